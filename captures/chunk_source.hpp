@@ -1,0 +1,30 @@
+// What every capture reader offers: timed chunks of serial bytes, exactly as recorded.
+#pragma once
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "decoder/records.hpp"
+
+namespace modtap::captures {
+
+// A capture that cannot be read: the message names the file and the offset or line.
+class CaptureError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class ChunkSource {
+ public:
+  virtual ~ChunkSource() = default;
+  // The next chunk, valid until the next call; false at the end. Throws CaptureError.
+  virtual bool next(decoder::Chunk& chunk) = 0;
+  virtual decoder::ClockQuality clock() const = 0;
+  // True when t_ns counts from the Unix epoch, false when from the start of the capture.
+  virtual bool absolute_time() const = 0;
+  virtual const std::vector<decoder::ChannelInfo>& channels() const = 0;
+};
+
+}  // namespace modtap::captures

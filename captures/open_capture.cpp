@@ -1,0 +1,93 @@
+#include "captures/open_capture.hpp"
+
+#include <array>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "captures/hexlog_reader.hpp"
+#include "captures/pcap_reader.hpp"
+#include "captures/raw_reader.hpp"
+
+namespace modtap::captures {
+namespace {
+
+bool ends_with(const std::string& s, const char* suffix) {
+  const size_t n = std::strlen(suffix);
+  return s.size() >= n && s.compare(s.size() - n, n, suffix) == 0;
+}
+
+Format by_extension(const std::string& path) {
+  if (ends_with(path, ".pcap") || ends_with(path, ".pcapng")) return Format::pcap;
+  if (ends_with(path, ".sr")) return Format::sigrok;
+  if (ends_with(path, ".log")) return Format::hexlog;
+  if (ends_with(path, ".bin") || ends_with(path, ".raw")) return Format::raw;
+  return Format::automatic;
+}
+
+}  // namespace
+
+Format parse_format(const std::string& name) {
+  if (name == "auto") return Format::automatic;
+  if (name == "raw") return Format::raw;
+  if (name == "hexlog") return Format::hexlog;
+  if (name == "pcap" || name == "pcapng") return Format::pcap;
+  if (name == "sigrok") return Format::sigrok;
+  throw std::invalid_argument("unknown format \"" + name + "\"");
+}
+
+const char* to_string(Format format) {
+  switch (format) {
+    case Format::automatic: return "auto";
+    case Format::raw: return "raw";
+    case Format::hexlog: return "hexlog";
+    case Format::pcap: return "pcap";
+    case Format::sigrok: return "sigrok";
+  }
+  return "?";
+}
+
+Format detect_format(const std::string& path) {
+  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!file) throw CaptureError(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
+  std::array<uint8_t, 64> head{};
+  const size_t n = std::fread(head.data(), 1, head.size(), file.get());
+  auto magic = [&](std::initializer_list<uint8_t> bytes) {
+    return n >= bytes.size() && std::equal(bytes.begin(), bytes.end(), head.begin());
+  };
+  if (magic({0xD4, 0xC3, 0xB2, 0xA1}) || magic({0xA1, 0xB2, 0xC3, 0xD4}) ||
+      magic({0x4D, 0x3C, 0xB2, 0xA1}) || magic({0xA1, 0xB2, 0x3C, 0x4D}) ||
+      magic({0x0A, 0x0D, 0x0D, 0x0A}))
+    return Format::pcap;
+  if (magic({'P', 'K', 0x03, 0x04})) return Format::sigrok;  // a .sr file is a zip
+  if (HexlogReader::is_header(std::string(head.begin(), head.begin() + static_cast<long>(n))))
+    return Format::hexlog;
+  const Format guess = by_extension(path);
+  if (guess != Format::automatic) return guess;
+  throw CaptureError(fmt::format(
+      "{}: offset 0: cannot tell the capture format from its content or name; "
+      "give --format raw|hexlog|pcap|sigrok",
+      path));
+}
+
+std::unique_ptr<ChunkSource> open_capture(const std::string& path, const OpenOptions& options) {
+  const Format format = options.format == Format::automatic ? detect_format(path) : options.format;
+  switch (format) {
+    case Format::raw: return std::make_unique<RawReader>(path);
+    case Format::hexlog:
+      return std::make_unique<HexlogReader>(path, options.serial.char_time_ns());
+    case Format::pcap: return std::make_unique<PcapReader>(path);
+    case Format::sigrok: {
+      SigrokOptions sigrok = options.sigrok;
+      sigrok.format = options.serial;
+      return std::make_unique<SigrokReader>(path, sigrok);
+    }
+    case Format::automatic: break;
+  }
+  throw CaptureError(path + ": no reader");
+}
+
+}  // namespace modtap::captures

@@ -1,0 +1,31 @@
+// Picks the reader for a capture file: by its content first, then by its name.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "captures/chunk_source.hpp"
+#include "captures/sigrok_reader.hpp"
+#include "decoder/serial_format.hpp"
+
+namespace modtap::captures {
+
+enum class Format { automatic, raw, hexlog, pcap, sigrok };
+
+// Throws std::invalid_argument for an unknown name.
+Format parse_format(const std::string& name);
+const char* to_string(Format format);
+
+// What the file's first bytes (or, failing that, its extension) say it is. Throws
+// CaptureError when neither tells.
+Format detect_format(const std::string& path);
+
+struct OpenOptions {
+  Format format = Format::automatic;
+  decoder::SerialFormat serial;
+  SigrokOptions sigrok;
+};
+
+std::unique_ptr<ChunkSource> open_capture(const std::string& path, const OpenOptions& options);
+
+}  // namespace modtap::captures

@@ -1,0 +1,29 @@
+// Bare bytes with no timing at all: framing goes by content alone.
+#pragma once
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "captures/chunk_source.hpp"
+
+namespace modtap::captures {
+
+class RawReader final : public ChunkSource {
+ public:
+  explicit RawReader(const std::string& path);
+
+  bool next(decoder::Chunk& chunk) override;
+  decoder::ClockQuality clock() const override { return decoder::ClockQuality::none; }
+  bool absolute_time() const override { return false; }
+  const std::vector<decoder::ChannelInfo>& channels() const override { return channels_; }
+
+ private:
+  std::string path_;
+  std::unique_ptr<FILE, int (*)(FILE*)> file_;
+  std::vector<uint8_t> block_;
+  uint64_t offset_ = 0;
+  std::vector<decoder::ChannelInfo> channels_;
+};
+
+}  // namespace modtap::captures

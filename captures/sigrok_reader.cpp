@@ -1,0 +1,165 @@
+#include "captures/sigrok_reader.hpp"
+
+#include <algorithm>
+#include <cinttypes>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "captures/subprocess.hpp"
+
+namespace modtap::captures {
+
+struct SigrokReader::Stream {
+  std::unique_ptr<Subprocess> process;
+  uint16_t channel = 0;
+  std::string name;
+  bool has_byte = false;
+  uint64_t sample = 0;  // first sample of the data bits
+  uint8_t byte = 0;
+  uint64_t line = 0;
+};
+
+namespace {
+
+struct CaptureShape {
+  uint64_t samplerate = 0;
+  std::vector<std::string> channels;
+};
+
+// `sigrok-cli --show` on an input file prints "Samplerate: N" and "- NAME: logic" lines.
+CaptureShape show(const std::string& path, const std::string& program) {
+  const std::string text = run_to_string({program, "-i", path, "--show"}, path);
+  CaptureShape shape;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("Samplerate: ", 0) == 0) {
+      shape.samplerate = std::strtoull(line.c_str() + 12, nullptr, 10);
+    } else if (line.rfind("- ", 0) == 0 && line.size() > 2) {
+      const auto colon = line.rfind(": logic");
+      if (colon != std::string::npos) shape.channels.push_back(line.substr(2, colon - 2));
+    }
+  }
+  if (shape.samplerate == 0)
+    throw CaptureError(fmt::format("{}: sigrok-cli reports no sample rate", path));
+  return shape;
+}
+
+const char* parity_name(decoder::Parity p) {
+  switch (p) {
+    case decoder::Parity::none: return "none";
+    case decoder::Parity::even: return "even";
+    case decoder::Parity::odd: return "odd";
+  }
+  return "none";
+}
+
+decoder::ChannelRole role_of(const std::string& role) {
+  if (role == "tx") return decoder::ChannelRole::master;
+  if (role == "rx") return decoder::ChannelRole::slave;
+  return decoder::ChannelRole::bus;
+}
+
+}  // namespace
+
+std::vector<SigrokLine> parse_sigrok_channels(const std::string& spec) {
+  std::vector<SigrokLine> lines;
+  std::istringstream in(spec);
+  for (std::string item; std::getline(in, item, ',');) {
+    const auto eq = item.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == item.size())
+      throw std::invalid_argument("expected ROLE=NAME, got \"" + item + "\"");
+    SigrokLine line{item.substr(0, eq), item.substr(eq + 1)};
+    if (line.role != "tx" && line.role != "rx" && line.role != "bus")
+      throw std::invalid_argument("a sigrok line is tx, rx or bus, not \"" + line.role + "\"");
+    lines.push_back(std::move(line));
+  }
+  const bool has_bus = std::any_of(lines.begin(), lines.end(),
+                                   [](const SigrokLine& l) { return l.role == "bus"; });
+  if (lines.empty() || (has_bus && lines.size() > 1))
+    throw std::invalid_argument("give tx=NAME,rx=NAME or a single bus=NAME");
+  return lines;
+}
+
+SigrokReader::SigrokReader(const std::string& path, const SigrokOptions& options)
+    : path_(path), options_(options) {
+  const CaptureShape shape = show(path, options.program);
+  samplerate_ = shape.samplerate;
+  std::vector<SigrokLine> lines = options.lines;
+  if (lines.empty()) {
+    if (shape.channels.empty()) throw CaptureError(fmt::format("{}: no logic channels", path));
+    lines.push_back({"bus", shape.channels.front()});
+  }
+  const auto& f = options.format;
+  for (const auto& line : lines) {
+    // sigrok-cli quietly decodes a default channel when a name is wrong, so check first.
+    if (std::find(shape.channels.begin(), shape.channels.end(), line.name) == shape.channels.end())
+      throw CaptureError(fmt::format("{}: no channel named \"{}\" (the capture has: {})", path,
+                                     line.name, fmt::join(shape.channels, ", ")));
+    std::string decoder = fmt::format("uart:rx={}:baudrate={}:parity={}:data_bits={}", line.name,
+                                      f.baud, parity_name(f.parity), f.data_bits);
+    if (f.stop_bits != 1) decoder += fmt::format(":stop_bits={}.0", f.stop_bits);
+    if (options.invert) decoder += ":invert_rx=yes";
+    auto stream = std::make_unique<Stream>();
+    stream->channel = static_cast<uint16_t>(channels_.size());
+    stream->name = line.name;
+    stream->process = std::make_unique<Subprocess>(
+        std::vector<std::string>{options.program, "-i", path, "-P", decoder, "-A", "uart=rx-data",
+                                 "--protocol-decoder-samplenum"});
+    channels_.push_back({line.role + ":" + line.name, role_of(line.role)});
+    streams_.push_back(std::move(stream));
+  }
+  for (auto& s : streams_) refill(*s);
+}
+
+SigrokReader::~SigrokReader() = default;
+
+// Lines look like "31179-31597 uart-1: 01": the sample range of the data bits, then the byte.
+bool SigrokReader::refill(Stream& s) {
+  s.has_byte = false;
+  if (!s.process) return false;
+  char text[256];
+  if (!std::fgets(text, sizeof text, s.process->output())) {
+    std::string error_text;
+    const int status = s.process->wait(error_text);
+    s.process.reset();
+    if (status != 0)
+      throw CaptureError(fmt::format("{}: sigrok-cli failed on channel {}: {}", path_, s.name,
+                                     error_text));
+    return false;
+  }
+  ++s.line;
+  uint64_t first = 0, last = 0;
+  unsigned value = 0;
+  char tag[64];
+  if (std::sscanf(text, "%" SCNu64 "-%" SCNu64 " %63s %x", &first, &last, tag, &value) != 4 ||
+      value > 0xFF)
+    throw CaptureError(fmt::format("{}: sigrok-cli output line {} on channel {} is not a UART byte: {}",
+                                   path_, s.line, s.name, text));
+  s.has_byte = true;
+  s.sample = first;
+  s.byte = static_cast<uint8_t>(value);
+  return true;
+}
+
+bool SigrokReader::next(decoder::Chunk& chunk) {
+  Stream* earliest = nullptr;
+  for (auto& s : streams_)
+    if (s->has_byte && (!earliest || s->sample < earliest->sample)) earliest = s.get();
+  if (!earliest) return false;
+  const auto& f = options_.format;
+  // The decoder reports where the data bits start; the byte ended one character after its
+  // start bit, one bit earlier.
+  const int64_t data_start_ns =
+      static_cast<int64_t>(static_cast<__int128>(earliest->sample) * 1'000'000'000 / samplerate_);
+  const int64_t bit_ns = 1'000'000'000 / f.baud;
+  byte_ = earliest->byte;
+  chunk = {earliest->channel, data_start_ns - bit_ns + f.char_time_ns(), {&byte_, 1}};
+  refill(*earliest);
+  return true;
+}
+
+}  // namespace modtap::captures

@@ -1,0 +1,52 @@
+// Logic-analyzer captures (.sr): sigrok-cli's UART decoder turns each probed line into bytes
+// with exact sample positions, which become one-byte chunks merged in time order.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "captures/chunk_source.hpp"
+#include "decoder/serial_format.hpp"
+
+namespace modtap::captures {
+
+struct SigrokLine {
+  std::string role;  // "tx" (the master's transmit line), "rx" (its receive line) or "bus"
+  std::string name;  // the channel's name in the capture
+};
+
+struct SigrokOptions {
+  std::vector<SigrokLine> lines;  // empty: one "bus" line on the capture's first channel
+  bool invert = false;
+  decoder::SerialFormat format;
+  std::string program = "sigrok-cli";
+};
+
+// Parses "tx=NAME,rx=NAME" or "bus=NAME"; throws std::invalid_argument.
+std::vector<SigrokLine> parse_sigrok_channels(const std::string& spec);
+
+class SigrokReader final : public ChunkSource {
+ public:
+  SigrokReader(const std::string& path, const SigrokOptions& options);
+  ~SigrokReader() override;
+
+  bool next(decoder::Chunk& chunk) override;
+  decoder::ClockQuality clock() const override { return decoder::ClockQuality::per_byte; }
+  bool absolute_time() const override { return false; }
+  const std::vector<decoder::ChannelInfo>& channels() const override { return channels_; }
+
+  uint64_t samplerate() const { return samplerate_; }
+
+ private:
+  struct Stream;
+  bool refill(Stream& stream);
+
+  std::string path_;
+  SigrokOptions options_;
+  uint64_t samplerate_ = 0;
+  std::vector<std::unique_ptr<Stream>> streams_;
+  std::vector<decoder::ChannelInfo> channels_;
+  uint8_t byte_ = 0;
+};
+
+}  // namespace modtap::captures

@@ -1,0 +1,87 @@
+// The pipeline for one bus: a framer per channel feeding one matcher, records out in order.
+// It owns no I/O: sources push chunks in, a RecordSink takes records out.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <variant>
+#include <vector>
+
+#include "decoder/ascii_framer.hpp"
+#include "decoder/frame_sink.hpp"
+#include "decoder/matcher.hpp"
+#include "decoder/records.hpp"
+#include "decoder/rtu_framer.hpp"
+#include "decoder/serial_format.hpp"
+
+namespace modtap::decoder {
+
+enum class ModeChoice : uint8_t { automatic, rtu, ascii };
+
+struct AnalyzerOptions {
+  ModeChoice mode = ModeChoice::automatic;
+  SerialFormat format;
+  ClockQuality clock = ClockQuality::per_chunk;
+  int64_t timeout_ns = 1'000'000'000;
+  int64_t ascii_char_timeout_ns = 1'000'000'000;
+  int64_t chunk_jitter_ns = 20'000'000;
+};
+
+class RecordSink {
+ public:
+  virtual ~RecordSink() = default;
+  virtual void on_frame(const Frame& frame) = 0;
+  virtual void on_noise(const Noise& noise) = 0;
+  virtual void on_timeout(const Timeout& timeout) = 0;
+};
+
+struct BusStats {
+  uint64_t frames = 0, bad_checks = 0, requests = 0, responses = 0, unknown_roles = 0;
+  uint64_t exceptions = 0, broadcasts = 0, unsolicited = 0, mismatches = 0, timeouts = 0;
+  uint64_t noise_records = 0, noise_bytes = 0, frame_bytes = 0;
+  int64_t latency_sum_ns = 0, latency_max_ns = 0;
+  uint64_t latency_count = 0;
+};
+
+class Analyzer final : private FrameSink {
+ public:
+  Analyzer(const AnalyzerOptions& options, std::vector<ChannelInfo> channels, RecordSink& out);
+  ~Analyzer() override;
+
+  void push(const Chunk& chunk);
+  void flush(int64_t now_ns);  // live sources: call on idle so silences resolve frames
+  void finish();
+
+  const BusStats& stats() const { return stats_; }
+  // The mode the bus settled on (automatic mode decides from the first frames).
+  std::optional<Mode> mode() const { return mode_; }
+
+ private:
+  class ModeProbe;
+  using Framer =
+      std::variant<std::monostate, std::unique_ptr<RtuFramer>, std::unique_ptr<AsciiFramer>>;
+  struct Channel {
+    ChannelInfo info;
+    Framer framer;
+  };
+
+  Channel& channel(uint16_t id);
+  void start_framer(uint16_t id, Mode mode);
+  void settle_mode();
+  void on_frame(Frame& frame) override;
+  void on_noise(Noise& noise) override;
+  Expectation expectation() const override { return matcher_.expectation(); }
+  void on_timeout(const Timeout& timeout);
+
+  AnalyzerOptions options_;
+  std::vector<Channel> channels_;
+  RecordSink& out_;
+  Matcher matcher_;
+  std::unique_ptr<ModeProbe> probe_;  // until automatic mode has decided
+  std::optional<Mode> mode_;
+  BusStats stats_;
+  uint64_t next_index_ = 1;
+  int64_t last_ns_ = 0;
+};
+
+}  // namespace modtap::decoder

@@ -1,0 +1,24 @@
+// What a framer hands its records to, and what it may ask back.
+#pragma once
+
+#include "decoder/records.hpp"
+
+namespace modtap::decoder {
+
+// The request the bus is waiting on, if any: lets a framer try the response reading first.
+struct Expectation {
+  bool pending = false;
+  uint8_t slave = 0;
+  uint8_t function = 0;
+};
+
+class FrameSink {
+ public:
+  virtual ~FrameSink() = default;
+  // Spans inside the records are valid only during the call.
+  virtual void on_frame(Frame& frame) = 0;
+  virtual void on_noise(Noise& noise) = 0;
+  virtual Expectation expectation() const { return {}; }
+};
+
+}  // namespace modtap::decoder

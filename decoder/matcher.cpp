@@ -1,0 +1,140 @@
+#include "decoder/matcher.hpp"
+
+#include <algorithm>
+
+#include "decoder/function_codes.hpp"
+
+namespace modtap::decoder {
+namespace {
+
+uint16_t be16(std::span<const uint8_t> p, size_t at) {
+  return p.size() < at + 2 ? 0 : static_cast<uint16_t>(p[at] << 8 | p[at + 1]);
+}
+
+}  // namespace
+
+Finding check_response_fit(std::span<const uint8_t> req, std::span<const uint8_t> rsp) {
+  if (req.empty() || rsp.empty() || (rsp[0] & 0x80)) return finding_none;
+  auto count_is = [&](unsigned expected) {
+    return rsp.size() >= 2 && rsp[1] == expected && rsp.size() == 2u + expected
+               ? finding_none
+               : finding_length_mismatch;
+  };
+  auto same_first = [&](size_t n) {
+    return req.size() >= n && rsp.size() >= n && std::equal(req.begin(), req.begin() + n, rsp.begin())
+               ? finding_none
+               : finding_echo_mismatch;
+  };
+  switch (rsp[0]) {
+    case 0x01:
+    case 0x02: return count_is((be16(req, 3) + 7u) / 8u);
+    case 0x03:
+    case 0x04:
+    case 0x17: return count_is(be16(req, 3) * 2u);
+    case 0x05:
+    case 0x06:
+    case 0x08:
+    case 0x16:
+      return std::equal(req.begin(), req.end(), rsp.begin(), rsp.end()) ? finding_none
+                                                                         : finding_echo_mismatch;
+    case 0x0F:
+    case 0x10: return same_first(5);  // function, address, quantity
+    case 0x2B: return same_first(2);  // function, MEI type
+    default: return finding_none;
+  }
+}
+
+Matcher::Matcher(const MatcherOptions& options, TimeoutHandler on_timeout)
+    : options_(options), on_timeout_(std::move(on_timeout)) {}
+
+Expectation Matcher::expectation() const {
+  if (!pending_) return {};
+  return {true, pending_->slave, pending_->pdu[0]};
+}
+
+void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
+  advance(frame.t_ns);
+  frame.role = decide_role(frame, channel_role);
+  if (frame.role == Role::request) {
+    on_request(frame);
+  } else if (frame.role == Role::response) {
+    on_response(frame);
+  }
+}
+
+Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role) const {
+  if (channel_role == ChannelRole::master) return Role::request;
+  if (channel_role == ChannelRole::slave) return Role::response;
+  if (frame.fit.request && !frame.fit.response) return Role::request;
+  if (frame.fit.response && !frame.fit.request) return Role::response;
+  // Both or neither: an echo, or a frame too damaged to tell. What the bus waits for decides.
+  if (pending_matches(frame)) return Role::response;
+  if (frame.fit.request) return Role::request;
+  return frame.is_exception() ? Role::response : Role::unknown;
+}
+
+bool Matcher::pending_matches(const Frame& frame) const {
+  return pending_ && pending_->slave == frame.slave() &&
+         pending_->pdu[0] == (frame.function() & 0x7F);
+}
+
+void Matcher::on_request(Frame& frame) {
+  if (pending_) expire(frame.t_ns, TimeoutReason::next_request);
+  if (frame.slave() == 0) {
+    frame.findings |= finding_broadcast;
+    if (!may_broadcast(frame.function())) frame.findings |= finding_illegal_broadcast;
+    return;
+  }
+  const auto pdu = frame.pdu();
+  Pending p;
+  p.index = frame.index;
+  p.channel = frame.channel;
+  p.end_ns = frame.end_ns;
+  p.slave = frame.slave();
+  p.size = static_cast<uint16_t>(std::min(pdu.size(), p.pdu.size()));
+  std::copy_n(pdu.begin(), p.size, p.pdu.begin());
+  pending_ = p;
+}
+
+void Matcher::on_response(Frame& frame) {
+  if (!pending_matches(frame)) {
+    frame.findings |= finding_unsolicited;
+    return;
+  }
+  frame.request = pending_->index;
+  answered_ = *pending_;
+  frame.request_pdu = {answered_.pdu.data(), answered_.size};
+  if (options_.timed) {
+    frame.latency_ns = frame.t_ns - pending_->end_ns;
+    if (options_.exact_clock && *frame.latency_ns < options_.t35_ns)
+      frame.findings |= finding_fast_turnaround;
+  }
+  if (frame.check_ok)
+    frame.findings |= check_response_fit({pending_->pdu.data(), pending_->size}, frame.pdu());
+  pending_.reset();
+}
+
+void Matcher::advance(int64_t now_ns) {
+  if (pending_ && options_.timed && now_ns - pending_->end_ns > options_.timeout_ns)
+    expire(pending_->end_ns + options_.timeout_ns, TimeoutReason::silence);
+}
+
+void Matcher::finish(int64_t end_ns) {
+  advance(end_ns);
+  if (pending_) expire(end_ns, TimeoutReason::end_of_capture);
+}
+
+void Matcher::expire(int64_t now_ns, TimeoutReason reason) {
+  Timeout t;
+  t.request = pending_->index;
+  t.channel = pending_->channel;
+  t.slave = pending_->slave;
+  t.function = pending_->pdu[0];
+  t.t_ns = now_ns;
+  t.waited_ns = now_ns - pending_->end_ns;
+  t.reason = reason;
+  pending_.reset();
+  on_timeout_(t);
+}
+
+}  // namespace modtap::decoder

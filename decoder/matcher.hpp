@@ -1,0 +1,64 @@
+// Pairs requests with responses on one bus: decides each frame's role, measures turnaround,
+// and reports time-outs, broadcasts, unsolicited responses and responses that do not fit.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <optional>
+
+#include "decoder/frame_sink.hpp"
+#include "decoder/records.hpp"
+
+namespace modtap::decoder {
+
+struct MatcherOptions {
+  int64_t timeout_ns = 1'000'000'000;
+  int64_t t35_ns = 0;         // below this a response counts as a fast turnaround
+  bool timed = true;          // false when the source has no clock: no latency, no silence
+  bool exact_clock = false;   // latencies are exact enough to judge turnaround
+};
+
+class Matcher {
+ public:
+  using TimeoutHandler = std::function<void(const Timeout&)>;
+
+  Matcher(const MatcherOptions& options, TimeoutHandler on_timeout);
+
+  // Decides the role and fills request, latency and findings. `channel_role` is what the
+  // frame's port says of its direction.
+  void on_frame(Frame& frame, ChannelRole channel_role);
+  // Any record or the clock moving on: a pending request older than the time-out expires.
+  void advance(int64_t now_ns);
+  void finish(int64_t end_ns);
+
+  Expectation expectation() const;
+
+ private:
+  struct Pending {
+    uint64_t index = 0;
+    uint16_t channel = 0;
+    int64_t end_ns = 0;
+    uint8_t slave = 0;
+    uint16_t size = 0;  // PDU bytes kept (enough for echo and fit checks)
+    std::array<uint8_t, 256> pdu{};
+  };
+
+  Role decide_role(const Frame& frame, ChannelRole channel_role) const;
+  void on_request(Frame& frame);
+  void on_response(Frame& frame);
+  void expire(int64_t now_ns, TimeoutReason reason);
+  bool pending_matches(const Frame& frame) const;
+
+  MatcherOptions options_;
+  TimeoutHandler on_timeout_;
+  std::optional<Pending> pending_;
+  Pending answered_;  // the request a response was just paired with, for its decoder
+};
+
+// Whether a response's content fits its request: byte counts against quantities, echoes
+// against what was sent. Returns the finding to raise, or finding_none.
+Finding check_response_fit(std::span<const uint8_t> request_pdu,
+                           std::span<const uint8_t> response_pdu);
+
+}  // namespace modtap::decoder

@@ -1,0 +1,43 @@
+#include "decoder/records.hpp"
+
+#include "decoder/checksum.hpp"
+
+namespace modtap::decoder {
+
+uint16_t Frame::wire_check() const {
+  if (adu.size() < check_size()) return 0;
+  return mode == Mode::rtu ? wire_crc(adu) : adu.back();
+}
+
+const char* to_string(NoiseReason reason) {
+  switch (reason) {
+    case NoiseReason::junk: return "junk";
+    case NoiseReason::truncated: return "truncated";
+    case NoiseReason::glitch: return "glitch";
+    case NoiseReason::overlong: return "overlong";
+    case NoiseReason::bad_hex: return "bad-hex";
+  }
+  return "?";
+}
+
+const char* to_string(TimeoutReason reason) {
+  switch (reason) {
+    case TimeoutReason::next_request: return "next-request";
+    case TimeoutReason::silence: return "silence";
+    case TimeoutReason::end_of_capture: return "end-of-capture";
+  }
+  return "?";
+}
+
+const char* to_string(Role role) {
+  switch (role) {
+    case Role::request: return "request";
+    case Role::response: return "response";
+    case Role::unknown: return "unknown";
+  }
+  return "?";
+}
+
+const char* to_string(Mode mode) { return mode == Mode::rtu ? "rtu" : "ascii"; }
+
+}  // namespace modtap::decoder

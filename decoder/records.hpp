@@ -1,0 +1,123 @@
+// The value types that flow through the pipeline: chunks in, frames, noise and time-outs out.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace modtap::decoder {
+
+// How well a source knows when each byte arrived.
+enum class ClockQuality : uint8_t {
+  per_byte,   // each chunk is one byte with its own exact time (logic analyzer, simulator)
+  per_chunk,  // one time per read or packet; bytes inside a chunk are untimed
+  none,       // no time at all (raw files); times are nominal, from the byte offset
+};
+
+// What a channel carries: both directions (a single RS-485 probe) or one side of a split tap.
+enum class ChannelRole : uint8_t { bus, master, slave };
+
+struct ChannelInfo {
+  std::string name;
+  ChannelRole role = ChannelRole::bus;
+};
+
+// Bytes exactly as a source delivered them. t_ns is when the last byte was complete.
+struct Chunk {
+  uint16_t channel = 0;
+  int64_t t_ns = 0;
+  std::span<const uint8_t> bytes;
+};
+
+enum class Mode : uint8_t { rtu, ascii };
+enum class Role : uint8_t { request, response, unknown };
+
+// Which roles the frame's structure allows; the matcher picks between them when both do.
+struct RoleFit {
+  bool request = false;
+  bool response = false;
+};
+
+// Facts about a record that sinks render; a bit set, so records stay plain values.
+enum Finding : uint32_t {
+  finding_none = 0,
+  finding_broadcast = 1u << 0,         // slave 0: no response expected
+  finding_unsolicited = 1u << 1,       // a response with no pending request
+  finding_length_mismatch = 1u << 2,   // response content does not fit its request
+  finding_echo_mismatch = 1u << 3,     // an echo response differs from its request
+  finding_bad_check = 1u << 4,         // CRC or LRC wrong
+  finding_fast_turnaround = 1u << 5,   // the slave answered before t3.5 of silence
+  finding_illegal_broadcast = 1u << 6  // a read sent to slave 0
+};
+
+// A Modbus ADU. The spans point into the framer's buffer and are valid during the callback.
+struct Frame {
+  uint64_t index = 0;
+  uint16_t channel = 0;
+  Mode mode = Mode::rtu;
+  Role role = Role::unknown;
+  RoleFit fit;
+  int64_t t_ns = 0;    // start of the first byte
+  int64_t end_ns = 0;  // end of the last byte
+  uint64_t offset = 0;               // byte offset of the first byte in its channel's stream
+  std::span<const uint8_t> raw;      // exact wire bytes (ASCII: ':' .. CRLF)
+  std::span<const uint8_t> adu;      // slave .. check, binary (ASCII: decoded hex)
+  bool check_ok = false;
+  uint16_t expected_check = 0;       // what the CRC/LRC should have been
+  uint32_t findings = finding_none;
+  std::optional<uint64_t> request;   // index of the matched request
+  std::optional<int64_t> latency_ns; // end of request to start of response
+  std::span<const uint8_t> request_pdu;  // the matched request's PDU, during the callback
+
+  uint8_t slave() const { return adu.empty() ? 0 : adu[0]; }
+  uint8_t function() const { return adu.size() < 2 ? 0 : adu[1]; }
+  bool is_exception() const { return adu.size() >= 3 && (function() & 0x80) != 0; }
+  size_t check_size() const { return mode == Mode::rtu ? 2 : 1; }
+  // The PDU: function code and data, without slave address and check.
+  std::span<const uint8_t> pdu() const {
+    return adu.size() < 1 + check_size() ? adu.subspan(0, 0)
+                                         : adu.subspan(1, adu.size() - 1 - check_size());
+  }
+  uint16_t wire_check() const;
+};
+
+enum class NoiseReason : uint8_t {
+  junk,       // bytes that start no frame
+  truncated,  // a frame header whose frame never completed
+  glitch,     // a lone 0x00/0xFF beside a frame, typical of an RS-485 turnaround
+  overlong,   // longer than the largest ADU without an end
+  bad_hex,    // an ASCII frame with characters that are not hex pairs
+};
+
+struct Noise {
+  uint64_t index = 0;
+  uint16_t channel = 0;
+  Mode mode = Mode::rtu;
+  int64_t t_ns = 0;
+  int64_t end_ns = 0;
+  uint64_t offset = 0;
+  std::span<const uint8_t> raw;
+  NoiseReason reason = NoiseReason::junk;
+};
+
+enum class TimeoutReason : uint8_t { next_request, silence, end_of_capture };
+
+struct Timeout {
+  uint64_t index = 0;
+  uint64_t request = 0;
+  uint16_t channel = 0;
+  uint8_t slave = 0;
+  uint8_t function = 0;
+  int64_t t_ns = 0;       // when the time-out was known
+  int64_t waited_ns = 0;  // from the end of the request to then
+  TimeoutReason reason = TimeoutReason::silence;
+};
+
+const char* to_string(NoiseReason reason);
+const char* to_string(TimeoutReason reason);
+const char* to_string(Role role);
+const char* to_string(Mode mode);
+
+}  // namespace modtap::decoder

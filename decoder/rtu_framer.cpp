@@ -1,0 +1,282 @@
+#include "decoder/rtu_framer.hpp"
+
+#include <algorithm>
+
+#include "decoder/checksum.hpp"
+#include "decoder/function_codes.hpp"
+
+namespace modtap::decoder {
+namespace {
+
+constexpr uint16_t crc_size = 2;
+constexpr uint16_t min_adu = 4;  // slave, function, CRC
+constexpr uint8_t max_unicast_slave = 247;
+// Compact the buffer once this much has been consumed, so memmove stays rare.
+constexpr size_t compact_after = 1 << 16;
+
+bool crc_ok(const uint8_t* p, size_t n) {
+  return crc16({p, n - crc_size}) == wire_crc({p, n});
+}
+
+}  // namespace
+
+RtuFramer::RtuFramer(uint16_t channel, const RtuFramerOptions& options, FrameSink& sink)
+    : channel_(channel),
+      options_(options),
+      sink_(sink),
+      char_ns_(options.format.char_time_ns()),
+      gap_threshold_ns_(options.format.t35_ns() +
+                        (options.clock == ClockQuality::per_chunk ? options.chunk_jitter_ns : 0)) {
+  buf_.reserve(compact_after + 4096);
+}
+
+void RtuFramer::push(const Chunk& chunk) {
+  if (chunk.bytes.empty()) return;
+  const auto n = static_cast<int64_t>(chunk.bytes.size());
+  int64_t t_end = chunk.t_ns;
+  if (options_.clock == ClockQuality::none) {
+    t_end = static_cast<int64_t>(end_ + chunk.bytes.size()) * char_ns_;
+  } else if (have_time_) {
+    const int64_t first_start = t_end - n * char_ns_;
+    if (first_start - last_end_ns_ >= gap_threshold_ns_) gaps_.push_back(end_);
+  }
+  have_time_ = true;
+  last_end_ns_ = std::max(last_end_ns_, t_end);
+  marks_.push_back({end_, end_ + chunk.bytes.size(), t_end});
+  buf_.insert(buf_.end(), chunk.bytes.begin(), chunk.bytes.end());
+  end_ += chunk.bytes.size();
+  resolve(false);
+}
+
+void RtuFramer::flush(int64_t now_ns) {
+  if (head_ < end_ && options_.clock != ClockQuality::none &&
+      now_ns - last_end_ns_ >= gap_threshold_ns_)
+    resolve(true);
+}
+
+void RtuFramer::finish() { resolve(true); }
+
+void RtuFramer::resolve(bool final) {
+  while (head_ < end_) {
+    const Match m = match_at(head_, final, true);
+    if (m.kind == Match::Kind::found) {
+      emit_frame(head_, m);
+      continue;
+    }
+    if (m.kind == Match::Kind::need_more && !final && !blocked_by_gap(head_, final)) return;
+    bool decided = false;
+    const uint64_t next = next_start(head_ + 1, final, decided);
+    if (!decided && next - head_ <= max_rtu_adu) return;  // may still be one (bad) frame
+    emit_unframed(head_, next);
+  }
+}
+
+RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, bool allow_search) const {
+  const uint64_t avail = end_ - at;
+  const uint8_t* p = at_ptr(at);
+  if (avail < 1) return need_more();
+  if (p[0] > max_unicast_slave) return {};
+  if (avail < 2) return need_more();
+  const uint8_t fc = p[1];
+  if ((fc & 0x7F) == 0) return {};
+
+  const bool broadcast = p[0] == 0;
+  const bool may_request = options_.role != ChannelRole::slave && !(fc & 0x80) &&
+                           (!broadcast || may_broadcast(fc));
+  const bool may_respond = options_.role != ChannelRole::master && !broadcast;
+  const Expectation expected = sink_.expectation();
+  const bool response_first =
+      expected.pending && expected.slave == p[0] && expected.function == (fc & 0x7F);
+
+  Role order[2] = {Role::request, Role::response};
+  if (response_first) std::swap(order[0], order[1]);
+  bool need_more = false;
+  for (Role role : order) {
+    if ((role == Role::request && !may_request) || (role == Role::response && !may_respond))
+      continue;
+    Match m = match_role(role, at, final, allow_search);
+    if (m.kind == Match::Kind::found) {
+      // The same bytes may read as the other role too (echo codes 05, 06, 08, ...).
+      const Role other = role == Role::request ? Role::response : Role::request;
+      const bool other_allowed = other == Role::request ? may_request : may_respond;
+      if (other_allowed && fits_role(other, at, m.length)) m.fit = {true, true};
+      return m;
+    }
+    need_more |= m.kind == Match::Kind::need_more;
+  }
+  return need_more ? RtuFramer::need_more() : Match{};
+}
+
+RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final,
+                                       bool allow_search) const {
+  const uint64_t avail = end_ - at;
+  const uint8_t* p = at_ptr(at);
+  const BodyLength body = body_length(role, {p, static_cast<size_t>(avail)});
+  const RoleFit fit{role == Role::request, role == Role::response};
+  switch (body.kind) {
+    case BodyLength::Kind::need_more: return need_more();
+    case BodyLength::Kind::invalid: return {};
+    case BodyLength::Kind::known: {
+      const uint16_t total = body.bytes + crc_size;
+      if (total > max_rtu_adu) return {};
+      if (avail < total) return need_more();
+      if (crc_ok(p, total)) return {Match::Kind::found, total, fit};
+      return {};
+    }
+    case BodyLength::Kind::variable: {
+      if (!allow_search) return {};
+      // A bounded CRC search. A CRC match alone is weak evidence (a trailing 0x00 keeps a
+      // zero residue zero), so the end must also be confirmed by a gap or the next frame.
+      const uint64_t limit = std::min<uint64_t>(avail, max_rtu_adu);
+      const size_t first = std::max<size_t>(body.bytes + crc_size, min_adu);
+      uint16_t crc = crc16({p, first - crc_size});
+      bool open = false;
+      for (size_t n = first; n <= limit; ++n) {
+        if (crc == wire_crc({p, n})) {
+          if (confirmed_end(at + n, final)) return {Match::Kind::found, static_cast<uint16_t>(n), fit};
+          open |= at + n == end_;
+        }
+        crc = crc16_step(crc, p[n - crc_size]);
+      }
+      if (!final && (avail < max_rtu_adu || open)) return need_more();
+      return {};
+    }
+  }
+  return {};
+}
+
+bool RtuFramer::fits_role(Role role, uint64_t at, uint16_t length) const {
+  const BodyLength body = body_length(role, {at_ptr(at), length});
+  if (body.kind == BodyLength::Kind::known) return body.bytes + crc_size == length;
+  return body.kind == BodyLength::Kind::variable && body.bytes + crc_size <= length;
+}
+
+bool RtuFramer::confirmed_end(uint64_t end, bool final) const {
+  if (end == end_) return final;
+  return gap_at(end) || match_at(end, false, false).kind == Match::Kind::found;
+}
+
+bool RtuFramer::blocked_by_gap(uint64_t at, bool final) const {
+  const uint64_t gap = first_gap_after(at);
+  return gap < end_ && match_at(gap, final, false).kind == Match::Kind::found;
+}
+
+uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
+  uint64_t at = std::max(from, scanned_to_);
+  for (; at < end_; ++at) {
+    const Match m = match_at(at, final, true);
+    if (m.kind == Match::Kind::found) break;
+    if (m.kind == Match::Kind::need_more && !final && !blocked_by_gap(at, final)) {
+      scanned_to_ = at;
+      decided = false;
+      return at;
+    }
+  }
+  scanned_to_ = at;
+  decided = true;
+  return at;
+}
+
+void RtuFramer::emit_frame(uint64_t at, const Match& match) {
+  Frame frame;
+  frame.channel = channel_;
+  frame.mode = Mode::rtu;
+  frame.fit = match.fit;
+  frame.offset = at;
+  frame.raw = frame.adu = {at_ptr(at), match.length};
+  frame.t_ns = end_time(at) - char_ns_;
+  frame.end_ns = end_time(at + match.length - 1);
+  frame.check_ok = true;
+  frame.expected_check = wire_crc(frame.adu);
+  sink_.on_frame(frame);
+  consume(at + match.length);
+}
+
+// Bytes that start no good frame, up to the next one: cut at every gap mark, then each piece
+// is a frame with a bad CRC when its header says exactly its length, else noise.
+void RtuFramer::emit_unframed(uint64_t begin, uint64_t end) {
+  while (begin < end) {
+    const uint64_t gap = std::min(first_gap_after(begin), end);
+    emit_piece(begin, gap);
+    begin = gap;
+  }
+}
+
+void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
+  const uint64_t size = end - begin;
+  const uint8_t* p = at_ptr(begin);
+  if (size >= min_adu && size <= max_rtu_adu && p[0] <= max_unicast_slave) {
+    RoleFit fit{options_.role != ChannelRole::slave && fits_role(Role::request, begin, size),
+                options_.role != ChannelRole::master && fits_role(Role::response, begin, size)};
+    if (fit.request || fit.response) {
+      Frame frame;
+      frame.channel = channel_;
+      frame.mode = Mode::rtu;
+      frame.fit = fit;
+      frame.offset = begin;
+      frame.raw = frame.adu = {p, static_cast<size_t>(size)};
+      frame.t_ns = end_time(begin) - char_ns_;
+      frame.end_ns = end_time(end - 1);
+      frame.check_ok = false;
+      frame.expected_check = crc16({p, static_cast<size_t>(size - crc_size)});
+      frame.findings = finding_bad_check;
+      sink_.on_frame(frame);
+      consume(end);
+      return;
+    }
+  }
+  NoiseReason reason = NoiseReason::junk;
+  if (size == 1 && (p[0] == 0x00 || p[0] == 0xFF)) {
+    reason = NoiseReason::glitch;
+  } else if (size >= 2 && p[0] <= max_unicast_slave && is_public_function(p[1])) {
+    reason = NoiseReason::truncated;
+  }
+  // Long runs of junk leave as several records so each stays printable and memory stays flat.
+  for (uint64_t at = begin; at < end; at += max_rtu_adu)
+    emit_noise(at, std::min<uint64_t>(end, at + max_rtu_adu), reason);
+}
+
+void RtuFramer::emit_noise(uint64_t begin, uint64_t end, NoiseReason reason) {
+  Noise noise;
+  noise.channel = channel_;
+  noise.mode = Mode::rtu;
+  noise.offset = begin;
+  noise.raw = {at_ptr(begin), static_cast<size_t>(end - begin)};
+  noise.t_ns = end_time(begin) - char_ns_;
+  noise.end_ns = end_time(end - 1);
+  noise.reason = reason;
+  sink_.on_noise(noise);
+  consume(end);
+}
+
+void RtuFramer::consume(uint64_t to) {
+  head_ = to;
+  while (!gaps_.empty() && gaps_.front() <= head_) gaps_.pop_front();
+  while (marks_.size() > 1 && marks_.front().end <= head_) marks_.pop_front();
+  if (head_ == end_) {
+    buf_.clear();
+    base_ = head_;
+  } else if (head_ - base_ >= compact_after) {
+    buf_.erase(buf_.begin(), buf_.begin() + static_cast<ptrdiff_t>(head_ - base_));
+    base_ = head_;
+  }
+}
+
+bool RtuFramer::gap_at(uint64_t offset) const {
+  return std::binary_search(gaps_.begin(), gaps_.end(), offset);
+}
+
+uint64_t RtuFramer::first_gap_after(uint64_t offset) const {
+  auto it = std::upper_bound(gaps_.begin(), gaps_.end(), offset);
+  return it == gaps_.end() ? end_ : *it;
+}
+
+// Bytes inside a chunk are placed back to back before its time, the best a chunk clock allows.
+int64_t RtuFramer::end_time(uint64_t offset) const {
+  auto it = std::upper_bound(marks_.begin(), marks_.end(), offset,
+                             [](uint64_t o, const TimeMark& m) { return o < m.end; });
+  if (it == marks_.end()) return last_end_ns_;
+  return it->end_ns - static_cast<int64_t>(it->end - 1 - offset) * char_ns_;
+}
+
+}  // namespace modtap::decoder

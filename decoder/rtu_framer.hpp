@@ -1,0 +1,90 @@
+// Splits a channel's byte stream into RTU frames and noise.
+//
+// Structure decides, timing advises: a boundary is where the function-code length rules say
+// a frame ends and the CRC agrees. Gaps of t3.5 or more (beyond what the source's clock can
+// blur) are marks that cut a frame which cannot complete. Every byte pushed leaves in exactly
+// one Frame or Noise record, in order.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <vector>
+
+#include "decoder/frame_sink.hpp"
+#include "decoder/records.hpp"
+#include "decoder/serial_format.hpp"
+
+namespace modtap::decoder {
+
+struct RtuFramerOptions {
+  SerialFormat format;
+  ClockQuality clock = ClockQuality::per_chunk;
+  ChannelRole role = ChannelRole::bus;
+  // With per-chunk clocks a USB adapter holds bytes back (FTDI: 16 ms latency timer), so a
+  // gap is only evidence when it is longer than t3.5 plus this.
+  int64_t chunk_jitter_ns = 20'000'000;
+};
+
+class RtuFramer {
+ public:
+  RtuFramer(uint16_t channel, const RtuFramerOptions& options, FrameSink& sink);
+
+  void push(const Chunk& chunk);
+  // Called with the current time when no bytes came: after a silence long enough to be a
+  // boundary, whatever is pending is resolved.
+  void flush(int64_t now_ns);
+  // End of the stream: resolve everything.
+  void finish();
+
+  int64_t last_byte_ns() const { return last_end_ns_; }
+
+ private:
+  struct Match {
+    enum class Kind : uint8_t { found, need_more, none } kind = Kind::none;
+    uint16_t length = 0;
+    RoleFit fit;
+  };
+  static Match need_more() { return {Match::Kind::need_more, 0, {}}; }
+  struct TimeMark {  // one per chunk: the bytes [first, end) ended at end_ns
+    uint64_t first;
+    uint64_t end;
+    int64_t end_ns;
+  };
+
+  void resolve(bool final);
+  Match match_at(uint64_t at, bool final, bool allow_search) const;
+  Match match_role(Role role, uint64_t at, bool final, bool allow_search) const;
+  bool fits_role(Role role, uint64_t at, uint16_t length) const;
+  bool confirmed_end(uint64_t end, bool final) const;
+  bool blocked_by_gap(uint64_t at, bool final) const;
+  // First position >= from that starts a good frame; `decided` false if one is still open.
+  uint64_t next_start(uint64_t from, bool final, bool& decided);
+  void emit_frame(uint64_t at, const Match& match);
+  void emit_unframed(uint64_t begin, uint64_t end);
+  void emit_piece(uint64_t begin, uint64_t end);
+  void emit_noise(uint64_t begin, uint64_t end, NoiseReason reason);
+  void consume(uint64_t to);
+
+  bool gap_at(uint64_t offset) const;
+  uint64_t first_gap_after(uint64_t offset) const;  // end_ if none
+  int64_t end_time(uint64_t offset) const;
+  const uint8_t* at_ptr(uint64_t offset) const { return buf_.data() + (offset - base_); }
+
+  uint16_t channel_;
+  RtuFramerOptions options_;
+  FrameSink& sink_;
+  int64_t char_ns_;
+  int64_t gap_threshold_ns_;
+
+  std::vector<uint8_t> buf_;  // bytes from stream offset base_ on
+  uint64_t base_ = 0;         // stream offset of buf_[0]
+  uint64_t head_ = 0;         // stream offset of the first unresolved byte
+  uint64_t end_ = 0;          // stream offset one past the last byte
+  uint64_t scanned_to_ = 0;   // positions below this are known not to start a frame
+  std::deque<TimeMark> marks_;
+  std::deque<uint64_t> gaps_;  // stream offsets preceded by a boundary-sized silence
+  int64_t last_end_ns_ = 0;
+  bool have_time_ = false;
+};
+
+}  // namespace modtap::decoder

@@ -1,0 +1,26 @@
+// JSON Lines: one object per record. docs/output.md lists every key.
+#pragma once
+
+#include <vector>
+
+#include "decoder/analyzer.hpp"
+#include "tools/modtap/output.hpp"
+
+namespace modtap::tools {
+
+class JsonSink final : public decoder::RecordSink {
+ public:
+  JsonSink(Output& out, const std::vector<decoder::ChannelInfo>& channels);
+
+  void on_frame(const decoder::Frame& frame) override;
+  void on_noise(const decoder::Noise& noise) override;
+  void on_timeout(const decoder::Timeout& timeout) override;
+
+ private:
+  void channel(uint16_t id);
+
+  Output& out_;
+  const std::vector<decoder::ChannelInfo>& channels_;
+};
+
+}  // namespace modtap::tools

@@ -1,0 +1,109 @@
+#include "tools/modtap/text_sink.hpp"
+
+#include "decoder/pdu_fields.hpp"
+#include "tools/modtap/render.hpp"
+
+namespace modtap::tools {
+
+using namespace decoder;
+
+namespace {
+
+constexpr size_t line_items = 8;  // values shown on a summary line; -V shows all
+
+const char* role_tag(Role role) {
+  switch (role) {
+    case Role::request: return "req";
+    case Role::response: return "rsp";
+    case Role::unknown: return "???";
+  }
+  return "?";
+}
+
+}  // namespace
+
+TextSink::TextSink(Output& out, const std::vector<ChannelInfo>& channels, bool verbose)
+    : out_(out), channels_(channels), verbose_(verbose) {}
+
+double TextSink::seconds(int64_t t_ns) {
+  if (!first_ns_) first_ns_ = t_ns;
+  return static_cast<double>(t_ns - *first_ns_) / 1e9;
+}
+
+void TextSink::channel_column(uint16_t channel) {
+  if (channels_.size() > 1) out_.print(" {:<10}", channel < channels_.size() ? channels_[channel].name : "?");
+}
+
+void TextSink::on_frame(const Frame& frame) {
+  out_.print("{:6} {:11.6f}", frame.index, seconds(frame.t_ns));
+  channel_column(frame.channel);
+  out_.print(" {} slave {:<3} {}", role_tag(frame.role), frame.slave(), function_label(frame.function()));
+  const DecodedPdu decoded = decode_pdu(frame.role, frame.pdu(), frame.request_pdu);
+  auto& buf = out_.buffer();
+  for (const Field& f : decoded.fields) {
+    if (f.kind == Field::Kind::items || f.key == "byte_count") continue;
+    out_.print(" {}=", f.key);
+    append_text_value(buf, f, line_items);
+  }
+  const char* check = frame.mode == Mode::rtu ? "crc" : "lrc";
+  if (frame.check_ok) {
+    out_.print("  {} ok", check);
+  } else {
+    out_.print("  {} BAD (expected 0x{:04x})", check, frame.expected_check);
+  }
+  if (frame.request) out_.print("  req #{}", *frame.request);
+  if (frame.latency_ns) out_.print(" {:.3f} ms", static_cast<double>(*frame.latency_ns) / 1e6);
+  for (const auto& [bit, name] : finding_names())
+    if ((frame.findings & bit) && bit != finding_bad_check) out_.print(" [{}]", name);
+  out_.print("\n");
+  if (verbose_) tree(frame);
+  out_.end_record();
+}
+
+void TextSink::tree(const Frame& frame) {
+  auto& buf = out_.buffer();
+  out_.print("    Frame {}: {} bytes, {}, channel {}, offset {}\n", frame.index, frame.raw.size(),
+             to_string(frame.mode), frame.channel < channels_.size() ? channels_[frame.channel].name : "?",
+             frame.offset);
+  out_.print("    Raw: ");
+  append_hex(buf, frame.raw, true);
+  out_.print("\n    Role: {}\n    Slave: {}\n    Function: {} ({})\n", to_string(frame.role),
+             frame.slave(), frame.function(), function_label(frame.function()));
+  const DecodedPdu decoded = decode_pdu(frame.role, frame.pdu(), frame.request_pdu);
+  for (const Field& f : decoded.fields) {
+    out_.print("    {}: ", f.key);
+    append_text_value(buf, f, SIZE_MAX);
+    out_.print("\n");
+  }
+  if (decoded.truncated) out_.print("    [PDU shorter than its fields]\n");
+  const int width = frame.mode == Mode::rtu ? 4 : 2;
+  out_.print("    {}: 0x{:0{}x} ({})", frame.mode == Mode::rtu ? "CRC" : "LRC", frame.wire_check(),
+             width, frame.check_ok ? "ok" : "bad");
+  if (!frame.check_ok) out_.print(", expected 0x{:0{}x}", frame.expected_check, width);
+  out_.print("\n");
+  if (frame.request)
+    out_.print("    Request in frame: {}\n", *frame.request);
+  if (frame.latency_ns)
+    out_.print("    Latency: {:.3f} ms\n", static_cast<double>(*frame.latency_ns) / 1e6);
+}
+
+void TextSink::on_noise(const Noise& noise) {
+  out_.print("{:6} {:11.6f}", noise.index, seconds(noise.t_ns));
+  channel_column(noise.channel);
+  out_.print(" noise {} bytes ({}): ", noise.raw.size(), to_string(noise.reason));
+  append_hex(out_.buffer(), noise.raw.first(std::min<size_t>(noise.raw.size(), 32)), true);
+  if (noise.raw.size() > 32) out_.print(" ...");
+  out_.print("\n");
+  out_.end_record();
+}
+
+void TextSink::on_timeout(const Timeout& t) {
+  out_.print("{:6} {:11.6f}", "-", seconds(t.t_ns));
+  channel_column(t.channel);
+  out_.print(" TIMEOUT request #{} slave {} {}: no response after {:.3f} ms ({})\n", t.request,
+             t.slave, function_label(t.function), static_cast<double>(t.waited_ns) / 1e6,
+             to_string(t.reason));
+  out_.end_record();
+}
+
+}  // namespace modtap::tools
