@@ -63,8 +63,8 @@ Format detect_format(const std::string& path) {
       magic({0x0A, 0x0D, 0x0D, 0x0A}))
     return Format::pcap;
   if (magic({'P', 'K', 0x03, 0x04})) return Format::sigrok;  // a .sr file is a zip
-  if (HexlogReader::is_header(std::string(head.begin(), head.begin() + static_cast<long>(n))))
-    return Format::hexlog;
+  const std::string text(head.begin(), head.begin() + static_cast<long>(n));
+  if (HexlogReader::is_header(text.substr(0, text.find_first_of("\r\n")))) return Format::hexlog;
   const Format guess = by_extension(path);
   if (guess != Format::automatic) return guess;
   throw CaptureError(fmt::format(

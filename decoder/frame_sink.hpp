@@ -10,6 +10,7 @@ struct Expectation {
   bool pending = false;
   uint8_t slave = 0;
   uint8_t function = 0;
+  uint16_t echo_size = 0;  // ADU size of an echo whose length its header does not tell, or 0
 };
 
 class FrameSink {

@@ -31,9 +31,14 @@ Finding check_response_fit(std::span<const uint8_t> req, std::span<const uint8_t
     case 0x03:
     case 0x04:
     case 0x17: return count_is(be16(req, 3) * 2u);
+    case 0x08:
+      // Return Query Data echoes everything; the counters return their value instead.
+      return be16(req, 1) == 0 ? (std::equal(req.begin(), req.end(), rsp.begin(), rsp.end())
+                                      ? finding_none
+                                      : finding_echo_mismatch)
+                               : same_first(3);
     case 0x05:
     case 0x06:
-    case 0x08:
     case 0x16:
       return std::equal(req.begin(), req.end(), rsp.begin(), rsp.end()) ? finding_none
                                                                          : finding_echo_mismatch;
@@ -49,7 +54,11 @@ Matcher::Matcher(const MatcherOptions& options, TimeoutHandler on_timeout)
 
 Expectation Matcher::expectation() const {
   if (!pending_) return {};
-  return {true, pending_->slave, pending_->pdu[0]};
+  // FC08 Return Query Data: the response is the request again, so its length is known.
+  const bool query_echo = pending_->pdu[0] == 0x08 && pending_->size >= 3 &&
+                          pending_->pdu[1] == 0 && pending_->pdu[2] == 0;
+  return {true, pending_->slave, pending_->pdu[0],
+          static_cast<uint16_t>(query_echo ? pending_->adu_size : 0)};
 }
 
 void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
@@ -80,6 +89,8 @@ bool Matcher::pending_matches(const Frame& frame) const {
 
 void Matcher::on_request(Frame& frame) {
   if (pending_) expire(frame.t_ns, TimeoutReason::next_request);
+  // A slave ignores a request whose check fails, so it opens no transaction.
+  if (!frame.check_ok) return;
   if (frame.slave() == 0) {
     frame.findings |= finding_broadcast;
     if (!may_broadcast(frame.function())) frame.findings |= finding_illegal_broadcast;
@@ -91,6 +102,7 @@ void Matcher::on_request(Frame& frame) {
   p.channel = frame.channel;
   p.end_ns = frame.end_ns;
   p.slave = frame.slave();
+  p.adu_size = static_cast<uint16_t>(frame.adu.size());
   p.size = static_cast<uint16_t>(std::min(pdu.size(), p.pdu.size()));
   std::copy_n(pdu.begin(), p.size, p.pdu.begin());
   pending_ = p;

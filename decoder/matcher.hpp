@@ -40,6 +40,7 @@ class Matcher {
     uint16_t channel = 0;
     int64_t end_ns = 0;
     uint8_t slave = 0;
+    uint16_t adu_size = 0;
     uint16_t size = 0;  // PDU bytes kept (enough for echo and fit checks)
     std::array<uint8_t, 256> pdu{};
   };

@@ -13,6 +13,10 @@ constexpr uint16_t min_adu = 4;  // slave, function, CRC
 constexpr uint8_t max_unicast_slave = 247;
 // Compact the buffer once this much has been consumed, so memmove stays rare.
 constexpr size_t compact_after = 1 << 16;
+// A frame found by CRC search may be confirmed by following ones found the same way (FC08
+// Return Query Data requests and their echoes, back to back); CRC hits are rare, so each
+// level costs one more bounded scan.
+constexpr int max_search = 8;
 
 bool crc_ok(const uint8_t* p, size_t n) {
   return crc16({p, n - crc_size}) == wire_crc({p, n});
@@ -58,7 +62,7 @@ void RtuFramer::finish() { resolve(true); }
 
 void RtuFramer::resolve(bool final) {
   while (head_ < end_) {
-    const Match m = match_at(head_, final, true);
+    const Match m = match_at(head_, final, max_search);
     if (m.kind == Match::Kind::found) {
       emit_frame(head_, m);
       continue;
@@ -71,7 +75,7 @@ void RtuFramer::resolve(bool final) {
   }
 }
 
-RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, bool allow_search) const {
+RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const {
   const uint64_t avail = end_ - at;
   const uint8_t* p = at_ptr(at);
   if (avail < 1) return need_more();
@@ -94,7 +98,7 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, bool allow_search)
   for (Role role : order) {
     if ((role == Role::request && !may_request) || (role == Role::response && !may_respond))
       continue;
-    Match m = match_role(role, at, final, allow_search);
+    Match m = match_role(role, at, final, search);
     if (m.kind == Match::Kind::found) {
       // The same bytes may read as the other role too (echo codes 05, 06, 08, ...).
       const Role other = role == Role::request ? Role::response : Role::request;
@@ -102,13 +106,16 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, bool allow_search)
       if (other_allowed && fits_role(other, at, m.length)) m.fit = {true, true};
       return m;
     }
-    need_more |= m.kind == Match::Kind::need_more;
+    if (m.kind == Match::Kind::need_more) {
+      // The likelier reading is still open: wait for it rather than take the other one early.
+      if (!final) return m;
+      need_more = true;
+    }
   }
   return need_more ? RtuFramer::need_more() : Match{};
 }
 
-RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final,
-                                       bool allow_search) const {
+RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int search) const {
   const uint64_t avail = end_ - at;
   const uint8_t* p = at_ptr(at);
   const BodyLength body = body_length(role, {p, static_cast<size_t>(avail)});
@@ -124,19 +131,29 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final,
       return {};
     }
     case BodyLength::Kind::variable: {
-      if (!allow_search) return {};
+      const Expectation expected = sink_.expectation();
+      if (role == Role::response && expected.echo_size && expected.slave == p[0] &&
+          expected.function == p[1]) {
+        if (avail < expected.echo_size) return need_more();
+        if (crc_ok(p, expected.echo_size)) return {Match::Kind::found, expected.echo_size, fit};
+      }
+      if (search <= 0) return {};
       // A bounded CRC search. A CRC match alone is weak evidence (a trailing 0x00 keeps a
-      // zero residue zero), so the end must also be confirmed by a gap or the next frame.
+      // zero residue zero), so the end must also be confirmed by a gap or the next frame;
+      // only when nothing confirms that way may a turnaround glitch stand in between.
       const uint64_t limit = std::min<uint64_t>(avail, max_rtu_adu);
       const size_t first = std::max<size_t>(body.bytes + crc_size, min_adu);
-      uint16_t crc = crc16({p, first - crc_size});
       bool open = false;
-      for (size_t n = first; n <= limit; ++n) {
-        if (crc == wire_crc({p, n})) {
-          if (confirmed_end(at + n, final)) return {Match::Kind::found, static_cast<uint16_t>(n), fit};
-          open |= at + n == end_;
+      for (bool allow_glitch : {false, true}) {
+        uint16_t crc = crc16({p, first - crc_size});
+        for (size_t n = first; n <= limit; ++n) {
+          if (crc == wire_crc({p, n})) {
+            if (confirmed_end(at, at + n, final, search - 1, allow_glitch))
+              return {Match::Kind::found, static_cast<uint16_t>(n), fit};
+            open |= at + n == end_;
+          }
+          crc = crc16_step(crc, p[n - crc_size]);
         }
-        crc = crc16_step(crc, p[n - crc_size]);
       }
       if (!final && (avail < max_rtu_adu || open)) return need_more();
       return {};
@@ -151,20 +168,29 @@ bool RtuFramer::fits_role(Role role, uint64_t at, uint16_t length) const {
   return body.kind == BodyLength::Kind::variable && body.bytes + crc_size <= length;
 }
 
-bool RtuFramer::confirmed_end(uint64_t end, bool final) const {
+bool RtuFramer::confirmed_end(uint64_t begin, uint64_t end, bool final, int search,
+                              bool allow_glitch) const {
   if (end == end_) return final;
-  return gap_at(end) || match_at(end, false, false).kind == Match::Kind::found;
+  if (gap_at(end) || match_at(end, final, search).kind == Match::Kind::found) return true;
+  // An exact copy right behind is the echo of FC08 Return Query Data.
+  const uint64_t size = end - begin;
+  if (end + size <= end_ && std::equal(at_ptr(begin), at_ptr(end), at_ptr(end))) return true;
+  // A turnaround glitch between this frame and the next still confirms this end; without
+  // this, the glitch's 0x00 would be taken into the frame (it keeps the CRC residue zero).
+  const uint8_t next = *at_ptr(end);
+  return allow_glitch && (next == 0x00 || next == 0xFF) && end + 1 < end_ &&
+         (gap_at(end + 1) || match_at(end + 1, final, search).kind == Match::Kind::found);
 }
 
 bool RtuFramer::blocked_by_gap(uint64_t at, bool final) const {
   const uint64_t gap = first_gap_after(at);
-  return gap < end_ && match_at(gap, final, false).kind == Match::Kind::found;
+  return gap < end_ && match_at(gap, final, 0).kind == Match::Kind::found;
 }
 
 uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
   uint64_t at = std::max(from, scanned_to_);
   for (; at < end_; ++at) {
-    const Match m = match_at(at, final, true);
+    const Match m = match_at(at, final, max_search);
     if (m.kind == Match::Kind::found) break;
     if (m.kind == Match::Kind::need_more && !final && !blocked_by_gap(at, final)) {
       scanned_to_ = at;
@@ -217,9 +243,9 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
       frame.raw = frame.adu = {p, static_cast<size_t>(size)};
       frame.t_ns = end_time(begin) - char_ns_;
       frame.end_ns = end_time(end - 1);
-      frame.check_ok = false;
       frame.expected_check = crc16({p, static_cast<size_t>(size - crc_size)});
-      frame.findings = finding_bad_check;
+      frame.check_ok = frame.expected_check == wire_crc(frame.adu);
+      frame.findings = frame.check_ok ? finding_none : finding_bad_check;
       sink_.on_frame(frame);
       consume(end);
       return;

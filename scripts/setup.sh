@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Installs what modtap needs on Debian 12 (as root) and builds it into build/.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+packages=(cmake g++ make pkg-config libfmt-dev libpcap-dev libcli11-dev libgtest-dev libgmock-dev
+          libbenchmark-dev sigrok-cli)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null
+fi
+build=${BUILD_DIR:-build}
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}" ${CMAKE_ARGS:-} >/dev/null
+cmake --build "$build" -j"$(nproc)"

@@ -1,0 +1,59 @@
+// Framing, checking and matching throughput on back-to-back simulated RTU traffic.
+#include <benchmark/benchmark.h>
+
+#include "decoder/analyzer.hpp"
+#include "decoder/checksum.hpp"
+#include "tools/busgen/bus_simulator.hpp"
+
+namespace {
+
+using namespace modtap;
+
+class Counting final : public decoder::RecordSink {
+ public:
+  void on_frame(const decoder::Frame&) override { ++frames; }
+  void on_noise(const decoder::Noise&) override {}
+  void on_timeout(const decoder::Timeout&) override {}
+  uint64_t frames = 0;
+};
+
+const busgen::BusCapture& capture() {
+  static const busgen::BusCapture c = [] {
+    busgen::BusOptions o;
+    o.transactions = 200'000;
+    o.back_to_back = true;
+    o.exception_rate = o.no_response_rate = o.broadcast_rate = 0;
+    return busgen::simulate(o);
+  }();
+  return c;
+}
+
+void BM_AnalyzeUntimed(benchmark::State& state) {
+  const auto& c = capture();
+  uint64_t frames = 0;
+  for (auto _ : state) {
+    Counting sink;
+    decoder::AnalyzerOptions o;
+    o.mode = decoder::ModeChoice::rtu;
+    o.clock = decoder::ClockQuality::none;
+    decoder::Analyzer analyzer(o, {{"bench", decoder::ChannelRole::bus}}, sink);
+    for (size_t at = 0; at < c.bytes.size(); at += 65536)
+      analyzer.push({0, 0, {c.bytes.data() + at, std::min<size_t>(65536, c.bytes.size() - at)}});
+    analyzer.finish();
+    frames += sink.frames;
+  }
+  state.counters["frames/s"] = benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsRate);
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * c.bytes.size()));
+}
+BENCHMARK(BM_AnalyzeUntimed)->Unit(benchmark::kMillisecond);
+
+void BM_Crc16(benchmark::State& state) {
+  const auto& c = capture();
+  for (auto _ : state) benchmark::DoNotOptimize(decoder::crc16({c.bytes.data(), 4096}));
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * 4096));
+}
+BENCHMARK(BM_Crc16);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,149 @@
+#include <gtest/gtest.h>
+#include <pcap/pcap.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "captures/hexlog_reader.hpp"
+#include "captures/open_capture.hpp"
+#include "captures/pcap_reader.hpp"
+#include "captures/raw_reader.hpp"
+#include "tests/support/collector.hpp"
+
+namespace modtap::captures {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::hex;
+
+class TempDir : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("modtap-test-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string write(const std::string& name, const std::string& content) {
+    const auto path = (dir_ / name).string();
+    std::ofstream(path, std::ios::binary) << content;
+    return path;
+  }
+  std::string write_pcap(const std::string& name, int dlt, const std::vector<std::vector<uint8_t>>& packets) {
+    const auto path = (dir_ / name).string();
+    pcap_t* dead = pcap_open_dead(dlt, 65535);
+    pcap_dumper_t* dumper = pcap_dump_open(dead, path.c_str());
+    for (size_t i = 0; i < packets.size(); ++i) {
+      pcap_pkthdr h{};
+      h.ts.tv_sec = 1700000000;
+      h.ts.tv_usec = static_cast<suseconds_t>(i * 1000);
+      h.caplen = h.len = static_cast<bpf_u_int32>(packets[i].size());
+      pcap_dump(reinterpret_cast<u_char*>(dumper), &h, packets[i].data());
+    }
+    pcap_dump_close(dumper);
+    pcap_close(dead);
+    return path;
+  }
+  fs::path dir_;
+};
+
+std::string error_of(const std::string& path, Format format = Format::automatic) {
+  try {
+    OpenOptions o;
+    o.format = format;
+    auto source = open_capture(path, o);
+    decoder::Chunk chunk;
+    while (source->next(chunk)) {
+    }
+  } catch (const CaptureError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST_F(TempDir, HexlogReadsJpnevulatorBlocksAndTtyNames) {
+  const auto path = write("bus.log",
+                          "2026-11-22 10:57:33.761949: /dev/ttyUSB0\n"
+                          "01 03 00 00 00 0A C5 CD                        \t........\n"
+                          "2026-11-22 10:57:33.963377: /dev/ttyUSB1\n"
+                          "01 03 02 00 0A 38 43");
+  HexlogReader reader(path, 1000);
+  decoder::Chunk chunk;
+  ASSERT_TRUE(reader.next(chunk));
+  EXPECT_EQ(std::vector<uint8_t>(chunk.bytes.begin(), chunk.bytes.end()), hex("01 03 00 00 00 0a c5 cd"));
+  EXPECT_EQ(chunk.channel, 0);
+  const int64_t first = chunk.t_ns;
+  ASSERT_TRUE(reader.next(chunk));
+  EXPECT_EQ(chunk.channel, 1);
+  EXPECT_EQ(chunk.t_ns - first, 201'428'000 + 7000 - 8000);
+  EXPECT_FALSE(reader.next(chunk));
+  ASSERT_EQ(reader.channels().size(), 2u);
+  EXPECT_EQ(reader.channels()[1].name, "/dev/ttyUSB1");
+}
+
+TEST_F(TempDir, HexlogWithABrokenLineNamesTheLine) {
+  const auto path = write("bad.log", "2026-11-22 10:57:33.761949:\n01 03 zz 00\n");
+  EXPECT_EQ(error_of(path), path + ": line 2, column 7: expected a hex byte, found \"zz 00\"");
+}
+
+TEST_F(TempDir, HexlogBytesBeforeAnyTimeStampAreAnError) {
+  const auto path = write("nostamp.log", "01 03\n");
+  EXPECT_NE(error_of(path, Format::hexlog).find("line 1: bytes before the first time stamp"), std::string::npos);
+}
+
+TEST_F(TempDir, PcapPacketsBecomeTimedChunks) {
+  const auto path = write_pcap("user0.pcap", 147, {hex("01 03 00 00"), hex("00 0a c5 cd")});
+  PcapReader reader(path);
+  decoder::Chunk chunk;
+  ASSERT_TRUE(reader.next(chunk));
+  EXPECT_EQ(chunk.t_ns, 1700000000LL * 1'000'000'000);
+  ASSERT_TRUE(reader.next(chunk));
+  EXPECT_EQ(chunk.t_ns, 1700000000LL * 1'000'000'000 + 1'000'000);
+  EXPECT_EQ(chunk.bytes.size(), 4u);
+  EXPECT_FALSE(reader.next(chunk));
+}
+
+TEST_F(TempDir, PcapOfAnotherLinkTypeIsRefused) {
+  const auto path = write_pcap("eth.pcap", 1, {hex("00")});
+  EXPECT_NE(error_of(path).find("link type 1"), std::string::npos);
+}
+
+TEST_F(TempDir, TruncatedPcapNamesTheOffset) {
+  const auto good = write_pcap("whole.pcap", 147, {hex("01 03 00 00 00 0a c5 cd"), hex("01 03 00 00 00 0a c5 cd")});
+  std::ifstream in(good, std::ios::binary);
+  std::string content((std::istreambuf_iterator<char>(in)), {});
+  const auto path = write("cut.pcap", content.substr(0, content.size() - 5));
+  const std::string error = error_of(path);
+  EXPECT_NE(error.find(path + ": offset 48, after packet 1: truncated"), std::string::npos) << error;
+}
+
+TEST_F(TempDir, UnknownContentWithAnUnknownNameIsAnError) {
+  const auto path = write("mystery.dat", "\x01\x03");
+  EXPECT_NE(error_of(path).find("cannot tell the capture format"), std::string::npos);
+}
+
+TEST_F(TempDir, MissingFileIsAnError) {
+  EXPECT_NE(error_of((dir_ / "absent.pcap").string()).find("cannot open"), std::string::npos);
+}
+
+TEST_F(TempDir, FormatIsToldByContentBeforeName) {
+  const auto pcap = write_pcap("looks-raw.bin", 147, {hex("01")});
+  EXPECT_EQ(detect_format(pcap), Format::pcap);
+  EXPECT_EQ(detect_format(write("x.bin", "\x01\x02")), Format::raw);
+  EXPECT_EQ(detect_format(write("x.txt", "2026-11-22 10:57:33.761949:\n01\n")), Format::hexlog);
+}
+
+TEST_F(TempDir, RawReaderDeliversEveryByteUntimed) {
+  std::string content(200000, '\x5a');
+  RawReader reader(write("big.bin", content));
+  decoder::Chunk chunk;
+  size_t total = 0;
+  while (reader.next(chunk)) total += chunk.bytes.size();
+  EXPECT_EQ(total, content.size());
+  EXPECT_EQ(reader.clock(), decoder::ClockQuality::none);
+}
+
+}  // namespace
+}  // namespace modtap::captures

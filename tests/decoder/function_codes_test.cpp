@@ -1,0 +1,81 @@
+#include "decoder/function_codes.hpp"
+
+#include <gtest/gtest.h>
+
+#include "tests/support/collector.hpp"
+
+namespace modtap::decoder {
+namespace {
+
+using testing::hex;
+using K = BodyLength::Kind;
+
+BodyLength request(const char* h) { return body_length(Role::request, hex(h)); }
+BodyLength response(const char* h) { return body_length(Role::response, hex(h)); }
+
+TEST(BodyLength, ReadRequestsAreSixBytesWithALegalQuantity) {
+  EXPECT_EQ(request("01 03 00 00 00 0a").bytes, 6);
+  EXPECT_EQ(request("01 03 00 00 00 7e").kind, K::invalid);  // 126 registers
+  EXPECT_EQ(request("01 01 00 00 07 d0").kind, K::known);    // 2000 coils
+  EXPECT_EQ(request("01 03 00").kind, K::need_more);
+}
+
+TEST(BodyLength, ResponsesCarryTheirByteCount) {
+  EXPECT_EQ(response("01 03 04").bytes, 7);
+  EXPECT_EQ(response("01 03 03").kind, K::invalid);  // registers come in pairs
+  EXPECT_EQ(response("01 01 01").bytes, 4);
+  EXPECT_EQ(response("01 83").bytes, 3);
+}
+
+TEST(BodyLength, WriteMultipleCountsMustFitTheQuantity) {
+  EXPECT_EQ(request("01 10 00 00 00 02 04").bytes, 11);
+  EXPECT_EQ(request("01 10 00 00 00 02 05").kind, K::invalid);
+  EXPECT_EQ(request("01 0f 00 00 00 0a 02").bytes, 9);
+  EXPECT_EQ(response("01 10").bytes, 6);
+}
+
+TEST(BodyLength, EchoCodesHaveTheSameLengthBothWays) {
+  for (const char* h : {"01 05 00 01 ff 00", "01 06 00 01 00 02", "01 08 00 0a 00 00"})
+    EXPECT_EQ(request(h).bytes, response(h).bytes) << h;
+  EXPECT_EQ(request("01 16").bytes, 8);
+  EXPECT_EQ(response("01 16").bytes, 8);
+}
+
+TEST(BodyLength, ReturnQueryDataHasNoLengthOfItsOwn) {
+  EXPECT_EQ(request("01 08 00 00").kind, K::variable);
+  EXPECT_EQ(response("01 08 00 00").kind, K::variable);
+}
+
+TEST(BodyLength, OtherCodesFollowTheirLayout) {
+  EXPECT_EQ(request("01 07").bytes, 2);
+  EXPECT_EQ(response("01 07").bytes, 3);
+  EXPECT_EQ(response("01 0b").bytes, 6);
+  EXPECT_EQ(response("01 0c 08").bytes, 11);
+  EXPECT_EQ(response("01 11 03").bytes, 6);
+  EXPECT_EQ(request("01 14 0e").bytes, 17);
+  EXPECT_EQ(request("01 17 00 00 00 02 00 00 00 01 02").bytes, 13);
+  EXPECT_EQ(response("01 17 04").bytes, 7);
+  EXPECT_EQ(request("01 18").bytes, 4);
+  EXPECT_EQ(response("01 18 00 06").bytes, 10);
+  EXPECT_EQ(request("01 2b 0e").bytes, 5);
+}
+
+TEST(BodyLength, DeviceIdentificationWalksItsObjects) {
+  // Header 8 bytes, then {id, length, value}: "ab" and "c".
+  EXPECT_EQ(response("01 2b 0e 01 01 00 00 02 00 02 61 62 01 01 63").bytes, 15);
+  EXPECT_EQ(response("01 2b 0e 01 01 00 00 02 00 02 61").kind, K::need_more);
+}
+
+TEST(BodyLength, UnknownCodesAreSearchedFor) { EXPECT_EQ(request("01 41").kind, K::variable); }
+
+TEST(FunctionTable, NamesThePublicCodesOnly) {
+  EXPECT_STREQ(function_name(0x03), "Read Holding Registers");
+  EXPECT_STREQ(function_name(0x83), "Read Holding Registers");
+  EXPECT_EQ(function_name(0x41), nullptr);
+  EXPECT_TRUE(may_broadcast(0x10));
+  EXPECT_FALSE(may_broadcast(0x03));
+  EXPECT_STREQ(exception_name(0x02), "Illegal Data Address");
+}
+
+}  // namespace
+}  // namespace modtap::decoder

@@ -1,0 +1,83 @@
+#include "decoder/matcher.hpp"
+
+#include <gtest/gtest.h>
+
+#include "tests/support/collector.hpp"
+
+namespace modtap::decoder {
+namespace {
+
+using testing::analyze_untimed;
+using testing::hex;
+
+std::vector<uint8_t> join(std::initializer_list<const char*> frames) {
+  std::vector<uint8_t> out;
+  for (const char* f : frames) {
+    auto b = hex(f);
+    out.insert(out.end(), b.begin(), b.end());
+  }
+  return out;
+}
+
+TEST(Matcher, TellsAnEchoRequestFromItsResponseByOrder) {
+  // FC06 request and response are the same bytes: the second is the answer.
+  const auto out = analyze_untimed(join({"01 06 25 02 17 70 2d 12", "01 06 25 02 17 70 2d 12"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].role, Role::request);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+}
+
+TEST(Matcher, ReportsATimeoutWhenTheMasterMovesOn) {
+  const auto out = analyze_untimed(join({"01 03 00 00 00 0a c5 cd", "01 03 00 00 00 0a c5 cd"}));
+  const auto timeouts = out.timeouts();
+  ASSERT_EQ(timeouts.size(), 2u);
+  EXPECT_EQ(timeouts[0].request, 1u);
+  EXPECT_EQ(timeouts[0].timeout_reason, TimeoutReason::next_request);
+  EXPECT_EQ(timeouts[1].timeout_reason, TimeoutReason::end_of_capture);
+}
+
+TEST(Matcher, MarksBroadcastsAndExpectsNoResponse) {
+  const auto out = analyze_untimed(join({"00 06 00 01 00 03 99 da"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_TRUE(frames[0].findings & finding_broadcast);
+  EXPECT_TRUE(out.timeouts().empty());
+}
+
+TEST(Matcher, FlagsAResponseWithNoRequest) {
+  const auto out = analyze_untimed(join({"01 03 02 07 d0 bb e8"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_EQ(frames[0].role, Role::response);
+  EXPECT_TRUE(frames[0].findings & finding_unsolicited);
+  EXPECT_FALSE(frames[0].request.has_value());
+}
+
+TEST(Matcher, FlagsAByteCountThatDoesNotFitTheRequest) {
+  // Asked for 10 registers, got 1.
+  const auto out = analyze_untimed(join({"01 03 00 00 00 0a c5 cd", "01 03 02 07 d0 bb e8"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_TRUE(frames[1].findings & finding_length_mismatch);
+}
+
+TEST(Matcher, PairsAnExceptionWithItsRequest) {
+  const auto out = analyze_untimed(join({"01 03 25 23 00 01 7e cc", "01 83 02 c0 f1"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+}
+
+TEST(ResponseFit, CountersOfDiagnosticsNeedNotEcho) {
+  EXPECT_EQ(check_response_fit(hex("08 00 0b 00 00"), hex("08 00 0b 01 23")), finding_none);
+  EXPECT_EQ(check_response_fit(hex("08 00 00 12 ab"), hex("08 00 00 12 ac")), finding_echo_mismatch);
+  EXPECT_EQ(check_response_fit(hex("01 00 00 00 0a"), hex("01 02 ff 03")), finding_none);
+  EXPECT_EQ(check_response_fit(hex("01 00 00 00 0a"), hex("01 01 ff")), finding_length_mismatch);
+}
+
+}  // namespace
+}  // namespace modtap::decoder

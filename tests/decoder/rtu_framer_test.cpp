@@ -1,0 +1,174 @@
+#include "decoder/rtu_framer.hpp"
+
+#include <gtest/gtest.h>
+
+#include "decoder/analyzer.hpp"
+#include "decoder/checksum.hpp"
+#include "tests/support/collector.hpp"
+
+namespace modtap::decoder {
+namespace {
+
+using testing::analyze_untimed;
+using testing::Collector;
+using testing::hex;
+using testing::Record;
+
+// Feeds the bytes cut at every possible offset and expects the same records each time.
+void expect_same_at_every_split(const std::vector<uint8_t>& bytes) {
+  const auto whole = analyze_untimed(bytes);
+  for (size_t cut = 1; cut < bytes.size(); ++cut) {
+    const auto split = analyze_untimed(bytes, {cut});
+    ASSERT_EQ(split.records.size(), whole.records.size()) << "cut at " << cut;
+    for (size_t i = 0; i < whole.records.size(); ++i) {
+      EXPECT_EQ(split.records[i].raw, whole.records[i].raw) << "cut at " << cut;
+      EXPECT_EQ(split.records[i].type, whole.records[i].type) << "cut at " << cut;
+      EXPECT_EQ(split.records[i].role, whole.records[i].role) << "cut at " << cut;
+    }
+  }
+}
+
+const auto read_request = hex("01 03 00 00 00 0a c5 cd");
+const auto read_response = hex("01 03 14 00 01 00 02 00 03 00 04 00 05 00 06 00 07 00 08 00 09 00 0a 8f 16");
+
+std::vector<uint8_t> concat(std::initializer_list<std::vector<uint8_t>> parts) {
+  std::vector<uint8_t> out;
+  for (const auto& p : parts) out.insert(out.end(), p.begin(), p.end());
+  return out;
+}
+
+TEST(RtuFramer, SplitsARequestAndItsResponseWithNoGapBetweenThem) {
+  const auto bytes = concat({read_request, read_response});
+  const auto out = analyze_untimed(bytes);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].raw, read_request);
+  EXPECT_EQ(frames[0].role, Role::request);
+  EXPECT_EQ(frames[1].raw, read_response);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_TRUE(out.noise().empty());
+}
+
+TEST(RtuFramer, GivesTheSameRecordsWhereverTheInputIsCut) {
+  expect_same_at_every_split(concat({read_request, read_response, hex("00"), read_request,
+                                     hex("11 22"), read_request, read_response}));
+}
+
+TEST(RtuFramer, KeepsAGlitchByteBeforeAResponseAsNoise) {
+  const auto bytes = concat({read_request, hex("00"), read_response});
+  const auto out = analyze_untimed(bytes);
+  ASSERT_EQ(out.stream().size(), 3u);
+  EXPECT_EQ(out.stream()[1].type, Record::Type::noise);
+  EXPECT_EQ(out.stream()[1].reason, NoiseReason::glitch);
+  EXPECT_EQ(out.stream()[2].raw, read_response);
+  EXPECT_EQ(out.stream()[2].request, out.stream()[0].index);
+}
+
+TEST(RtuFramer, DoesNotSwallowATrailingZeroIntoTheFrame) {
+  const auto bytes = concat({read_request, hex("00")});
+  const auto out = analyze_untimed(bytes);
+  ASSERT_EQ(out.stream().size(), 2u);
+  EXPECT_EQ(out.stream()[0].raw, read_request);
+  EXPECT_EQ(out.stream()[1].raw, hex("00"));
+}
+
+TEST(RtuFramer, ReportsABadCrcFrameWithTheExpectedValue) {
+  auto damaged = read_request;
+  damaged[5] = 0x0b;  // quantity 11, CRC still that of quantity 10
+  const auto bytes = concat({damaged, read_request});
+  const auto out = analyze_untimed(bytes);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_FALSE(frames[0].check_ok);
+  EXPECT_EQ(frames[0].raw, damaged);
+  EXPECT_EQ(frames[0].expected_check, 0x0D04);  // CRC of 01 03 00 00 00 0b
+  EXPECT_TRUE(frames[1].check_ok);
+}
+
+TEST(RtuFramer, TurnsATruncatedFrameIntoNoiseAndFindsTheNextOne) {
+  const auto bytes = concat({hex("01 03 00 00"), read_request});
+  const auto out = analyze_untimed(bytes);
+  ASSERT_EQ(out.stream().size(), 2u);
+  EXPECT_EQ(out.stream()[0].type, Record::Type::noise);
+  EXPECT_EQ(out.stream()[0].reason, NoiseReason::truncated);
+  EXPECT_EQ(out.stream()[1].raw, read_request);
+}
+
+TEST(RtuFramer, KeepsEveryByteOfEndlessJunkInBoundedNoiseRecords) {
+  std::vector<uint8_t> junk(1 << 20);
+  uint32_t x = 12345;
+  for (auto& b : junk) {
+    x = x * 1103515245 + 12345;
+    b = static_cast<uint8_t>(x >> 24);
+  }
+  const auto out = analyze_untimed(junk, {1000, 70000, 500000});
+  EXPECT_EQ(out.bytes_of(0), junk);
+  for (const auto& r : out.records) EXPECT_LE(r.raw.size(), 256u);
+  // Random bytes can hold a CRC-good frame by chance; it must stay rare.
+  EXPECT_LT(out.frames().size(), 20u);
+}
+
+TEST(RtuFramer, FindsAnUnknownFunctionCodeByCrcWhenTheNextFrameConfirmsIt) {
+  const auto vendor = hex("05 41 01 02 03");
+  std::vector<uint8_t> frame = vendor;
+  const uint16_t crc = crc16(vendor);
+  frame.push_back(static_cast<uint8_t>(crc & 0xFF));
+  frame.push_back(static_cast<uint8_t>(crc >> 8));
+  const auto out = analyze_untimed(concat({frame, read_request}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].raw, frame);
+  EXPECT_EQ(frames[1].raw, read_request);
+}
+
+class GapCollector : public ::testing::Test {
+ protected:
+  // Pushes each byte with its own exact time: bytes of a frame back to back, then `gap_ns`.
+  Collector run_per_byte(const std::vector<std::vector<uint8_t>>& frames, int64_t gap_ns) {
+    Collector out;
+    AnalyzerOptions options;
+    options.mode = ModeChoice::rtu;
+    options.clock = ClockQuality::per_byte;
+    options.format = {9600, 8, Parity::none, 1};
+    Analyzer analyzer(options, {{"bus", ChannelRole::bus}}, out);
+    const int64_t char_ns = options.format.char_time_ns();
+    int64_t t = 0;
+    for (const auto& f : frames) {
+      t += gap_ns;
+      for (uint8_t b : f) {
+        t += char_ns;
+        analyzer.push({0, t, {&b, 1}});
+      }
+    }
+    analyzer.finish();
+    return out;
+  }
+};
+
+TEST_F(GapCollector, CutsATruncatedFrameAtASilence) {
+  const auto out = run_per_byte({hex("01 03 00 00 00"), read_request}, 10'000'000);
+  ASSERT_EQ(out.stream().size(), 2u);
+  EXPECT_EQ(out.stream()[0].type, Record::Type::noise);
+  EXPECT_EQ(out.stream()[0].raw, hex("01 03 00 00 00"));
+  EXPECT_EQ(out.stream()[1].raw, read_request);
+}
+
+TEST_F(GapCollector, MeasuresLatencyFromRequestEndToResponseStart) {
+  const auto out = run_per_byte({read_request, read_response}, 5'000'000);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  ASSERT_TRUE(frames[1].latency_ns.has_value());
+  EXPECT_EQ(*frames[1].latency_ns, 5'000'000);
+}
+
+TEST_F(GapCollector, ReportsATimeoutAfterSilence) {
+  const auto out = run_per_byte({read_request, read_request}, 1'500'000'000);
+  const auto timeouts = out.timeouts();
+  ASSERT_EQ(timeouts.size(), 2u);
+  EXPECT_EQ(timeouts[0].timeout_reason, TimeoutReason::silence);
+  EXPECT_EQ(timeouts[1].timeout_reason, TimeoutReason::end_of_capture);
+}
+
+}  // namespace
+}  // namespace modtap::decoder

@@ -1,0 +1,356 @@
+#include "tools/busgen/bus_simulator.hpp"
+
+#include <algorithm>
+#include <random>
+
+#include "decoder/checksum.hpp"
+
+namespace modtap::busgen {
+
+using decoder::Mode;
+using decoder::Role;
+using Bytes = std::vector<uint8_t>;
+
+void encode_frame(Mode mode, const Bytes& body, Bytes& out) {
+  if (mode == Mode::rtu) {
+    out.insert(out.end(), body.begin(), body.end());
+    const uint16_t crc = decoder::crc16(body);
+    out.push_back(static_cast<uint8_t>(crc & 0xFF));
+    out.push_back(static_cast<uint8_t>(crc >> 8));
+    return;
+  }
+  static constexpr char hex[] = "0123456789ABCDEF";
+  auto put = [&](uint8_t b) {
+    out.push_back(static_cast<uint8_t>(hex[b >> 4]));
+    out.push_back(static_cast<uint8_t>(hex[b & 15]));
+  };
+  out.push_back(':');
+  for (uint8_t b : body) put(b);
+  put(decoder::lrc(body));
+  out.push_back('\r');
+  out.push_back('\n');
+}
+
+namespace {
+
+class Simulator {
+ public:
+  explicit Simulator(const BusOptions& o)
+      : o_(o), rng_(o.seed), char_ns_(o.format.char_time_ns()), t35_(o.format.t35_ns()) {}
+
+  BusCapture run() {
+    for (size_t i = 0; i < o_.transactions; ++i) transaction();
+    return std::move(capture_);
+  }
+
+ private:
+  unsigned pick(unsigned lo, unsigned hi) { return std::uniform_int_distribution<unsigned>(lo, hi)(rng_); }
+  bool chance(double p) { return p > 0 && std::uniform_real_distribution<double>(0, 1)(rng_) < p; }
+  static void u16(Bytes& b, unsigned v) {
+    b.push_back(static_cast<uint8_t>(v >> 8));
+    b.push_back(static_cast<uint8_t>(v & 0xFF));
+  }
+  void random_bytes(Bytes& b, size_t n) {
+    for (size_t i = 0; i < n; ++i) b.push_back(static_cast<uint8_t>(pick(0, 255)));
+  }
+
+  // Bytes go on the wire back to back, starting `gap_ns` after the previous byte ended.
+  uint64_t send(const Bytes& wire, int64_t gap_ns) {
+    const uint64_t offset = capture_.bytes.size();
+    int64_t t = (capture_.end_ns.empty() ? 0 : capture_.end_ns.back()) + gap_ns;
+    for (uint8_t b : wire) {
+      t += char_ns_;
+      capture_.bytes.push_back(b);
+      capture_.end_ns.push_back(t);
+    }
+    return offset;
+  }
+
+  size_t send_frame(const Bytes& body, Role role, int64_t gap_ns, std::optional<size_t> request) {
+    Bytes wire;
+    encode_frame(o_.mode, body, wire);
+    const uint64_t offset = send(wire, gap_ns);
+    capture_.frames.push_back({offset, static_cast<uint32_t>(wire.size()), role, request});
+    return capture_.frames.size() - 1;
+  }
+
+  int64_t idle_gap() {
+    if (o_.back_to_back) return 0;
+    return std::max(o_.poll_gap_ns, t35_) + pick(0, 2'000'000);
+  }
+
+  void transaction() {
+    const bool broadcast = chance(o_.broadcast_rate);
+    const uint8_t slave = broadcast ? 0 : static_cast<uint8_t>(pick(1, 247));
+    Bytes request{slave}, response{slave};
+    build(slave, request, response, broadcast);
+
+    if (chance(o_.noise_rate)) {
+      Bytes junk;
+      random_bytes(junk, pick(1, 40));
+      send(junk, idle_gap());
+    }
+    if (chance(o_.truncation_rate)) {
+      Bytes wire;
+      encode_frame(o_.mode, request, wire);
+      wire.resize(pick(1, static_cast<unsigned>(wire.size() - 1)));
+      send(wire, idle_gap());
+    }
+    const size_t req = send_frame(request, Role::request, idle_gap(), std::nullopt);
+    if (broadcast) return;
+    if (chance(o_.no_response_rate)) {
+      capture_.timed_out.push_back(req);
+      return;
+    }
+    int64_t turnaround = chance(o_.fast_turnaround_rate) ? char_ns_ * pick(15, 30) / 10
+                                                         : t35_ + pick(0, 3'000'000);
+    if (o_.back_to_back) turnaround = 0;
+    if (chance(o_.glitch_rate)) {
+      send(Bytes{0x00}, turnaround);
+      turnaround = char_ns_ * pick(0, 20) / 10;
+    }
+    send_frame(response, Role::response, turnaround, req);
+  }
+
+  void exception(Bytes& rsp, uint8_t fc) {
+    rsp.push_back(static_cast<uint8_t>(fc | 0x80));
+    static constexpr uint8_t codes[] = {0x01, 0x02, 0x03, 0x04, 0x06};
+    rsp.push_back(codes[pick(0, 4)]);
+  }
+
+  void build(uint8_t slave, Bytes& req, Bytes& rsp, bool broadcast) {
+    static constexpr uint8_t unicast[] = {0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x0B, 0x0C,
+                                          0x0F, 0x10, 0x11, 0x14, 0x15, 0x16, 0x17, 0x18, 0x2B};
+    static constexpr uint8_t writes[] = {0x05, 0x06, 0x0F, 0x10};
+    uint8_t fc = broadcast ? writes[pick(0, 3)] : unicast[pick(0, sizeof unicast - 1)];
+    if (!broadcast && chance(o_.unknown_function_rate)) fc = static_cast<uint8_t>(pick(0x41, 0x48));
+    req.push_back(fc);
+    const bool fails = chance(o_.exception_rate);
+    if (!fails) rsp.push_back(fc);
+    fill(fc, req, rsp);
+    if (fails) {
+      rsp.resize(1);
+      exception(rsp, fc);
+    }
+    (void)slave;
+  }
+
+  void fill(uint8_t fc, Bytes& req, Bytes& rsp) {
+    switch (fc) {
+      case 0x01:
+      case 0x02: {
+        const unsigned qty = pick(1, 80);
+        u16(req, pick(0, 0xFFFF - qty));
+        u16(req, qty);
+        rsp.push_back(static_cast<uint8_t>((qty + 7) / 8));
+        random_bytes(rsp, (qty + 7) / 8);
+        break;
+      }
+      case 0x03:
+      case 0x04: {
+        const unsigned qty = pick(1, 40);
+        u16(req, pick(0, 0xFFFF - qty));
+        u16(req, qty);
+        rsp.push_back(static_cast<uint8_t>(qty * 2));
+        random_bytes(rsp, qty * 2);
+        break;
+      }
+      case 0x05:
+        u16(req, pick(0, 0xFFFF));
+        u16(req, chance(0.5) ? 0xFF00 : 0x0000);
+        rsp.assign(req.begin(), req.end());
+        break;
+      case 0x06:
+      case 0x16:
+        u16(req, pick(0, 0xFFFF));
+        random_bytes(req, fc == 0x06 ? 2 : 4);
+        rsp.assign(req.begin(), req.end());
+        break;
+      case 0x07: rsp.push_back(static_cast<uint8_t>(pick(0, 255))); break;
+      case 0x08: {
+        static constexpr uint16_t subs[] = {0x0000, 0x000A, 0x000B, 0x000C, 0x000D, 0x000E, 0x0012};
+        const uint16_t sub = subs[pick(0, 6)];
+        u16(req, sub);
+        random_bytes(req, sub == 0 ? pick(1, 4) * 2 : 2);
+        rsp.assign(req.begin(), req.end());
+        if (sub != 0) {
+          rsp.resize(rsp.size() - 2);
+          random_bytes(rsp, 2);
+        }
+        break;
+      }
+      case 0x0B: random_bytes(rsp, 4); break;
+      case 0x0C: {
+        const unsigned events = pick(0, 20);
+        rsp.push_back(static_cast<uint8_t>(6 + events));
+        random_bytes(rsp, 6 + events);
+        break;
+      }
+      case 0x0F:
+      case 0x10: {
+        const unsigned qty = fc == 0x0F ? pick(1, 80) : pick(1, 30);
+        const unsigned count = fc == 0x0F ? (qty + 7) / 8 : qty * 2;
+        u16(req, pick(0, 0xFFFF - qty));
+        u16(req, qty);
+        req.push_back(static_cast<uint8_t>(count));
+        random_bytes(req, count);
+        rsp.insert(rsp.end(), req.begin() + 2, req.begin() + 6);
+        break;
+      }
+      case 0x11: {
+        const unsigned count = pick(2, 20);
+        rsp.push_back(static_cast<uint8_t>(count));
+        random_bytes(rsp, count);
+        break;
+      }
+      case 0x14: {
+        const unsigned subs = pick(1, 3);
+        req.push_back(static_cast<uint8_t>(subs * 7));
+        Bytes data;
+        for (unsigned i = 0; i < subs; ++i) {
+          const unsigned length = pick(1, 5);
+          req.push_back(6);
+          u16(req, pick(1, 10));
+          u16(req, pick(0, 9999));
+          u16(req, length);
+          data.push_back(static_cast<uint8_t>(1 + length * 2));
+          data.push_back(6);
+          random_bytes(data, length * 2);
+        }
+        rsp.push_back(static_cast<uint8_t>(data.size()));
+        rsp.insert(rsp.end(), data.begin(), data.end());
+        break;
+      }
+      case 0x15: {
+        const unsigned subs = pick(1, 3);
+        Bytes data;
+        for (unsigned i = 0; i < subs; ++i) {
+          const unsigned length = pick(1, 5);
+          data.push_back(6);
+          u16(data, pick(1, 10));
+          u16(data, pick(0, 9999));
+          u16(data, length);
+          random_bytes(data, length * 2);
+        }
+        req.push_back(static_cast<uint8_t>(data.size()));
+        req.insert(req.end(), data.begin(), data.end());
+        rsp.assign(req.begin(), req.end());
+        break;
+      }
+      case 0x17: {
+        const unsigned read_qty = pick(1, 20), write_qty = pick(1, 10);
+        u16(req, pick(0, 1000));
+        u16(req, read_qty);
+        u16(req, pick(0, 1000));
+        u16(req, write_qty);
+        req.push_back(static_cast<uint8_t>(write_qty * 2));
+        random_bytes(req, write_qty * 2);
+        rsp.push_back(static_cast<uint8_t>(read_qty * 2));
+        random_bytes(rsp, read_qty * 2);
+        break;
+      }
+      case 0x18: {
+        const unsigned count = pick(0, 31);
+        u16(req, pick(0, 0xFFFF));
+        u16(rsp, 2 + count * 2);
+        u16(rsp, count);
+        random_bytes(rsp, count * 2);
+        break;
+      }
+      case 0x2B: {
+        const uint8_t code = static_cast<uint8_t>(pick(1, 4));
+        req.insert(req.end(), {0x0E, code, 0x00});
+        static constexpr const char* values[] = {"modtap", "BUSGEN-1", "V1.02"};
+        rsp.insert(rsp.end(), {0x0E, code, 0x81, 0x00, 0x00, 0x03});
+        for (uint8_t id = 0; id < 3; ++id) {
+          const std::string value = values[id];
+          rsp.push_back(id);
+          rsp.push_back(static_cast<uint8_t>(value.size()));
+          rsp.insert(rsp.end(), value.begin(), value.end());
+        }
+        break;
+      }
+      default: {  // a vendor code: some data both ways
+        random_bytes(req, pick(0, 6));
+        random_bytes(rsp, pick(0, 6));
+      }
+    }
+  }
+
+  BusOptions o_;
+  std::mt19937_64 rng_;
+  int64_t char_ns_;
+  int64_t t35_;
+  BusCapture capture_;
+};
+
+}  // namespace
+
+BusCapture simulate(const BusOptions& options) { return Simulator(options).run(); }
+
+decoder::ClockQuality clock_of(Delivery delivery) {
+  switch (delivery) {
+    case Delivery::per_byte: return decoder::ClockQuality::per_byte;
+    case Delivery::bursts:
+    case Delivery::per_frame: return decoder::ClockQuality::per_chunk;
+    case Delivery::untimed: return decoder::ClockQuality::none;
+  }
+  return decoder::ClockQuality::none;
+}
+
+std::vector<DeliveredChunk> deliver(const BusCapture& capture, Delivery delivery, uint64_t seed) {
+  std::vector<DeliveredChunk> chunks;
+  const auto& ends = capture.end_ns;
+  const uint64_t n = capture.bytes.size();
+  std::mt19937_64 rng(seed);
+  auto chance = [&](double p) { return std::uniform_real_distribution<double>(0, 1)(rng) < p; };
+  switch (delivery) {
+    case Delivery::per_byte:
+      for (uint64_t i = 0; i < n; ++i) chunks.push_back({ends[i], i, 1});
+      break;
+    case Delivery::untimed:
+      for (uint64_t i = 0; i < n; i += 4096)
+        chunks.push_back({0, i, static_cast<uint32_t>(std::min<uint64_t>(4096, n - i))});
+      break;
+    case Delivery::bursts: {
+      constexpr int64_t period = 16'000'000;
+      for (uint64_t i = 0; i < n;) {
+        const int64_t due = (ends[i] / period + 1) * period;
+        uint64_t j = i;
+        while (j < n && ends[j] <= due) ++j;
+        chunks.push_back({due, i, static_cast<uint32_t>(j - i)});
+        i = j;
+      }
+      break;
+    }
+    case Delivery::per_frame: {
+      // Cut where a gap-based sniffer would: at every frame and noise boundary, then split
+      // some pieces in two and merge some neighbours.
+      std::vector<uint64_t> cuts;
+      for (const auto& f : capture.frames) {
+        cuts.push_back(f.offset);
+        cuts.push_back(f.offset + f.size);
+      }
+      for (uint64_t i = 1; i < n; ++i)
+        if (ends[i] - ends[i - 1] > 3 * (ends[1] - ends[0])) cuts.push_back(i);
+      cuts.push_back(0);
+      cuts.push_back(n);
+      std::sort(cuts.begin(), cuts.end());
+      cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());
+      std::vector<uint64_t> kept{0};
+      for (size_t c = 1; c < cuts.size(); ++c) {
+        const uint64_t a = kept.back(), b = cuts[c];
+        if (b - a > 2 && chance(0.2)) kept.push_back(a + 1 + rng() % (b - a - 1));  // split
+        if (b == n || !chance(0.2)) kept.push_back(b);                            // or merge
+      }
+      for (size_t c = 1; c < kept.size(); ++c) {
+        const uint64_t a = kept[c - 1], b = kept[c];
+        if (b > a) chunks.push_back({ends[b - 1] + 1'000'000, a, static_cast<uint32_t>(b - a)});
+      }
+      break;
+    }
+  }
+  return chunks;
+}
+
+}  // namespace modtap::busgen

@@ -1,0 +1,70 @@
+// A Modbus serial bus simulator for tests and benchmarks: a master polling slaves with every
+// public function code, slaves answering (or not), with character timing, fast turnarounds,
+// turnaround glitches, line noise and truncated frames, and the exact ground truth of it all.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "decoder/records.hpp"
+#include "decoder/serial_format.hpp"
+
+namespace modtap::busgen {
+
+struct BusOptions {
+  uint64_t seed = 1;
+  size_t transactions = 1000;
+  decoder::SerialFormat format;
+  decoder::Mode mode = decoder::Mode::rtu;
+  // Rates are per transaction, between 0 and 1.
+  double exception_rate = 0.05;
+  double no_response_rate = 0.03;  // the slave stays silent: the master moves on
+  double broadcast_rate = 0.03;
+  double fast_turnaround_rate = 0.2;  // the slave answers after less than t3.5
+  double glitch_rate = 0.0;           // a 0x00 on the bus as the slave's driver turns on
+  double noise_rate = 0.0;            // a burst of junk between transactions
+  double truncation_rate = 0.0;       // the master's request breaks off, then is sent again
+  double unknown_function_rate = 0.0; // a vendor function code the length rules do not know
+  int64_t poll_gap_ns = 5'000'000;    // master's idle time between transactions (at least)
+  bool back_to_back = false;          // no idle time at all: the densest file for benchmarks
+};
+
+// A frame the master or a slave really sent, whole and with a good check.
+struct TruthFrame {
+  uint64_t offset = 0;  // in the byte stream
+  uint32_t size = 0;
+  decoder::Role role = decoder::Role::request;
+  std::optional<size_t> request;  // for a response: its request's position in `frames`
+};
+
+struct BusCapture {
+  std::vector<uint8_t> bytes;
+  std::vector<int64_t> end_ns;  // when each byte's stop bit ended
+  std::vector<TruthFrame> frames;
+  std::vector<size_t> timed_out;  // positions in `frames` of requests left unanswered
+};
+
+BusCapture simulate(const BusOptions& options);
+
+// Appends one frame in the mode's wire form (RTU: adu + CRC; ASCII: ':' hex LRC CR LF).
+void encode_frame(decoder::Mode mode, const std::vector<uint8_t>& body, std::vector<uint8_t>& out);
+
+// How an adapter hands bytes to the program that reads it.
+enum class Delivery {
+  per_byte,   // each byte with its exact time (a logic analyzer)
+  bursts,     // FTDI-style: whatever arrived, every 16 ms
+  per_frame,  // a gap-based sniffer: one chunk per frame, some split, some merged
+  untimed,    // a raw file: blocks with no time
+};
+
+struct DeliveredChunk {
+  int64_t t_ns = 0;
+  uint64_t offset = 0;
+  uint32_t size = 0;
+};
+
+std::vector<DeliveredChunk> deliver(const BusCapture& capture, Delivery delivery, uint64_t seed);
+decoder::ClockQuality clock_of(Delivery delivery);
+
+}  // namespace modtap::busgen
