@@ -16,7 +16,9 @@ bool digits(const std::string& s, size_t at, size_t n) {
   return true;
 }
 
-int number(const std::string& s, size_t at, size_t n) { return std::stoi(s.substr(at, n)); }
+int number(const std::string& s, size_t at, size_t n) {
+  return std::stoi(s.substr(at, n));
+}
 
 int hex_digit(char c) {
   if (c >= '0' && c <= '9') return c - '0';
@@ -33,15 +35,15 @@ HexlogReader::HexlogReader(const std::string& path, int64_t char_time_ns)
 bool HexlogReader::is_header(const std::string& s) {
   return s.size() >= stamp_size && digits(s, 0, 4) && s[4] == '-' && digits(s, 5, 2) &&
          s[7] == '-' && digits(s, 8, 2) && s[10] == ' ' && digits(s, 11, 2) && s[13] == ':' &&
-         digits(s, 14, 2) && s[16] == ':' && digits(s, 17, 2) && s[19] == '.' &&
-         digits(s, 20, 6) && s[26] == ':' && (s.size() == stamp_size || s[stamp_size] == ' ');
+         digits(s, 14, 2) && s[16] == ':' && digits(s, 17, 2) && s[19] == '.' && digits(s, 20, 6) &&
+         s[26] == ':' && (s.size() == stamp_size || s[stamp_size] == ' ');
 }
 
 uint16_t HexlogReader::channel_for(const std::string& name) {
   auto [it, added] = channel_ids_.try_emplace(name, static_cast<uint16_t>(channels_.size()));
   if (added) {
     // Ports named like the two sides of a split tap say which direction they carry.
-    auto role = name == "master" ? decoder::ChannelRole::master
+    auto role = name == "master"  ? decoder::ChannelRole::master
                 : name == "slave" ? decoder::ChannelRole::slave
                                   : decoder::ChannelRole::bus;
     channels_.push_back({name.empty() ? lines_.path() : name, role});

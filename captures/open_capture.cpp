@@ -41,11 +41,16 @@ Format parse_format(const std::string& name) {
 
 const char* to_string(Format format) {
   switch (format) {
-    case Format::automatic: return "auto";
-    case Format::raw: return "raw";
-    case Format::hexlog: return "hexlog";
-    case Format::pcap: return "pcap";
-    case Format::sigrok: return "sigrok";
+    case Format::automatic:
+      return "auto";
+    case Format::raw:
+      return "raw";
+    case Format::hexlog:
+      return "hexlog";
+    case Format::pcap:
+      return "pcap";
+    case Format::sigrok:
+      return "sigrok";
   }
   return "?";
 }
@@ -67,25 +72,28 @@ Format detect_format(const std::string& path) {
   if (HexlogReader::is_header(text.substr(0, text.find_first_of("\r\n")))) return Format::hexlog;
   const Format guess = by_extension(path);
   if (guess != Format::automatic) return guess;
-  throw CaptureError(fmt::format(
-      "{}: offset 0: cannot tell the capture format from its content or name; "
-      "give --format raw|hexlog|pcap|sigrok",
-      path));
+  throw CaptureError(
+      fmt::format("{}: offset 0: cannot tell the capture format from its content or name; "
+                  "give --format raw|hexlog|pcap|sigrok",
+                  path));
 }
 
 std::unique_ptr<ChunkSource> open_capture(const std::string& path, const OpenOptions& options) {
   const Format format = options.format == Format::automatic ? detect_format(path) : options.format;
   switch (format) {
-    case Format::raw: return std::make_unique<RawReader>(path);
+    case Format::raw:
+      return std::make_unique<RawReader>(path);
     case Format::hexlog:
       return std::make_unique<HexlogReader>(path, options.serial.char_time_ns());
-    case Format::pcap: return std::make_unique<PcapReader>(path);
+    case Format::pcap:
+      return std::make_unique<PcapReader>(path);
     case Format::sigrok: {
       SigrokOptions sigrok = options.sigrok;
       sigrok.format = options.serial;
       return std::make_unique<SigrokReader>(path, sigrok);
     }
-    case Format::automatic: break;
+    case Format::automatic:
+      break;
   }
   throw CaptureError(path + ": no reader");
 }

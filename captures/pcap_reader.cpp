@@ -8,7 +8,8 @@ namespace modtap::captures {
 
 PcapReader::PcapReader(const std::string& path) : path_(path) {
   char error[PCAP_ERRBUF_SIZE] = {};
-  handle_ = pcap_open_offline_with_tstamp_precision(path.c_str(), PCAP_TSTAMP_PRECISION_NANO, error);
+  handle_ =
+      pcap_open_offline_with_tstamp_precision(path.c_str(), PCAP_TSTAMP_PRECISION_NANO, error);
   if (!handle_) throw CaptureError(fmt::format("{}: offset 0: {}", path, error));
   const int dlt = pcap_datalink(handle_);
   if (dlt < first_user_dlt || dlt > last_user_dlt) {

@@ -50,9 +50,12 @@ CaptureShape show(const std::string& path, const std::string& program) {
 
 const char* parity_name(decoder::Parity p) {
   switch (p) {
-    case decoder::Parity::none: return "none";
-    case decoder::Parity::even: return "even";
-    case decoder::Parity::odd: return "odd";
+    case decoder::Parity::none:
+      return "none";
+    case decoder::Parity::even:
+      return "even";
+    case decoder::Parity::odd:
+      return "odd";
   }
   return "none";
 }
@@ -77,8 +80,8 @@ std::vector<SigrokLine> parse_sigrok_channels(const std::string& spec) {
       throw std::invalid_argument("a sigrok line is tx, rx or bus, not \"" + line.role + "\"");
     lines.push_back(std::move(line));
   }
-  const bool has_bus = std::any_of(lines.begin(), lines.end(),
-                                   [](const SigrokLine& l) { return l.role == "bus"; });
+  const bool has_bus =
+      std::any_of(lines.begin(), lines.end(), [](const SigrokLine& l) { return l.role == "bus"; });
   if (lines.empty() || (has_bus && lines.size() > 1))
     throw std::invalid_argument("give tx=NAME,rx=NAME or a single bus=NAME");
   return lines;
@@ -127,8 +130,8 @@ bool SigrokReader::refill(Stream& s) {
     const int status = s.process->wait(error_text);
     s.process.reset();
     if (status != 0)
-      throw CaptureError(fmt::format("{}: sigrok-cli failed on channel {}: {}", path_, s.name,
-                                     error_text));
+      throw CaptureError(
+          fmt::format("{}: sigrok-cli failed on channel {}: {}", path_, s.name, error_text));
     return false;
   }
   ++s.line;
@@ -137,8 +140,9 @@ bool SigrokReader::refill(Stream& s) {
   char tag[64];
   if (std::sscanf(text, "%" SCNu64 "-%" SCNu64 " %63s %x", &first, &last, tag, &value) != 4 ||
       value > 0xFF)
-    throw CaptureError(fmt::format("{}: sigrok-cli output line {} on channel {} is not a UART byte: {}",
-                                   path_, s.line, s.name, text));
+    throw CaptureError(
+        fmt::format("{}: sigrok-cli output line {} on channel {} is not a UART byte: {}", path_,
+                    s.line, s.name, text));
   s.has_byte = true;
   s.sample = first;
   s.byte = static_cast<uint8_t>(value);

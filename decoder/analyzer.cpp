@@ -52,7 +52,8 @@ class Analyzer::ModeProbe {
     auto& trial = trials_[channel];
     if (!trial) {
       RtuFramerOptions rtu{options_.format, options_.clock, role, options_.chunk_jitter_ns};
-      AsciiFramerOptions ascii{options_.format, options_.clock, role, options_.ascii_char_timeout_ns};
+      AsciiFramerOptions ascii{options_.format, options_.clock, role,
+                               options_.ascii_char_timeout_ns};
       trial.reset(new Trial{{channel, rtu, rtu_count_}, {channel, ascii, ascii_count_}});
     }
     return *trial;
@@ -132,8 +133,7 @@ void Analyzer::push(const Chunk& chunk) {
 void Analyzer::flush(int64_t now_ns) {
   for (auto& c : channels_) {
     if (auto* rtu = std::get_if<std::unique_ptr<RtuFramer>>(&c.framer)) (*rtu)->flush(now_ns);
-    if (auto* ascii = std::get_if<std::unique_ptr<AsciiFramer>>(&c.framer))
-      (*ascii)->flush(now_ns);
+    if (auto* ascii = std::get_if<std::unique_ptr<AsciiFramer>>(&c.framer)) (*ascii)->flush(now_ns);
   }
   if (options_.clock != ClockQuality::none) matcher_.advance(now_ns);
 }

@@ -12,7 +12,9 @@ constexpr uint16_t be16(std::span<const uint8_t> p, size_t at) {
 }
 
 // Quantities the standard allows per request (Modbus Application Protocol V1.1b3, 6.x).
-constexpr bool in_range(unsigned v, unsigned lo, unsigned hi) { return v >= lo && v <= hi; }
+constexpr bool in_range(unsigned v, unsigned lo, unsigned hi) {
+  return v >= lo && v <= hi;
+}
 
 // A length carried in a byte count at `at`: body = at + 1 + count.
 L counted(std::span<const uint8_t> p, size_t at, unsigned lo = 0, unsigned hi = 252) {
@@ -44,17 +46,21 @@ L request_length(std::span<const uint8_t> p) {
   };
   switch (fc) {
     case 0x01:
-    case 0x02: return quantity_at_4(1, 2000);
+    case 0x02:
+      return quantity_at_4(1, 2000);
     case 0x03:
-    case 0x04: return quantity_at_4(1, 125);
+    case 0x04:
+      return quantity_at_4(1, 125);
     case 0x05:
       if (p.size() < 6) return L::need_more();
       return (be16(p, 4) == 0xFF00 || be16(p, 4) == 0x0000) ? L::known(6) : L::invalid();
-    case 0x06: return L::known(6);
+    case 0x06:
+      return L::known(6);
     case 0x07:
     case 0x0B:
     case 0x0C:
-    case 0x11: return L::known(2);
+    case 0x11:
+      return L::known(2);
     case 0x08:
       if (p.size() < 4) return L::need_more();
       return be16(p, 2) == 0x0000 ? L::variable(4) : L::known(6);
@@ -71,8 +77,10 @@ L request_length(std::span<const uint8_t> p) {
       return L::known(7 + p[6]);
     }
     case 0x14:
-    case 0x15: return counted(p, 2, 7, 245);
-    case 0x16: return L::known(8);
+    case 0x15:
+      return counted(p, 2, 7, 245);
+    case 0x16:
+      return L::known(8);
     case 0x17: {
       if (p.size() < 11) return L::need_more();
       unsigned read_qty = be16(p, 4), write_qty = be16(p, 8);
@@ -80,11 +88,13 @@ L request_length(std::span<const uint8_t> p) {
         return L::invalid();
       return L::known(11 + p[10]);
     }
-    case 0x18: return L::known(4);
+    case 0x18:
+      return L::known(4);
     case 0x2B:
       if (p.size() < 3) return L::need_more();
       return p[2] == 0x0E ? L::known(5) : L::variable(3);
-    default: return L::variable(2);
+    default:
+      return L::variable(2);
   }
 }
 
@@ -93,7 +103,8 @@ L response_length(std::span<const uint8_t> p) {
   if (fc & 0x80) return p[0] == 0 ? L::invalid() : L::known(3);
   switch (fc) {
     case 0x01:
-    case 0x02: return counted(p, 2, 1, 250);
+    case 0x02:
+      return counted(p, 2, 1, 250);
     case 0x03:
     case 0x04: {
       L l = counted(p, 2, 2, 250);
@@ -103,8 +114,10 @@ L response_length(std::span<const uint8_t> p) {
     case 0x06:
     case 0x0B:
     case 0x0F:
-    case 0x10: return L::known(6);
-    case 0x07: return L::known(3);
+    case 0x10:
+      return L::known(6);
+    case 0x07:
+      return L::known(3);
     case 0x08:
       if (p.size() < 4) return L::need_more();
       return be16(p, 2) == 0x0000 ? L::variable(4) : L::known(6);
@@ -112,16 +125,20 @@ L response_length(std::span<const uint8_t> p) {
     case 0x11:
     case 0x14:
     case 0x15:
-    case 0x17: return counted(p, 2, 1, 252);
-    case 0x16: return L::known(8);
+    case 0x17:
+      return counted(p, 2, 1, 252);
+    case 0x16:
+      return L::known(8);
     case 0x18: {
       if (p.size() < 4) return L::need_more();
       unsigned count = be16(p, 2);
       if (!in_range(count, 2, 64)) return L::invalid();
       return L::known(4 + count);
     }
-    case 0x2B: return device_identification_response(p);
-    default: return L::variable(2);
+    case 0x2B:
+      return device_identification_response(p);
+    default:
+      return L::variable(2);
   }
 }
 
@@ -167,7 +184,9 @@ BodyLength body_length(Role role, std::span<const uint8_t> prefix) {
   return role == Role::request ? request_length(prefix) : response_length(prefix);
 }
 
-bool is_public_function(uint8_t fc) { return find(fc & 0x7F) != nullptr; }
+bool is_public_function(uint8_t fc) {
+  return find(fc & 0x7F) != nullptr;
+}
 
 bool may_broadcast(uint8_t fc) {
   const FunctionInfo* f = find(fc);
@@ -181,38 +200,65 @@ const char* function_name(uint8_t fc) {
 
 const char* exception_name(uint8_t code) {
   switch (code) {
-    case 0x01: return "Illegal Function";
-    case 0x02: return "Illegal Data Address";
-    case 0x03: return "Illegal Data Value";
-    case 0x04: return "Server Device Failure";
-    case 0x05: return "Acknowledge";
-    case 0x06: return "Server Device Busy";
-    case 0x07: return "Negative Acknowledge";
-    case 0x08: return "Memory Parity Error";
-    case 0x0A: return "Gateway Path Unavailable";
-    case 0x0B: return "Gateway Target Device Failed to Respond";
-    default: return nullptr;
+    case 0x01:
+      return "Illegal Function";
+    case 0x02:
+      return "Illegal Data Address";
+    case 0x03:
+      return "Illegal Data Value";
+    case 0x04:
+      return "Server Device Failure";
+    case 0x05:
+      return "Acknowledge";
+    case 0x06:
+      return "Server Device Busy";
+    case 0x07:
+      return "Negative Acknowledge";
+    case 0x08:
+      return "Memory Parity Error";
+    case 0x0A:
+      return "Gateway Path Unavailable";
+    case 0x0B:
+      return "Gateway Target Device Failed to Respond";
+    default:
+      return nullptr;
   }
 }
 
 const char* diagnostic_name(uint16_t sub) {
   switch (sub) {
-    case 0x00: return "Return Query Data";
-    case 0x01: return "Restart Communications Option";
-    case 0x02: return "Return Diagnostic Register";
-    case 0x03: return "Change ASCII Input Delimiter";
-    case 0x04: return "Force Listen Only Mode";
-    case 0x0A: return "Clear Counters and Diagnostic Register";
-    case 0x0B: return "Return Bus Message Count";
-    case 0x0C: return "Return Bus Communication Error Count";
-    case 0x0D: return "Return Bus Exception Error Count";
-    case 0x0E: return "Return Server Message Count";
-    case 0x0F: return "Return Server No Response Count";
-    case 0x10: return "Return Server NAK Count";
-    case 0x11: return "Return Server Busy Count";
-    case 0x12: return "Return Bus Character Overrun Count";
-    case 0x14: return "Clear Overrun Counter and Flag";
-    default: return nullptr;
+    case 0x00:
+      return "Return Query Data";
+    case 0x01:
+      return "Restart Communications Option";
+    case 0x02:
+      return "Return Diagnostic Register";
+    case 0x03:
+      return "Change ASCII Input Delimiter";
+    case 0x04:
+      return "Force Listen Only Mode";
+    case 0x0A:
+      return "Clear Counters and Diagnostic Register";
+    case 0x0B:
+      return "Return Bus Message Count";
+    case 0x0C:
+      return "Return Bus Communication Error Count";
+    case 0x0D:
+      return "Return Bus Exception Error Count";
+    case 0x0E:
+      return "Return Server Message Count";
+    case 0x0F:
+      return "Return Server No Response Count";
+    case 0x10:
+      return "Return Server NAK Count";
+    case 0x11:
+      return "Return Server Busy Count";
+    case 0x12:
+      return "Return Bus Character Overrun Count";
+    case 0x14:
+      return "Clear Overrun Counter and Flag";
+    default:
+      return nullptr;
   }
 }
 

@@ -37,9 +37,9 @@ bool is_public_function(uint8_t fc);
 bool may_broadcast(uint8_t fc);
 
 // Names from the Modbus Application Protocol, or nullptr where the standard has none.
-const char* function_name(uint8_t fc);          // exception bit ignored
+const char* function_name(uint8_t fc);  // exception bit ignored
 const char* exception_name(uint8_t code);
-const char* diagnostic_name(uint16_t sub);      // FC08 sub-function
+const char* diagnostic_name(uint16_t sub);  // FC08 sub-function
 
 // The largest ADU: 256 bytes in RTU (Modbus over Serial Line 2.5.1.1).
 inline constexpr uint16_t max_rtu_adu = 256;

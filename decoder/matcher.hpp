@@ -14,9 +14,9 @@ namespace modtap::decoder {
 
 struct MatcherOptions {
   int64_t timeout_ns = 1'000'000'000;
-  int64_t t35_ns = 0;         // below this a response counts as a fast turnaround
-  bool timed = true;          // false when the source has no clock: no latency, no silence
-  bool exact_clock = false;   // latencies are exact enough to judge turnaround
+  int64_t t35_ns = 0;        // below this a response counts as a fast turnaround
+  bool timed = true;         // false when the source has no clock: no latency, no silence
+  bool exact_clock = false;  // latencies are exact enough to judge turnaround
 };
 
 class Matcher {

@@ -45,8 +45,12 @@ Field make(std::string_view key, Field::Kind kind, int64_t v = 0) {
   f.number = v;
   return f;
 }
-Field number(std::string_view key, int64_t v) { return make(key, Field::Kind::number, v); }
-Field hex(std::string_view key, int64_t v) { return make(key, Field::Kind::hex, v); }
+Field number(std::string_view key, int64_t v) {
+  return make(key, Field::Kind::number, v);
+}
+Field hex(std::string_view key, int64_t v) {
+  return make(key, Field::Kind::hex, v);
+}
 Field text(std::string_view key, std::string v) {
   Field f = make(key, Field::Kind::text);
   f.text = std::move(v);
@@ -123,14 +127,22 @@ void read_file_response(Reader& r, std::vector<Field>& out) {
 
 const char* object_name(uint8_t id) {
   switch (id) {
-    case 0x00: return "VendorName";
-    case 0x01: return "ProductCode";
-    case 0x02: return "MajorMinorRevision";
-    case 0x03: return "VendorUrl";
-    case 0x04: return "ProductName";
-    case 0x05: return "ModelName";
-    case 0x06: return "UserApplicationName";
-    default: return id < 0x80 ? "Reserved" : "Private";
+    case 0x00:
+      return "VendorName";
+    case 0x01:
+      return "ProductCode";
+    case 0x02:
+      return "MajorMinorRevision";
+    case 0x03:
+      return "VendorUrl";
+    case 0x04:
+      return "ProductName";
+    case 0x05:
+      return "ModelName";
+    case 0x06:
+      return "UserApplicationName";
+    default:
+      return id < 0x80 ? "Reserved" : "Private";
   }
 }
 
@@ -166,7 +178,9 @@ void decode_request(uint8_t fc, Reader& r, std::vector<Field>& out) {
     case 0x01:
     case 0x02:
     case 0x03:
-    case 0x04: address_quantity(r, out); break;
+    case 0x04:
+      address_quantity(r, out);
+      break;
     case 0x05: {
       out.push_back(number("address", r.u16()));
       const uint16_t v = r.u16();
@@ -178,7 +192,9 @@ void decode_request(uint8_t fc, Reader& r, std::vector<Field>& out) {
       out.push_back(number("address", r.u16()));
       out.push_back(number("value", r.u16()));
       break;
-    case 0x08: diagnostics(r, out); break;
+    case 0x08:
+      diagnostics(r, out);
+      break;
     case 0x0F: {
       out.push_back(number("address", r.u16()));
       const uint16_t qty = r.u16();
@@ -196,8 +212,12 @@ void decode_request(uint8_t fc, Reader& r, std::vector<Field>& out) {
       out.push_back(registers("values", r, qty));
       break;
     }
-    case 0x14: file_records(r, out, false); break;
-    case 0x15: file_records(r, out, true); break;
+    case 0x14:
+      file_records(r, out, false);
+      break;
+    case 0x15:
+      file_records(r, out, true);
+      break;
     case 0x16:
       out.push_back(number("address", r.u16()));
       out.push_back(hex("and_mask", r.u16()));
@@ -213,19 +233,23 @@ void decode_request(uint8_t fc, Reader& r, std::vector<Field>& out) {
       out.push_back(registers("values", r, qty));
       break;
     }
-    case 0x18: out.push_back(number("fifo_address", r.u16())); break;
-    case 0x2B: device_identification(Role::request, r, out); break;
+    case 0x18:
+      out.push_back(number("fifo_address", r.u16()));
+      break;
+    case 0x2B:
+      device_identification(Role::request, r, out);
+      break;
     case 0x07:
     case 0x0B:
     case 0x0C:
-    case 0x11: break;
+    case 0x11:
+      break;
     default:
       if (r.left()) out.push_back(bytes("data", r.take(r.left())));
   }
 }
 
-void decode_response(uint8_t fc, Reader& r, std::span<const uint8_t> req,
-                     std::vector<Field>& out) {
+void decode_response(uint8_t fc, Reader& r, std::span<const uint8_t> req, std::vector<Field>& out) {
   switch (fc) {
     case 0x01:
     case 0x02: {
@@ -247,7 +271,9 @@ void decode_response(uint8_t fc, Reader& r, std::span<const uint8_t> req,
       out.push_back(registers("values", r, count / 2));
       break;
     }
-    case 0x07: out.push_back(hex("status", r.u8())); break;
+    case 0x07:
+      out.push_back(hex("status", r.u8()));
+      break;
     case 0x0B:
       out.push_back(hex("status", r.u16()));
       out.push_back(number("event_count", r.u16()));
@@ -262,14 +288,18 @@ void decode_response(uint8_t fc, Reader& r, std::span<const uint8_t> req,
       break;
     }
     case 0x0F:
-    case 0x10: address_quantity(r, out); break;
+    case 0x10:
+      address_quantity(r, out);
+      break;
     case 0x11: {
       const uint8_t count = r.u8();
       out.push_back(number("byte_count", count));
       out.push_back(bytes("data", r.take(count)));
       break;
     }
-    case 0x14: read_file_response(r, out); break;
+    case 0x14:
+      read_file_response(r, out);
+      break;
     case 0x18: {
       out.push_back(number("byte_count", r.u16()));
       const uint16_t count = r.u16();
@@ -277,12 +307,16 @@ void decode_response(uint8_t fc, Reader& r, std::span<const uint8_t> req,
       out.push_back(registers("values", r, count));
       break;
     }
-    case 0x2B: device_identification(Role::response, r, out); break;
+    case 0x2B:
+      device_identification(Role::response, r, out);
+      break;
     case 0x05:
     case 0x06:
     case 0x08:
     case 0x15:
-    case 0x16: decode_request(fc, r, out); break;  // echoes
+    case 0x16:
+      decode_request(fc, r, out);
+      break;  // echoes
     default:
       if (r.left()) out.push_back(bytes("data", r.take(r.left())));
   }
@@ -297,8 +331,11 @@ bool response_start_address(std::span<const uint8_t> req, uint16_t& address) {
     case 0x02:
     case 0x03:
     case 0x04:
-    case 0x17: address = request_u16(req, 1); return true;
-    default: return false;
+    case 0x17:
+      address = request_u16(req, 1);
+      return true;
+    default:
+      return false;
   }
 }
 

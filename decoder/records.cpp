@@ -11,33 +11,46 @@ uint16_t Frame::wire_check() const {
 
 const char* to_string(NoiseReason reason) {
   switch (reason) {
-    case NoiseReason::junk: return "junk";
-    case NoiseReason::truncated: return "truncated";
-    case NoiseReason::glitch: return "glitch";
-    case NoiseReason::overlong: return "overlong";
-    case NoiseReason::bad_hex: return "bad-hex";
+    case NoiseReason::junk:
+      return "junk";
+    case NoiseReason::truncated:
+      return "truncated";
+    case NoiseReason::glitch:
+      return "glitch";
+    case NoiseReason::overlong:
+      return "overlong";
+    case NoiseReason::bad_hex:
+      return "bad-hex";
   }
   return "?";
 }
 
 const char* to_string(TimeoutReason reason) {
   switch (reason) {
-    case TimeoutReason::next_request: return "next-request";
-    case TimeoutReason::silence: return "silence";
-    case TimeoutReason::end_of_capture: return "end-of-capture";
+    case TimeoutReason::next_request:
+      return "next-request";
+    case TimeoutReason::silence:
+      return "silence";
+    case TimeoutReason::end_of_capture:
+      return "end-of-capture";
   }
   return "?";
 }
 
 const char* to_string(Role role) {
   switch (role) {
-    case Role::request: return "request";
-    case Role::response: return "response";
-    case Role::unknown: return "unknown";
+    case Role::request:
+      return "request";
+    case Role::response:
+      return "response";
+    case Role::unknown:
+      return "unknown";
   }
   return "?";
 }
 
-const char* to_string(Mode mode) { return mode == Mode::rtu ? "rtu" : "ascii"; }
+const char* to_string(Mode mode) {
+  return mode == Mode::rtu ? "rtu" : "ascii";
+}
 
 }  // namespace modtap::decoder

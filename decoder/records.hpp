@@ -59,16 +59,16 @@ struct Frame {
   Mode mode = Mode::rtu;
   Role role = Role::unknown;
   RoleFit fit;
-  int64_t t_ns = 0;    // start of the first byte
-  int64_t end_ns = 0;  // end of the last byte
-  uint64_t offset = 0;               // byte offset of the first byte in its channel's stream
-  std::span<const uint8_t> raw;      // exact wire bytes (ASCII: ':' .. CRLF)
-  std::span<const uint8_t> adu;      // slave .. check, binary (ASCII: decoded hex)
+  int64_t t_ns = 0;              // start of the first byte
+  int64_t end_ns = 0;            // end of the last byte
+  uint64_t offset = 0;           // byte offset of the first byte in its channel's stream
+  std::span<const uint8_t> raw;  // exact wire bytes (ASCII: ':' .. CRLF)
+  std::span<const uint8_t> adu;  // slave .. check, binary (ASCII: decoded hex)
   bool check_ok = false;
-  uint16_t expected_check = 0;       // what the CRC/LRC should have been
+  uint16_t expected_check = 0;  // what the CRC/LRC should have been
   uint32_t findings = finding_none;
-  std::optional<uint64_t> request;   // index of the matched request
-  std::optional<int64_t> latency_ns; // end of request to start of response
+  std::optional<uint64_t> request;       // index of the matched request
+  std::optional<int64_t> latency_ns;     // end of request to start of response
   std::span<const uint8_t> request_pdu;  // the matched request's PDU, during the callback
 
   uint8_t slave() const { return adu.empty() ? 0 : adu[0]; }

@@ -58,7 +58,9 @@ void RtuFramer::flush(int64_t now_ns) {
     resolve(true);
 }
 
-void RtuFramer::finish() { resolve(true); }
+void RtuFramer::finish() {
+  resolve(true);
+}
 
 void RtuFramer::resolve(bool final) {
   while (head_ < end_) {
@@ -85,8 +87,8 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const 
   if ((fc & 0x7F) == 0) return {};
 
   const bool broadcast = p[0] == 0;
-  const bool may_request = options_.role != ChannelRole::slave && !(fc & 0x80) &&
-                           (!broadcast || may_broadcast(fc));
+  const bool may_request =
+      options_.role != ChannelRole::slave && !(fc & 0x80) && (!broadcast || may_broadcast(fc));
   const bool may_respond = options_.role != ChannelRole::master && !broadcast;
   const Expectation expected = sink_.expectation();
   const bool response_first =
@@ -121,8 +123,10 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
   const BodyLength body = body_length(role, {p, static_cast<size_t>(avail)});
   const RoleFit fit{role == Role::request, role == Role::response};
   switch (body.kind) {
-    case BodyLength::Kind::need_more: return need_more();
-    case BodyLength::Kind::invalid: return {};
+    case BodyLength::Kind::need_more:
+      return need_more();
+    case BodyLength::Kind::invalid:
+      return {};
     case BodyLength::Kind::known: {
       const uint16_t total = body.bytes + crc_size;
       if (total > max_rtu_adu) return {};

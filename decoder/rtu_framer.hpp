@@ -56,8 +56,7 @@ class RtuFramer {
   Match match_at(uint64_t at, bool final, int search) const;
   Match match_role(Role role, uint64_t at, bool final, int search) const;
   bool fits_role(Role role, uint64_t at, uint16_t length) const;
-  bool confirmed_end(uint64_t begin, uint64_t end, bool final, int search,
-                     bool allow_glitch) const;
+  bool confirmed_end(uint64_t begin, uint64_t end, bool final, int search, bool allow_glitch) const;
   bool blocked_by_gap(uint64_t at, bool final) const;
   // First position >= from that starts a good frame; `decided` false if one is still open.
   uint64_t next_start(uint64_t from, bool final, bool& decided);

@@ -42,7 +42,8 @@ void BM_AnalyzeUntimed(benchmark::State& state) {
     analyzer.finish();
     frames += sink.frames;
   }
-  state.counters["frames/s"] = benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsRate);
+  state.counters["frames/s"] =
+      benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsRate);
   state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * c.bytes.size()));
 }
 BENCHMARK(BM_AnalyzeUntimed)->Unit(benchmark::kMillisecond);

@@ -21,8 +21,8 @@ class TempDir : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("modtap-test-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+           ("modtap-test-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+            "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
@@ -31,7 +31,8 @@ class TempDir : public ::testing::Test {
     std::ofstream(path, std::ios::binary) << content;
     return path;
   }
-  std::string write_pcap(const std::string& name, int dlt, const std::vector<std::vector<uint8_t>>& packets) {
+  std::string write_pcap(const std::string& name, int dlt,
+                         const std::vector<std::vector<uint8_t>>& packets) {
     const auto path = (dir_ / name).string();
     pcap_t* dead = pcap_open_dead(dlt, 65535);
     pcap_dumper_t* dumper = pcap_dump_open(dead, path.c_str());
@@ -72,7 +73,8 @@ TEST_F(TempDir, HexlogReadsJpnevulatorBlocksAndTtyNames) {
   HexlogReader reader(path, 1000);
   decoder::Chunk chunk;
   ASSERT_TRUE(reader.next(chunk));
-  EXPECT_EQ(std::vector<uint8_t>(chunk.bytes.begin(), chunk.bytes.end()), hex("01 03 00 00 00 0a c5 cd"));
+  EXPECT_EQ(std::vector<uint8_t>(chunk.bytes.begin(), chunk.bytes.end()),
+            hex("01 03 00 00 00 0a c5 cd"));
   EXPECT_EQ(chunk.channel, 0);
   const int64_t first = chunk.t_ns;
   ASSERT_TRUE(reader.next(chunk));
@@ -90,7 +92,8 @@ TEST_F(TempDir, HexlogWithABrokenLineNamesTheLine) {
 
 TEST_F(TempDir, HexlogBytesBeforeAnyTimeStampAreAnError) {
   const auto path = write("nostamp.log", "01 03\n");
-  EXPECT_NE(error_of(path, Format::hexlog).find("line 1: bytes before the first time stamp"), std::string::npos);
+  EXPECT_NE(error_of(path, Format::hexlog).find("line 1: bytes before the first time stamp"),
+            std::string::npos);
 }
 
 TEST_F(TempDir, PcapPacketsBecomeTimedChunks) {
@@ -111,12 +114,14 @@ TEST_F(TempDir, PcapOfAnotherLinkTypeIsRefused) {
 }
 
 TEST_F(TempDir, TruncatedPcapNamesTheOffset) {
-  const auto good = write_pcap("whole.pcap", 147, {hex("01 03 00 00 00 0a c5 cd"), hex("01 03 00 00 00 0a c5 cd")});
+  const auto good = write_pcap("whole.pcap", 147,
+                               {hex("01 03 00 00 00 0a c5 cd"), hex("01 03 00 00 00 0a c5 cd")});
   std::ifstream in(good, std::ios::binary);
   std::string content((std::istreambuf_iterator<char>(in)), {});
   const auto path = write("cut.pcap", content.substr(0, content.size() - 5));
   const std::string error = error_of(path);
-  EXPECT_NE(error.find(path + ": offset 48, after packet 1: truncated"), std::string::npos) << error;
+  EXPECT_NE(error.find(path + ": offset 48, after packet 1: truncated"), std::string::npos)
+      << error;
 }
 
 TEST_F(TempDir, UnknownContentWithAnUnknownNameIsAnError) {

@@ -33,7 +33,8 @@ void expect_clean_pairs(const Collector& out, size_t frames_expected) {
   EXPECT_TRUE(out.timeouts().empty());
   for (size_t i = 0; i < frames.size(); ++i) {
     EXPECT_TRUE(frames[i].check_ok) << "frame " << frames[i].index;
-    EXPECT_EQ(frames[i].role, i % 2 ? Role::response : Role::request) << "frame " << frames[i].index;
+    EXPECT_EQ(frames[i].role, i % 2 ? Role::response : Role::request)
+        << "frame " << frames[i].index;
     if (i % 2) {
       EXPECT_EQ(frames[i].request, frames[i - 1].index);
       EXPECT_EQ(frames[i].findings, 0u) << "frame " << frames[i].index;

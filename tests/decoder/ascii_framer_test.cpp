@@ -12,7 +12,9 @@ namespace {
 using testing::analyze_untimed;
 using testing::Record;
 
-std::vector<uint8_t> bytes(const std::string& s) { return {s.begin(), s.end()}; }
+std::vector<uint8_t> bytes(const std::string& s) {
+  return {s.begin(), s.end()};
+}
 
 TEST(AsciiFramer, FramesColonToCrLfAndChecksTheLrc) {
   const auto out = analyze_untimed(bytes(":010300000001FB\r\n"), {}, ModeChoice::ascii);

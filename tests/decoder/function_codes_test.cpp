@@ -10,8 +10,12 @@ namespace {
 using testing::hex;
 using K = BodyLength::Kind;
 
-BodyLength request(const char* h) { return body_length(Role::request, hex(h)); }
-BodyLength response(const char* h) { return body_length(Role::response, hex(h)); }
+BodyLength request(const char* h) {
+  return body_length(Role::request, hex(h));
+}
+BodyLength response(const char* h) {
+  return body_length(Role::response, hex(h));
+}
 
 TEST(BodyLength, ReadRequestsAreSixBytesWithALegalQuantity) {
   EXPECT_EQ(request("01 03 00 00 00 0a").bytes, 6);
@@ -66,7 +70,9 @@ TEST(BodyLength, DeviceIdentificationWalksItsObjects) {
   EXPECT_EQ(response("01 2b 0e 01 01 00 00 02 00 02 61").kind, K::need_more);
 }
 
-TEST(BodyLength, UnknownCodesAreSearchedFor) { EXPECT_EQ(request("01 41").kind, K::variable); }
+TEST(BodyLength, UnknownCodesAreSearchedFor) {
+  EXPECT_EQ(request("01 41").kind, K::variable);
+}
 
 TEST(FunctionTable, NamesThePublicCodesOnly) {
   EXPECT_STREQ(function_name(0x03), "Read Holding Registers");

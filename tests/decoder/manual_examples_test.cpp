@@ -36,8 +36,10 @@ INSTANTIATE_TEST_SUITE_P(
     Seeds, ManualExample,
     ::testing::Values(
         // 000 NTA5000 (English)
-        Example{"000 FC03 request as printed (address A023 instead of 2523)", "01 03 a0 23 00 01 57 c0", true, 0xC057},
-        Example{"000 FC03 request with the right address and the printed CRC", "01 03 25 23 00 01 57 c0", false, 0xCC7E},
+        Example{"000 FC03 request as printed (address A023 instead of 2523)",
+                "01 03 a0 23 00 01 57 c0", true, 0xC057},
+        Example{"000 FC03 request with the right address and the printed CRC",
+                "01 03 25 23 00 01 57 c0", false, 0xCC7E},
         Example{"000/001 FC03 request, corrected", "01 03 25 23 00 01 7e cc", true, 0xCC7E},
         Example{"000 FC03 response", "01 03 02 07 d0 bb e8", true, 0xE8BB},
         Example{"000 FC03 exception", "01 83 52 c0 cd", true, 0xCDC0},
@@ -58,9 +60,11 @@ INSTANTIATE_TEST_SUITE_P(
         Example{"004 FC03 response", "01 03 04 13 88 00 00 7e 9d", true, 0x9D7E},
         Example{"004 FC06 request", "02 06 00 04 13 88 c5 6e", true, 0x6EC5},
         Example{"004 FC08 loop-back", "01 08 00 00 12 ab ad 14", true, 0x14AD},
-        Example{"004 FC10 request as printed (CRC of the FC06 example)", "02 10 00 04 00 02 04 13 88 00 32 c5 6e", false, 0x63F8},
+        Example{"004 FC10 request as printed (CRC of the FC06 example)",
+                "02 10 00 04 00 02 04 13 88 00 32 c5 6e", false, 0x63F8},
         Example{"004 FC10 response as printed", "02 10 00 04 00 02 c5 6e", false, 0x3A00},
-        Example{"004 FC10 request, corrected", "02 10 00 04 00 02 04 13 88 00 32 f8 63", true, 0x63F8}));
+        Example{"004 FC10 request, corrected", "02 10 00 04 00 02 04 13 88 00 32 f8 63", true,
+                0x63F8}));
 
 TEST(ManualAsciiExample, Nta5000ReadDecodesWithItsLrc) {
   // 000, 4.1 ASCII: ":010325230001B3" CR LF, and the response ":0103021770" LRC 73.

@@ -74,7 +74,8 @@ TEST(Matcher, PairsAnExceptionWithItsRequest) {
 
 TEST(ResponseFit, CountersOfDiagnosticsNeedNotEcho) {
   EXPECT_EQ(check_response_fit(hex("08 00 0b 00 00"), hex("08 00 0b 01 23")), finding_none);
-  EXPECT_EQ(check_response_fit(hex("08 00 00 12 ab"), hex("08 00 00 12 ac")), finding_echo_mismatch);
+  EXPECT_EQ(check_response_fit(hex("08 00 00 12 ab"), hex("08 00 00 12 ac")),
+            finding_echo_mismatch);
   EXPECT_EQ(check_response_fit(hex("01 00 00 00 0a"), hex("01 02 ff 03")), finding_none);
   EXPECT_EQ(check_response_fit(hex("01 00 00 00 0a"), hex("01 01 ff")), finding_length_mismatch);
 }

@@ -50,7 +50,8 @@ TEST(PduFields, DeviceIdentificationListsItsObjects) {
 }
 
 TEST(PduFields, ReadFileRecordSubRequests) {
-  const auto d = decode_pdu(Role::request, hex("14 0e 06 00 04 00 01 00 02 06 00 03 00 09 00 02"), {});
+  const auto d =
+      decode_pdu(Role::request, hex("14 0e 06 00 04 00 01 00 02 06 00 03 00 09 00 02"), {});
   ASSERT_EQ(find(d, "sub_requests")->items.size(), 2u);
   EXPECT_EQ(find(d, "sub_requests")->items[1][1].number, 3);
 }

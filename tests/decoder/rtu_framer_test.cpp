@@ -29,7 +29,8 @@ void expect_same_at_every_split(const std::vector<uint8_t>& bytes) {
 }
 
 const auto read_request = hex("01 03 00 00 00 0a c5 cd");
-const auto read_response = hex("01 03 14 00 01 00 02 00 03 00 04 00 05 00 06 00 07 00 08 00 09 00 0a 8f 16");
+const auto read_response =
+    hex("01 03 14 00 01 00 02 00 03 00 04 00 05 00 06 00 07 00 08 00 09 00 0a 8f 16");
 
 std::vector<uint8_t> concat(std::initializer_list<std::vector<uint8_t>> parts) {
   std::vector<uint8_t> out;

@@ -100,7 +100,7 @@ inline std::vector<uint8_t> hex(const std::string& text) {
   std::vector<uint8_t> out;
   int nibble = -1;
   for (char c : text) {
-    int v = (c >= '0' && c <= '9') ? c - '0'
+    int v = (c >= '0' && c <= '9')   ? c - '0'
             : (c >= 'a' && c <= 'f') ? c - 'a' + 10
             : (c >= 'A' && c <= 'F') ? c - 'A' + 10
                                      : -1;

@@ -34,9 +34,10 @@ TEST(Cli, JsonLinesCarryTheDocumentedKeys) {
   const Outcome r = run(brainchild + " -T json");
   ASSERT_EQ(r.status, 0);
   ASSERT_EQ(r.lines.size(), 30u);
-  for (const char* key : {"\"type\":\"frame\"", "\"index\":", "\"t_ns\":", "\"channel\":", "\"mode\":\"rtu\"",
-                          "\"role\":", "\"slave\":1", "\"fc\":", "\"raw\":\"", "\"check\":\"ok\"",
-                          "\"exception\":null", "\"request\":", "\"latency_us\":"})
+  for (const char* key :
+       {"\"type\":\"frame\"", "\"index\":", "\"t_ns\":", "\"channel\":", "\"mode\":\"rtu\"",
+        "\"role\":", "\"slave\":1", "\"fc\":", "\"raw\":\"", "\"check\":\"ok\"",
+        "\"exception\":null", "\"request\":", "\"latency_us\":"})
     EXPECT_NE(r.lines[1].find(key), std::string::npos) << key << " in " << r.lines[1];
   EXPECT_NE(r.lines[0].find("\"raw\":\"010100030001"), std::string::npos) << r.lines[0];
   EXPECT_NE(r.lines[1].find("\"role\":\"response\""), std::string::npos);
@@ -62,7 +63,8 @@ TEST(Cli, AMissingFileIsAClearErrorAndAnExitStatus) {
   const Outcome r = run("-r /nonexistent/capture.pcap");
   EXPECT_NE(r.status, 0);
   ASSERT_FALSE(r.lines.empty());
-  EXPECT_EQ(r.lines.back().rfind("modtap: /nonexistent/capture.pcap: cannot open", 0), 0u) << r.lines.back();
+  EXPECT_EQ(r.lines.back().rfind("modtap: /nonexistent/capture.pcap: cannot open", 0), 0u)
+      << r.lines.back();
 }
 
 }  // namespace

@@ -44,7 +44,9 @@ class Simulator {
   }
 
  private:
-  unsigned pick(unsigned lo, unsigned hi) { return std::uniform_int_distribution<unsigned>(lo, hi)(rng_); }
+  unsigned pick(unsigned lo, unsigned hi) {
+    return std::uniform_int_distribution<unsigned>(lo, hi)(rng_);
+  }
   bool chance(double p) { return p > 0 && std::uniform_real_distribution<double>(0, 1)(rng_) < p; }
   static void u16(Bytes& b, unsigned v) {
     b.push_back(static_cast<uint8_t>(v >> 8));
@@ -102,8 +104,8 @@ class Simulator {
       capture_.timed_out.push_back(req);
       return;
     }
-    int64_t turnaround = chance(o_.fast_turnaround_rate) ? char_ns_ * pick(15, 30) / 10
-                                                         : t35_ + pick(0, 3'000'000);
+    int64_t turnaround =
+        chance(o_.fast_turnaround_rate) ? char_ns_ * pick(15, 30) / 10 : t35_ + pick(0, 3'000'000);
     if (o_.back_to_back) turnaround = 0;
     if (chance(o_.glitch_rate)) {
       send(Bytes{0x00}, turnaround);
@@ -119,8 +121,9 @@ class Simulator {
   }
 
   void build(uint8_t slave, Bytes& req, Bytes& rsp, bool broadcast) {
-    static constexpr uint8_t unicast[] = {0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x0B, 0x0C,
-                                          0x0F, 0x10, 0x11, 0x14, 0x15, 0x16, 0x17, 0x18, 0x2B};
+    static constexpr uint8_t unicast[] = {0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07,
+                                          0x08, 0x0B, 0x0C, 0x0F, 0x10, 0x11, 0x14,
+                                          0x15, 0x16, 0x17, 0x18, 0x2B};
     static constexpr uint8_t writes[] = {0x05, 0x06, 0x0F, 0x10};
     uint8_t fc = broadcast ? writes[pick(0, 3)] : unicast[pick(0, sizeof unicast - 1)];
     if (!broadcast && chance(o_.unknown_function_rate)) fc = static_cast<uint8_t>(pick(0x41, 0x48));
@@ -166,7 +169,9 @@ class Simulator {
         random_bytes(req, fc == 0x06 ? 2 : 4);
         rsp.assign(req.begin(), req.end());
         break;
-      case 0x07: rsp.push_back(static_cast<uint8_t>(pick(0, 255))); break;
+      case 0x07:
+        rsp.push_back(static_cast<uint8_t>(pick(0, 255)));
+        break;
       case 0x08: {
         static constexpr uint16_t subs[] = {0x0000, 0x000A, 0x000B, 0x000C, 0x000D, 0x000E, 0x0012};
         const uint16_t sub = subs[pick(0, 6)];
@@ -179,7 +184,9 @@ class Simulator {
         }
         break;
       }
-      case 0x0B: random_bytes(rsp, 4); break;
+      case 0x0B:
+        random_bytes(rsp, 4);
+        break;
       case 0x0C: {
         const unsigned events = pick(0, 20);
         rsp.push_back(static_cast<uint8_t>(6 + events));
@@ -286,14 +293,19 @@ class Simulator {
 
 }  // namespace
 
-BusCapture simulate(const BusOptions& options) { return Simulator(options).run(); }
+BusCapture simulate(const BusOptions& options) {
+  return Simulator(options).run();
+}
 
 decoder::ClockQuality clock_of(Delivery delivery) {
   switch (delivery) {
-    case Delivery::per_byte: return decoder::ClockQuality::per_byte;
+    case Delivery::per_byte:
+      return decoder::ClockQuality::per_byte;
     case Delivery::bursts:
-    case Delivery::per_frame: return decoder::ClockQuality::per_chunk;
-    case Delivery::untimed: return decoder::ClockQuality::none;
+    case Delivery::per_frame:
+      return decoder::ClockQuality::per_chunk;
+    case Delivery::untimed:
+      return decoder::ClockQuality::none;
   }
   return decoder::ClockQuality::none;
 }
@@ -341,7 +353,7 @@ std::vector<DeliveredChunk> deliver(const BusCapture& capture, Delivery delivery
       for (size_t c = 1; c < cuts.size(); ++c) {
         const uint64_t a = kept.back(), b = cuts[c];
         if (b - a > 2 && chance(0.2)) kept.push_back(a + 1 + rng() % (b - a - 1));  // split
-        if (b == n || !chance(0.2)) kept.push_back(b);                            // or merge
+        if (b == n || !chance(0.2)) kept.push_back(b);                              // or merge
       }
       for (size_t c = 1; c < kept.size(); ++c) {
         const uint64_t a = kept[c - 1], b = kept[c];

@@ -21,13 +21,13 @@ struct BusOptions {
   double exception_rate = 0.05;
   double no_response_rate = 0.03;  // the slave stays silent: the master moves on
   double broadcast_rate = 0.03;
-  double fast_turnaround_rate = 0.2;  // the slave answers after less than t3.5
-  double glitch_rate = 0.0;           // a 0x00 on the bus as the slave's driver turns on
-  double noise_rate = 0.0;            // a burst of junk between transactions
-  double truncation_rate = 0.0;       // the master's request breaks off, then is sent again
-  double unknown_function_rate = 0.0; // a vendor function code the length rules do not know
-  int64_t poll_gap_ns = 5'000'000;    // master's idle time between transactions (at least)
-  bool back_to_back = false;          // no idle time at all: the densest file for benchmarks
+  double fast_turnaround_rate = 0.2;   // the slave answers after less than t3.5
+  double glitch_rate = 0.0;            // a 0x00 on the bus as the slave's driver turns on
+  double noise_rate = 0.0;             // a burst of junk between transactions
+  double truncation_rate = 0.0;        // the master's request breaks off, then is sent again
+  double unknown_function_rate = 0.0;  // a vendor function code the length rules do not know
+  int64_t poll_gap_ns = 5'000'000;     // master's idle time between transactions (at least)
+  bool back_to_back = false;           // no idle time at all: the densest file for benchmarks
 };
 
 // A frame the master or a slave really sent, whole and with a good check.

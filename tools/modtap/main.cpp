@@ -4,8 +4,8 @@
 #include <memory>
 #include <string>
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include "captures/open_capture.hpp"
 #include "decoder/analyzer.hpp"
@@ -59,7 +59,8 @@ int run(const Options& o) {
   open.format = captures::parse_format(o.format);
   open.serial = {o.baud, static_cast<uint8_t>(o.data_bits), parse_parity(o.parity),
                  static_cast<uint8_t>(o.stop_bits)};
-  if (!o.sigrok_channels.empty()) open.sigrok.lines = captures::parse_sigrok_channels(o.sigrok_channels);
+  if (!o.sigrok_channels.empty())
+    open.sigrok.lines = captures::parse_sigrok_channels(o.sigrok_channels);
   open.sigrok.invert = o.sigrok_invert;
   auto source = captures::open_capture(o.read_file, open);
 
@@ -89,7 +90,8 @@ int main(int argc, char** argv) {
   app.add_option("-r,--read", o.read_file, "Capture file to read")->required();
   app.add_option("--format", o.format, "Capture format")
       ->check(CLI::IsMember({"auto", "raw", "hexlog", "pcap", "pcapng", "sigrok"}));
-  app.add_option("--mode", o.mode, "Transmission mode")->check(CLI::IsMember({"auto", "rtu", "ascii"}));
+  app.add_option("--mode", o.mode, "Transmission mode")
+      ->check(CLI::IsMember({"auto", "rtu", "ascii"}));
   app.add_option("-T,--output", o.output, "Output: text, json (JSON Lines), stats, none")
       ->check(CLI::IsMember({"text", "json", "stats", "none"}));
   app.add_flag("-V,--verbose", o.verbose, "Print each frame's field tree");

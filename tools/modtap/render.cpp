@@ -39,10 +39,16 @@ void append_json_value(fmt::memory_buffer& out, const Field& f) {
   auto it = std::back_inserter(out);
   switch (f.kind) {
     case Field::Kind::number:
-    case Field::Kind::hex: fmt::format_to(it, "{}", f.number); break;
-    case Field::Kind::text: append_json_string(out, f.text); break;
+    case Field::Kind::hex:
+      fmt::format_to(it, "{}", f.number);
+      break;
+    case Field::Kind::text:
+      append_json_string(out, f.text);
+      break;
     case Field::Kind::numbers:
-    case Field::Kind::bits: fmt::format_to(it, "[{}]", fmt::join(f.numbers, ",")); break;
+    case Field::Kind::bits:
+      fmt::format_to(it, "[{}]", fmt::join(f.numbers, ","));
+      break;
     case Field::Kind::bytes:
       out.push_back('"');
       append_hex(out, f.bytes, false);
@@ -68,9 +74,15 @@ void append_json_value(fmt::memory_buffer& out, const Field& f) {
 void append_text_value(fmt::memory_buffer& out, const Field& f, size_t max_items) {
   auto it = std::back_inserter(out);
   switch (f.kind) {
-    case Field::Kind::number: fmt::format_to(it, "{}", f.number); break;
-    case Field::Kind::hex: fmt::format_to(it, "0x{:04x}", f.number); break;
-    case Field::Kind::text: fmt::format_to(it, "\"{}\"", f.text); break;
+    case Field::Kind::number:
+      fmt::format_to(it, "{}", f.number);
+      break;
+    case Field::Kind::hex:
+      fmt::format_to(it, "0x{:04x}", f.number);
+      break;
+    case Field::Kind::text:
+      fmt::format_to(it, "\"{}\"", f.text);
+      break;
     case Field::Kind::bits:
       for (size_t i = 0; i < f.numbers.size() && i < max_items; ++i)
         out.push_back(f.numbers[i] ? '1' : '0');
@@ -78,12 +90,16 @@ void append_text_value(fmt::memory_buffer& out, const Field& f, size_t max_items
       break;
     case Field::Kind::numbers: {
       const size_t shown = std::min(f.numbers.size(), max_items);
-      fmt::format_to(it, "[{}", fmt::join(f.numbers.begin(), f.numbers.begin() + static_cast<long>(shown), " "));
+      fmt::format_to(
+          it, "[{}",
+          fmt::join(f.numbers.begin(), f.numbers.begin() + static_cast<long>(shown), " "));
       if (shown < f.numbers.size()) fmt::format_to(it, " ...({} values)", f.numbers.size());
       out.push_back(']');
       break;
     }
-    case Field::Kind::bytes: append_hex(out, f.bytes, true); break;
+    case Field::Kind::bytes:
+      append_hex(out, f.bytes, true);
+      break;
     case Field::Kind::items:
       for (size_t i = 0; i < f.items.size(); ++i) {
         out.push_back(i ? ' ' : '{');

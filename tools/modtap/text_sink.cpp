@@ -13,9 +13,12 @@ constexpr size_t line_items = 8;  // values shown on a summary line; -V shows al
 
 const char* role_tag(Role role) {
   switch (role) {
-    case Role::request: return "req";
-    case Role::response: return "rsp";
-    case Role::unknown: return "???";
+    case Role::request:
+      return "req";
+    case Role::response:
+      return "rsp";
+    case Role::unknown:
+      return "???";
   }
   return "?";
 }
@@ -31,13 +34,15 @@ double TextSink::seconds(int64_t t_ns) {
 }
 
 void TextSink::channel_column(uint16_t channel) {
-  if (channels_.size() > 1) out_.print(" {:<10}", channel < channels_.size() ? channels_[channel].name : "?");
+  if (channels_.size() > 1)
+    out_.print(" {:<10}", channel < channels_.size() ? channels_[channel].name : "?");
 }
 
 void TextSink::on_frame(const Frame& frame) {
   out_.print("{:6} {:11.6f}", frame.index, seconds(frame.t_ns));
   channel_column(frame.channel);
-  out_.print(" {} slave {:<3} {}", role_tag(frame.role), frame.slave(), function_label(frame.function()));
+  out_.print(" {} slave {:<3} {}", role_tag(frame.role), frame.slave(),
+             function_label(frame.function()));
   const DecodedPdu decoded = decode_pdu(frame.role, frame.pdu(), frame.request_pdu);
   auto& buf = out_.buffer();
   for (const Field& f : decoded.fields) {
@@ -63,8 +68,8 @@ void TextSink::on_frame(const Frame& frame) {
 void TextSink::tree(const Frame& frame) {
   auto& buf = out_.buffer();
   out_.print("    Frame {}: {} bytes, {}, channel {}, offset {}\n", frame.index, frame.raw.size(),
-             to_string(frame.mode), frame.channel < channels_.size() ? channels_[frame.channel].name : "?",
-             frame.offset);
+             to_string(frame.mode),
+             frame.channel < channels_.size() ? channels_[frame.channel].name : "?", frame.offset);
   out_.print("    Raw: ");
   append_hex(buf, frame.raw, true);
   out_.print("\n    Role: {}\n    Slave: {}\n    Function: {} ({})\n", to_string(frame.role),
@@ -81,8 +86,7 @@ void TextSink::tree(const Frame& frame) {
              width, frame.check_ok ? "ok" : "bad");
   if (!frame.check_ok) out_.print(", expected 0x{:0{}x}", frame.expected_check, width);
   out_.print("\n");
-  if (frame.request)
-    out_.print("    Request in frame: {}\n", *frame.request);
+  if (frame.request) out_.print("    Request in frame: {}\n", *frame.request);
   if (frame.latency_ns)
     out_.print("    Latency: {:.3f} ms\n", static_cast<double>(*frame.latency_ns) / 1e6);
 }
