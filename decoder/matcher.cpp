@@ -103,7 +103,8 @@ void Matcher::on_request(Frame& frame) {
     return;
   }
   const auto pdu = frame.pdu();
-  Pending p;
+  Pending& p = slots_[next_slot_];
+  next_slot_ ^= 1;
   p.index = frame.index;
   p.channel = frame.channel;
   p.end_ns = frame.end_ns;
@@ -111,7 +112,7 @@ void Matcher::on_request(Frame& frame) {
   p.adu_size = static_cast<uint16_t>(frame.adu.size());
   p.size = static_cast<uint16_t>(std::min(pdu.size(), p.pdu.size()));
   std::copy_n(pdu.begin(), p.size, p.pdu.begin());
-  pending_ = p;
+  pending_ = &p;
 }
 
 void Matcher::on_response(Frame& frame) {
@@ -120,8 +121,7 @@ void Matcher::on_response(Frame& frame) {
     return;
   }
   frame.request = pending_->index;
-  answered_ = *pending_;
-  frame.request_pdu = {answered_.pdu.data(), answered_.size};
+  frame.request_pdu = {pending_->pdu.data(), pending_->size};
   if (options_.timed) {
     frame.latency_ns = frame.t_ns - pending_->end_ns;
     if (options_.exact_clock && *frame.latency_ns < options_.t35_ns)
@@ -129,7 +129,7 @@ void Matcher::on_response(Frame& frame) {
   }
   if (frame.check_ok)
     frame.findings |= check_response_fit({pending_->pdu.data(), pending_->size}, frame.pdu());
-  pending_.reset();
+  pending_ = nullptr;
 }
 
 void Matcher::advance(int64_t now_ns) {
@@ -151,7 +151,7 @@ void Matcher::expire(int64_t now_ns, TimeoutReason reason) {
   t.t_ns = now_ns;
   t.waited_ns = now_ns - pending_->end_ns;
   t.reason = reason;
-  pending_.reset();
+  pending_ = nullptr;
   on_timeout_(t);
 }
 

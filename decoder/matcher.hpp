@@ -41,8 +41,8 @@ class Matcher {
     int64_t end_ns = 0;
     uint8_t slave = 0;
     uint16_t adu_size = 0;
-    uint16_t size = 0;  // PDU bytes kept (enough for echo and fit checks)
-    std::array<uint8_t, 256> pdu{};
+    uint16_t size = 0;             // PDU bytes kept (enough for echo and fit checks)
+    std::array<uint8_t, 256> pdu;  // left uninitialised: only `size` bytes are ever read
   };
 
   Role decide_role(const Frame& frame, ChannelRole channel_role) const;
@@ -53,8 +53,11 @@ class Matcher {
 
   MatcherOptions options_;
   TimeoutHandler on_timeout_;
-  std::optional<Pending> pending_;
-  Pending answered_;  // the request a response was just paired with, for its decoder
+  // Two slots, so a paired request stays readable through its response's callback while
+  // no request is copied on the hot path.
+  std::array<Pending, 2> slots_;
+  uint8_t next_slot_ = 0;
+  Pending* pending_ = nullptr;  // the open transaction
 };
 
 // Whether a response's content fits its request: byte counts against quantities, echoes
