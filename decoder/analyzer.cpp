@@ -158,33 +158,15 @@ void Analyzer::on_frame(Frame& frame) {
   frame.index = next_index_++;
   if (options_.clock == ClockQuality::none) last_ns_ = std::max(last_ns_, frame.end_ns);
   matcher_.on_frame(frame, channels_[frame.channel].info.role);
-  ++stats_.frames;
-  stats_.frame_bytes += frame.raw.size();
-  stats_.bad_checks += !frame.check_ok;
-  stats_.requests += frame.role == Role::request;
-  stats_.responses += frame.role == Role::response;
-  stats_.unknown_roles += frame.role == Role::unknown;
-  stats_.exceptions += frame.is_exception();
-  stats_.broadcasts += (frame.findings & finding_broadcast) != 0;
-  stats_.unsolicited += (frame.findings & finding_unsolicited) != 0;
-  stats_.mismatches += (frame.findings & (finding_length_mismatch | finding_echo_mismatch)) != 0;
-  if (frame.latency_ns) {
-    stats_.latency_sum_ns += *frame.latency_ns;
-    stats_.latency_max_ns = std::max(stats_.latency_max_ns, *frame.latency_ns);
-    ++stats_.latency_count;
-  }
   out_.on_frame(frame);
 }
 
 void Analyzer::on_noise(Noise& noise) {
   noise.index = next_index_++;
-  ++stats_.noise_records;
-  stats_.noise_bytes += noise.raw.size();
   out_.on_noise(noise);
 }
 
 void Analyzer::on_timeout(const Timeout& timeout) {
-  ++stats_.timeouts;
   out_.on_timeout(timeout);
 }
 

@@ -35,14 +35,6 @@ class RecordSink {
   virtual void on_timeout(const Timeout& timeout) = 0;
 };
 
-struct BusStats {
-  uint64_t frames = 0, bad_checks = 0, requests = 0, responses = 0, unknown_roles = 0;
-  uint64_t exceptions = 0, broadcasts = 0, unsolicited = 0, mismatches = 0, timeouts = 0;
-  uint64_t noise_records = 0, noise_bytes = 0, frame_bytes = 0;
-  int64_t latency_sum_ns = 0, latency_max_ns = 0;
-  uint64_t latency_count = 0;
-};
-
 class Analyzer final : private FrameSink {
  public:
   Analyzer(const AnalyzerOptions& options, std::vector<ChannelInfo> channels, RecordSink& out);
@@ -52,7 +44,6 @@ class Analyzer final : private FrameSink {
   void flush(int64_t now_ns);  // live sources: call on idle so silences resolve frames
   void finish();
 
-  const BusStats& stats() const { return stats_; }
   // The mode the bus settled on (automatic mode decides from the first frames).
   std::optional<Mode> mode() const { return mode_; }
 
@@ -70,7 +61,7 @@ class Analyzer final : private FrameSink {
   void settle_mode();
   void on_frame(Frame& frame) override;
   void on_noise(Noise& noise) override;
-  Expectation expectation() const override { return matcher_.expectation(); }
+  const Expectation& expectation() const override { return matcher_.expectation(); }
   void on_timeout(const Timeout& timeout);
 
   AnalyzerOptions options_;
@@ -79,7 +70,6 @@ class Analyzer final : private FrameSink {
   Matcher matcher_;
   std::unique_ptr<ModeProbe> probe_;  // until automatic mode has decided
   std::optional<Mode> mode_;
-  BusStats stats_;
   uint64_t next_index_ = 1;
   int64_t last_ns_ = 0;
 };

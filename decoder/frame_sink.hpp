@@ -19,7 +19,11 @@ class FrameSink {
   // Spans inside the records are valid only during the call.
   virtual void on_frame(Frame& frame) = 0;
   virtual void on_noise(Noise& noise) = 0;
-  virtual Expectation expectation() const { return {}; }
+  // A live view of what the bus waits for; framers keep the reference and read it per frame.
+  virtual const Expectation& expectation() const {
+    static const Expectation nothing;
+    return nothing;
+  }
 };
 
 }  // namespace modtap::decoder

@@ -58,13 +58,17 @@ Finding check_response_fit(std::span<const uint8_t> req, std::span<const uint8_t
 Matcher::Matcher(const MatcherOptions& options, TimeoutHandler on_timeout)
     : options_(options), on_timeout_(std::move(on_timeout)) {}
 
-Expectation Matcher::expectation() const {
-  if (!pending_) return {};
+void Matcher::set_pending(Pending* pending) {
+  pending_ = pending;
+  if (!pending) {
+    expectation_ = {};
+    return;
+  }
   // FC08 Return Query Data: the response is the request again, so its length is known.
-  const bool query_echo = pending_->pdu[0] == 0x08 && pending_->size >= 3 &&
-                          pending_->pdu[1] == 0 && pending_->pdu[2] == 0;
-  return {true, pending_->slave, pending_->pdu[0],
-          static_cast<uint16_t>(query_echo ? pending_->adu_size : 0)};
+  const bool query_echo =
+      pending->pdu[0] == 0x08 && pending->size >= 3 && pending->pdu[1] == 0 && pending->pdu[2] == 0;
+  expectation_ = {true, pending->slave, pending->pdu[0],
+                  static_cast<uint16_t>(query_echo ? pending->adu_size : 0)};
 }
 
 void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
@@ -112,7 +116,7 @@ void Matcher::on_request(Frame& frame) {
   p.adu_size = static_cast<uint16_t>(frame.adu.size());
   p.size = static_cast<uint16_t>(std::min(pdu.size(), p.pdu.size()));
   std::copy_n(pdu.begin(), p.size, p.pdu.begin());
-  pending_ = &p;
+  set_pending(&p);
 }
 
 void Matcher::on_response(Frame& frame) {
@@ -129,7 +133,7 @@ void Matcher::on_response(Frame& frame) {
   }
   if (frame.check_ok)
     frame.findings |= check_response_fit({pending_->pdu.data(), pending_->size}, frame.pdu());
-  pending_ = nullptr;
+  set_pending(nullptr);
 }
 
 void Matcher::advance(int64_t now_ns) {
@@ -151,7 +155,7 @@ void Matcher::expire(int64_t now_ns, TimeoutReason reason) {
   t.t_ns = now_ns;
   t.waited_ns = now_ns - pending_->end_ns;
   t.reason = reason;
-  pending_ = nullptr;
+  set_pending(nullptr);
   on_timeout_(t);
 }
 

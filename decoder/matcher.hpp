@@ -32,7 +32,7 @@ class Matcher {
   void advance(int64_t now_ns);
   void finish(int64_t end_ns);
 
-  Expectation expectation() const;
+  const Expectation& expectation() const { return expectation_; }
 
  private:
   struct Pending {
@@ -58,6 +58,9 @@ class Matcher {
   std::array<Pending, 2> slots_;
   uint8_t next_slot_ = 0;
   Pending* pending_ = nullptr;  // the open transaction
+  Expectation expectation_;     // what pending_ means to a framer, kept in step with it
+
+  void set_pending(Pending* pending);
 };
 
 // Whether a response's content fits its request: byte counts against quantities, echoes

@@ -28,6 +28,7 @@ RtuFramer::RtuFramer(uint16_t channel, const RtuFramerOptions& options, FrameSin
     : channel_(channel),
       options_(options),
       sink_(sink),
+      expected_(sink.expectation()),
       char_ns_(options.format.char_time_ns()),
       gap_threshold_ns_(options.format.t35_ns() +
                         (options.clock == ClockQuality::per_chunk ? options.chunk_jitter_ns : 0)) {
@@ -90,7 +91,7 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const 
   const bool may_request =
       options_.role != ChannelRole::slave && !(fc & 0x80) && (!broadcast || may_broadcast(fc));
   const bool may_respond = options_.role != ChannelRole::master && !broadcast;
-  const Expectation expected = sink_.expectation();
+  const Expectation& expected = expected_;
   const bool response_first =
       expected.pending && expected.slave == p[0] && expected.function == (fc & 0x7F);
 
@@ -135,7 +136,7 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
       return {};
     }
     case BodyLength::Kind::variable: {
-      const Expectation expected = sink_.expectation();
+      const Expectation& expected = expected_;
       if (role == Role::response && expected.echo_size && expected.slave == p[0] &&
           expected.function == p[1]) {
         if (avail < expected.echo_size) return need_more();
@@ -303,6 +304,10 @@ uint64_t RtuFramer::first_gap_after(uint64_t offset) const {
 
 // Bytes inside a chunk are placed back to back before its time, the best a chunk clock allows.
 int64_t RtuFramer::end_time(uint64_t offset) const {
+  if (options_.clock == ClockQuality::none) return static_cast<int64_t>(offset + 1) * char_ns_;
+  const TimeMark& last = marks_.back();
+  if (offset >= last.first && offset < last.end)
+    return last.end_ns - static_cast<int64_t>(last.end - 1 - offset) * char_ns_;
   auto it = std::upper_bound(marks_.begin(), marks_.end(), offset,
                              [](uint64_t o, const TimeMark& m) { return o < m.end; });
   if (it == marks_.end()) return last_end_ns_;

@@ -74,6 +74,7 @@ class RtuFramer {
   uint16_t channel_;
   RtuFramerOptions options_;
   FrameSink& sink_;
+  const Expectation& expected_;
   int64_t char_ns_;
   int64_t gap_threshold_ns_;
 

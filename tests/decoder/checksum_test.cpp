@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "tests/support/collector.hpp"
 
@@ -28,6 +29,20 @@ TEST(Crc16, StepwiseEqualsWhole) {
   for (uint8_t b : bytes) crc = crc16_step(crc, b);
   EXPECT_EQ(crc, crc16(bytes));
   EXPECT_EQ(crc, 0xCDC5);
+}
+
+TEST(Crc16, SlicedFormEqualsBytewiseAtEveryLength) {
+  std::vector<uint8_t> bytes;
+  uint32_t x = 7;
+  for (int i = 0; i < 300; ++i) {
+    x = x * 1664525 + 1013904223;
+    bytes.push_back(static_cast<uint8_t>(x >> 24));
+  }
+  for (size_t n = 0; n <= bytes.size(); ++n) {
+    uint16_t bytewise = 0xFFFF;
+    for (size_t i = 0; i < n; ++i) bytewise = crc16_step(bytewise, bytes[i]);
+    ASSERT_EQ(crc16({bytes.data(), n}), bytewise) << n;
+  }
 }
 
 TEST(Crc16, ResidueOfAGoodFrameStaysZeroWithATrailingZero) {

@@ -51,6 +51,7 @@ std::unique_ptr<decoder::RecordSink> make_sink(const Options& o, tools::Output& 
                                                const std::vector<decoder::ChannelInfo>& channels) {
   if (o.output == "json") return std::make_unique<tools::JsonSink>(out, channels);
   if (o.output == "text") return std::make_unique<tools::TextSink>(out, channels, o.verbose);
+  if (o.output == "stats") return std::make_unique<tools::StatsSink>();
   return std::make_unique<tools::NullSink>();
 }
 
@@ -78,7 +79,7 @@ int run(const Options& o) {
   decoder::Chunk chunk;
   while (source->next(chunk)) bus.push(chunk);
   bus.finish();
-  if (o.output == "stats") print_stats(out, bus.stats());
+  if (auto* stats = dynamic_cast<tools::StatsSink*>(sink.get())) print_stats(out, stats->stats());
   return 0;
 }
 

@@ -1,8 +1,36 @@
 #include "tools/modtap/stats_sink.hpp"
 
+#include <algorithm>
+
 namespace modtap::tools {
 
-void print_stats(Output& out, const decoder::BusStats& s) {
+using namespace decoder;
+
+void StatsSink::on_frame(const Frame& frame) {
+  auto& s = stats_;
+  ++s.frames;
+  s.frame_bytes += frame.raw.size();
+  s.bad_checks += !frame.check_ok;
+  s.requests += frame.role == Role::request;
+  s.responses += frame.role == Role::response;
+  s.unknown_roles += frame.role == Role::unknown;
+  s.exceptions += frame.is_exception();
+  s.broadcasts += (frame.findings & finding_broadcast) != 0;
+  s.unsolicited += (frame.findings & finding_unsolicited) != 0;
+  s.mismatches += (frame.findings & (finding_length_mismatch | finding_echo_mismatch)) != 0;
+  if (frame.latency_ns) {
+    s.latency_sum_ns += *frame.latency_ns;
+    s.latency_max_ns = std::max(s.latency_max_ns, *frame.latency_ns);
+    ++s.latency_count;
+  }
+}
+
+void StatsSink::on_noise(const Noise& noise) {
+  ++stats_.noise_records;
+  stats_.noise_bytes += noise.raw.size();
+}
+
+void print_stats(Output& out, const BusStats& s) {
   const uint64_t bytes = s.frame_bytes + s.noise_bytes;
   out.print("frames          {}\n", s.frames);
   out.print("  requests      {}\n", s.requests);

@@ -1,4 +1,5 @@
-// The summary of a capture: counts, error rates and turnaround, printed at the end (-T stats).
+// The summary of a capture (-T stats): counts, error rates and turnaround. A sink like the
+// others, so the pipeline itself counts nothing it is not asked for.
 #pragma once
 
 #include "decoder/analyzer.hpp"
@@ -6,9 +7,28 @@
 
 namespace modtap::tools {
 
-void print_stats(Output& out, const decoder::BusStats& stats);
+struct BusStats {
+  uint64_t frames = 0, bad_checks = 0, requests = 0, responses = 0, unknown_roles = 0;
+  uint64_t exceptions = 0, broadcasts = 0, unsolicited = 0, mismatches = 0, timeouts = 0;
+  uint64_t noise_records = 0, noise_bytes = 0, frame_bytes = 0;
+  int64_t latency_sum_ns = 0, latency_max_ns = 0;
+  uint64_t latency_count = 0;
+};
 
-// Takes records and keeps nothing: -T none and -T stats measure the pipeline alone.
+class StatsSink final : public decoder::RecordSink {
+ public:
+  void on_frame(const decoder::Frame& frame) override;
+  void on_noise(const decoder::Noise& noise) override;
+  void on_timeout(const decoder::Timeout&) override { ++stats_.timeouts; }
+  const BusStats& stats() const { return stats_; }
+
+ private:
+  BusStats stats_;
+};
+
+void print_stats(Output& out, const BusStats& stats);
+
+// Takes records and keeps nothing: -T none measures the pipeline alone.
 class NullSink final : public decoder::RecordSink {
  public:
   void on_frame(const decoder::Frame&) override {}
