@@ -151,8 +151,16 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
       bool open = false;
       for (bool allow_glitch : {false, true}) {
         uint16_t crc = crc16({p, first - crc_size});
+        bool previous_hit = false;
         for (size_t n = first; n <= limit; ++n) {
-          if (crc == wire_crc({p, n})) {
+          const bool hit = crc == wire_crc({p, n});
+          // A hit right after a hit is the shorter one with a 0x00 appended: a glitch, unless
+          // a silence right after it says that 0x00 was the frame's last CRC byte.
+          const bool zero_appended = hit && previous_hit;
+          previous_hit = hit;
+          if (zero_appended && !gap_at(at + n)) {
+            open |= at + n == end_;
+          } else if (hit) {
             if (confirmed_end(at, at + n, final, search - 1, allow_glitch))
               return {Match::Kind::found, static_cast<uint16_t>(n), fit};
             open |= at + n == end_;

@@ -5,6 +5,10 @@
 #include <map>
 #include <set>
 
+#include <filesystem>
+
+#include "captures/chunk_writers.hpp"
+#include "captures/open_capture.hpp"
 #include "decoder/analyzer.hpp"
 #include "tests/support/collector.hpp"
 #include "tools/busgen/bus_simulator.hpp"
@@ -17,6 +21,10 @@ using busgen::BusOptions;
 using busgen::Delivery;
 using testing::Collector;
 
+// How the traffic reaches the analyzer: handed over directly, or written to a file that
+// modtap's own reader then reads back.
+enum class Via { direct, pcap, hexlog };
+
 struct Scenario {
   const char* name;
   Delivery delivery;
@@ -24,18 +32,53 @@ struct Scenario {
   // Junk and broken frames with no timing to cut them off can hide a neighbour; where the
   // source has no per-byte clock the few such frames are counted, not excused silently.
   size_t max_missing = 0;
+  Via via = Via::direct;
 };
+
+constexpr int64_t file_epoch_ns = 1'700'000'000'000'000'000;
+
+// Writes the delivered chunks as the scenario's file format and returns the path.
+std::string write_file(const BusCapture& capture, const Scenario& s) {
+  const auto path = (std::filesystem::temp_directory_path() /
+                     (std::string("modtap-scenario-") + s.name + (s.via == Via::pcap ? ".pcap" : ".log")))
+                        .string();
+  const auto chunks = busgen::deliver(capture, s.delivery, s.bus.seed);
+  auto chunk_at = [&](const busgen::DeliveredChunk& c) {
+    return Chunk{0, file_epoch_ns + c.t_ns, {capture.bytes.data() + c.offset, c.size}};
+  };
+  if (s.via == Via::pcap) {
+    captures::PcapChunkWriter writer(path, 147);
+    for (const auto& c : chunks) writer.write(chunk_at(c));
+  } else {
+    captures::HexlogWriter writer(path, s.bus.format.char_time_ns());
+    for (const auto& c : chunks) writer.write(chunk_at(c));
+  }
+  return path;
+}
 
 Collector run(const BusCapture& capture, const Scenario& s) {
   AnalyzerOptions options;
   options.mode = ModeChoice::automatic;
   options.format = s.bus.format;
-  options.clock = busgen::clock_of(s.delivery);
   Collector out;
-  Analyzer analyzer(options, {{"bus", ChannelRole::bus}}, out);
-  for (const auto& c : busgen::deliver(capture, s.delivery, s.bus.seed))
-    analyzer.push({0, c.t_ns, {capture.bytes.data() + c.offset, c.size}});
+  if (s.via == Via::direct) {
+    options.clock = busgen::clock_of(s.delivery);
+    Analyzer analyzer(options, {{"bus", ChannelRole::bus}}, out);
+    for (const auto& c : busgen::deliver(capture, s.delivery, s.bus.seed))
+      analyzer.push({0, c.t_ns, {capture.bytes.data() + c.offset, c.size}});
+    analyzer.finish();
+    return out;
+  }
+  const std::string path = write_file(capture, s);
+  captures::OpenOptions open;
+  open.serial = s.bus.format;
+  auto source = captures::open_capture(path, open);
+  options.clock = source->clock();
+  Analyzer analyzer(options, source->channels(), out);
+  Chunk chunk;
+  while (source->next(chunk)) analyzer.push(chunk);
   analyzer.finish();
+  std::filesystem::remove(path);
   return out;
 }
 
@@ -147,7 +190,11 @@ INSTANTIATE_TEST_SUITE_P(
                       Scenario{"ascii_per_byte", Delivery::per_byte, ascii(11)},
                       Scenario{"ascii_bursts", Delivery::bursts, ascii(12)},
                       Scenario{"ascii_untimed", Delivery::untimed, ascii(13)},
-                      Scenario{"vendor_codes_per_byte", Delivery::per_byte, vendor_codes(14)}),
+                      Scenario{"vendor_codes_per_byte", Delivery::per_byte, vendor_codes(14)},
+                      Scenario{"pcap_per_frame", Delivery::per_frame, clean(15), 0, Via::pcap},
+                      Scenario{"pcap_bursts_rough", Delivery::bursts, rough(16), 0, Via::pcap},
+                      Scenario{"hexlog_bursts", Delivery::bursts, clean(17), 0, Via::hexlog},
+                      Scenario{"hexlog_ascii", Delivery::bursts, ascii(18), 0, Via::hexlog}),
     [](const auto& info) { return std::string(info.param.name); });
 
 }  // namespace
