@@ -97,11 +97,18 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const 
 
   Role order[2] = {Role::request, Role::response};
   if (response_first) std::swap(order[0], order[1]);
-  bool need_more = false;
+  bool waiting = false;
   for (Role role : order) {
     if ((role == Role::request && !may_request) || (role == Role::response && !may_respond))
       continue;
     Match m = match_role(role, at, final, search);
+    // A silence inside a frame, with a good frame starting right after it, means this was a
+    // frame that broke off, whatever its CRC says.
+    if (m.kind == Match::Kind::found && first_gap_after(at) < at + m.length) {
+      const Match after_gap = match_at(first_gap_after(at), final, 0);
+      if (after_gap.kind == Match::Kind::found) return {};
+      if (after_gap.kind == Match::Kind::need_more && !final) return need_more();
+    }
     if (m.kind == Match::Kind::found) {
       // The same bytes may read as the other role too (echo codes 05, 06, 08, ...).
       const Role other = role == Role::request ? Role::response : Role::request;
@@ -112,10 +119,10 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const 
     if (m.kind == Match::Kind::need_more) {
       // The likelier reading is still open: wait for it rather than take the other one early.
       if (!final) return m;
-      need_more = true;
+      waiting = true;
     }
   }
-  return need_more ? RtuFramer::need_more() : Match{};
+  return waiting ? need_more() : Match{};
 }
 
 RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int search) const {
@@ -145,10 +152,12 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
       if (search <= 0) return {};
       // A bounded CRC search. A CRC match alone is weak evidence (a trailing 0x00 keeps a
       // zero residue zero), so the end must also be confirmed by a gap or the next frame;
-      // only when nothing confirms that way may a turnaround glitch stand in between.
+      // only when nothing confirms that way may a turnaround glitch stand in between. A
+      // frame found this way never swallows a frame whose length rules and CRC agree.
       const uint64_t limit = std::min<uint64_t>(avail, max_rtu_adu);
       const size_t first = std::max<size_t>(body.bytes + crc_size, min_adu);
       bool open = false;
+      size_t unconfirmed = 0;  // the first plausible end nothing confirmed
       for (bool allow_glitch : {false, true}) {
         uint16_t crc = crc16({p, first - crc_size});
         bool previous_hit = false;
@@ -158,16 +167,23 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
           // a silence right after it says that 0x00 was the frame's last CRC byte.
           const bool zero_appended = hit && previous_hit;
           previous_hit = hit;
-          if (zero_appended && !gap_at(at + n)) {
-            open |= at + n == end_;
-          } else if (hit) {
-            if (confirmed_end(at, at + n, final, search - 1, allow_glitch))
-              return {Match::Kind::found, static_cast<uint16_t>(n), fit};
-            open |= at + n == end_;
-          }
           crc = crc16_step(crc, p[n - crc_size]);
+          if (!hit || (zero_appended && !gap_at(at + n) && !copy_follows(at, at + n))) {
+            open |= hit && at + n == end_;
+            continue;
+          }
+          if (swallows_known_frame(at, at + n)) continue;
+          if (confirmed_end(at, at + n, final, search - 1, allow_glitch))
+            return {Match::Kind::found, static_cast<uint16_t>(n), fit};
+          open |= at + n == end_;
+          if (!unconfirmed) unconfirmed = n;
         }
       }
+      // FC08 Return Query Data followed by junk: once nothing more can confirm it, its own
+      // header (slave, 08, sub-function 0000) and CRC have to do.
+      const bool exhausted = final || (avail >= max_rtu_adu && !open);
+      if (unconfirmed && exhausted && p[1] == 0x08)
+        return {Match::Kind::found, static_cast<uint16_t>(unconfirmed), fit};
       if (!final && (avail < max_rtu_adu || open)) return need_more();
       return {};
     }
@@ -185,14 +201,24 @@ bool RtuFramer::confirmed_end(uint64_t begin, uint64_t end, bool final, int sear
                               bool allow_glitch) const {
   if (end == end_) return final;
   if (gap_at(end) || match_at(end, final, search).kind == Match::Kind::found) return true;
-  // An exact copy right behind is the echo of FC08 Return Query Data.
-  const uint64_t size = end - begin;
-  if (end + size <= end_ && std::equal(at_ptr(begin), at_ptr(end), at_ptr(end))) return true;
+  if (copy_follows(begin, end)) return true;
   // A turnaround glitch between this frame and the next still confirms this end; without
   // this, the glitch's 0x00 would be taken into the frame (it keeps the CRC residue zero).
   const uint8_t next = *at_ptr(end);
   return allow_glitch && (next == 0x00 || next == 0xFF) && end + 1 < end_ &&
          (gap_at(end + 1) || match_at(end + 1, final, search).kind == Match::Kind::found);
+}
+
+// An exact copy right behind is the echo of FC08 Return Query Data.
+bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
+  const uint64_t size = end - begin;
+  return end + size <= end_ && std::equal(at_ptr(begin), at_ptr(end), at_ptr(end));
+}
+
+bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end) const {
+  for (uint64_t inner = begin + 1; inner + min_adu <= end; ++inner)
+    if (match_at(inner, false, 0).kind == Match::Kind::found) return true;
+  return false;
 }
 
 bool RtuFramer::blocked_by_gap(uint64_t at, bool final) const {

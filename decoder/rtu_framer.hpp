@@ -58,6 +58,9 @@ class RtuFramer {
   bool fits_role(Role role, uint64_t at, uint16_t length) const;
   bool confirmed_end(uint64_t begin, uint64_t end, bool final, int search, bool allow_glitch) const;
   bool blocked_by_gap(uint64_t at, bool final) const;
+  bool copy_follows(uint64_t begin, uint64_t end) const;
+  // Whether a frame of known length and good CRC starts inside [begin, end).
+  bool swallows_known_frame(uint64_t begin, uint64_t end) const;
   // First position >= from that starts a good frame; `decided` false if one is still open.
   uint64_t next_start(uint64_t from, bool final, bool& decided);
   void emit_frame(uint64_t at, const Match& match);

@@ -39,9 +39,10 @@ constexpr int64_t file_epoch_ns = 1'700'000'000'000'000'000;
 
 // Writes the delivered chunks as the scenario's file format and returns the path.
 std::string write_file(const BusCapture& capture, const Scenario& s) {
-  const auto path = (std::filesystem::temp_directory_path() /
-                     (std::string("modtap-scenario-") + s.name + (s.via == Via::pcap ? ".pcap" : ".log")))
-                        .string();
+  const auto path =
+      (std::filesystem::temp_directory_path() /
+       (std::string("modtap-scenario-") + s.name + (s.via == Via::pcap ? ".pcap" : ".log")))
+          .string();
   const auto chunks = busgen::deliver(capture, s.delivery, s.bus.seed);
   auto chunk_at = [&](const busgen::DeliveredChunk& c) {
     return Chunk{0, file_epoch_ns + c.t_ns, {capture.bytes.data() + c.offset, c.size}};
@@ -184,15 +185,15 @@ INSTANTIATE_TEST_SUITE_P(
                       Scenario{"fast_per_byte", Delivery::per_byte, fast(5)},
                       Scenario{"fast_bursts", Delivery::bursts, fast(6)},
                       Scenario{"rough_per_byte", Delivery::per_byte, rough(7)},
-                      Scenario{"rough_bursts", Delivery::bursts, rough(8)},
-                      Scenario{"rough_per_frame", Delivery::per_frame, rough(9), 4},
-                      Scenario{"rough_untimed", Delivery::untimed, rough(10), 4},
+                      Scenario{"rough_bursts", Delivery::bursts, rough(8), 2},
+                      Scenario{"rough_per_frame", Delivery::per_frame, rough(9), 2},
+                      Scenario{"rough_untimed", Delivery::untimed, rough(10), 2},
                       Scenario{"ascii_per_byte", Delivery::per_byte, ascii(11)},
                       Scenario{"ascii_bursts", Delivery::bursts, ascii(12)},
                       Scenario{"ascii_untimed", Delivery::untimed, ascii(13)},
                       Scenario{"vendor_codes_per_byte", Delivery::per_byte, vendor_codes(14)},
                       Scenario{"pcap_per_frame", Delivery::per_frame, clean(15), 0, Via::pcap},
-                      Scenario{"pcap_bursts_rough", Delivery::bursts, rough(16), 0, Via::pcap},
+                      Scenario{"pcap_bursts_rough", Delivery::bursts, rough(16), 2, Via::pcap},
                       Scenario{"hexlog_bursts", Delivery::bursts, clean(17), 0, Via::hexlog},
                       Scenario{"hexlog_ascii", Delivery::bursts, ascii(18), 0, Via::hexlog}),
     [](const auto& info) { return std::string(info.param.name); });
