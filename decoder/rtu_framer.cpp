@@ -104,7 +104,7 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const 
     Match m = match_role(role, at, final, search);
     // A silence inside a frame, with a good frame starting right after it, means this was a
     // frame that broke off, whatever its CRC says.
-    if (m.kind == Match::Kind::found && first_gap_after(at) < at + m.length) {
+    if (m.kind == Match::Kind::found && !gaps_.empty() && first_gap_after(at) < at + m.length) {
       const Match after_gap = match_at(first_gap_after(at), final, 0);
       if (after_gap.kind == Match::Kind::found) return {};
       if (after_gap.kind == Match::Kind::need_more && !final) return need_more();

@@ -303,6 +303,7 @@ decoder::ClockQuality clock_of(Delivery delivery) {
       return decoder::ClockQuality::per_byte;
     case Delivery::bursts:
     case Delivery::per_frame:
+    case Delivery::whole_frames:
       return decoder::ClockQuality::per_chunk;
     case Delivery::untimed:
       return decoder::ClockQuality::none;
@@ -335,7 +336,9 @@ std::vector<DeliveredChunk> deliver(const BusCapture& capture, Delivery delivery
       }
       break;
     }
+    case Delivery::whole_frames:
     case Delivery::per_frame: {
+      const double change_rate = delivery == Delivery::per_frame ? 0.2 : 0.0;
       // Cut where a gap-based sniffer would: at every frame and noise boundary, then split
       // some pieces in two and merge some neighbours.
       std::vector<uint64_t> cuts;
@@ -352,8 +355,8 @@ std::vector<DeliveredChunk> deliver(const BusCapture& capture, Delivery delivery
       std::vector<uint64_t> kept{0};
       for (size_t c = 1; c < cuts.size(); ++c) {
         const uint64_t a = kept.back(), b = cuts[c];
-        if (b - a > 2 && chance(0.2)) kept.push_back(a + 1 + rng() % (b - a - 1));  // split
-        if (b == n || !chance(0.2)) kept.push_back(b);                              // or merge
+        if (b - a > 2 && chance(change_rate)) kept.push_back(a + 1 + rng() % (b - a - 1));  // split
+        if (b == n || !chance(change_rate)) kept.push_back(b);                              // or merge
       }
       for (size_t c = 1; c < kept.size(); ++c) {
         const uint64_t a = kept[c - 1], b = kept[c];

@@ -1,27 +1,72 @@
-// modtap-busgen: writes simulated bus traffic as a raw byte file, for benchmarks and demos.
+// modtap-busgen: writes simulated bus traffic as a capture file, for benchmarks and demos.
 #include <cstdio>
+#include <map>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
+#include "captures/chunk_writers.hpp"
 #include "tools/busgen/bus_simulator.hpp"
 
+namespace {
+
+using namespace modtap;
+
+// Frame-per-packet pcaps start at a fixed, recent date so that tools show sensible times.
+constexpr int64_t epoch_ns = 1'700'000'000'000'000'000;
+
+int write(const busgen::BusCapture& capture, const std::string& format, busgen::Delivery delivery,
+          uint64_t seed, const std::string& path, int64_t char_ns) {
+  const auto chunks = busgen::deliver(capture, delivery, seed);
+  auto chunk = [&](const busgen::DeliveredChunk& c) {
+    return decoder::Chunk{0, epoch_ns + c.t_ns, {capture.bytes.data() + c.offset, c.size}};
+  };
+  if (format == "pcap") {
+    captures::PcapChunkWriter writer(path, 147);
+    for (const auto& c : chunks) writer.write(chunk(c));
+  } else if (format == "hexlog") {
+    captures::HexlogWriter writer(path, char_ns);
+    for (const auto& c : chunks) writer.write(chunk(c));
+  } else {
+    FILE* f = path == "-" ? stdout : std::fopen(path.c_str(), "wb");
+    if (!f) {
+      std::perror(path.c_str());
+      return 2;
+    }
+    std::fwrite(capture.bytes.data(), 1, capture.bytes.size(), f);
+    if (f != stdout) std::fclose(f);
+  }
+  return 0;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  CLI::App app{"modtap-busgen: simulated Modbus RTU traffic as raw bytes"};
-  modtap::busgen::BusOptions o;
-  std::string out = "-";
+  CLI::App app{"modtap-busgen: simulated Modbus RTU traffic as a capture file"};
+  busgen::BusOptions o;
+  std::string out = "-", format = "raw", delivery_name = "frames";
   app.add_option("-n,--transactions", o.transactions, "Request/response pairs to simulate");
   app.add_option("--seed", o.seed, "Random seed");
   app.add_flag("--back-to-back", o.back_to_back, "No idle time between frames");
-  app.add_option("-o,--output", out, "Output file (- for stdout)");
+  app.add_option("--format", format, "raw, pcap (DLT_USER0) or hexlog")
+      ->check(CLI::IsMember({"raw", "pcap", "hexlog"}));
+  app.add_option("--delivery", delivery_name,
+                 "For pcap and hexlog: frames (one frame a packet), bytes, bursts (16 ms), "
+                 "sniffer (frames, some split, some merged)")
+      ->check(CLI::IsMember({"frames", "bytes", "bursts", "sniffer"}));
+  app.add_option("-o,--output", out, "Output file (- for stdout, raw only)");
   CLI11_PARSE(app, argc, argv);
-  const auto capture = modtap::busgen::simulate(o);
-  FILE* f = out == "-" ? stdout : std::fopen(out.c_str(), "wb");
-  if (!f) {
-    std::perror(out.c_str());
+  const std::map<std::string, busgen::Delivery> deliveries{
+      {"frames", busgen::Delivery::whole_frames},
+      {"bytes", busgen::Delivery::per_byte},
+      {"bursts", busgen::Delivery::bursts},
+      {"sniffer", busgen::Delivery::per_frame}};
+  const auto capture = busgen::simulate(o);
+  std::fprintf(stderr, "%zu frames, %zu bytes\n", capture.frames.size(), capture.bytes.size());
+  try {
+    return write(capture, format, deliveries.at(delivery_name), o.seed, out, o.format.char_time_ns());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "modtap-busgen: %s\n", e.what());
     return 2;
   }
-  std::fwrite(capture.bytes.data(), 1, capture.bytes.size(), f);
-  std::fprintf(stderr, "%zu frames, %zu bytes\n", capture.frames.size(), capture.bytes.size());
-  if (f != stdout) std::fclose(f);
-  return 0;
 }
