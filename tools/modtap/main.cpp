@@ -3,11 +3,13 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
 #include "captures/open_capture.hpp"
+#include "captures/pcapng_sink.hpp"
 #include "decoder/analyzer.hpp"
 #include "tools/modtap/json_sink.hpp"
 #include "tools/modtap/output.hpp"
@@ -33,6 +35,27 @@ struct Options {
   double jitter_ms = 20.0;
   std::string sigrok_channels;
   bool sigrok_invert = false;
+  std::string write_file;
+  std::string link = "user";
+  int dlt = 147;
+};
+
+// Hands every record to each of several sinks (the terminal and a pcapng file, say).
+class FanOut final : public decoder::RecordSink {
+ public:
+  void add(decoder::RecordSink& sink) { sinks_.push_back(&sink); }
+  void on_frame(const decoder::Frame& f) override {
+    for (auto* s : sinks_) s->on_frame(f);
+  }
+  void on_noise(const decoder::Noise& n) override {
+    for (auto* s : sinks_) s->on_noise(n);
+  }
+  void on_timeout(const decoder::Timeout& t) override {
+    for (auto* s : sinks_) s->on_timeout(t);
+  }
+
+ private:
+  std::vector<decoder::RecordSink*> sinks_;
 };
 
 decoder::Parity parse_parity(const std::string& s) {
@@ -75,7 +98,19 @@ int run(const Options& o) {
 
   tools::Output out(stdout);
   auto sink = make_sink(o, out, source->channels());
-  decoder::Analyzer bus(analyzer, source->channels(), *sink);
+  FanOut sinks;
+  sinks.add(*sink);
+  std::unique_ptr<captures::PcapngWriter> pcapng;
+  std::unique_ptr<captures::PcapngSink> pcapng_sink;
+  if (!o.write_file.empty()) {
+    captures::PcapngOptions options;
+    options.link = captures::parse_link(o.link);
+    options.dlt = o.dlt;
+    pcapng = std::make_unique<captures::PcapngWriter>(o.write_file);
+    pcapng_sink = std::make_unique<captures::PcapngSink>(*pcapng, source->channels(), options);
+    sinks.add(*pcapng_sink);
+  }
+  decoder::Analyzer bus(analyzer, source->channels(), sinks);
   decoder::Chunk chunk;
   while (source->next(chunk)) bus.push(chunk);
   bus.finish();
@@ -93,8 +128,15 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "raw", "hexlog", "pcap", "pcapng", "sigrok"}));
   app.add_option("--mode", o.mode, "Transmission mode")
       ->check(CLI::IsMember({"auto", "rtu", "ascii"}));
-  app.add_option("-T,--output", o.output, "Output: text, json (JSON Lines), stats, none")
-      ->check(CLI::IsMember({"text", "json", "stats", "none"}));
+  auto* output = app.add_option("-T,--output", o.output,
+                                "Output: text, json (JSON Lines), stats, none (default: text, "
+                                "or none with -w)")
+                     ->check(CLI::IsMember({"text", "json", "stats", "none"}));
+  app.add_option("-w,--write", o.write_file, "Write every frame and noise record as pcapng");
+  app.add_option("--link", o.link, "pcapng link: user (DLT_USER + modtap.lua), exported-pdu, bare")
+      ->check(CLI::IsMember({"user", "exported-pdu", "bare"}));
+  app.add_option("--dlt", o.dlt, "DLT_USER link type for --link user or bare")
+      ->check(CLI::Range(147, 162));
   app.add_flag("-V,--verbose", o.verbose, "Print each frame's field tree");
   app.add_option("--baud", o.baud, "Baud rate")->check(CLI::Range(50u, 4'000'000u));
   app.add_option("--parity", o.parity, "Parity")->check(CLI::IsMember({"none", "even", "odd"}));
@@ -111,6 +153,7 @@ int main(int argc, char** argv) {
                  "sigrok lines: tx=NAME,rx=NAME (the master's transmit and receive) or bus=NAME");
   app.add_flag("--sigrok-invert", o.sigrok_invert, "The sigrok lines have inverted levels");
   CLI11_PARSE(app, argc, argv);
+  if (!o.write_file.empty() && output->count() == 0) o.output = "none";  // as tshark -w
   try {
     return run(o);
   } catch (const std::exception& e) {

@@ -1,0 +1,151 @@
+#include "captures/pcapng_sink.hpp"
+
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace modtap::captures {
+
+using namespace decoder;
+
+namespace {
+
+// Exported PDU tags (Wireshark's epan/exported_pdu.h).
+constexpr uint16_t tag_end_of_options = 0;
+constexpr uint16_t tag_protocol_name = 12;
+constexpr uint16_t tag_port_type = 24;
+constexpr uint16_t tag_source_port = 25;
+constexpr uint16_t tag_destination_port = 26;
+constexpr uint32_t port_type_tcp = 2;
+
+void put16(std::vector<uint8_t>& out, uint16_t v) {
+  out.push_back(static_cast<uint8_t>(v >> 8));
+  out.push_back(static_cast<uint8_t>(v));
+}
+
+void put_tlv(std::vector<uint8_t>& out, uint16_t tag, std::span<const uint8_t> value) {
+  const size_t padded = (value.size() + 3) / 4 * 4;  // the length counts the padding
+  put16(out, tag);
+  put16(out, static_cast<uint16_t>(padded));
+  out.insert(out.end(), value.begin(), value.end());
+  out.resize(out.size() + padded - value.size(), 0);
+}
+
+void put_tlv32(std::vector<uint8_t>& out, uint16_t tag, uint32_t v) {
+  const uint8_t be[4] = {static_cast<uint8_t>(v >> 24), static_cast<uint8_t>(v >> 16),
+                         static_cast<uint8_t>(v >> 8), static_cast<uint8_t>(v)};
+  put_tlv(out, tag, be);
+}
+
+PacketDirection direction_of(Role role, ChannelRole channel) {
+  if (role == Role::request || channel == ChannelRole::master) return PacketDirection::outbound;
+  if (role == Role::response || channel == ChannelRole::slave) return PacketDirection::inbound;
+  return PacketDirection::unknown;
+}
+
+const char* finding_name(uint32_t bit) {
+  switch (bit) {
+    case finding_broadcast:
+      return "broadcast";
+    case finding_unsolicited:
+      return "unsolicited";
+    case finding_length_mismatch:
+      return "length-mismatch";
+    case finding_echo_mismatch:
+      return "echo-mismatch";
+    case finding_bad_check:
+      return "bad-check";
+    case finding_fast_turnaround:
+      return "fast-turnaround";
+    case finding_illegal_broadcast:
+      return "illegal-broadcast";
+    default:
+      return "finding";
+  }
+}
+
+}  // namespace
+
+PcapngLink parse_link(const std::string& name) {
+  if (name == "user") return PcapngLink::user;
+  if (name == "exported-pdu") return PcapngLink::exported_pdu;
+  if (name == "bare") return PcapngLink::bare;
+  throw std::invalid_argument("unknown link \"" + name + "\"");
+}
+
+std::string frame_comment(const Frame& f) {
+  std::string c = fmt::format("modtap index={} mode={} role={} check={}", f.index,
+                              to_string(f.mode), to_string(f.role), f.check_ok ? "ok" : "bad");
+  if (!f.check_ok)
+    c += fmt::format(" expected=0x{:0{}x}", f.expected_check, f.mode == Mode::rtu ? 4 : 2);
+  if (f.request) c += fmt::format(" request={}", *f.request);
+  if (f.latency_ns)
+    c += fmt::format(" latency_us={:.3f}", static_cast<double>(*f.latency_ns) / 1e3);
+  for (uint32_t bit = 1; bit != 0 && bit <= f.findings; bit <<= 1)
+    if (f.findings & bit) c += fmt::format(" finding={}", finding_name(bit));
+  return c;
+}
+
+std::string noise_comment(const Noise& n) {
+  return fmt::format("modtap index={} mode={} noise={}", n.index, to_string(n.mode),
+                     to_string(n.reason));
+}
+
+PcapngSink::PcapngSink(PcapngWriter& writer, const std::vector<ChannelInfo>& channels,
+                       const PcapngOptions& options)
+    : writer_(writer), channels_(channels), options_(options) {}
+
+uint32_t PcapngSink::interface_for(uint16_t channel) {
+  if (interface_of_channel_.size() <= channel) interface_of_channel_.resize(channel + 1u, -1);
+  if (interface_of_channel_[channel] < 0) {
+    const int dlt = options_.link == PcapngLink::exported_pdu ? exported_pdu_dlt : options_.dlt;
+    const std::string name = channel < channels_.size() ? channels_[channel].name : "modtap";
+    interface_of_channel_[channel] = writer_.add_interface(dlt, name);
+  }
+  return static_cast<uint32_t>(interface_of_channel_[channel]);
+}
+
+std::span<const uint8_t> PcapngSink::exported_pdu(std::string_view protocol, bool from_master,
+                                                  std::span<const uint8_t> payload) {
+  payload_.clear();
+  put_tlv(payload_, tag_protocol_name,
+          {reinterpret_cast<const uint8_t*>(protocol.data()), protocol.size()});
+  put_tlv32(payload_, tag_port_type, port_type_tcp);
+  put_tlv32(payload_, tag_source_port, from_master ? options_.master_port : options_.slave_port);
+  put_tlv32(payload_, tag_destination_port,
+            from_master ? options_.slave_port : options_.master_port);
+  put16(payload_, tag_end_of_options);
+  put16(payload_, 0);
+  payload_.insert(payload_.end(), payload.begin(), payload.end());
+  return payload_;
+}
+
+void PcapngSink::on_frame(const Frame& frame) {
+  const ChannelRole channel_role =
+      frame.channel < channels_.size() ? channels_[frame.channel].role : ChannelRole::bus;
+  const PacketDirection direction = direction_of(frame.role, channel_role);
+  const uint32_t interface = interface_for(frame.channel);
+  if (options_.link == PcapngLink::bare) {
+    writer_.write_packet(interface, frame.t_ns, frame.raw, direction, {});
+    return;
+  }
+  comment_ = frame_comment(frame);
+  std::span<const uint8_t> data = frame.raw;
+  if (options_.link == PcapngLink::exported_pdu) {
+    // mbrtu reads RTU only; ASCII frames go as data with their verdicts in the comment.
+    data = exported_pdu(frame.mode == Mode::rtu ? "mbrtu" : "data",
+                        direction != PacketDirection::inbound, frame.raw);
+  }
+  writer_.write_packet(interface, frame.t_ns, data, direction, comment_);
+}
+
+void PcapngSink::on_noise(const Noise& noise) {
+  if (options_.link == PcapngLink::bare) return;
+  const uint32_t interface = interface_for(noise.channel);
+  comment_ = noise_comment(noise);
+  std::span<const uint8_t> data = noise.raw;
+  if (options_.link == PcapngLink::exported_pdu) data = exported_pdu("data", true, noise.raw);
+  writer_.write_packet(interface, noise.t_ns, data, PacketDirection::unknown, comment_);
+}
+
+}  // namespace modtap::captures

@@ -1,0 +1,59 @@
+// Writes modtap's records as pcapng for Wireshark: one packet per frame and per noise record,
+// one interface per channel, the direction in epb_flags and the verdicts in a comment.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "captures/pcapng_writer.hpp"
+#include "decoder/analyzer.hpp"
+
+namespace modtap::captures {
+
+enum class PcapngLink {
+  user,          // DLT_USER: the wire bytes, verdicts in the comment (for plugins/wireshark)
+  exported_pdu,  // link type 252: stock Wireshark's mbrtu dissector, classified by port
+  bare,          // DLT_USER with frames only and no comments, as other sniffers write
+};
+
+struct PcapngOptions {
+  PcapngLink link = PcapngLink::user;
+  int dlt = 147;
+  // Exported PDU: the slave side of every frame sits on this TCP port, so that
+  // `-o mbrtu.tcp.port:502` tells Wireshark which frames are requests.
+  uint32_t slave_port = 502;
+  uint32_t master_port = 50200;
+};
+
+// Parses "user", "exported-pdu" or "bare"; throws std::invalid_argument.
+PcapngLink parse_link(const std::string& name);
+
+class PcapngSink final : public decoder::RecordSink {
+ public:
+  PcapngSink(PcapngWriter& writer, const std::vector<decoder::ChannelInfo>& channels,
+             const PcapngOptions& options);
+
+  void on_frame(const decoder::Frame& frame) override;
+  void on_noise(const decoder::Noise& noise) override;
+  void on_timeout(const decoder::Timeout&) override {}
+
+  static constexpr int exported_pdu_dlt = 252;
+
+ private:
+  uint32_t interface_for(uint16_t channel);
+  std::span<const uint8_t> exported_pdu(std::string_view protocol, bool from_master,
+                                        std::span<const uint8_t> payload);
+
+  PcapngWriter& writer_;
+  const std::vector<decoder::ChannelInfo>& channels_;
+  PcapngOptions options_;
+  std::vector<int64_t> interface_of_channel_;  // -1 until its interface block is written
+  std::vector<uint8_t> payload_;
+  std::string comment_;
+};
+
+// The comment modtap writes on a frame: "modtap key=value ...", parsed by modtap.lua.
+std::string frame_comment(const decoder::Frame& frame);
+std::string noise_comment(const decoder::Noise& noise);
+
+}  // namespace modtap::captures

@@ -1,0 +1,132 @@
+#include "captures/pcapng_writer.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "captures/chunk_source.hpp"
+
+namespace modtap::captures {
+namespace {
+
+// Block types and option codes from the pcapng specification (draft-ietf-opsawg-pcapng).
+constexpr uint32_t section_header_block = 0x0A0D0D0A;
+constexpr uint32_t interface_description_block = 1;
+constexpr uint32_t enhanced_packet_block = 6;
+constexpr uint16_t opt_endofopt = 0;
+constexpr uint16_t opt_comment = 1;
+constexpr uint16_t shb_userappl = 4;
+constexpr uint16_t if_name = 2;
+constexpr uint16_t if_tsresol = 9;
+constexpr uint16_t epb_flags = 2;
+
+// Blocks are written in the machine's byte order; the byte-order magic tells readers which.
+class Body {
+ public:
+  template <typename T>
+  void put(T value) {
+    const auto* p = reinterpret_cast<const uint8_t*>(&value);
+    bytes_.insert(bytes_.end(), p, p + sizeof value);
+  }
+  void put_bytes(std::span<const uint8_t> data) {
+    bytes_.insert(bytes_.end(), data.begin(), data.end());
+    pad();
+  }
+  void option(uint16_t code, std::span<const uint8_t> value) {
+    put(code);
+    put(static_cast<uint16_t>(value.size()));
+    put_bytes(value);
+  }
+  void option(uint16_t code, std::string_view text) {
+    option(code, {reinterpret_cast<const uint8_t*>(text.data()), text.size()});
+  }
+  void end_options() {
+    put(opt_endofopt);
+    put(uint16_t{0});
+  }
+  std::span<const uint8_t> bytes() const { return bytes_; }
+
+ private:
+  void pad() {
+    while (bytes_.size() % 4) bytes_.push_back(0);
+  }
+  std::vector<uint8_t> bytes_;
+};
+
+}  // namespace
+
+PcapngWriter::PcapngWriter(const std::string& path) : owned_(path != "-"), path_(path) {
+  file_ = owned_ ? std::fopen(path.c_str(), "wb") : stdout;
+  if (!file_) throw CaptureError(fmt::format("{}: cannot create: {}", path, std::strerror(errno)));
+  write_section_header();
+}
+
+PcapngWriter::PcapngWriter(FILE* stream, bool live) : file_(stream), live_(live), path_("stream") {
+  write_section_header();
+  flush();
+}
+
+PcapngWriter::~PcapngWriter() {
+  flush();
+  if (owned_) std::fclose(file_);
+}
+
+void PcapngWriter::write_block(uint32_t type, std::span<const uint8_t> body) {
+  const uint32_t total = static_cast<uint32_t>(12 + body.size());
+  std::fwrite(&type, 4, 1, file_);
+  std::fwrite(&total, 4, 1, file_);
+  std::fwrite(body.data(), 1, body.size(), file_);
+  std::fwrite(&total, 4, 1, file_);
+}
+
+void PcapngWriter::write_section_header() {
+  Body b;
+  b.put(uint32_t{0x1A2B3C4D});
+  b.put(uint16_t{1});
+  b.put(uint16_t{0});
+  b.put(int64_t{-1});  // section length not known in advance
+  b.option(shb_userappl, std::string_view("modtap"));
+  b.end_options();
+  write_block(section_header_block, b.bytes());
+}
+
+uint32_t PcapngWriter::add_interface(int link_type, std::string_view name) {
+  Body b;
+  b.put(static_cast<uint16_t>(link_type));
+  b.put(uint16_t{0});
+  b.put(uint32_t{0});  // no snap length
+  b.option(if_name, name);
+  const uint8_t nanoseconds = 9;
+  b.option(if_tsresol, std::span<const uint8_t>(&nanoseconds, 1));
+  b.end_options();
+  write_block(interface_description_block, b.bytes());
+  return interfaces_++;
+}
+
+void PcapngWriter::write_packet(uint32_t interface, int64_t t_ns, std::span<const uint8_t> data,
+                                PacketDirection direction, std::string_view comment) {
+  Body b;
+  const auto t = static_cast<uint64_t>(t_ns);
+  b.put(interface);
+  b.put(static_cast<uint32_t>(t >> 32));
+  b.put(static_cast<uint32_t>(t & 0xFFFFFFFF));
+  b.put(static_cast<uint32_t>(data.size()));
+  b.put(static_cast<uint32_t>(data.size()));
+  b.put_bytes(data);
+  if (!comment.empty()) b.option(opt_comment, comment);
+  if (direction != PacketDirection::unknown) {
+    const uint32_t flags = static_cast<uint32_t>(direction);
+    b.option(epb_flags, {reinterpret_cast<const uint8_t*>(&flags), 4});
+  }
+  b.end_options();
+  write_block(enhanced_packet_block, b.bytes());
+  if (live_) flush();
+}
+
+void PcapngWriter::flush() {
+  std::fflush(file_);
+}
+
+}  // namespace modtap::captures

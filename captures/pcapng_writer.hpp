@@ -1,0 +1,44 @@
+// A minimal pcapng writer: one section, interfaces with a name and nanosecond time stamps,
+// enhanced packet blocks with direction flags and a comment. libpcap reads pcapng but writes
+// only pcap, which has no interfaces, no direction and no comments; see docs/pcapng.md.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+
+namespace modtap::captures {
+
+enum class PacketDirection : uint8_t { unknown = 0, inbound = 1, outbound = 2 };
+
+class PcapngWriter {
+ public:
+  // Throws CaptureError when the file cannot be created. "-" writes to standard output.
+  explicit PcapngWriter(const std::string& path);
+  // Takes an open stream (an extcap FIFO); flushes after every packet when `live`.
+  PcapngWriter(FILE* stream, bool live);
+  ~PcapngWriter();
+  PcapngWriter(const PcapngWriter&) = delete;
+  PcapngWriter& operator=(const PcapngWriter&) = delete;
+
+  // Returns the interface id for the packets that follow.
+  uint32_t add_interface(int link_type, std::string_view name);
+  void write_packet(uint32_t interface, int64_t t_ns, std::span<const uint8_t> data,
+                    PacketDirection direction, std::string_view comment);
+  void flush();
+
+ private:
+  void write_section_header();
+  void write_block(uint32_t type, std::span<const uint8_t> body);
+
+  FILE* file_ = nullptr;
+  bool owned_ = false;
+  bool live_ = false;
+  uint32_t interfaces_ = 0;
+  std::string path_;
+};
+
+}  // namespace modtap::captures

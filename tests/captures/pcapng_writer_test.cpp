@@ -1,0 +1,95 @@
+#include "captures/pcapng_writer.hpp"
+
+#include <gtest/gtest.h>
+#include <pcap/pcap.h>
+
+#include <filesystem>
+
+#include "captures/pcapng_sink.hpp"
+#include "tests/support/collector.hpp"
+
+namespace modtap::captures {
+namespace {
+
+using testing::hex;
+
+std::string temp_path(const char* name) {
+  return (std::filesystem::temp_directory_path() / name).string();
+}
+
+TEST(PcapngWriter, LibpcapReadsBackPacketsWithNanosecondTimes) {
+  const auto path = temp_path("modtap-writer-test.pcapng");
+  {
+    PcapngWriter writer(path);
+    const uint32_t bus = writer.add_interface(147, "bus");
+    const auto frame = hex("01 03 00 00 00 0a c5 cd");
+    writer.write_packet(bus, 1'700'000'000'123'456'789, frame, PacketDirection::outbound,
+                        "modtap index=1");
+    writer.write_packet(bus, 1'700'000'001'000'000'001, hex("00"), PacketDirection::unknown, {});
+  }
+  char error[PCAP_ERRBUF_SIZE];
+  pcap_t* p =
+      pcap_open_offline_with_tstamp_precision(path.c_str(), PCAP_TSTAMP_PRECISION_NANO, error);
+  ASSERT_NE(p, nullptr) << error;
+  EXPECT_EQ(pcap_datalink(p), 147);
+  pcap_pkthdr* header;
+  const u_char* data;
+  ASSERT_EQ(pcap_next_ex(p, &header, &data), 1);
+  EXPECT_EQ(header->ts.tv_sec, 1'700'000'000);
+  EXPECT_EQ(header->ts.tv_usec, 123'456'789);
+  EXPECT_EQ(std::vector<uint8_t>(data, data + header->caplen), hex("01 03 00 00 00 0a c5 cd"));
+  ASSERT_EQ(pcap_next_ex(p, &header, &data), 1);
+  EXPECT_EQ(header->caplen, 1u);
+  EXPECT_EQ(pcap_next_ex(p, &header, &data), PCAP_ERROR_BREAK);
+  pcap_close(p);
+  std::filesystem::remove(path);
+}
+
+TEST(PcapngSink, ExportedPduNamesMbrtuAndPutsTheSlaveOnPort502) {
+  const auto path = temp_path("modtap-exported-test.pcapng");
+  const std::vector<decoder::ChannelInfo> channels{{"bus", decoder::ChannelRole::bus}};
+  {
+    PcapngWriter writer(path);
+    PcapngOptions options;
+    options.link = PcapngLink::exported_pdu;
+    PcapngSink sink(writer, channels, options);
+    const auto raw = hex("01 03 02 07 d0 bb e8");
+    decoder::Frame frame;
+    frame.raw = frame.adu = raw;
+    frame.role = decoder::Role::response;
+    frame.check_ok = true;
+    sink.on_frame(frame);
+  }
+  char error[PCAP_ERRBUF_SIZE];
+  pcap_t* p = pcap_open_offline(path.c_str(), error);
+  ASSERT_NE(p, nullptr) << error;
+  EXPECT_EQ(pcap_datalink(p), 252);
+  pcap_pkthdr* header;
+  const u_char* data;
+  ASSERT_EQ(pcap_next_ex(p, &header, &data), 1);
+  const std::vector<uint8_t> packet(data, data + header->caplen);
+  // tag 12 "mbrtu" padded to 8, port type TCP, source 502, destination 50200, end, ADU.
+  EXPECT_EQ(packet, hex("000c 0008 6d 62 72 74 75 00 00 00  0018 0004 00000002  0019 0004 000001f6"
+                        "001a 0004 0000c418  0000 0000  01 03 02 07 d0 bb e8"));
+  pcap_close(p);
+  std::filesystem::remove(path);
+}
+
+TEST(PcapngSink, CommentsCarryTheVerdictsForTheLuaDissector) {
+  decoder::Frame frame;
+  const auto raw = hex("01 03 02 07 d0 bb e9");
+  frame.raw = frame.adu = raw;
+  frame.index = 7;
+  frame.role = decoder::Role::response;
+  frame.check_ok = false;
+  frame.expected_check = 0xE8BB;
+  frame.request = 6;
+  frame.latency_ns = 2'500'000;
+  frame.findings = decoder::finding_bad_check;
+  EXPECT_EQ(frame_comment(frame),
+            "modtap index=7 mode=rtu role=response check=bad expected=0xe8bb request=6 "
+            "latency_us=2500.000 finding=bad-check");
+}
+
+}  // namespace
+}  // namespace modtap::captures
