@@ -1,5 +1,7 @@
 // modtap: a passive Modbus RTU/ASCII analyzer. This file wires a capture, the analyzer and a
 // sink together; the work happens in decoder/ and captures/.
+#include <unistd.h>
+
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -11,6 +13,7 @@
 #include "captures/open_capture.hpp"
 #include "captures/pcapng_sink.hpp"
 #include "decoder/analyzer.hpp"
+#include "tools/live/live_capture.hpp"
 #include "tools/modtap/json_sink.hpp"
 #include "tools/modtap/output.hpp"
 #include "tools/modtap/stats_sink.hpp"
@@ -22,6 +25,8 @@ using namespace modtap;
 
 struct Options {
   std::string read_file;
+  std::vector<std::string> interfaces;
+  bool reconnect = false;
   std::string format = "auto";
   std::string mode = "auto";
   std::string output = "text";
@@ -78,44 +83,88 @@ std::unique_ptr<decoder::RecordSink> make_sink(const Options& o, tools::Output& 
   return std::make_unique<tools::NullSink>();
 }
 
-int run(const Options& o) {
+decoder::SerialFormat serial_format(const Options& o) {
+  return {o.baud, static_cast<uint8_t>(o.data_bits), parse_parity(o.parity),
+          static_cast<uint8_t>(o.stop_bits)};
+}
+
+decoder::AnalyzerOptions analyzer_options(const Options& o, decoder::ClockQuality clock) {
+  decoder::AnalyzerOptions analyzer;
+  analyzer.mode = parse_mode(o.mode);
+  analyzer.format = serial_format(o);
+  analyzer.clock = clock;
+  analyzer.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
+  analyzer.ascii_char_timeout_ns = static_cast<int64_t>(o.ascii_timeout_s * 1e9);
+  analyzer.chunk_jitter_ns = static_cast<int64_t>(o.jitter_ms * 1e6);
+  return analyzer;
+}
+
+// The sinks a run writes to: the terminal's, and a pcapng file with -w.
+class Sinks {
+ public:
+  Sinks(const Options& o, tools::Output& out, const std::vector<decoder::ChannelInfo>& channels)
+      : terminal_(make_sink(o, out, channels)) {
+    fan_out_.add(*terminal_);
+    if (o.write_file.empty()) return;
+    captures::PcapngOptions options;
+    options.link = captures::parse_link(o.link);
+    options.dlt = o.dlt;
+    pcapng_ = std::make_unique<captures::PcapngWriter>(o.write_file);
+    pcapng_sink_ = std::make_unique<captures::PcapngSink>(*pcapng_, channels, options);
+    fan_out_.add(*pcapng_sink_);
+  }
+  decoder::RecordSink& all() { return fan_out_; }
+  decoder::RecordSink& terminal() { return *terminal_; }
+
+ private:
+  std::unique_ptr<decoder::RecordSink> terminal_;
+  std::unique_ptr<captures::PcapngWriter> pcapng_;
+  std::unique_ptr<captures::PcapngSink> pcapng_sink_;
+  FanOut fan_out_;
+};
+
+void print_summary(const Options& o, tools::Output& out, Sinks& sinks) {
+  if (o.output != "stats") return;
+  print_stats(out, static_cast<tools::StatsSink&>(sinks.terminal()).stats());
+}
+
+int read_file(const Options& o) {
   captures::OpenOptions open;
   open.format = captures::parse_format(o.format);
-  open.serial = {o.baud, static_cast<uint8_t>(o.data_bits), parse_parity(o.parity),
-                 static_cast<uint8_t>(o.stop_bits)};
+  open.serial = serial_format(o);
   if (!o.sigrok_channels.empty())
     open.sigrok.lines = captures::parse_sigrok_channels(o.sigrok_channels);
   open.sigrok.invert = o.sigrok_invert;
   auto source = captures::open_capture(o.read_file, open);
 
-  decoder::AnalyzerOptions analyzer;
-  analyzer.mode = parse_mode(o.mode);
-  analyzer.format = open.serial;
-  analyzer.clock = source->clock();
-  analyzer.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
-  analyzer.ascii_char_timeout_ns = static_cast<int64_t>(o.ascii_timeout_s * 1e9);
-  analyzer.chunk_jitter_ns = static_cast<int64_t>(o.jitter_ms * 1e6);
-
   tools::Output out(stdout);
-  auto sink = make_sink(o, out, source->channels());
-  FanOut sinks;
-  sinks.add(*sink);
-  std::unique_ptr<captures::PcapngWriter> pcapng;
-  std::unique_ptr<captures::PcapngSink> pcapng_sink;
-  if (!o.write_file.empty()) {
-    captures::PcapngOptions options;
-    options.link = captures::parse_link(o.link);
-    options.dlt = o.dlt;
-    pcapng = std::make_unique<captures::PcapngWriter>(o.write_file);
-    pcapng_sink = std::make_unique<captures::PcapngSink>(*pcapng, source->channels(), options);
-    sinks.add(*pcapng_sink);
-  }
-  decoder::Analyzer bus(analyzer, source->channels(), sinks);
+  Sinks sinks(o, out, source->channels());
+  decoder::Analyzer bus(analyzer_options(o, source->clock()), source->channels(), sinks.all());
   decoder::Chunk chunk;
   while (source->next(chunk)) bus.push(chunk);
   bus.finish();
-  if (auto* stats = dynamic_cast<tools::StatsSink*>(sink.get())) print_stats(out, stats->stats());
+  print_summary(o, out, sinks);
   return 0;
+}
+
+int listen(const Options& o) {
+  std::vector<live::PortSpec> ports;
+  std::vector<decoder::ChannelInfo> channels;
+  for (const auto& spec : o.interfaces) {
+    ports.push_back(live::parse_port(spec));
+    channels.push_back({ports.back().name, ports.back().role});
+  }
+  const auto& stop = live::stop_on_signals();
+  tools::Output out(stdout);
+  out.set_line_buffered(true);
+  Sinks sinks(o, out, channels);
+  live::LiveOptions options;
+  options.analyzer = analyzer_options(o, decoder::ClockQuality::per_chunk);
+  options.reconnect = o.reconnect;
+  options.status_line = isatty(STDERR_FILENO) && o.output != "text";
+  const int status = live::run_live(ports, options, sinks.all(), stop);
+  print_summary(o, out, sinks);
+  return status;
 }
 
 }  // namespace
@@ -123,7 +172,12 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
   CLI::App app{"modtap: a passive analyzer for Modbus RTU and ASCII on serial lines"};
   Options o;
-  app.add_option("-r,--read", o.read_file, "Capture file to read")->required();
+  auto* read = app.add_option("-r,--read", o.read_file, "Capture file to read");
+  auto* listen_on = app.add_option("-i,--interface", o.interfaces,
+                                   "Serial port to listen on (read-only): PATH, or master=PATH and "
+                                   "slave=PATH for a tap that splits the directions");
+  read->excludes(listen_on);
+  app.add_flag("--reconnect", o.reconnect, "Wait for an unplugged port to come back");
   app.add_option("--format", o.format, "Capture format")
       ->check(CLI::IsMember({"auto", "raw", "hexlog", "pcap", "pcapng", "sigrok"}));
   app.add_option("--mode", o.mode, "Transmission mode")
@@ -155,7 +209,15 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   if (!o.write_file.empty() && output->count() == 0) o.output = "none";  // as tshark -w
   try {
-    return run(o);
+    if (o.interfaces.empty() && o.read_file.empty()) {
+      fmt::print(stderr, "modtap: give a capture with -r FILE or a port with -i PORT\n");
+      return 2;
+    }
+    if (o.interfaces.size() > 2) {
+      fmt::print(stderr, "modtap: at most two ports (master=PATH slave=PATH)\n");
+      return 2;
+    }
+    return o.interfaces.empty() ? read_file(o) : listen(o);
   } catch (const std::exception& e) {
     std::fflush(stdout);
     fmt::print(stderr, "modtap: {}\n", e.what());

@@ -1,0 +1,37 @@
+// A serial port opened only to listen: read-only, raw, with the line's character format.
+// modtap never writes to it and never sets RTS or DTR itself.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "decoder/serial_format.hpp"
+
+namespace modtap::captures {
+
+class SerialPort {
+ public:
+  // Throws CaptureError naming the port: missing, busy (another program holds it), not a tty.
+  SerialPort(const std::string& path, const decoder::SerialFormat& format);
+  ~SerialPort();
+  SerialPort(const SerialPort&) = delete;
+  SerialPort& operator=(const SerialPort&) = delete;
+
+  int fd() const { return fd_; }
+  const std::string& path() const { return path_; }
+  // Bytes that arrived, 0 if none yet. Throws CaptureError when the port is gone (unplugged).
+  size_t read(std::span<uint8_t> into);
+  // How the port's time stamps can be trusted: low-latency mode, the FTDI latency timer.
+  const std::string& clock_note() const { return clock_note_; }
+
+ private:
+  void configure(const decoder::SerialFormat& format);
+  void lower_latency();
+
+  std::string path_;
+  int fd_ = -1;
+  std::string clock_note_;
+};
+
+}  // namespace modtap::captures

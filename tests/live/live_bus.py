@@ -1,0 +1,256 @@
+#!/usr/bin/python3
+"""modtap on a live tap, with real masters and slaves, over pseudo-terminals.
+
+A relay joins a master's pty to a slave's pty, paces each chunk at the baud rate, and copies
+every byte to a third pty that modtap listens on (read-only). What modtap reports must equal
+what passed: the requests as the master sent them, the responses as the slave sent them,
+each response paired with its request. Nothing may ever come back out of the tap.
+
+Usage: live_bus.py MODTAP LIBMODBUS_SLAVE WORK_DIR
+"""
+import json
+import os
+import select
+import signal
+import subprocess
+import sys
+import termios
+import threading
+import time
+import tty
+
+MODTAP, LIBMODBUS_SLAVE, WORK = sys.argv[1:4]
+failures = []
+passed = 0
+
+
+def check(name, condition, message):
+    if not condition:
+        failures.append(f"{name}: {message}")
+    return condition
+
+
+class Pty:
+    def __init__(self):
+        self.master, self.slave = os.openpty()
+        tty.setraw(self.master)
+        tty.setraw(self.slave)
+        self.path = os.ttyname(self.slave)
+
+    def close(self):
+        for fd in (self.master, self.slave):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+
+
+class Relay(threading.Thread):
+    """Master pty <-> slave pty, every byte copied to the tap pty, paced at the baud rate."""
+
+    def __init__(self, master, slave, tap, char_seconds):
+        super().__init__(daemon=True)
+        self.master, self.slave, self.tap = master, slave, tap
+        self.char_seconds = char_seconds
+        self.sent = {"request": bytearray(), "response": bytearray()}
+        self.tap_wrote = bytearray()
+        self.running = True
+
+    def run(self):
+        fds = [self.master.master, self.slave.master, self.tap.master]
+        while self.running:
+            readable, _, _ = select.select(fds, [], [], 0.05)
+            for fd in readable:
+                try:
+                    data = os.read(fd, 4096)
+                except OSError:
+                    continue
+                if fd == self.tap.master:
+                    self.tap_wrote += data  # modtap must never write
+                    continue
+                time.sleep(len(data) * self.char_seconds)
+                if fd == self.master.master:
+                    self.sent["request"] += data
+                    os.write(self.slave.master, data)
+                else:
+                    self.sent["response"] += data
+                    os.write(self.master.master, data)
+                os.write(self.tap.master, data)
+
+
+def char_seconds(baud, data_bits, parity, stop_bits):
+    return (1 + data_bits + (0 if parity == "none" else 1) + stop_bits) / baud
+
+
+def run_case(name, baud, parity, data_bits, mode, start_slave, run_master):
+    global passed
+    m, s, t = Pty(), Pty(), Pty()
+    relay = Relay(m, s, t, char_seconds(baud, data_bits, parity, 1))
+    relay.start()
+    modtap = subprocess.Popen([MODTAP, "-i", t.path, "--baud", str(baud), "--parity", parity,
+                               "--data-bits", str(data_bits), "--mode", mode, "-T", "json"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    slave = start_slave(s.path)
+    time.sleep(0.5)
+    try:
+        run_master(m.path)
+    finally:
+        time.sleep(0.5)
+        modtap.send_signal(signal.SIGTERM)
+        out, err = modtap.communicate(timeout=10)
+        slave.terminate()
+        slave.wait(timeout=10)
+        relay.running = False
+        relay.join()
+        for p in (m, s, t):
+            p.close()
+    records = [json.loads(line) for line in out.splitlines()]
+    frames = [r for r in records if r["type"] == "frame"]
+    requests = [r for r in frames if r["role"] == "request"]
+    responses = [r for r in frames if r["role"] == "response"]
+    ok = True
+    ok &= check(name, modtap.returncode == 0, f"modtap exited {modtap.returncode}: {err}")
+    ok &= check(name, len(requests) >= 3 and len(responses) >= 3,
+                f"{len(requests)} requests, {len(responses)} responses")
+    ok &= check(name, all(f["check"] == "ok" for f in frames), "a bad check on a clean line")
+    ok &= check(name, not [r for r in records if r["type"] == "noise"], "noise on a clean line")
+    for role in ("request", "response"):
+        seen = "".join(f["raw"] for f in frames if f["role"] == role)
+        ok &= check(name, seen == relay.sent[role].hex(),
+                    f"{role} bytes differ from what passed: {seen[:80]} vs {relay.sent[role].hex()[:80]}")
+    last_request = None
+    for f in frames:
+        if f["role"] == "request":
+            last_request = f["index"]
+        else:
+            ok &= check(name, f["request"] == last_request, f"frame {f['index']} paired with {f['request']}")
+    ok &= check(name, not relay.tap_wrote, f"modtap wrote {len(relay.tap_wrote)} bytes to the tap")
+    passed += ok
+    print(f"{name}: {len(requests)} requests, {len(responses)} responses, "
+          f"{sum(len(v) for v in relay.sent.values())} bytes: {'ok' if ok else 'FAILED'}")
+
+
+def libmodbus_slave(baud, parity):
+    p = {"none": "N", "even": "E", "odd": "O"}[parity]
+    return lambda path: subprocess.Popen([LIBMODBUS_SLAVE, path, str(baud), p, "8", "1"])
+
+
+def mbpoll_master(baud, parity):
+    def run(path):
+        common = ["mbpoll", "-m", "rtu", "-a", "1", "-b", str(baud), "-P", parity, "-0", "-1",
+                  "-o", "1"]
+        for args in (["-t", "4", "-r", "0", "-c", "10"], ["-t", "3", "-r", "5", "-c", "4"],
+                     ["-t", "0", "-r", "3", "-c", "12"], ["-t", "4", "-r", "7", "1234"],
+                     ["-t", "4", "-r", "10", "11", "12", "13"], ["-t", "0", "-r", "2", "1"]):
+            subprocess.run(common + args + [path], capture_output=True, timeout=20)
+    return run
+
+
+PYMODBUS_SERVER = r"""
+import sys
+from pymodbus.server import StartSerialServer
+from pymodbus.datastore import ModbusSequentialDataBlock, ModbusSlaveContext, ModbusServerContext
+from pymodbus.transaction import ModbusAsciiFramer, ModbusRtuFramer
+port, baud, parity, bits, mode = sys.argv[1], int(sys.argv[2]), sys.argv[3], int(sys.argv[4]), sys.argv[5]
+block = lambda: ModbusSequentialDataBlock(0, list(range(100, 300)))
+context = ModbusServerContext(slaves=ModbusSlaveContext(di=block(), co=block(), hr=block(), ir=block()), single=True)
+StartSerialServer(context=context, port=port, baudrate=baud, parity=parity, bytesize=bits, stopbits=1,
+                  framer=ModbusAsciiFramer if mode == "ascii" else ModbusRtuFramer, timeout=0.5)
+"""
+
+PYMODBUS_CLIENT = r"""
+import sys
+from pymodbus.client import ModbusSerialClient
+port, baud, parity, bits, mode = sys.argv[1], int(sys.argv[2]), sys.argv[3], int(sys.argv[4]), sys.argv[5]
+client = ModbusSerialClient(method=mode, port=port, baudrate=baud, parity=parity, bytesize=bits, stopbits=1, timeout=1, strict=False)
+client.connect()
+for _ in range(2):
+    client.read_holding_registers(0, 10, slave=1)
+    client.read_input_registers(3, 2, slave=1)
+    client.write_register(5, 4321, slave=1)
+    client.read_coils(0, 9, slave=1)
+    client.write_coil(4, True, slave=1)
+    client.write_registers(20, [1, 2, 3], slave=1)
+client.close()
+"""
+
+
+def pymodbus_slave(baud, parity, bits, mode):
+    p = {"none": "N", "even": "E", "odd": "O"}[parity]
+    return lambda path: subprocess.Popen(["/usr/bin/python3", "-c", PYMODBUS_SERVER, path,
+                                          str(baud), p, str(bits), mode],
+                                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def pymodbus_master(baud, parity, bits, mode):
+    p = {"none": "N", "even": "E", "odd": "O"}[parity]
+    return lambda path: subprocess.run(["/usr/bin/python3", "-c", PYMODBUS_CLIENT, path, str(baud),
+                                        p, str(bits), mode], capture_output=True, timeout=60)
+
+
+def error_cases():
+    global passed
+    result = subprocess.run([MODTAP, "-i", "/dev/modtap-no-such-port"], capture_output=True, text=True)
+    ok = check("missing port", result.returncode != 0 and
+               "/dev/modtap-no-such-port: cannot open: No such file or directory" in result.stderr,
+               result.stderr)
+    t = Pty()
+    first = subprocess.Popen([MODTAP, "-i", t.path, "-T", "none"], stderr=subprocess.PIPE, text=True)
+    time.sleep(0.5)
+    second = subprocess.run([MODTAP, "-i", t.path], capture_output=True, text=True, timeout=10)
+    ok &= check("busy port", second.returncode != 0 and "busy" in second.stderr, second.stderr)
+    first.send_signal(signal.SIGTERM)
+    first.wait(timeout=10)
+    ok &= check("busy port", first.returncode == 0, "the first modtap did not end cleanly")
+    t.close()
+    passed += ok
+    print(f"missing and busy ports: {'ok' if ok else 'FAILED'}")
+
+
+def junk_and_clean_exit():
+    """1 MB of junk gives noise, memory stays bounded, SIGTERM leaves a valid pcapng."""
+    global passed
+    t = Pty()
+    pcapng = os.path.join(WORK, "junk.pcapng")
+    modtap = subprocess.Popen([MODTAP, "-i", t.path, "-T", "json", "-w", pcapng, "--baud", "115200"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(0.5)
+    junk = bytes((i * 7919 + (i >> 8) * 31) & 0xFF for i in range(1 << 20))
+    for at in range(0, len(junk), 4096):
+        os.write(t.master, junk[at:at + 4096])
+        time.sleep(0.0005)
+    time.sleep(1.0)
+    with open(f"/proc/{modtap.pid}/status") as status:
+        peak_kb = int(next(l for l in status if l.startswith("VmHWM")).split()[1])
+    modtap.send_signal(signal.SIGTERM)
+    out, err = modtap.communicate(timeout=20)
+    records = [json.loads(line) for line in out.splitlines()]
+    seen = sum(len(r["raw"]) // 2 for r in records if r["type"] in ("noise", "frame"))
+    ok = check("junk", seen == len(junk), f"{seen} of {len(junk)} bytes accounted for")
+    ok &= check("junk", peak_kb < 50 * 1024, f"peak RSS {peak_kb} kB")
+    read = subprocess.run(["tshark", "-r", pcapng, "-T", "fields", "-e", "frame.number"],
+                          capture_output=True, text=True)
+    ok &= check("junk", read.returncode == 0 and len(read.stdout.split()) == len(records) - sum(
+        1 for r in records if r["type"] == "timeout"), f"pcapng after SIGTERM: {read.stderr}")
+    t.close()
+    passed += ok
+    print(f"1 MB of junk: {len(records)} records, peak RSS {peak_kb} kB: {'ok' if ok else 'FAILED'}")
+
+
+os.makedirs(WORK, exist_ok=True)
+run_case("mbpoll -> libmodbus, RTU 9600 8E1", 9600, "even", 8, "rtu",
+         libmodbus_slave(9600, "even"), mbpoll_master(9600, "even"))
+run_case("mbpoll -> libmodbus, RTU 115200 8N1", 115200, "none", 8, "rtu",
+         libmodbus_slave(115200, "none"), mbpoll_master(115200, "none"))
+run_case("pymodbus -> pymodbus, RTU 9600 8E1", 9600, "even", 8, "rtu",
+         pymodbus_slave(9600, "even", 8, "rtu"), pymodbus_master(9600, "even", 8, "rtu"))
+run_case("pymodbus -> pymodbus, ASCII 9600 7E1", 9600, "even", 7, "ascii",
+         pymodbus_slave(9600, "even", 7, "ascii"), pymodbus_master(9600, "even", 7, "ascii"))
+run_case("pymodbus -> libmodbus, RTU 115200 8N1", 115200, "none", 8, "auto",
+         libmodbus_slave(115200, "none"), pymodbus_master(115200, "none", 8, "rtu"))
+error_cases()
+junk_and_clean_exit()
+for f in failures:
+    print("FAIL", f)
+print(f"{passed} passed, {7 - passed} failed")
+sys.exit(1 if failures else 0)

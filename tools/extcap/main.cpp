@@ -1,0 +1,143 @@
+// modtap-extcap: lets Wireshark capture from a serial port through modtap's framer.
+// Wireshark runs it with --extcap-interfaces, --extcap-dlts, --extcap-config, and
+// --capture --fifo PATH; it writes pcapng (DLT_USER0 with modtap's verdicts) to the FIFO.
+#include <dirent.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+
+#include "captures/pcapng_sink.hpp"
+#include "captures/pcapng_writer.hpp"
+#include "tools/live/live_capture.hpp"
+
+namespace {
+
+using namespace modtap;
+
+constexpr const char* prefix = "modtap:";
+
+// USB and on-board serial ports, plus any listed in MODTAP_EXTCAP_PORTS (colon-free paths,
+// comma-separated), e.g. a pseudo-terminal under test.
+std::vector<std::string> serial_ports() {
+  std::vector<std::string> ports;
+  if (DIR* dev = opendir("/dev")) {
+    while (dirent* e = readdir(dev)) {
+      const std::string name = e->d_name;
+      for (const char* kind : {"ttyUSB", "ttyACM", "ttyAMA", "rfcomm"})
+        if (name.rfind(kind, 0) == 0) ports.push_back("/dev/" + name);
+    }
+    closedir(dev);
+  }
+  if (const char* extra = std::getenv("MODTAP_EXTCAP_PORTS")) {
+    std::string list = extra;
+    for (size_t at = 0; at <= list.size();) {
+      const size_t comma = std::min(list.find(',', at), list.size());
+      if (comma > at) ports.push_back(list.substr(at, comma - at));
+      at = comma + 1;
+    }
+  }
+  return ports;
+}
+
+void print_interfaces() {
+  fmt::print("extcap {{version=0.1.0}}{{display=modtap serial Modbus}}\n");
+  for (const auto& port : serial_ports())
+    fmt::print("interface {{value={}{}}}{{display=Modbus serial (modtap): {}}}\n", prefix, port,
+               port);
+}
+
+void print_config() {
+  int n = 0;
+  auto selector = [&](const char* call, const char* display, const char* fallback,
+                      std::initializer_list<const char*> values) {
+    fmt::print("arg {{number={}}}{{call=--{}}}{{display={}}}{{type=selector}}\n", n, call, display);
+    for (const char* v : values)
+      fmt::print("value {{arg={}}}{{value={}}}{{display={}}}{{default={}}}\n", n, v, v,
+                 std::string(v) == fallback ? "true" : "false");
+    ++n;
+  };
+  selector("baud", "Baud rate", "19200",
+           {"1200", "2400", "4800", "9600", "19200", "38400", "57600", "115200"});
+  selector("parity", "Parity", "even", {"none", "even", "odd"});
+  selector("data-bits", "Data bits", "8", {"7", "8"});
+  selector("stop-bits", "Stop bits", "1", {"1", "2"});
+  selector("mode", "Mode", "auto", {"auto", "rtu", "ascii"});
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"modtap-extcap: modtap's serial Modbus capture for Wireshark"};
+  app.allow_extras();  // Wireshark may add options of its own in later versions
+  bool interfaces = false, dlts = false, config = false, capture = false;
+  std::string interface, fifo, version, filter, parity = "even", mode = "auto";
+  uint32_t baud = 19200;
+  unsigned data_bits = 8, stop_bits = 1;
+  app.add_flag("--extcap-interfaces", interfaces);
+  app.add_flag("--extcap-dlts", dlts);
+  app.add_flag("--extcap-config", config);
+  app.add_flag("--capture", capture);
+  app.add_option("--extcap-interface", interface);
+  app.add_option("--extcap-version", version);
+  app.add_option("--extcap-capture-filter", filter);
+  app.add_option("--fifo", fifo);
+  app.add_option("--baud", baud);
+  app.add_option("--parity", parity);
+  app.add_option("--data-bits", data_bits);
+  app.add_option("--stop-bits", stop_bits);
+  app.add_option("--mode", mode);
+  CLI11_PARSE(app, argc, argv);
+
+  if (interfaces) {
+    print_interfaces();
+    return 0;
+  }
+  if (interface.rfind(prefix, 0) != 0) {
+    fmt::print(stderr, "modtap-extcap: unknown interface \"{}\"\n", interface);
+    return 1;
+  }
+  if (dlts) {
+    fmt::print("dlt {{number=147}}{{name=USER0}}{{display=Modbus serial with modtap verdicts}}\n");
+    return 0;
+  }
+  if (config) {
+    print_config();
+    return 0;
+  }
+  if (!capture || fifo.empty()) {
+    fmt::print(stderr, "modtap-extcap: nothing to do\n");
+    return 1;
+  }
+  try {
+    const std::string port = interface.substr(std::string(prefix).size());
+    const auto& stop = live::stop_on_signals();
+    FILE* out = std::fopen(fifo.c_str(), "wb");
+    if (!out) throw std::runtime_error(fifo + ": cannot open the FIFO");
+    captures::PcapngWriter writer(out, true);
+    const std::vector<decoder::ChannelInfo> channels{{port, decoder::ChannelRole::bus}};
+    captures::PcapngSink sink(writer, channels, {});
+    live::LiveOptions options;
+    options.announce = false;  // Wireshark reads anything on stderr as an error
+    options.analyzer.format = {baud, static_cast<uint8_t>(data_bits),
+                               parity == "none"  ? decoder::Parity::none
+                               : parity == "odd" ? decoder::Parity::odd
+                                                 : decoder::Parity::even,
+                               static_cast<uint8_t>(stop_bits)};
+    options.analyzer.mode = mode == "rtu"     ? decoder::ModeChoice::rtu
+                            : mode == "ascii" ? decoder::ModeChoice::ascii
+                                              : decoder::ModeChoice::automatic;
+    const int status =
+        live::run_live({{port, port, decoder::ChannelRole::bus}}, options, sink, stop);
+    writer.flush();
+    std::fclose(out);
+    return status;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "modtap-extcap: {}\n", e.what());
+    return 1;
+  }
+}

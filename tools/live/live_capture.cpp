@@ -1,0 +1,149 @@
+#include "tools/live/live_capture.hpp"
+
+#include <poll.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <memory>
+#include <stdexcept>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "captures/chunk_source.hpp"
+#include "captures/serial_port.hpp"
+
+namespace modtap::live {
+namespace {
+
+using captures::SerialPort;
+
+std::atomic<bool> stop_requested{false};
+
+void on_signal(int) {
+  stop_requested = true;
+}
+
+int64_t now_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+// Counts what went by, for the status line.
+class Counting final : public decoder::RecordSink {
+ public:
+  explicit Counting(decoder::RecordSink& next) : next_(next) {}
+  void on_frame(const decoder::Frame& f) override {
+    ++frames;
+    errors += !f.check_ok;
+    next_.on_frame(f);
+  }
+  void on_noise(const decoder::Noise& n) override {
+    ++noise;
+    next_.on_noise(n);
+  }
+  void on_timeout(const decoder::Timeout& t) override {
+    ++timeouts;
+    next_.on_timeout(t);
+  }
+  uint64_t frames = 0, errors = 0, noise = 0, timeouts = 0;
+
+ private:
+  decoder::RecordSink& next_;
+};
+
+}  // namespace
+
+PortSpec parse_port(const std::string& spec) {
+  const auto eq = spec.find('=');
+  if (eq == std::string::npos) return {spec, spec, decoder::ChannelRole::bus};
+  PortSpec p{spec.substr(0, eq), spec.substr(eq + 1), decoder::ChannelRole::bus};
+  if (p.name == "master") {
+    p.role = decoder::ChannelRole::master;
+  } else if (p.name == "slave") {
+    p.role = decoder::ChannelRole::slave;
+  } else {
+    throw std::invalid_argument("a port is PATH, master=PATH or slave=PATH, not \"" + spec + "\"");
+  }
+  if (p.path.empty()) throw std::invalid_argument("no path in \"" + spec + "\"");
+  return p;
+}
+
+const std::atomic<bool>& stop_on_signals() {
+  struct sigaction action {};
+  action.sa_handler = on_signal;
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+  signal(SIGPIPE, SIG_IGN);
+  return stop_requested;
+}
+
+int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options,
+             decoder::RecordSink& sink, const std::atomic<bool>& stop) {
+  std::vector<std::unique_ptr<SerialPort>> ports;
+  std::vector<decoder::ChannelInfo> channels;
+  for (const auto& spec : specs) {
+    ports.push_back(std::make_unique<SerialPort>(spec.path, options.analyzer.format));
+    channels.push_back({spec.name, spec.role});
+    if (options.announce)
+      fmt::print(stderr, "modtap: listening on {} ({})\n", spec.path, ports.back()->clock_note());
+  }
+  decoder::AnalyzerOptions analyzer_options = options.analyzer;
+  analyzer_options.clock = decoder::ClockQuality::per_chunk;
+  Counting counting(sink);
+  decoder::Analyzer bus(analyzer_options, channels, counting);
+
+  // Wake often enough to print a frame within t3.5 plus a few milliseconds of its end.
+  const int wake_ms =
+      static_cast<int>(std::max<int64_t>(1, analyzer_options.format.t35_ns() / 1'000'000));
+  std::vector<uint8_t> buffer(4096);
+  int status = 0;
+  int64_t last_status = 0;
+  uint64_t last_frames = 0;
+  while (!stop) {
+    std::vector<pollfd> fds;
+    for (const auto& p : ports) fds.push_back({p->fd(), POLLIN, 0});
+    poll(fds.data(), fds.size(), wake_ms);
+    try {
+      for (size_t i = 0; i < ports.size(); ++i) {
+        if (!(fds[i].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+        const size_t n = ports[i]->read(buffer);
+        if (n) bus.push({static_cast<uint16_t>(i), now_ns(), {buffer.data(), n}});
+      }
+    } catch (const captures::CaptureError& e) {
+      fmt::print(stderr, "modtap: {}\n", e.what());
+      if (!options.reconnect) {
+        status = 1;
+        break;
+      }
+      for (size_t i = 0; i < ports.size() && !stop; ++i) {
+        while (!stop) {
+          try {
+            ports[i] = std::make_unique<SerialPort>(specs[i].path, options.analyzer.format);
+            fmt::print(stderr, "modtap: {} is back\n", specs[i].path);
+            break;
+          } catch (const captures::CaptureError&) {
+            std::this_thread::sleep_for(std::chrono::seconds(1));
+          }
+        }
+      }
+      continue;
+    }
+    const int64_t now = now_ns();
+    bus.flush(now);
+    if (options.status_line && now - last_status >= 1'000'000'000) {
+      fmt::print(stderr, "\r{} frames/s  frames {}  bad checks {}  noise {}  time-outs {}   ",
+                 counting.frames - last_frames, counting.frames, counting.errors, counting.noise,
+                 counting.timeouts);
+      last_status = now;
+      last_frames = counting.frames;
+    }
+  }
+  if (options.status_line) fmt::print(stderr, "\n");
+  bus.finish();
+  return status;
+}
+
+}  // namespace modtap::live
