@@ -356,7 +356,7 @@ std::vector<DeliveredChunk> deliver(const BusCapture& capture, Delivery delivery
       for (size_t c = 1; c < cuts.size(); ++c) {
         const uint64_t a = kept.back(), b = cuts[c];
         if (b - a > 2 && chance(change_rate)) kept.push_back(a + 1 + rng() % (b - a - 1));  // split
-        if (b == n || !chance(change_rate)) kept.push_back(b);                              // or merge
+        if (b == n || !chance(change_rate)) kept.push_back(b);  // or merge
       }
       for (size_t c = 1; c < kept.size(); ++c) {
         const uint64_t a = kept[c - 1], b = kept[c];

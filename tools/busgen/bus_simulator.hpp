@@ -52,11 +52,11 @@ void encode_frame(decoder::Mode mode, const std::vector<uint8_t>& body, std::vec
 
 // How an adapter hands bytes to the program that reads it.
 enum class Delivery {
-  per_byte,   // each byte with its exact time (a logic analyzer)
-  bursts,     // FTDI-style: whatever arrived, every 16 ms
-  per_frame,  // a gap-based sniffer: one chunk per frame, some split, some merged
+  per_byte,      // each byte with its exact time (a logic analyzer)
+  bursts,        // FTDI-style: whatever arrived, every 16 ms
+  per_frame,     // a gap-based sniffer: one chunk per frame, some split, some merged
   whole_frames,  // exactly one chunk per frame or run of noise: what tshark's mbrtu needs
-  untimed,    // a raw file: blocks with no time
+  untimed,       // a raw file: blocks with no time
 };
 
 struct DeliveredChunk {

@@ -64,7 +64,8 @@ int main(int argc, char** argv) {
   const auto capture = busgen::simulate(o);
   std::fprintf(stderr, "%zu frames, %zu bytes\n", capture.frames.size(), capture.bytes.size());
   try {
-    return write(capture, format, deliveries.at(delivery_name), o.seed, out, o.format.char_time_ns());
+    return write(capture, format, deliveries.at(delivery_name), o.seed, out,
+                 o.format.char_time_ns());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "modtap-busgen: %s\n", e.what());
     return 2;
