@@ -50,7 +50,14 @@ void JsonSink::on_frame(const Frame& frame) {
     out_.print("{}\"{}\"", first ? "" : ",", name);
     first = false;
   }
+  if (frame.meaning) {
+    for (const RuleFinding& finding : frame.meaning->findings) {
+      out_.print("{}\"{}\"", first ? "" : ",", to_string(finding.kind));
+      first = false;
+    }
+  }
   out_.print("]");
+  if (frame.meaning) meaning(*frame.meaning);
   const DecodedPdu decoded = decode_pdu(frame.role, frame.pdu(), frame.request_pdu);
   for (const Field& f : decoded.fields) {
     out_.print(",\"{}\":", f.key);
@@ -59,6 +66,32 @@ void JsonSink::on_frame(const Frame& frame) {
   if (decoded.truncated) out_.print(",\"truncated\":true");
   out_.print("}}\n");
   out_.end_record();
+}
+
+// "model", "registers" and "notes": each model finding's kind, address and explanation.
+void JsonSink::meaning(const Meaning& meaning) {
+  auto& buf = out_.buffer();
+  out_.print(",\"model\":");
+  append_json_string(buf, meaning.model->name);
+  out_.print(",\"registers\":[");
+  for (size_t i = 0; i < meaning.registers.size(); ++i) {
+    if (i) out_.print(",");
+    append_register_json(buf, meaning.registers[i]);
+  }
+  out_.print("],\"notes\":[");
+  for (size_t i = 0; i < meaning.findings.size(); ++i) {
+    const RuleFinding& finding = meaning.findings[i];
+    out_.print("{}{{\"finding\":\"{}\",\"addr\":", i ? "," : "", to_string(finding.kind));
+    if (finding.address) {
+      out_.print("{}", *finding.address);
+    } else {
+      out_.print("null");
+    }
+    out_.print(",\"text\":");
+    append_json_string(buf, finding.text);
+    out_.print("}}");
+  }
+  out_.print("]");
 }
 
 void JsonSink::on_noise(const Noise& noise) {

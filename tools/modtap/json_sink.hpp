@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "decoder/analyzer.hpp"
+#include "decoder/register_meaning.hpp"
 #include "tools/modtap/output.hpp"
 
 namespace modtap::tools {
@@ -18,6 +19,7 @@ class JsonSink final : public decoder::RecordSink {
 
  private:
   void channel(uint16_t id);
+  void meaning(const decoder::Meaning& meaning);
 
   Output& out_;
   const std::vector<decoder::ChannelInfo>& channels_;

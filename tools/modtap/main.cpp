@@ -15,6 +15,7 @@
 #include "decoder/analyzer.hpp"
 #include "tools/live/live_capture.hpp"
 #include "tools/modtap/json_sink.hpp"
+#include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/output.hpp"
 #include "tools/modtap/stats_sink.hpp"
 #include "tools/modtap/text_sink.hpp"
@@ -43,6 +44,8 @@ struct Options {
   std::string write_file;
   std::string link = "user";
   int dlt = 147;
+  std::vector<std::string> models;
+  std::string models_dir;
 };
 
 // Hands every record to each of several sinks (the terminal and a pcapng file, say).
@@ -99,11 +102,21 @@ decoder::AnalyzerOptions analyzer_options(const Options& o, decoder::ClockQualit
   return analyzer;
 }
 
-// The sinks a run writes to: the terminal's, and a pcapng file with -w.
+tools::ModelCatalog load_models(const Options& o) {
+  tools::ModelCatalog catalog;
+  catalog.load_builtin();
+  if (!o.models_dir.empty()) catalog.load_dir(o.models_dir);
+  return catalog;
+}
+
+// The sinks a run writes to: the terminal's, and a pcapng file with -w; in front of them, the
+// stage that reads frames through the device models.
 class Sinks {
  public:
   Sinks(const Options& o, tools::Output& out, const std::vector<decoder::ChannelInfo>& channels)
-      : terminal_(make_sink(o, out, channels)) {
+      : catalog_(load_models(o)),
+        interpreter_(catalog_.all(), catalog_.choose(o.models), fan_out_),
+        terminal_(make_sink(o, out, channels)) {
     fan_out_.add(*terminal_);
     if (o.write_file.empty()) return;
     captures::PcapngOptions options;
@@ -113,15 +126,24 @@ class Sinks {
     pcapng_sink_ = std::make_unique<captures::PcapngSink>(*pcapng_, channels, options);
     fan_out_.add(*pcapng_sink_);
   }
-  decoder::RecordSink& all() { return fan_out_; }
+  decoder::RecordSink& all() { return interpreter_; }
   decoder::RecordSink& terminal() { return *terminal_; }
 
  private:
+  tools::ModelCatalog catalog_;
+  FanOut fan_out_;
+  decoder::ModelInterpreter interpreter_;
   std::unique_ptr<decoder::RecordSink> terminal_;
   std::unique_ptr<captures::PcapngWriter> pcapng_;
   std::unique_ptr<captures::PcapngSink> pcapng_sink_;
-  FanOut fan_out_;
 };
+
+int list_models(const Options& o) {
+  const tools::ModelCatalog catalog = load_models(o);
+  for (const auto& entry : catalog.entries())
+    fmt::print("{:<12} {:<40} {}\n", entry.model.name, entry.model.title, entry.origin);
+  return 0;
+}
 
 void print_summary(const Options& o, tools::Output& out, Sinks& sinks) {
   if (o.output != "stats") return;
@@ -206,9 +228,18 @@ int main(int argc, char** argv) {
   app.add_option("--sigrok-channels", o.sigrok_channels,
                  "sigrok lines: tx=NAME,rx=NAME (the master's transmit and receive) or bus=NAME");
   app.add_flag("--sigrok-invert", o.sigrok_invert, "The sigrok lines have inverted levels");
+  app.add_option("--model", o.models,
+                 "Device model for the bus (MODEL) or one slave (SLAVE=MODEL); repeatable");
+  app.add_option("--models-dir", o.models_dir, "A folder of the user's model files (*.yaml)");
+  auto* models = app.add_subcommand("models", "List the device models, or check a model file");
+  std::string check_file;
+  auto* check = models->add_subcommand("check", "Validate a model file");
+  check->add_option("FILE", check_file, "Model file (YAML)")->required();
   CLI11_PARSE(app, argc, argv);
   if (!o.write_file.empty() && output->count() == 0) o.output = "none";  // as tshark -w
   try {
+    if (check->parsed()) return tools::check_model_file(check_file);
+    if (models->parsed()) return list_models(o);
     if (o.interfaces.empty() && o.read_file.empty()) {
       fmt::print(stderr, "modtap: give a capture with -r FILE or a port with -i PORT\n");
       return 2;

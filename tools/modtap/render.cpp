@@ -1,6 +1,7 @@
 #include "tools/modtap/render.hpp"
 
 #include <array>
+#include <cmath>
 
 #include <fmt/ranges.h>
 
@@ -112,6 +113,51 @@ void append_text_value(fmt::memory_buffer& out, const Field& f, size_t max_items
       if (!f.items.empty()) out.push_back('}');
       break;
   }
+}
+
+namespace {
+
+void append_number(fmt::memory_buffer& out, const decoder::RegisterValue& reg) {
+  fmt::format_to(std::back_inserter(out), "{:.{}f}", reg.value, reg.decimals);
+}
+
+}  // namespace
+
+void append_register_text(fmt::memory_buffer& out, const decoder::RegisterValue& reg) {
+  if (!reg.text.empty() && reg.unit.empty()) {
+    fmt::format_to(std::back_inserter(out), "{} ({})", reg.text, reg.raw);
+    return;
+  }
+  if (!std::isfinite(reg.value)) {
+    fmt::format_to(std::back_inserter(out), "{}", reg.value);
+  } else {
+    append_number(out, reg);
+  }
+  if (!reg.unit.empty()) fmt::format_to(std::back_inserter(out), " {}", reg.unit);
+  if (!reg.text.empty()) fmt::format_to(std::back_inserter(out), " ({})", reg.text);
+}
+
+void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue& reg) {
+  auto optional_string = [&](const std::string& text) {
+    if (text.empty()) {
+      fmt::format_to(std::back_inserter(out), "null");
+    } else {
+      append_json_string(out, text);
+    }
+  };
+  fmt::format_to(std::back_inserter(out), "{{\"addr\":{},\"name\":", reg.address);
+  optional_string(reg.name);
+  fmt::format_to(std::back_inserter(out), ",\"raw\":{},\"value\":", reg.raw);
+  if (std::isfinite(reg.value)) {
+    append_number(out, reg);
+  } else {
+    fmt::format_to(std::back_inserter(out), "null");
+  }
+  fmt::format_to(std::back_inserter(out), ",\"unit\":");
+  optional_string(reg.unit);
+  fmt::format_to(std::back_inserter(out), ",\"text\":");
+  optional_string(reg.text);
+  fmt::format_to(std::back_inserter(out), "}}");
 }
 
 std::span<const FindingName> finding_names() {

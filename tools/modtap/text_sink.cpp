@@ -1,6 +1,7 @@
 #include "tools/modtap/text_sink.hpp"
 
 #include "decoder/pdu_fields.hpp"
+#include "decoder/register_meaning.hpp"
 #include "tools/modtap/render.hpp"
 
 namespace modtap::tools {
@@ -60,6 +61,7 @@ void TextSink::on_frame(const Frame& frame) {
   if (frame.latency_ns) out_.print(" {:.3f} ms", static_cast<double>(*frame.latency_ns) / 1e6);
   for (const auto& [bit, name] : finding_names())
     if ((frame.findings & bit) && bit != finding_bad_check) out_.print(" [{}]", name);
+  if (frame.meaning) registers_line(*frame.meaning);
   out_.print("\n");
   if (verbose_) tree(frame);
   out_.end_record();
@@ -89,6 +91,38 @@ void TextSink::tree(const Frame& frame) {
   if (frame.request) out_.print("    Request in frame: {}\n", *frame.request);
   if (frame.latency_ns)
     out_.print("    Latency: {:.3f} ms\n", static_cast<double>(*frame.latency_ns) / 1e6);
+  if (frame.meaning) registers_tree(*frame.meaning);
+}
+
+// The named registers after the summary line, then the model's findings, marked so they stand
+// out: "| frequency_command=60.00 Hz  !! 2520H is read-only".
+void TextSink::registers_line(const Meaning& meaning) {
+  auto& buf = out_.buffer();
+  size_t shown = 0;
+  for (const RegisterValue& reg : meaning.registers) {
+    if (reg.name.empty()) continue;
+    if (shown++ == line_items) {
+      out_.print(" ...");
+      break;
+    }
+    out_.print("{}{}=", shown == 1 ? "  | " : " ", reg.name);
+    append_register_text(buf, reg);
+  }
+  for (const RuleFinding& finding : meaning.findings) out_.print("  !! {}", finding.text);
+}
+
+void TextSink::registers_tree(const Meaning& meaning) {
+  auto& buf = out_.buffer();
+  if (!meaning.registers.empty()) out_.print("    Registers ({}):\n", meaning.model->name);
+  for (const RegisterValue& reg : meaning.registers) {
+    out_.print("      {:04X}H {}", reg.address, reg.name.empty() ? "(unknown)" : reg.name);
+    if (!reg.label.empty()) out_.print(" \"{}\"", reg.label);
+    out_.print(" = 0x{:04X} -> ", reg.raw);
+    append_register_text(buf, reg);
+    out_.print("\n");
+  }
+  for (const RuleFinding& finding : meaning.findings)
+    out_.print("    Finding ({}): {}\n", to_string(finding.kind), finding.text);
 }
 
 void TextSink::on_noise(const Noise& noise) {

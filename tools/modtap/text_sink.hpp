@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "decoder/analyzer.hpp"
+#include "decoder/register_meaning.hpp"
 #include "tools/modtap/output.hpp"
 
 namespace modtap::tools {
@@ -21,6 +22,8 @@ class TextSink final : public decoder::RecordSink {
   double seconds(int64_t t_ns);
   void channel_column(uint16_t channel);
   void tree(const decoder::Frame& frame);
+  void registers_line(const decoder::Meaning& meaning);
+  void registers_tree(const decoder::Meaning& meaning);
 
   Output& out_;
   const std::vector<decoder::ChannelInfo>& channels_;

@@ -1,0 +1,60 @@
+#include "decoder/model_interpreter.hpp"
+
+#include <fmt/format.h>
+
+#include "decoder/pdu_fields.hpp"
+
+namespace modtap::decoder {
+
+ModelInterpreter::ModelInterpreter(std::vector<const DeviceModel*> known, ModelChoice choice,
+                                   RecordSink& next)
+    : known_(std::move(known)), choice_(std::move(choice)), next_(next) {}
+
+const DeviceModel* ModelInterpreter::model_for(uint8_t slave) const {
+  if (auto it = choice_.by_slave.find(slave); it != choice_.by_slave.end()) return it->second;
+  if (auto it = identified_.find(slave); it != identified_.end()) return it->second;
+  return choice_.bus;
+}
+
+void ModelInterpreter::on_frame(const Frame& frame) {
+  const DeviceModel* model = model_for(frame.slave());
+  if (!model) return next_.on_frame(frame);
+  meaning_ = interpret(*model, frame);
+  identify(frame);
+  Frame annotated = frame;
+  annotated.meaning = &meaning_;
+  next_.on_frame(annotated);
+}
+
+// A read response that covers a model's identification register with its value names the
+// device: from then on the slave is decoded with that model, unless the user chose one.
+void ModelInterpreter::identify(const Frame& frame) {
+  const auto pdu = frame.pdu();
+  uint16_t start = 0;
+  if (frame.role != Role::response || !frame.check_ok || pdu.size() < 2 ||
+      (pdu[0] != 0x03 && pdu[0] != 0x04) || !response_start_address(frame.request_pdu, start))
+    return;
+  const size_t words = std::min<size_t>(pdu[1], pdu.size() - 2) / 2;
+  for (const DeviceModel* model : known_) {
+    const auto& id = model->identification;
+    if (!id || id->address < start || id->address >= start + words) continue;
+    const size_t at = 2 + 2 * (id->address - start);
+    if ((pdu[at] << 8 | pdu[at + 1]) != id->value) continue;
+    const uint8_t slave = frame.slave();
+    const DeviceModel* chosen = model_for(slave);
+    if (chosen == model) return;
+    std::string text = fmt::format("slave {} identifies as {} ({:04X}H = {:04X}H)", slave,
+                                   model->name, id->address, id->value);
+    if (choice_.by_slave.count(slave) || !choice_.apply_identified) {
+      text += fmt::format(", but is decoded as {}", chosen ? chosen->name : "nothing");
+    } else {
+      identified_[slave] = model;
+      meaning_ = interpret(*model, frame);
+      text += "; decoded as such from here on";
+    }
+    meaning_.findings.push_back({RuleKind::identified, id->address, std::move(text)});
+    return;
+  }
+}
+
+}  // namespace modtap::decoder

@@ -1,0 +1,40 @@
+// The pipeline stage that reads each frame through its slave's device model and hands the
+// frame on with its Meaning attached. It also notices a device that names itself.
+#pragma once
+
+#include <map>
+#include <vector>
+
+#include "decoder/analyzer.hpp"
+#include "decoder/register_meaning.hpp"
+
+namespace modtap::decoder {
+
+struct ModelChoice {
+  const DeviceModel* bus = nullptr;                // for slaves not named below
+  std::map<uint8_t, const DeviceModel*> by_slave;  // --model SLAVE=MODEL
+  bool apply_identified = true;  // decode a slave that identifies itself with its model
+};
+
+class ModelInterpreter final : public RecordSink {
+ public:
+  // `known` are the models whose identification rule may match the traffic.
+  ModelInterpreter(std::vector<const DeviceModel*> known, ModelChoice choice, RecordSink& next);
+
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override { next_.on_noise(noise); }
+  void on_timeout(const Timeout& timeout) override { next_.on_timeout(timeout); }
+
+  const DeviceModel* model_for(uint8_t slave) const;
+
+ private:
+  void identify(const Frame& frame);
+
+  std::vector<const DeviceModel*> known_;
+  ModelChoice choice_;
+  std::map<uint8_t, const DeviceModel*> identified_;
+  RecordSink& next_;
+  Meaning meaning_;
+};
+
+}  // namespace modtap::decoder

@@ -1,0 +1,422 @@
+#include "decoder/model_yaml.hpp"
+
+#include <charconv>
+#include <set>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+namespace modtap::decoder {
+namespace {
+
+std::string join_lines(const std::vector<std::string>& problems) {
+  std::string text;
+  for (const auto& p : problems) text += (text.empty() ? "" : "\n") + p;
+  return text;
+}
+
+// Collects problems with their line so that one run of `models check` reports them all.
+class Problems {
+ public:
+  explicit Problems(std::string file) : file_(std::move(file)) {}
+  void add(const YAML::Node& at, const std::string& message) {
+    const YAML::Mark mark = at.Mark();
+    list_.push_back(mark.is_null() ? fmt::format("{}: {}", file_, message)
+                                   : fmt::format("{}:{}: {}", file_, mark.line + 1, message));
+  }
+  void throw_if_any() const {
+    if (!list_.empty()) throw ModelError(list_);
+  }
+
+ private:
+  std::string file_;
+  std::vector<std::string> list_;
+};
+
+// Reads the fields of one YAML map, refusing keys it does not know (typos, misplaced keys).
+class MapReader {
+ public:
+  MapReader(const YAML::Node& node, Problems& problems, std::set<std::string> keys) : node_(node) {
+    if (!node.IsMap()) {
+      problems.add(node, "expected a map");
+      return;
+    }
+    for (const auto& item : node) {
+      const auto key = item.first.as<std::string>();
+      if (!keys.count(key)) problems.add(item.first, fmt::format("unknown key '{}'", key));
+    }
+  }
+  YAML::Node operator[](const char* key) const { return node_.IsMap() ? node_[key] : YAML::Node(); }
+
+ private:
+  YAML::Node node_;
+};
+
+// Integers as the manuals write them: 10, 0x2502, or 2502H.
+bool parse_integer(const std::string& text, int64_t& out) {
+  std::string s = text;
+  int base = 10;
+  bool negative = false;
+  if (!s.empty() && s[0] == '-') negative = true, s.erase(0, 1);
+  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
+    base = 16;
+    s.erase(0, 2);
+  } else if (s.size() > 1 && (s.back() == 'H' || s.back() == 'h')) {
+    base = 16;
+    s.pop_back();
+  }
+  if (s.empty()) return false;
+  uint64_t value = 0;
+  const auto [end, error] = std::from_chars(s.data(), s.data() + s.size(), value, base);
+  if (error != std::errc() || end != s.data() + s.size() || value > INT64_MAX) return false;
+  out = negative ? -static_cast<int64_t>(value) : static_cast<int64_t>(value);
+  return true;
+}
+
+template <typename T>
+bool read_integer(const YAML::Node& node, Problems& problems, T& out, int64_t min, int64_t max) {
+  int64_t value = 0;
+  if (!node.IsScalar() || !parse_integer(node.Scalar(), value)) {
+    problems.add(node, fmt::format("expected an integer, got '{}'",
+                                   node.IsScalar() ? node.Scalar() : "a list or map"));
+    return false;
+  }
+  if (value < min || value > max) {
+    problems.add(node, fmt::format("{} is outside {}..{}", value, min, max));
+    return false;
+  }
+  out = static_cast<T>(value);
+  return true;
+}
+
+bool read_number(const YAML::Node& node, Problems& problems, double& out) {
+  int64_t integer = 0;
+  if (node.IsScalar() && parse_integer(node.Scalar(), integer)) {
+    out = static_cast<double>(integer);
+    return true;
+  }
+  try {
+    out = node.as<double>();
+    return true;
+  } catch (const YAML::Exception&) {
+    problems.add(node, fmt::format("expected a number, got '{}'",
+                                   node.IsScalar() ? node.Scalar() : "a list or map"));
+    return false;
+  }
+}
+
+std::string read_text(const YAML::Node& node, Problems& problems) {
+  if (!node.IsScalar()) {
+    problems.add(node, "expected text");
+    return {};
+  }
+  return node.Scalar();
+}
+
+template <typename Enum>
+bool read_choice(const YAML::Node& node, Problems& problems,
+                 std::initializer_list<std::pair<const char*, Enum>> choices, Enum& out) {
+  const std::string text = node.IsScalar() ? node.Scalar() : "";
+  std::string names;
+  for (const auto& [name, value] : choices) {
+    if (text == name) {
+      out = value;
+      return true;
+    }
+    names += (names.empty() ? "" : ", ") + std::string(name);
+  }
+  problems.add(node, fmt::format("'{}' is not one of: {}", text, names));
+  return false;
+}
+
+std::shared_ptr<const EnumTable> read_enum(const YAML::Node& node, Problems& problems) {
+  auto table = std::make_shared<EnumTable>();
+  if (!node.IsMap()) {
+    problems.add(node, "named values must be a map of value: text");
+    return table;
+  }
+  for (const auto& item : node) {
+    int64_t value = 0;
+    if (read_integer(item.first, problems, value, INT32_MIN, UINT32_MAX))
+      (*table)[value] = read_text(item.second, problems);
+  }
+  return table;
+}
+
+class ModelReader {
+ public:
+  ModelReader(DeviceModel& model, Problems& problems) : model_(model), problems_(problems) {}
+
+  void read(const YAML::Node& root) {
+    MapReader map(root, problems_,
+                  {"model", "extends", "title", "source", "stations", "limits", "exceptions",
+                   "enums", "groups", "alias", "identify", "registers", "parameters"});
+    if (!root.IsMap()) return;
+    if (map["model"]) model_.name = read_text(map["model"], problems_);
+    if (model_.name.empty()) problems_.add(root, "a model needs 'model: NAME'");
+    if (map["title"]) model_.title = read_text(map["title"], problems_);
+    if (map["source"]) model_.source = read_text(map["source"], problems_);
+    if (map["stations"]) read_stations(map["stations"]);
+    if (map["limits"]) read_limits(map["limits"]);
+    if (map["exceptions"]) read_exceptions(map["exceptions"]);
+    if (map["enums"]) read_enums(map["enums"]);
+    if (map["groups"]) read_groups(map["groups"]);
+    if (map["alias"]) read_alias(map["alias"]);
+    if (map["identify"]) read_identify(map["identify"]);
+    if (map["registers"]) read_registers(map["registers"]);
+    if (map["parameters"]) read_parameters(map["parameters"]);
+  }
+
+ private:
+  void read_stations(const YAML::Node& node) {
+    if (!node.IsSequence() || node.size() != 2) {
+      problems_.add(node, "stations must be [first, last]");
+      return;
+    }
+    read_integer(node[0], problems_, model_.station_min, 0, 255);
+    read_integer(node[1], problems_, model_.station_max, 0, 255);
+  }
+
+  void read_word_limits(const YAML::Node& node, WordLimits& limits) {
+    MapReader map(node, problems_, {"read", "write"});
+    if (map["read"]) read_integer(map["read"], problems_, limits.read, 1, 125);
+    if (map["write"]) read_integer(map["write"], problems_, limits.write, 1, 123);
+  }
+
+  void read_limits(const YAML::Node& node) {
+    MapReader map(node, problems_, {"rtu", "ascii", "same_group_only"});
+    if (map["rtu"]) read_word_limits(map["rtu"], model_.rtu_limits);
+    if (map["ascii"]) read_word_limits(map["ascii"], model_.ascii_limits);
+    if (map["same_group_only"]) model_.same_group_only = read_flag(map["same_group_only"]);
+  }
+
+  bool read_flag(const YAML::Node& node) {
+    try {
+      return node.as<bool>();
+    } catch (const YAML::Exception&) {
+      problems_.add(node, "expected true or false");
+      return false;
+    }
+  }
+
+  void read_exceptions(const YAML::Node& node) {
+    MapReader map(node, problems_, {"vendor", "codes"});
+    if (map["vendor"]) model_.vendor_exceptions = read_flag(map["vendor"]);
+    if (!map["codes"]) return;
+    if (!map["codes"].IsMap()) return problems_.add(map["codes"], "codes must be a map");
+    model_.exceptions.clear();
+    for (const auto& item : map["codes"]) {
+      uint8_t code = 0;
+      if (read_integer(item.first, problems_, code, 1, 255))
+        model_.exceptions[code] = read_text(item.second, problems_);
+    }
+  }
+
+  void read_enums(const YAML::Node& node) {
+    if (!node.IsMap()) return problems_.add(node, "enums must be a map of name: {value: text}");
+    for (const auto& item : node)
+      enums_[item.first.as<std::string>()] = read_enum(item.second, problems_);
+  }
+
+  void read_groups(const YAML::Node& node) {
+    MapReader map(node, problems_,
+                  {"prefix", "counts", "max_group", "max_index", "closed", "access"});
+    ParameterGroups groups;
+    if (map["prefix"]) groups.prefix = read_text(map["prefix"], problems_);
+    if (map["max_group"]) read_integer(map["max_group"], problems_, groups.max_group, 0, 255);
+    if (map["max_index"]) read_integer(map["max_index"], problems_, groups.max_index, 0, 255);
+    if (map["access"]) read_access(map["access"], groups.access);
+    if (const auto counts = map["counts"]) {
+      if (!counts.IsMap()) return problems_.add(counts, "counts must be a map of group: count");
+      for (const auto& item : counts) {
+        unsigned group = 0, count = 0;
+        if (read_integer(item.first, problems_, group, 0, 255) &&
+            read_integer(item.second, problems_, count, 1, 256))
+          groups.counts[group] = count;
+      }
+    }
+    if (const auto closed = map["closed"]; closed && closed.IsSequence()) {
+      for (const auto& item : closed) {
+        unsigned group = 0;
+        if (read_integer(item, problems_, group, 0, 255)) groups.closed.insert(group);
+      }
+    }
+    model_.groups = groups;
+  }
+
+  void read_alias(const YAML::Node& node) {
+    MapReader map(node, problems_, {"flag", "label"});
+    WriteOnlyAlias alias;
+    if (map["flag"]) read_integer(map["flag"], problems_, alias.flag, 1, 0xFFFF);
+    if (map["label"]) alias.label = read_text(map["label"], problems_);
+    model_.alias = alias;
+  }
+
+  void read_identify(const YAML::Node& node) {
+    MapReader map(node, problems_, {"address", "value"});
+    Identification id;
+    if (!map["address"] || !map["value"])
+      return problems_.add(node, "identify needs address and value");
+    read_integer(map["address"], problems_, id.address, 0, 0xFFFF);
+    read_integer(map["value"], problems_, id.value, 0, 0xFFFF);
+    model_.identification = id;
+  }
+
+  void read_access(const YAML::Node& node, Access& access) {
+    read_choice(node, problems_,
+                {{"R", Access::read}, {"W", Access::write}, {"RW", Access::read_write}}, access);
+  }
+
+  void read_registers(const YAML::Node& node) {
+    if (!node.IsSequence()) return problems_.add(node, "registers must be a list");
+    for (const auto& item : node) read_register(item);
+  }
+
+  void read_register(const YAML::Node& node) {
+    MapReader map(node, problems_,
+                  {"address", "to", "table", "name", "label", "type", "words", "order", "scale",
+                   "offset", "unit", "access", "min", "max", "enum", "values", "bits", "reserved"});
+    if (!node.IsMap()) return;
+    RegisterDef def;
+    uint16_t last = 0;
+    if (!map["address"]) return problems_.add(node, "a register needs an address");
+    if (!read_integer(map["address"], problems_, def.address, 0, 0xFFFF)) return;
+    last = def.address;
+    if (map["to"] && read_integer(map["to"], problems_, last, def.address, 0xFFFF) &&
+        last != def.address && !map["reserved"])
+      problems_.add(map["to"], "'to' is for runs of reserved registers");
+    if (map["table"])
+      read_choice(map["table"], problems_,
+                  {{"holding", Table::holding},
+                   {"input", Table::input},
+                   {"coil", Table::coil},
+                   {"discrete", Table::discrete}},
+                  def.table);
+    if (map["name"]) def.name = read_text(map["name"], problems_);
+    if (map["label"]) def.label = read_text(map["label"], problems_);
+    if (map["type"]) read_type(map["type"], def);
+    if (map["words"]) read_integer(map["words"], problems_, def.words, 1, 64);
+    if (map["order"])
+      read_choice(map["order"], problems_,
+                  {{"high_first", WordOrder::high_first}, {"low_first", WordOrder::low_first}},
+                  def.order);
+    if (map["scale"]) read_number(map["scale"], problems_, def.scale);
+    if (map["offset"]) read_number(map["offset"], problems_, def.offset);
+    if (map["unit"]) def.unit = read_text(map["unit"], problems_);
+    if (map["access"]) read_access(map["access"], def.access);
+    if (map["min"]) read_number(map["min"], problems_, def.min.emplace());
+    if (map["max"]) read_number(map["max"], problems_, def.max.emplace());
+    if (map["enum"]) read_named_enum(map["enum"], def);
+    if (map["values"]) def.values = read_enum(map["values"], problems_);
+    if (map["bits"]) read_bits(map["bits"], def);
+    if (map["reserved"]) def.reserved = read_flag(map["reserved"]);
+    if (def.name.empty() && !def.reserved) problems_.add(node, "a register needs a name");
+    if (def.type == ValueType::u32 || def.type == ValueType::s32 || def.type == ValueType::f32)
+      def.words = 2;
+    for (unsigned address = def.address; address <= last; ++address) {
+      RegisterDef one = def;
+      one.address = static_cast<uint16_t>(address);
+      if (one.name.empty()) one.name = fmt::format("reserved_{:04X}", address);
+      model_.registers[{one.table, one.address}] = std::move(one);
+    }
+  }
+
+  void read_type(const YAML::Node& node, RegisterDef& def) {
+    read_choice(node, problems_,
+                {{"u16", ValueType::u16},
+                 {"s16", ValueType::s16},
+                 {"u32", ValueType::u32},
+                 {"s32", ValueType::s32},
+                 {"f32", ValueType::f32},
+                 {"bcd", ValueType::bcd},
+                 {"string", ValueType::string},
+                 {"raw", ValueType::raw}},
+                def.type);
+  }
+
+  void read_named_enum(const YAML::Node& node, RegisterDef& def) {
+    const std::string name = read_text(node, problems_);
+    if (auto it = enums_.find(name); it != enums_.end()) {
+      def.values = it->second;
+    } else {
+      problems_.add(node, fmt::format("no enum named '{}' under 'enums'", name));
+    }
+  }
+
+  void read_bits(const YAML::Node& node, RegisterDef& def) {
+    if (!node.IsSequence()) return problems_.add(node, "bits must be a list");
+    for (const auto& item : node) {
+      MapReader map(item, problems_, {"bit", "bits", "name", "values"});
+      BitField field;
+      if (map["bit"]) {
+        read_integer(map["bit"], problems_, field.lsb, 0, 31);
+      } else if (const auto range = map["bits"]; range && range.IsSequence() && range.size() == 2) {
+        uint8_t high = 0;
+        read_integer(range[0], problems_, field.lsb, 0, 31);
+        read_integer(range[1], problems_, high, field.lsb, 31);
+        field.width = static_cast<uint8_t>(high - field.lsb + 1);
+      } else {
+        problems_.add(item, "a bit field needs 'bit: N' or 'bits: [low, high]'");
+        continue;
+      }
+      if (map["name"]) field.name = read_text(map["name"], problems_);
+      if (field.name.empty()) problems_.add(item, "a bit field needs a name");
+      if (const auto values = map["values"]) {
+        const auto table = read_enum(values, problems_);
+        for (const auto& [value, text] : *table) field.values[static_cast<uint32_t>(value)] = text;
+      }
+      def.bits.push_back(std::move(field));
+    }
+  }
+
+  // A table of address: parameter name, for models whose parameters follow no rule (N3).
+  void read_parameters(const YAML::Node& node) {
+    if (!node.IsMap()) return problems_.add(node, "parameters must be a map of address: name");
+    for (const auto& item : node) {
+      RegisterDef def;
+      if (!read_integer(item.first, problems_, def.address, 0, 0xFFFF)) continue;
+      def.name = read_text(item.second, problems_);
+      if (model_.registers.count({def.table, def.address}))
+        problems_.add(item.first, fmt::format("{:04X}H is defined twice", def.address));
+      model_.registers[{def.table, def.address}] = std::move(def);
+    }
+  }
+
+  DeviceModel& model_;
+  Problems& problems_;
+  std::map<std::string, std::shared_ptr<const EnumTable>> enums_;
+};
+
+YAML::Node load(std::string_view yaml, const std::string& file) {
+  try {
+    return YAML::Load(std::string(yaml));
+  } catch (const YAML::ParserException& e) {
+    throw ModelError({fmt::format("{}:{}: {}", file, e.mark.line + 1, e.msg)});
+  }
+}
+
+}  // namespace
+
+ModelError::ModelError(std::vector<std::string> problems)
+    : std::runtime_error(join_lines(problems)), problems_(std::move(problems)) {}
+
+std::string model_base(std::string_view yaml, const std::string& file) {
+  const YAML::Node root = load(yaml, file);
+  if (!root.IsMap() || !root["extends"] || !root["extends"].IsScalar()) return {};
+  return root["extends"].Scalar();
+}
+
+DeviceModel parse_model(std::string_view yaml, const std::string& file, const DeviceModel* base) {
+  const YAML::Node root = load(yaml, file);
+  Problems problems(file);
+  DeviceModel model = base ? *base : DeviceModel{};
+  model.name.clear();
+  if (root.IsMap() && root["extends"] && !base)
+    problems.add(root["extends"], "extends a model that is not loaded");
+  ModelReader(model, problems).read(root);
+  if (!root.IsMap() && !root.IsNull()) problems.add(root, "a model file must be a YAML map");
+  problems.throw_if_any();
+  return model;
+}
+
+}  // namespace modtap::decoder

@@ -1,0 +1,339 @@
+#include "decoder/register_meaning.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "decoder/pdu_fields.hpp"
+
+namespace modtap::decoder {
+namespace {
+
+uint16_t be16(std::span<const uint8_t> bytes, size_t at) {
+  return bytes.size() < at + 2 ? 0 : static_cast<uint16_t>(bytes[at] << 8 | bytes[at + 1]);
+}
+
+std::vector<uint16_t> words_of(std::span<const uint8_t> bytes) {
+  std::vector<uint16_t> words(bytes.size() / 2);
+  for (size_t i = 0; i < words.size(); ++i) words[i] = be16(bytes, 2 * i);
+  return words;
+}
+
+// The registers a request reads or writes, and for a write the values it carries.
+struct RegisterAccess {
+  Table table = Table::holding;
+  uint16_t start = 0;
+  uint16_t count = 0;
+  bool write = false;
+  std::vector<uint16_t> values;
+};
+
+std::vector<RegisterAccess> accesses_of(std::span<const uint8_t> pdu) {
+  if (pdu.size() < 5) return {};
+  const uint16_t a = be16(pdu, 1);
+  const uint16_t b = be16(pdu, 3);
+  switch (pdu[0]) {
+    case 0x01:
+      return {{Table::coil, a, b, false, {}}};
+    case 0x02:
+      return {{Table::discrete, a, b, false, {}}};
+    case 0x03:
+      return {{Table::holding, a, b, false, {}}};
+    case 0x04:
+      return {{Table::input, a, b, false, {}}};
+    case 0x05:
+      return {{Table::coil, a, 1, true, {}}};
+    case 0x06:
+      return {{Table::holding, a, 1, true, {b}}};
+    case 0x0F:
+      return {{Table::coil, a, b, true, {}}};
+    case 0x10:
+      return {{Table::holding, a, b, true, words_of(pdu.subspan(std::min<size_t>(6, pdu.size())))}};
+    case 0x16:
+      return {{Table::holding, a, 1, true, {}}};
+    case 0x17: {
+      const uint16_t write_start = be16(pdu, 5);
+      const uint16_t write_count = be16(pdu, 7);
+      return {{Table::holding, a, b, false, {}},
+              {Table::holding, write_start, write_count, true,
+               words_of(pdu.subspan(std::min<size_t>(10, pdu.size())))}};
+    }
+    default:
+      return {};
+  }
+}
+
+int decimals_of(double scale) {
+  if (scale <= 0 || scale >= 1) return 0;
+  return std::clamp(static_cast<int>(std::lround(-std::log10(scale))), 0, 9);
+}
+
+double bcd_value(uint32_t raw) {
+  double value = 0;
+  for (int shift = 28; shift >= 0; shift -= 4) value = value * 10 + ((raw >> shift) & 0xF);
+  return value;
+}
+
+double typed_value(const RegisterDef& def, uint32_t raw) {
+  switch (def.type) {
+    case ValueType::s16:
+      return static_cast<int16_t>(raw);
+    case ValueType::s32:
+      return static_cast<int32_t>(raw);
+    case ValueType::f32:
+      return std::bit_cast<float>(raw);
+    case ValueType::bcd:
+      return bcd_value(raw);
+    default:
+      return raw;
+  }
+}
+
+std::string string_text(std::span<const uint16_t> words) {
+  std::string text;
+  for (uint16_t w : words)
+    for (uint8_t c : {static_cast<uint8_t>(w >> 8), static_cast<uint8_t>(w)})
+      if (c >= 0x20 && c < 0x7F) text.push_back(static_cast<char>(c));
+  return text;
+}
+
+// "Run, Reverse, S1": each field's meaning for its current value, or its name when set.
+std::string bits_text(const RegisterDef& def, uint32_t raw) {
+  std::string text;
+  for (const BitField& field : def.bits) {
+    const uint32_t mask = (1u << field.width) - 1;
+    const uint32_t value = (raw >> field.lsb) & mask;
+    std::string part;
+    if (auto it = field.values.find(value); it != field.values.end()) {
+      part = it->second;
+    } else if (field.width == 1 && value) {
+      part = field.name;
+    } else if (field.width > 1) {
+      part = fmt::format("{}={}", field.name, value);
+    }
+    if (part.empty()) continue;
+    if (!text.empty()) text += ", ";
+    text += part;
+  }
+  return text;
+}
+
+uint32_t combine(const RegisterDef& def, uint16_t first, uint16_t second) {
+  return def.order == WordOrder::high_first ? (uint32_t{first} << 16 | second)
+                                            : (uint32_t{second} << 16 | first);
+}
+
+void check_value(const RegisterDef& def, const RegisterValue& v, std::vector<RuleFinding>* found) {
+  if (!found) return;
+  if ((def.min && v.value < *def.min) || (def.max && v.value > *def.max)) {
+    found->push_back({RuleKind::out_of_range, v.address,
+                      fmt::format("{} = {:.{}f} is outside {:g}..{:g}", v.name, v.value, v.decimals,
+                                  def.min.value_or(-INFINITY), def.max.value_or(INFINITY))});
+  }
+  if (def.values && !def.values->count(static_cast<int64_t>(v.raw)))
+    found->push_back({RuleKind::not_in_enum, v.address,
+                      fmt::format("{} = {} is not one of its named values", v.name, v.raw)});
+}
+
+void decode_span(const DeviceModel& model, Table table, uint16_t start,
+                 std::span<const uint16_t> words, std::vector<RegisterValue>& out,
+                 std::vector<RuleFinding>* found) {
+  for (size_t i = 0; i < words.size(); ++i) {
+    const auto address = static_cast<uint16_t>(start + i);
+    const RegisterLookup lookup = find_register(model, table, address);
+    const RegisterDef* def = lookup.def();
+    RegisterValue v;
+    v.address = address;
+    v.raw = words[i];
+    v.value = words[i];
+    if (!def || def->type == ValueType::raw) {
+      if (def) v.name = def->name, v.label = def->label;
+      out.push_back(std::move(v));
+      continue;
+    }
+    v.name = lookup.via_alias ? def->name + " (RAM)" : def->name;
+    v.label = def->label;
+    v.unit = def->unit;
+    if (def->type == ValueType::string) {
+      const size_t n = std::min<size_t>(def->words, words.size() - i);
+      v.text = string_text(words.subspan(i, n));
+      i += n - 1;
+      out.push_back(std::move(v));
+      continue;
+    }
+    if (def->words == 2 && i + 1 < words.size()) {
+      v.raw = combine(*def, words[i], words[i + 1]);
+      ++i;
+    }
+    v.value = typed_value(*def, v.raw) * def->scale + def->offset;
+    v.decimals = decimals_of(def->scale);
+    if (def->values) {
+      if (auto it = def->values->find(static_cast<int64_t>(v.raw)); it != def->values->end())
+        v.text = it->second;
+    } else if (!def->bits.empty()) {
+      v.text = bits_text(*def, v.raw);
+    }
+    check_value(*def, v, found);
+    out.push_back(std::move(v));
+  }
+}
+
+std::string hex_address(uint16_t address) {
+  return fmt::format("{:04X}H", address);
+}
+
+void check_limits(const DeviceModel& model, Mode mode, const RegisterAccess& access,
+                  std::vector<RuleFinding>& found) {
+  if (access.table == Table::coil || access.table == Table::discrete) return;
+  const WordLimits& limits = model.limits(mode);
+  const uint16_t limit = access.write ? limits.write : limits.read;
+  if (access.count > limit)
+    found.push_back({RuleKind::too_many_words, access.start,
+                     fmt::format("{} {} registers; {} allows at most {} in {}",
+                                 access.write ? "writes" : "reads", access.count, model.name, limit,
+                                 to_string(mode))});
+  const unsigned last = access.start + std::max<unsigned>(access.count, 1) - 1;
+  if (model.same_group_only && (access.start >> 8) != (last >> 8))
+    found.push_back(
+        {RuleKind::crosses_group, access.start,
+         fmt::format("{}..{} crosses a parameter group; {} allows one group per access",
+                     hex_address(access.start), hex_address(last & 0xFFFF), model.name)});
+}
+
+void check_registers(const DeviceModel& model, const RegisterAccess& access,
+                     std::vector<RuleFinding>& found) {
+  bool closed_reported = false;
+  for (unsigned i = 0; i < access.count && access.start + i <= 0xFFFF; ++i) {
+    const auto address = static_cast<uint16_t>(access.start + i);
+    const RegisterLookup lookup = find_register(model, access.table, address);
+    const RegisterDef* def = lookup.def();
+    if (!def) continue;
+    if (lookup.closed_group && !closed_reported) {
+      found.push_back({RuleKind::closed_group, address,
+                       fmt::format("{} is in a group {} does not let a master read or write",
+                                   def->name, model.name)});
+      closed_reported = true;
+    }
+    if (!access.write && (lookup.via_alias || def->access == Access::write)) {
+      found.push_back(
+          {RuleKind::write_only_read, address,
+           lookup.via_alias
+               ? fmt::format("{} is the write-only RAM alias of {}; reading it is invalid",
+                             hex_address(address), def->name)
+               : fmt::format("{} ({}) is write-only", def->name, hex_address(address))});
+    } else if (access.write && def->reserved) {
+      found.push_back({RuleKind::reserved_write, address,
+                       fmt::format("{} is reserved: do not write", hex_address(address))});
+    } else if (access.write && def->access == Access::read) {
+      found.push_back({RuleKind::read_only_write, address,
+                       fmt::format("{} ({}) is read-only", def->name, hex_address(address))});
+    }
+  }
+}
+
+void check_station(const DeviceModel& model, const Frame& frame, std::vector<RuleFinding>& found) {
+  const uint8_t slave = frame.slave();
+  if (slave == 0 || (slave >= model.station_min && slave <= model.station_max)) return;
+  found.push_back({RuleKind::station_out_of_range, std::nullopt,
+                   fmt::format("station {} is outside {}'s range {}..{}", slave, model.name,
+                               model.station_min, model.station_max)});
+}
+
+void explain_exception(const DeviceModel& model, const Frame& frame,
+                       std::vector<RuleFinding>& found) {
+  const uint8_t code = frame.adu[2];
+  const auto it = model.exceptions.find(code);
+  found.push_back(
+      {RuleKind::exception, std::nullopt,
+       it != model.exceptions.end()
+           ? fmt::format("exception {:02X}H: {} ({})", code, it->second, model.name)
+           : fmt::format("exception {:02X}H is not one {} documents", code, model.name)});
+}
+
+void interpret_request(const DeviceModel& model, const Frame& frame, Meaning& meaning) {
+  check_station(model, frame, meaning.findings);
+  for (const RegisterAccess& access : accesses_of(frame.pdu())) {
+    check_limits(model, frame.mode, access, meaning.findings);
+    check_registers(model, access, meaning.findings);
+    if (!access.values.empty())
+      decode_span(model, access.table, access.start, access.values, meaning.registers,
+                  &meaning.findings);
+  }
+}
+
+void interpret_response(const DeviceModel& model, const Frame& frame, Meaning& meaning) {
+  const auto pdu = frame.pdu();
+  if (pdu.empty()) return;
+  switch (pdu[0]) {
+    case 0x03:
+    case 0x04:
+    case 0x17: {
+      uint16_t start = 0;
+      if (pdu.size() < 2 || !response_start_address(frame.request_pdu, start)) return;
+      const auto words = words_of(pdu.subspan(2, std::min<size_t>(pdu[1], pdu.size() - 2)));
+      const Table table = pdu[0] == 0x04 ? Table::input : Table::holding;
+      decode_span(model, table, start, words, meaning.registers, &meaning.findings);
+      break;
+    }
+    case 0x06:
+      if (pdu.size() >= 5) {
+        const uint16_t value = be16(pdu, 3);
+        decode_span(model, Table::holding, be16(pdu, 1), {&value, 1}, meaning.registers, nullptr);
+      }
+      break;
+    default:
+      break;
+  }
+}
+
+}  // namespace
+
+void decode_registers(const DeviceModel& model, Table table, uint16_t start,
+                      std::span<const uint16_t> words, std::vector<RegisterValue>& out) {
+  decode_span(model, table, start, words, out, nullptr);
+}
+
+Meaning interpret(const DeviceModel& model, const Frame& frame) {
+  Meaning meaning;
+  meaning.model = &model;
+  if (frame.adu.size() < 2 + frame.check_size()) return meaning;
+  if (frame.is_exception()) {
+    if (frame.role != Role::request) explain_exception(model, frame, meaning.findings);
+    return meaning;
+  }
+  if (frame.role == Role::request) interpret_request(model, frame, meaning);
+  if (frame.role == Role::response) interpret_response(model, frame, meaning);
+  return meaning;
+}
+
+const char* to_string(RuleKind kind) {
+  switch (kind) {
+    case RuleKind::reserved_write:
+      return "reserved_write";
+    case RuleKind::read_only_write:
+      return "read_only_write";
+    case RuleKind::write_only_read:
+      return "write_only_read";
+    case RuleKind::closed_group:
+      return "closed_group";
+    case RuleKind::too_many_words:
+      return "too_many_words";
+    case RuleKind::crosses_group:
+      return "crosses_group";
+    case RuleKind::out_of_range:
+      return "out_of_range";
+    case RuleKind::not_in_enum:
+      return "not_in_enum";
+    case RuleKind::station_out_of_range:
+      return "station_out_of_range";
+    case RuleKind::exception:
+      return "exception";
+    case RuleKind::identified:
+      return "identified";
+  }
+  return "?";
+}
+
+}  // namespace modtap::decoder

@@ -1,0 +1,60 @@
+// A frame read through a device model: its registers as named, scaled values, and the model's
+// rules it breaks. Pure: the model and the frame in, a Meaning out.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "decoder/device_model.hpp"
+#include "decoder/records.hpp"
+
+namespace modtap::decoder {
+
+struct RegisterValue {
+  uint16_t address = 0;
+  std::string name;   // empty for a register the model does not know
+  std::string label;  // the manual's words
+  uint32_t raw = 0;   // the register, or both words of a 32-bit value
+  double value = 0;   // raw, signed by type, scaled and offset
+  int decimals = 0;   // digits after the point that the scale implies
+  std::string unit;
+  std::string text;  // an enum's meaning, the set bits' names, or a string register's text
+};
+
+enum class RuleKind : uint8_t {
+  reserved_write,   // a write to a reserved ("do not write") register
+  read_only_write,  // a write to a register the device only reports
+  write_only_read,  // a read of a write-only register or alias
+  closed_group,     // an access to a parameter group the device keeps to itself
+  too_many_words,   // more registers in one request than the model allows in this mode
+  crosses_group,    // a multi-register access that spans two parameter groups
+  out_of_range,     // a value outside the register's min/max
+  not_in_enum,      // a value the register's named values do not include
+  station_out_of_range,
+  exception,  // an exception response, explained with the model's meaning
+  identified,
+};
+
+struct RuleFinding {
+  RuleKind kind = RuleKind::exception;
+  std::optional<uint16_t> address;
+  std::string text;
+};
+
+struct Meaning {
+  const DeviceModel* model = nullptr;
+  std::vector<RegisterValue> registers;
+  std::vector<RuleFinding> findings;
+};
+
+Meaning interpret(const DeviceModel& model, const Frame& frame);
+
+// Appends to `out` the registers `words` hold from `start` on, in the model's terms.
+void decode_registers(const DeviceModel& model, Table table, uint16_t start,
+                      std::span<const uint16_t> words, std::vector<RegisterValue>& out);
+
+const char* to_string(RuleKind kind);
+
+}  // namespace modtap::decoder

@@ -1,0 +1,142 @@
+#include "tools/modtap/model_catalog.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "decoder/model_yaml.hpp"
+#include "plugins/models/builtin_models.hpp"
+
+namespace modtap::tools {
+
+using decoder::DeviceModel;
+using decoder::ModelError;
+
+namespace {
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(fmt::format("{}: cannot open", path));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace
+
+void ModelCatalog::load_builtin() {
+  std::vector<Text> texts;
+  for (const auto& builtin : models::builtin_models())
+    texts.push_back({std::string(builtin.file), std::string(builtin.yaml)});
+  load(std::move(texts), "built-in");
+}
+
+void ModelCatalog::load_dir(const std::string& dir) {
+  namespace fs = std::filesystem;
+  if (!fs::is_directory(dir)) throw std::runtime_error(fmt::format("{}: not a directory", dir));
+  std::vector<Text> texts;
+  for (const auto& item : fs::directory_iterator(dir)) {
+    if (item.path().extension() != ".yaml" && item.path().extension() != ".yml") continue;
+    texts.push_back({item.path().string(), read_text(item.path().string())});
+  }
+  std::sort(texts.begin(), texts.end(), [](auto& a, auto& b) { return a.file < b.file; });
+  load(std::move(texts), dir);
+}
+
+// Models that extend another load after it, so bases are loaded in passes until none is left.
+void ModelCatalog::load(std::vector<Text> texts, const std::string& origin) {
+  while (!texts.empty()) {
+    std::vector<Text> waiting;
+    for (auto& text : texts) {
+      const std::string base_name = decoder::model_base(text.yaml, text.file);
+      const DeviceModel* base = base_name.empty() ? nullptr : find(base_name);
+      if (!base_name.empty() && !base) {
+        waiting.push_back(std::move(text));
+        continue;
+      }
+      add(decoder::parse_model(text.yaml, text.file, base),
+          origin == "built-in" ? origin : text.file);
+    }
+    if (waiting.size() == texts.size()) {
+      std::vector<std::string> problems;
+      for (const auto& text : waiting)
+        problems.push_back(fmt::format("{}: extends '{}', which is not a known model", text.file,
+                                       decoder::model_base(text.yaml, text.file)));
+      throw ModelError(problems);
+    }
+    texts = std::move(waiting);
+  }
+}
+
+void ModelCatalog::add(DeviceModel model, std::string origin) {
+  for (auto& entry : entries_) {
+    if (entry.model.name != model.name) continue;
+    entry = {std::move(model), std::move(origin)};  // a user's file replaces a built-in
+    return;
+  }
+  entries_.push_back({std::move(model), std::move(origin)});
+}
+
+const DeviceModel* ModelCatalog::find(std::string_view name) const {
+  for (const auto& entry : entries_)
+    if (entry.model.name == name) return &entry.model;
+  return nullptr;
+}
+
+std::vector<const DeviceModel*> ModelCatalog::all() const {
+  std::vector<const DeviceModel*> models;
+  for (const auto& entry : entries_) models.push_back(&entry.model);
+  return models;
+}
+
+decoder::ModelChoice ModelCatalog::choose(const std::vector<std::string>& specs) const {
+  decoder::ModelChoice choice;
+  auto model_named = [&](const std::string& name) {
+    const DeviceModel* model = find(name);
+    if (!model)
+      throw std::runtime_error(fmt::format("no model named '{}' (modtap models lists them)", name));
+    return model;
+  };
+  for (const auto& spec : specs) {
+    const auto eq = spec.find('=');
+    if (eq == std::string::npos) {
+      choice.bus = model_named(spec);
+      continue;
+    }
+    unsigned slave = 0;
+    const std::string number = spec.substr(0, eq);
+    if (number.empty() || number.find_first_not_of("0123456789") != std::string::npos ||
+        (slave = static_cast<unsigned>(std::stoul(number))) > 255)
+      throw std::runtime_error(fmt::format("--model {}: expected SLAVE=MODEL, SLAVE 0-255", spec));
+    choice.by_slave[static_cast<uint8_t>(slave)] = model_named(spec.substr(eq + 1));
+  }
+  if (!choice.bus) choice.bus = find("generic");
+  return choice;
+}
+
+int check_model_file(const std::string& file) {
+  ModelCatalog catalog;
+  catalog.load_builtin();
+  const std::string yaml = read_text(file);
+  try {
+    const std::string base_name = decoder::model_base(yaml, file);
+    const DeviceModel* base = base_name.empty() ? nullptr : catalog.find(base_name);
+    if (!base_name.empty() && !base)
+      throw ModelError(
+          {fmt::format("{}: extends '{}', which is not a built-in model", file, base_name)});
+    const DeviceModel model = decoder::parse_model(yaml, file, base);
+    fmt::print("{}: model {} ({}): {} registers, {} exception codes{}\n", file, model.name,
+               model.title, model.registers.size(), model.exceptions.size(),
+               model.groups ? ", parameter groups by rule" : "");
+    return 0;
+  } catch (const ModelError& e) {
+    for (const auto& problem : e.problems()) fmt::print(stderr, "{}\n", problem);
+    return 1;
+  }
+}
+
+}  // namespace modtap::tools

@@ -1,0 +1,47 @@
+// The device models modtap knows: the built-in ones and the user's files (--models-dir).
+#pragma once
+
+#include <deque>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "decoder/device_model.hpp"
+#include "decoder/model_interpreter.hpp"
+
+namespace modtap::tools {
+
+class ModelCatalog {
+ public:
+  struct Entry {
+    decoder::DeviceModel model;
+    std::string origin;  // "built-in" or the file it came from
+  };
+
+  // Throws decoder::ModelError naming the file and line of each problem.
+  void load_builtin();
+  void load_dir(const std::string& dir);  // every *.yaml in it; a name may replace a built-in
+
+  const decoder::DeviceModel* find(std::string_view name) const;
+  const std::deque<Entry>& entries() const { return entries_; }
+  std::vector<const decoder::DeviceModel*> all() const;
+
+  // From --model values: "MODEL" for the bus, "SLAVE=MODEL" for one slave. No model: generic.
+  decoder::ModelChoice choose(const std::vector<std::string>& specs) const;
+
+ private:
+  struct Text {
+    std::string file;
+    std::string yaml;
+  };
+  void load(std::vector<Text> texts, const std::string& origin);
+  void add(decoder::DeviceModel model, std::string origin);
+
+  std::deque<Entry> entries_;  // a deque: ModelChoice holds pointers into it
+};
+
+// `modtap models check FILE`: loads the file against the built-in models and prints what it
+// finds. Returns the process status.
+int check_model_file(const std::string& file);
+
+}  // namespace modtap::tools
