@@ -11,7 +11,10 @@ namespace {
 
 std::string join_lines(const std::vector<std::string>& problems) {
   std::string text;
-  for (const auto& p : problems) text += (text.empty() ? "" : "\n") + p;
+  for (const auto& p : problems) {
+    if (!text.empty()) text += '\n';
+    text += p;
+  }
   return text;
 }
 
@@ -123,7 +126,8 @@ bool read_choice(const YAML::Node& node, Problems& problems,
       out = value;
       return true;
     }
-    names += (names.empty() ? "" : ", ") + std::string(name);
+    if (!names.empty()) names += ", ";
+    names += name;
   }
   problems.add(node, fmt::format("'{}' is not one of: {}", text, names));
   return false;

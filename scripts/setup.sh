@@ -2,8 +2,8 @@
 # Installs what modtap needs on Debian 12 (as root) and builds it into build/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-packages=(cmake g++ make pkg-config libfmt-dev libpcap-dev libcli11-dev libyaml-cpp-dev libgtest-dev libgmock-dev
-          libbenchmark-dev sigrok-cli tshark python3)
+packages=(cmake g++ make pkg-config libfmt-dev libpcap-dev libcli11-dev libyaml-cpp-dev libgtest-dev
+          libgmock-dev libbenchmark-dev sigrok-cli tshark python3)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

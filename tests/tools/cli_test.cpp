@@ -2,8 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
+
+#include "decoder/checksum.hpp"
 
 namespace {
 
@@ -65,6 +69,77 @@ TEST(Cli, AMissingFileIsAClearErrorAndAnExitStatus) {
   ASSERT_FALSE(r.lines.empty());
   EXPECT_EQ(r.lines.back().rfind("modtap: /nonexistent/capture.pcap: cannot open", 0), 0u)
       << r.lines.back();
+}
+
+// A raw RTU capture of `bodies` (slave + PDU, CRC added) in a temporary file.
+std::string raw_capture(const std::string& name, const std::vector<std::vector<uint8_t>>& bodies) {
+  const auto path = std::filesystem::temp_directory_path() / name;
+  std::ofstream out(path, std::ios::binary);
+  for (auto body : bodies) {
+    const uint16_t crc = modtap::decoder::crc16(body);
+    body.push_back(static_cast<uint8_t>(crc & 0xFF));
+    body.push_back(static_cast<uint8_t>(crc >> 8));
+    out.write(reinterpret_cast<const char*>(body.data()), static_cast<std::streamsize>(body.size()));
+  }
+  return path.string();
+}
+
+TEST(Cli, ModelsListsTheBuiltInModels) {
+  const Outcome r = run("models");
+  ASSERT_EQ(r.status, 0);
+  std::string names;
+  for (const auto& line : r.lines) names += line.substr(0, line.find(' ')) + " ";
+  EXPECT_EQ(names, "gd20 generic n3 nta5000 nta5000-cn ");
+}
+
+TEST(Cli, ModelsCheckReportsTheFileAndLine) {
+  const auto path = std::filesystem::temp_directory_path() / "modtap-bad-model.yaml";
+  std::ofstream(path) << "model: bad\nregisters:\n  - {address: 0x2502, name: f, unit: [Hz]}\n";
+  const Outcome bad = run("models check " + path.string());
+  EXPECT_NE(bad.status, 0);
+  ASSERT_EQ(bad.lines.size(), 1u);
+  EXPECT_EQ(bad.lines[0], path.string() + ":3: expected text");
+  const Outcome good = run(std::string("models check ") + MODTAP_SOURCE + "/plugins/models/gd20.yaml");
+  EXPECT_EQ(good.status, 0);
+}
+
+TEST(Cli, JsonCarriesRegistersOfTheSlavesModel) {
+  const std::string capture = raw_capture("modtap-models.raw",
+                                          {{0x01, 0x06, 0x25, 0x02, 0x17, 0x70},
+                                           {0x01, 0x06, 0x25, 0x02, 0x17, 0x70},
+                                           {0x02, 0x06, 0x25, 0x02, 0x17, 0x70},
+                                           {0x02, 0x06, 0x25, 0x02, 0x17, 0x70}});
+  const Outcome r = run("-r " + capture + " --format raw --mode rtu --model 1=nta5000 -T json");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_EQ(r.lines.size(), 4u);
+  EXPECT_NE(r.lines[0].find("\"model\":\"nta5000\",\"registers\":[{\"addr\":9474,\"name\":"
+                            "\"frequency_command\",\"raw\":6000,\"value\":60.00,\"unit\":\"Hz\","
+                            "\"text\":null}]"),
+            std::string::npos)
+      << r.lines[0];
+  EXPECT_NE(r.lines[2].find("\"model\":\"generic\",\"registers\":[{\"addr\":9474,\"name\":null,"
+                            "\"raw\":6000,\"value\":6000,\"unit\":null,\"text\":null}]"),
+            std::string::npos)
+      << r.lines[2];
+}
+
+TEST(Cli, TextHighlightsRuleFindingsAndIdentifiesGd20) {
+  const std::string capture = raw_capture("modtap-gd20.raw", {{0x03, 0x03, 0x21, 0x03, 0x00, 0x01},
+                                                              {0x03, 0x03, 0x02, 0x01, 0x06},
+                                                              {0x03, 0x03, 0x80, 0x07, 0x00, 0x01}});
+  const Outcome r = run("-r " + capture + " --format raw --mode rtu");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_GE(r.lines.size(), 3u);
+  EXPECT_NE(r.lines[1].find("!! slave 3 identifies as gd20"), std::string::npos) << r.lines[1];
+  EXPECT_NE(r.lines[2].find("!! 8007H is the write-only RAM alias of P00.07"), std::string::npos)
+      << r.lines[2];
+}
+
+TEST(Cli, AnUnknownModelIsAClearError) {
+  const Outcome r = run(brainchild + " --model nosuch");
+  EXPECT_NE(r.status, 0);
+  ASSERT_FALSE(r.lines.empty());
+  EXPECT_EQ(r.lines.back(), "modtap: no model named 'nosuch' (modtap models lists them)");
 }
 
 }  // namespace

@@ -116,7 +116,9 @@ class Sinks {
   Sinks(const Options& o, tools::Output& out, const std::vector<decoder::ChannelInfo>& channels)
       : catalog_(load_models(o)),
         interpreter_(catalog_.all(), catalog_.choose(o.models), fan_out_),
-        terminal_(make_sink(o, out, channels)) {
+        terminal_(make_sink(o, out, channels)),
+        // Only text and JSON show what the models say; the other outputs skip the work.
+        interpret_(o.output == "text" || o.output == "json") {
     fan_out_.add(*terminal_);
     if (o.write_file.empty()) return;
     captures::PcapngOptions options;
@@ -126,7 +128,9 @@ class Sinks {
     pcapng_sink_ = std::make_unique<captures::PcapngSink>(*pcapng_, channels, options);
     fan_out_.add(*pcapng_sink_);
   }
-  decoder::RecordSink& all() { return interpreter_; }
+  decoder::RecordSink& all() {
+    return interpret_ ? static_cast<decoder::RecordSink&>(interpreter_) : fan_out_;
+  }
   decoder::RecordSink& terminal() { return *terminal_; }
 
  private:
@@ -134,6 +138,7 @@ class Sinks {
   FanOut fan_out_;
   decoder::ModelInterpreter interpreter_;
   std::unique_ptr<decoder::RecordSink> terminal_;
+  bool interpret_;
   std::unique_ptr<captures::PcapngWriter> pcapng_;
   std::unique_ptr<captures::PcapngSink> pcapng_sink_;
 };

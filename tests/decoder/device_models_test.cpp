@@ -1,0 +1,467 @@
+// The built-in device models against their manuals: the manuals' examples decode to the values
+// the manuals state, the models' rules fire on frames that break them and stay silent on legal
+// ones, and every register of the manuals' tables is in the YAML.
+#include <fstream>
+#include <sstream>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "decoder/checksum.hpp"
+#include "decoder/model_interpreter.hpp"
+#include "decoder/model_yaml.hpp"
+#include "decoder/register_meaning.hpp"
+#include "tools/modtap/model_catalog.hpp"
+
+namespace modtap::decoder {
+namespace {
+
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+using ::testing::IsEmpty;
+
+std::vector<uint8_t> hex(const std::string& text) {
+  std::vector<uint8_t> bytes;
+  std::istringstream in(text);
+  std::string pair;
+  while (in >> pair) bytes.push_back(static_cast<uint8_t>(std::stoul(pair, nullptr, 16)));
+  return bytes;
+}
+
+// An RTU ADU from slave + PDU; the CRC is computed, so the examples state only what they mean.
+std::vector<uint8_t> rtu(const std::string& body) {
+  auto adu = hex(body);
+  const uint16_t crc = crc16(adu);
+  adu.push_back(static_cast<uint8_t>(crc & 0xFF));
+  adu.push_back(static_cast<uint8_t>(crc >> 8));
+  return adu;
+}
+
+class Models : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    catalog_ = new tools::ModelCatalog;
+    catalog_->load_builtin();
+  }
+  static void TearDownTestSuite() { delete catalog_; }
+
+  const DeviceModel& model(const char* name) {
+    const DeviceModel* found = catalog_->find(name);
+    EXPECT_NE(found, nullptr) << name;
+    return *found;
+  }
+
+  Frame frame(const std::vector<uint8_t>& adu, Role role, Mode mode = Mode::rtu) {
+    Frame f;
+    f.adu = adu;
+    f.raw = adu;
+    f.role = role;
+    f.mode = mode;
+    f.check_ok = true;
+    return f;
+  }
+
+  Meaning request(const char* name, const std::vector<uint8_t>& adu, Mode mode = Mode::rtu) {
+    return interpret(model(name), frame(adu, Role::request, mode));
+  }
+
+  // The response read with its request's PDU, as the matcher hands it on.
+  Meaning response(const char* name, const std::vector<uint8_t>& request_adu,
+                   const std::vector<uint8_t>& response_adu) {
+    Frame f = frame(response_adu, Role::response);
+    f.request_pdu = std::span<const uint8_t>(request_adu).subspan(1, request_adu.size() - 3);
+    return interpret(model(name), f);
+  }
+
+  static std::vector<RuleKind> kinds(const Meaning& meaning) {
+    std::vector<RuleKind> out;
+    for (const auto& f : meaning.findings) out.push_back(f.kind);
+    return out;
+  }
+
+  static tools::ModelCatalog* catalog_;
+};
+
+tools::ModelCatalog* Models::catalog_ = nullptr;
+
+// --- The manuals' examples ---------------------------------------------------------------
+
+TEST_F(Models, Nta5000ReadOf2523HGivesTheFrequencyCommand) {
+  // 4.1: the request (with the corrected CRC 7EH CCH) and the response 07D0H as printed.
+  const auto req = hex("01 03 25 23 00 01 7E CC");
+  const auto rsp = hex("01 03 02 07 D0 BB E8");
+  const Meaning m = response("nta5000", req, rsp);
+  ASSERT_EQ(m.registers.size(), 1u);
+  EXPECT_EQ(m.registers[0].address, 0x2523);
+  EXPECT_EQ(m.registers[0].name, "frequency_command_monitor");
+  EXPECT_EQ(m.registers[0].raw, 0x07D0u);
+  EXPECT_DOUBLE_EQ(m.registers[0].value, 20.00);
+  EXPECT_EQ(m.registers[0].unit, "Hz");
+  EXPECT_THAT(m.findings, IsEmpty());
+}
+
+TEST_F(Models, Nta5000WriteOf1770HTo2502HIs60Hz) {
+  const auto adu = hex("01 06 25 02 17 70 2D 12");  // 4.3, RTU
+  const Meaning m = request("nta5000", adu);
+  ASSERT_EQ(m.registers.size(), 1u);
+  EXPECT_EQ(m.registers[0].name, "frequency_command");
+  EXPECT_DOUBLE_EQ(m.registers[0].value, 60.00);
+  EXPECT_EQ(m.registers[0].decimals, 2);
+  EXPECT_THAT(m.findings, IsEmpty());
+  // The echo shows the same register.
+  const Meaning echo = response("nta5000", adu, adu);
+  ASSERT_EQ(echo.registers.size(), 1u);
+  EXPECT_DOUBLE_EQ(echo.registers[0].value, 60.00);
+}
+
+TEST_F(Models, Nta5000MultiWriteIsForwardRunAt60Hz) {
+  const Meaning m = request("nta5000", hex("01 10 25 01 00 02 04 00 01 17 70 CB 26"));  // 4.4
+  ASSERT_EQ(m.registers.size(), 2u);
+  EXPECT_EQ(m.registers[0].name, "operation_signal");
+  EXPECT_EQ(m.registers[0].text, "Run, Forward");
+  EXPECT_EQ(m.registers[1].name, "frequency_command");
+  EXPECT_DOUBLE_EQ(m.registers[1].value, 60.00);
+  EXPECT_THAT(m.findings, IsEmpty());
+}
+
+TEST_F(Models, Nta5000ExceptionIsExplainedWithTheVendorsMeaning) {
+  const auto req = rtu("01 06 25 02 17 70");
+  const Meaning m = response("nta5000", req, hex("01 86 52 C3 9D"));  // 4.3, fault response
+  ASSERT_THAT(kinds(m), ElementsAre(RuleKind::exception));
+  EXPECT_THAT(m.findings[0].text, HasSubstr("Address error"));
+}
+
+TEST_F(Models, Nta5000StatusBitsAndFaultCodeHaveTheirNames) {
+  const auto req = rtu("01 03 25 20 00 03");
+  const Meaning m = response("nta5000", req, rtu("01 03 06 00 0B 00 0D 00 41"));
+  ASSERT_EQ(m.registers.size(), 3u);
+  EXPECT_EQ(m.registers[0].text, "Run, Reverse, Unready, Abnormal");
+  EXPECT_EQ(m.registers[1].text, "OL1 (motor over load)");
+  EXPECT_EQ(m.registers[2].text, "S1, RELAY1");
+}
+
+TEST_F(Models, Nta5000ChineseVariantDiffersWhereItsManualDoes) {
+  const auto req = rtu("01 03 25 21 00 01");
+  const auto rsp = rtu("01 03 02 00 28");  // fault 40
+  EXPECT_THAT(response("nta5000-cn", req, rsp).registers[0].text, HasSubstr("OVSP"));
+  // The English table stops at 39: 40 is not one of its named values.
+  EXPECT_THAT(kinds(response("nta5000", req, rsp)), ElementsAre(RuleKind::not_in_enum));
+  EXPECT_EQ(response("nta5000", req, rtu("01 03 02 00 0B")).registers[0].text, "Reserved");
+  EXPECT_THAT(response("nta5000-cn", req, rtu("01 03 02 00 0B")).registers[0].text,
+              HasSubstr("OL3"));
+  const auto torque = rtu("01 03 25 29 00 01");
+  EXPECT_EQ(response("nta5000-cn", torque, rtu("01 03 02 00 10")).registers[0].name,
+            "output_torque");
+  EXPECT_TRUE(response("nta5000", torque, rtu("01 03 02 00 10")).registers[0].name.find(
+                  "reserved") == 0);
+  EXPECT_THAT(kinds(request("nta5000-cn", rtu("21 03 25 20 00 01"))),
+              ElementsAre(RuleKind::station_out_of_range));
+  EXPECT_THAT(request("nta5000", rtu("21 03 25 20 00 01")).findings, IsEmpty());
+}
+
+TEST_F(Models, Nta5000ParametersFollowTheGroupRule) {
+  const auto req = rtu("01 03 0A 0B 00 01");  // F10.11, the manual's own example of GGnnH
+  const Meaning m = response("nta5000", req, rtu("01 03 02 00 05"));
+  ASSERT_EQ(m.registers.size(), 1u);
+  EXPECT_EQ(m.registers[0].name, "F10.11");
+  // F00 has 15 parameters: 000FH is no parameter, and decodes as a raw value.
+  const Meaning beyond = response("nta5000", rtu("01 03 00 0F 00 01"), rtu("01 03 02 12 34"));
+  EXPECT_EQ(beyond.registers[0].name, "");
+  EXPECT_EQ(beyond.registers[0].raw, 0x1234u);
+}
+
+TEST_F(Models, N3ExamplesDecodeToTheManualsValues) {
+  const Meaning write = request("n3", hex("01 06 01 02 17 70 27 E2"));  // 4.5
+  ASSERT_EQ(write.registers.size(), 1u);
+  EXPECT_EQ(write.registers[0].name, "frequency_command");
+  EXPECT_DOUBLE_EQ(write.registers[0].value, 60.00);
+  // 4.3 with the corrected response CRC (B6H 50H).
+  const Meaning read = response("n3", hex("01 03 01 23 00 01 74 3C"), hex("01 03 02 17 70 B6 50"));
+  ASSERT_EQ(read.registers.size(), 1u);
+  EXPECT_EQ(read.registers[0].address, 0x0123);
+  EXPECT_DOUBLE_EQ(read.registers[0].value, 60.00);
+  const Meaning multi = request("n3", hex("01 10 01 01 00 02 04 00 01 17 70 60 27"));  // 4.6
+  ASSERT_EQ(multi.registers.size(), 2u);
+  EXPECT_EQ(multi.registers[0].text, "Run, Forward");
+  EXPECT_DOUBLE_EQ(multi.registers[1].value, 60.00);
+}
+
+TEST_F(Models, N3ParameterTableMapsRegistersOutOfOrder) {
+  const auto req = rtu("01 03 00 07 00 03");
+  const Meaning m = response("n3", req, rtu("01 03 06 00 01 00 02 00 03"));
+  ASSERT_EQ(m.registers.size(), 3u);
+  EXPECT_EQ(m.registers[0].name, "A007");
+  EXPECT_EQ(m.registers[1].name, "B012");
+  EXPECT_EQ(m.registers[2].name, "B000");
+  EXPECT_THAT(kinds(request("n3", rtu("01 06 00 32 00 01"))),
+              ElementsAre(RuleKind::reserved_write));  // 0032H is '~' in the table
+}
+
+TEST_F(Models, Gd20ReadOf0004HAnd0005HGivesP0004AndP0005) {
+  // 7.3.1.1: the request and the response with 1388H and 0000H.
+  const Meaning m =
+      response("gd20", hex("01 03 00 04 00 02 85 CA"), hex("01 03 04 13 88 00 00 7E 9D"));
+  ASSERT_EQ(m.registers.size(), 2u);
+  EXPECT_EQ(m.registers[0].name, "P00.04");
+  EXPECT_EQ(m.registers[0].raw, 5000u);
+  EXPECT_EQ(m.registers[1].name, "P00.05");
+  EXPECT_EQ(m.registers[1].raw, 0u);
+}
+
+TEST_F(Models, Gd20WriteOf0001HTo2000HIsForwardRunning) {
+  const Meaning m = request("gd20", rtu("03 06 20 00 00 01"));  // 7.5.2 example 1
+  ASSERT_EQ(m.registers.size(), 1u);
+  EXPECT_EQ(m.registers[0].name, "control_command");
+  EXPECT_EQ(m.registers[0].text, "Forward running");
+  EXPECT_THAT(m.findings, IsEmpty());
+}
+
+TEST_F(Models, Gd20OtherExamplesDecodeToTheManualsValues) {
+  // 7.5.1: state word 1 reads 0003H, "the inverter stops".
+  EXPECT_EQ(response("gd20", rtu("01 03 21 00 00 01"), rtu("01 03 02 00 03")).registers[0].text,
+            "Stop");
+  // 7.5.2 example 2: 2710H to P00.03 is 100 Hz.
+  const Meaning max = request("gd20", rtu("03 06 00 03 27 10"));
+  EXPECT_EQ(max.registers[0].name, "P00.03");
+  EXPECT_DOUBLE_EQ(max.registers[0].value, 100.00);
+  // 7.5.3 example 1: run forward at 10 Hz.
+  const Meaning run = request("gd20", rtu("01 10 20 00 00 02 04 00 01 03 E8"));
+  ASSERT_EQ(run.registers.size(), 2u);
+  EXPECT_EQ(run.registers[0].text, "Forward running");
+  EXPECT_DOUBLE_EQ(run.registers[1].value, 10.00);
+  // 7.5.3 example 2: ACC time 10 s, DEC time 20 s.
+  const Meaning times = request("gd20", rtu("01 10 00 0B 00 02 04 00 64 00 C8"));
+  EXPECT_DOUBLE_EQ(times.registers[0].value, 10.0);
+  EXPECT_EQ(times.registers[0].unit, "s");
+  EXPECT_DOUBLE_EQ(times.registers[1].value, 20.0);
+  // 7.4.4: P00.01 = 3 is out of range, and the slave answers 86H 04H "operation failed".
+  const auto bad = rtu("01 06 00 01 00 03");
+  EXPECT_THAT(kinds(request("gd20", bad)), ElementsAre(RuleKind::out_of_range, RuleKind::not_in_enum));
+  const Meaning refused = response("gd20", bad, rtu("01 86 04"));
+  ASSERT_THAT(kinds(refused), ElementsAre(RuleKind::exception));
+  EXPECT_THAT(refused.findings[0].text, HasSubstr("Operation failed"));
+}
+
+// --- Rule findings -----------------------------------------------------------------------
+
+TEST_F(Models, WritesToReservedOrReadOnlyRegistersAreFound) {
+  EXPECT_THAT(kinds(request("nta5000", rtu("01 06 25 03 00 01"))),
+              ElementsAre(RuleKind::reserved_write));
+  EXPECT_THAT(kinds(request("nta5000", rtu("01 06 25 24 00 01"))),
+              ElementsAre(RuleKind::read_only_write));
+  EXPECT_THAT(kinds(request("gd20", rtu("01 06 30 00 00 01"))),
+              ElementsAre(RuleKind::read_only_write));
+  EXPECT_THAT(request("nta5000", rtu("01 06 25 01 00 01")).findings, IsEmpty());
+}
+
+TEST_F(Models, ReadsOfWriteOnlyRegistersAndAliasesAreFound) {
+  const Meaning alias_read = request("gd20", rtu("01 03 80 07 00 01"));
+  ASSERT_THAT(kinds(alias_read), ElementsAre(RuleKind::write_only_read));
+  EXPECT_THAT(alias_read.findings[0].text, HasSubstr("P00.07"));
+  EXPECT_THAT(kinds(request("gd20", rtu("01 03 20 00 00 01"))),
+              ElementsAre(RuleKind::write_only_read));
+  // Writing the alias is what it is for: RAM only, and silent.
+  const Meaning alias_write = request("gd20", rtu("01 06 80 07 00 05"));
+  EXPECT_THAT(alias_write.findings, IsEmpty());
+  EXPECT_EQ(alias_write.registers[0].name, "P00.07 (RAM)");
+}
+
+TEST_F(Models, MoreWordsThanTheModelAllowsAreFoundPerMode) {
+  EXPECT_THAT(request("nta5000", rtu("01 03 03 00 00 25")).findings, IsEmpty());  // 37
+  EXPECT_THAT(kinds(request("nta5000", rtu("01 03 03 00 00 26"))),
+              ElementsAre(RuleKind::too_many_words));  // 38
+  const auto read18 = hex("01 03 03 00 00 12 00");      // ASCII: 17 allowed
+  EXPECT_THAT(kinds(request("nta5000", read18, Mode::ascii)),
+              ElementsAre(RuleKind::too_many_words));
+  EXPECT_THAT(request("nta5000", hex("01 03 03 00 00 11 00"), Mode::ascii).findings, IsEmpty());
+  EXPECT_THAT(kinds(request("gd20", rtu("01 03 00 00 00 11"))),
+              ElementsAre(RuleKind::too_many_words));  // 17 > 16
+  EXPECT_THAT(request("gd20", rtu("01 03 00 00 00 10")).findings, IsEmpty());
+  EXPECT_THAT(kinds(request("generic", rtu("01 03 00 00 00 7E"))),
+              ElementsAre(RuleKind::too_many_words));  // 126 > 125
+}
+
+TEST_F(Models, AccessesAcrossParameterGroupsAreFound) {
+  const Meaning m = request("nta5000", rtu("01 03 01 17 00 02"));  // F01.23 and 0118H ... no
+  EXPECT_THAT(m.findings, IsEmpty());
+  EXPECT_THAT(kinds(request("nta5000", rtu("01 03 01 FF 00 02"))),
+              ElementsAre(RuleKind::crosses_group));
+  EXPECT_THAT(request("gd20", rtu("01 03 00 FF 00 02")).findings, IsEmpty());  // no such rule
+}
+
+TEST_F(Models, StationsOutsideTheModelsRangeAreFound) {
+  EXPECT_THAT(kinds(request("nta5000", rtu("41 03 25 20 00 01"))),
+              ElementsAre(RuleKind::station_out_of_range));
+  EXPECT_THAT(request("nta5000", rtu("40 03 25 20 00 01")).findings, IsEmpty());
+  EXPECT_THAT(request("n3", rtu("FE 03 01 20 00 01")).findings, IsEmpty());
+  EXPECT_THAT(kinds(request("n3", rtu("FF 03 01 20 00 01"))),
+              ElementsAre(RuleKind::station_out_of_range));
+  EXPECT_THAT(kinds(request("gd20", rtu("F8 03 21 00 00 01"))),
+              ElementsAre(RuleKind::station_out_of_range));
+  EXPECT_THAT(request("gd20", rtu("00 06 20 00 00 05")).findings, IsEmpty());  // broadcast
+}
+
+TEST_F(Models, ValuesOutsideRangeOrEnumAreFound) {
+  EXPECT_THAT(kinds(request("gd20", rtu("01 06 20 00 00 09"))),
+              ElementsAre(RuleKind::not_in_enum));
+  EXPECT_THAT(kinds(request("gd20", rtu("01 06 20 04 0B B9"))),  // 300.1 %
+              ElementsAre(RuleKind::out_of_range));
+  const Meaning negative = request("gd20", rtu("01 06 20 04 F4 48"));  // -300.0 %, signed
+  EXPECT_DOUBLE_EQ(negative.registers[0].value, -300.0);
+  EXPECT_THAT(negative.findings, IsEmpty());
+}
+
+TEST_F(Models, FactoryGroupIsClosed) {
+  EXPECT_THAT(kinds(request("gd20", rtu("01 03 1D 00 00 02"))),
+              ElementsAre(RuleKind::closed_group));
+}
+
+TEST_F(Models, GenericModelNamesNothingAndExplainsStandardExceptions) {
+  const Meaning m = response("generic", rtu("01 03 00 00 00 01"), rtu("01 03 02 00 2A"));
+  ASSERT_EQ(m.registers.size(), 1u);
+  EXPECT_EQ(m.registers[0].name, "");
+  EXPECT_DOUBLE_EQ(m.registers[0].value, 42);
+  const Meaning e = response("generic", rtu("01 03 00 00 00 01"), rtu("01 83 02"));
+  EXPECT_THAT(e.findings[0].text, HasSubstr("Illegal data address"));
+}
+
+// --- Identification ----------------------------------------------------------------------
+
+class Recorder final : public RecordSink {
+ public:
+  void on_frame(const Frame& frame) override {
+    models.push_back(frame.meaning ? frame.meaning->model->name : "");
+    findings.push_back(frame.meaning ? frame.meaning->findings : std::vector<RuleFinding>{});
+  }
+  void on_noise(const Noise&) override {}
+  void on_timeout(const Timeout&) override {}
+  std::vector<std::string> models;
+  std::vector<std::vector<RuleFinding>> findings;
+};
+
+TEST_F(Models, ASlaveReadingGd20sIdentifyingCodeIsDecodedAsGd20) {
+  Recorder out;
+  ModelChoice choice;
+  choice.bus = &model("generic");
+  ModelInterpreter interpreter(catalog_->all(), choice, out);
+  const auto req = rtu("05 03 21 03 00 01");
+  const auto rsp = rtu("05 03 02 01 06");
+  Frame q = frame(req, Role::request);
+  Frame r = frame(rsp, Role::response);
+  r.request_pdu = std::span<const uint8_t>(req).subspan(1, 5);
+  interpreter.on_frame(q);
+  interpreter.on_frame(r);
+  interpreter.on_frame(q);
+  EXPECT_THAT(out.models, ElementsAre("generic", "gd20", "gd20"));
+  ASSERT_EQ(out.findings[1].size(), 1u);
+  EXPECT_EQ(out.findings[1][0].kind, RuleKind::identified);
+  EXPECT_THAT(out.findings[1][0].text, HasSubstr("slave 5 identifies as gd20"));
+}
+
+TEST_F(Models, AnIdentificationDoesNotOverrideTheUsersChoice) {
+  Recorder out;
+  ModelChoice choice;
+  choice.bus = &model("generic");
+  choice.by_slave[5] = &model("n3");
+  ModelInterpreter interpreter(catalog_->all(), choice, out);
+  const auto req = rtu("05 03 21 03 00 01");
+  const auto rsp = rtu("05 03 02 01 06");
+  Frame r = frame(rsp, Role::response);
+  r.request_pdu = std::span<const uint8_t>(req).subspan(1, 5);
+  interpreter.on_frame(r);
+  EXPECT_THAT(out.models, ElementsAre("n3"));
+  EXPECT_THAT(out.findings[0][0].text, HasSubstr("but is decoded as n3"));
+}
+
+// --- Every register of the manuals' tables -------------------------------------------------
+
+struct ListedRegister {
+  uint16_t address;
+  std::string name;
+};
+
+std::vector<ListedRegister> manual_list(const std::string& file) {
+  std::ifstream in(std::string(MODTAP_TEST_DATA) + "/models/" + file);
+  EXPECT_TRUE(in) << file;
+  std::vector<ListedRegister> out;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    std::string address, name;
+    fields >> address >> name;
+    out.push_back({static_cast<uint16_t>(std::stoul(address, nullptr, 16)), name});
+  }
+  return out;
+}
+
+void expect_all_listed(const DeviceModel& model, const std::vector<ListedRegister>& list) {
+  for (const auto& listed : list) {
+    const RegisterLookup found = find_register(model, Table::holding, listed.address);
+    ASSERT_NE(found.def(), nullptr) << model.name << " lacks " << std::hex << listed.address;
+    if (!listed.name.empty()) {
+      EXPECT_EQ(found.def()->name, listed.name) << listed.address;
+    }
+  }
+}
+
+TEST_F(Models, EveryRegisterInTheNta5000ManualIsInTheModel) {
+  const auto list = manual_list("nta5000.list");
+  EXPECT_EQ(list.size(), 10u + 17u + 285u);  // 2500H-2509H, 2520H-2530H, F00.00-F13.47
+  expect_all_listed(model("nta5000"), list);
+  expect_all_listed(model("nta5000-cn"), list);
+  EXPECT_EQ(model("nta5000").registers.at({Table::holding, 0x2521}).values->size(), 40u);
+  EXPECT_EQ(model("nta5000-cn").registers.at({Table::holding, 0x2521}).values->size(), 41u);
+  EXPECT_EQ(model("nta5000").exceptions.size(), 5u);
+}
+
+TEST_F(Models, EveryRegisterInTheN3ManualIsInTheModel) {
+  const auto list = manual_list("n3.list");
+  EXPECT_EQ(list.size(), 2u + 29u + 15u + 174u);  // command, reserved, monitor, parameters
+  expect_all_listed(model("n3"), list);
+  EXPECT_EQ(model("n3").registers.at({Table::holding, 0x0121}).values->size(), 46u);
+}
+
+TEST_F(Models, EveryRegisterInTheGd20ManualIsInTheModel) {
+  const auto list = manual_list("gd20.list");
+  EXPECT_EQ(list.size(), 15u + 4u + 23u + 1u);  // 2000H-200EH, 2100H-2103H, 3000H-3016H, 5000H
+  expect_all_listed(model("gd20"), list);
+  EXPECT_EQ(model("gd20").exceptions.size(), 9u);
+}
+
+// --- Bad dictionaries ----------------------------------------------------------------------
+
+TEST(ModelFiles, ProblemsNameTheFileAndLine) {
+  const std::string yaml =
+      "model: broken\n"
+      "registers:\n"
+      "  - {address: 0x2502, name: f, scale: fast}\n"
+      "  - {address: 0x2503, nmae: g}\n"
+      "  - {address: 0x2504, name: h, enum: nowhere}\n";
+  try {
+    parse_model(yaml, "broken.yaml");
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_THAT(e.problems(), ::testing::Contains(HasSubstr("broken.yaml:3: expected a number")));
+    EXPECT_THAT(e.problems(), ::testing::Contains(HasSubstr("broken.yaml:4: unknown key 'nmae'")));
+    EXPECT_THAT(e.problems(), ::testing::Contains(HasSubstr("broken.yaml:5: no enum named")));
+  }
+}
+
+TEST(ModelFiles, YamlSyntaxErrorsNameTheLine) {
+  EXPECT_THROW(
+      {
+        try {
+          parse_model("model: x\nregisters: [\n  {address: 1\n", "syntax.yaml");
+        } catch (const ModelError& e) {
+          EXPECT_THAT(e.what(), HasSubstr("syntax.yaml:"));
+          throw;
+        }
+      },
+      ModelError);
+  EXPECT_THROW(parse_model("- just\n- a list\n", "list.yaml"), ModelError);
+  EXPECT_THROW(parse_model("", "empty.yaml"), ModelError);
+}
+
+}  // namespace
+}  // namespace modtap::decoder
