@@ -415,6 +415,7 @@ DeviceModel parse_model(std::string_view yaml, const std::string& file, const De
   Problems problems(file);
   DeviceModel model = base ? *base : DeviceModel{};
   model.name.clear();
+  model.title = base ? "based on " + base->name : "";
   if (root.IsMap() && root["extends"] && !base)
     problems.add(root["extends"], "extends a model that is not loaded");
   ModelReader(model, problems).read(root);

@@ -135,6 +135,24 @@ TEST(Cli, TextHighlightsRuleFindingsAndIdentifiesGd20) {
       << r.lines[2];
 }
 
+TEST(Cli, ModelsDirAddsTheUsersModels) {
+  const auto dir = std::filesystem::temp_directory_path() / "modtap-user-models";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "pump.yaml") << "model: pump\nextends: gd20\nregisters:\n"
+                                      "  - {address: 0x3000, name: pump_speed, scale: 0.1, unit: rpm}\n";
+  const std::string capture = raw_capture("modtap-pump.raw", {{0x07, 0x03, 0x30, 0x00, 0x00, 0x01},
+                                                              {0x07, 0x03, 0x02, 0x00, 0x64}});
+  const Outcome listed = run("models --models-dir " + dir.string());
+  ASSERT_EQ(listed.status, 0);
+  ASSERT_EQ(listed.lines.size(), 6u);
+  EXPECT_EQ(listed.lines[5].rfind("pump ", 0), 0u) << listed.lines[5];
+  const Outcome r =
+      run("-r " + capture + " --format raw --mode rtu --models-dir " + dir.string() + " --model 7=pump");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_EQ(r.lines.size(), 2u);
+  EXPECT_NE(r.lines[1].find("| pump_speed=10.0 rpm"), std::string::npos) << r.lines[1];
+}
+
 TEST(Cli, AnUnknownModelIsAClearError) {
   const Outcome r = run(brainchild + " --model nosuch");
   EXPECT_NE(r.status, 0);

@@ -237,6 +237,7 @@ int main(int argc, char** argv) {
                  "Device model for the bus (MODEL) or one slave (SLAVE=MODEL); repeatable");
   app.add_option("--models-dir", o.models_dir, "A folder of the user's model files (*.yaml)");
   auto* models = app.add_subcommand("models", "List the device models, or check a model file");
+  models->fallthrough();  // `modtap models --models-dir DIR` lists the user's models too
   std::string check_file;
   auto* check = models->add_subcommand("check", "Validate a model file");
   check->add_option("FILE", check_file, "Model file (YAML)")->required();
