@@ -4,6 +4,8 @@
 
 #include <fmt/format.h>
 
+#include "decoder/register_meaning.hpp"
+
 namespace modtap::captures {
 
 using namespace decoder;
@@ -64,6 +66,22 @@ const char* finding_name(uint32_t bit) {
   }
 }
 
+// The device model's reading, one line each after the verdicts, for modtap.lua and for people:
+// "register 2502H frequency_command = 60.00 Hz" and "note read_only_write: ... is read-only".
+void append_meaning(std::string& comment, const Meaning& meaning) {
+  comment += fmt::format(" model={}", meaning.model->name);
+  fmt::memory_buffer line;
+  for (const RegisterValue& reg : meaning.registers) {
+    line.clear();
+    fmt::format_to(std::back_inserter(line), "\nregister {:04X}H {} = ", reg.address,
+                   reg.name.empty() ? "-" : reg.name);
+    append_value_text(line, reg);
+    comment.append(line.data(), line.size());
+  }
+  for (const RuleFinding& finding : meaning.findings)
+    comment += fmt::format("\nnote {}: {}", to_string(finding.kind), finding.text);
+}
+
 }  // namespace
 
 PcapngLink parse_link(const std::string& name) {
@@ -83,6 +101,7 @@ std::string frame_comment(const Frame& f) {
     c += fmt::format(" latency_us={:.3f}", static_cast<double>(*f.latency_ns) / 1e3);
   for (uint32_t bit = 1; bit != 0 && bit <= f.findings; bit <<= 1)
     if (f.findings & bit) c += fmt::format(" finding={}", finding_name(bit));
+  if (f.meaning) append_meaning(c, *f.meaning);
   return c;
 }
 

@@ -308,6 +308,21 @@ Meaning interpret(const DeviceModel& model, const Frame& frame) {
   return meaning;
 }
 
+void append_value_text(fmt::memory_buffer& out, const RegisterValue& reg) {
+  auto put = std::back_inserter(out);
+  if (!reg.text.empty() && reg.unit.empty()) {
+    fmt::format_to(put, "{} ({})", reg.text, reg.raw);
+    return;
+  }
+  if (std::isfinite(reg.value)) {
+    fmt::format_to(put, "{:.{}f}", reg.value, reg.decimals);
+  } else {
+    fmt::format_to(put, "{}", reg.value);
+  }
+  if (!reg.unit.empty()) fmt::format_to(put, " {}", reg.unit);
+  if (!reg.text.empty()) fmt::format_to(put, " ({})", reg.text);
+}
+
 const char* to_string(RuleKind kind) {
   switch (kind) {
     case RuleKind::reserved_write:

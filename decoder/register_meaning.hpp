@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "decoder/device_model.hpp"
 #include "decoder/records.hpp"
 
@@ -56,5 +58,8 @@ void decode_registers(const DeviceModel& model, Table table, uint16_t start,
                       std::span<const uint16_t> words, std::vector<RegisterValue>& out);
 
 const char* to_string(RuleKind kind);
+
+// A register's value as people read it: "60.00 Hz", "Forward running (1)", "Run, Reverse (3)".
+void append_value_text(fmt::memory_buffer& out, const RegisterValue& reg);
 
 }  // namespace modtap::decoder

@@ -4,7 +4,9 @@
 -- RTU frame to Wireshark's own Modbus RTU dissector with the direction modtap decided, so
 -- that the echo codes (05, 06, 08) that mbrtu cannot classify by length are classified too.
 -- Modbus ASCII frames, which Wireshark has no dissector for, are decoded here and passed on
--- to the Modbus dissector in RTU form.
+-- to the Modbus dissector in RTU form. With a device model (modtap --model, or a device that
+-- identified itself), each register's name, scaled value and unit, and the model's findings,
+-- come from modtap's one implementation of the models, carried in the packet comment.
 --
 -- Use: tshark -X lua_script:modtap.lua -o mbrtu.tcp.port:502 -r capture.pcapng
 -- (or copy it to ~/.local/lib/wireshark/plugins/ and set the mbrtu TCP port to 502 once).
@@ -29,6 +31,12 @@ local fields = {
   fc = ProtoField.uint8("modtap.ascii.fc", "Function code", base.DEC),
   data = ProtoField.bytes("modtap.ascii.data", "Data"),
   lrc = ProtoField.uint8("modtap.ascii.lrc", "LRC", base.HEX),
+  model = ProtoField.string("modtap.model", "Device model"),
+  register = ProtoField.string("modtap.register", "Register"),
+  reg_addr = ProtoField.uint16("modtap.register.addr", "Address", base.HEX),
+  reg_name = ProtoField.string("modtap.register.name", "Name"),
+  reg_value = ProtoField.string("modtap.register.value", "Value"),
+  note = ProtoField.string("modtap.note", "Model finding"),
 }
 local field_list = {}
 for _, f in pairs(fields) do table.insert(field_list, f) end
@@ -45,14 +53,25 @@ modtap.experts = {bad_check, finding_expert, noise_expert}
 local comment_field = Field.new("frame.comment")
 local mbrtu = Dissector.get("mbrtu")
 
--- "modtap index=3 mode=rtu role=response check=ok request=2 finding=..." -> table
+-- "modtap index=3 mode=rtu role=response check=ok request=2 finding=... model=gd20", then a
+-- line per register ("register 2502H frequency_command = 60.00 Hz") and per model finding
+-- ("note read_only_write: ...") -> table
 local function verdicts()
-  local v = {findings = {}}
+  local v = {findings = {}, registers = {}, notes = {}}
   for _, c in ipairs({comment_field()}) do
     local text = tostring(c.value)
     if text:sub(1, 7) == "modtap " then
-      for key, value in text:gmatch("([%w_]+)=(%S+)") do
+      local first = text:match("^[^\n]*")
+      for key, value in first:gmatch("([%w_]+)=(%S+)") do
         if key == "finding" then table.insert(v.findings, value) else v[key] = value end
+      end
+      for line in text:gmatch("\n([^\n]*)") do
+        local addr, name, value = line:match("^register (%x+)H (.-) = (.*)$")
+        if addr then
+          table.insert(v.registers, {addr = tonumber(addr, 16), name = name, value = value})
+        elseif line:sub(1, 5) == "note " then
+          table.insert(v.notes, line:sub(6))
+        end
       end
     end
   end
@@ -106,6 +125,17 @@ local function add_verdicts(tree, tvb, v)
   end
   if v.noise then
     tree:add(fields.noise, v.noise):add_proto_expert_info(noise_expert, "Noise: " .. v.noise)
+  end
+  if v.model then tree:add(fields.model, v.model) end
+  for _, reg in ipairs(v.registers) do
+    local label = string.format("%04XH %s = %s", reg.addr, reg.name, reg.value)
+    local item = tree:add(fields.register, label)
+    item:add(fields.reg_addr, reg.addr)
+    item:add(fields.reg_name, reg.name)  -- "-" for a register the model does not know
+    item:add(fields.reg_value, reg.value)
+  end
+  for _, note in ipairs(v.notes) do
+    tree:add(fields.note, note):add_proto_expert_info(finding_expert, note)
   end
 end
 

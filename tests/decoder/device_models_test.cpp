@@ -152,8 +152,8 @@ TEST_F(Models, Nta5000ChineseVariantDiffersWhereItsManualDoes) {
   const auto torque = rtu("01 03 25 29 00 01");
   EXPECT_EQ(response("nta5000-cn", torque, rtu("01 03 02 00 10")).registers[0].name,
             "output_torque");
-  EXPECT_TRUE(response("nta5000", torque, rtu("01 03 02 00 10")).registers[0].name.find(
-                  "reserved") == 0);
+  EXPECT_TRUE(
+      response("nta5000", torque, rtu("01 03 02 00 10")).registers[0].name.find("reserved") == 0);
   EXPECT_THAT(kinds(request("nta5000-cn", rtu("21 03 25 20 00 01"))),
               ElementsAre(RuleKind::station_out_of_range));
   EXPECT_THAT(request("nta5000", rtu("21 03 25 20 00 01")).findings, IsEmpty());
@@ -236,7 +236,8 @@ TEST_F(Models, Gd20OtherExamplesDecodeToTheManualsValues) {
   EXPECT_DOUBLE_EQ(times.registers[1].value, 20.0);
   // 7.4.4: P00.01 = 3 is out of range, and the slave answers 86H 04H "operation failed".
   const auto bad = rtu("01 06 00 01 00 03");
-  EXPECT_THAT(kinds(request("gd20", bad)), ElementsAre(RuleKind::out_of_range, RuleKind::not_in_enum));
+  EXPECT_THAT(kinds(request("gd20", bad)),
+              ElementsAre(RuleKind::out_of_range, RuleKind::not_in_enum));
   const Meaning refused = response("gd20", bad, rtu("01 86 04"));
   ASSERT_THAT(kinds(refused), ElementsAre(RuleKind::exception));
   EXPECT_THAT(refused.findings[0].text, HasSubstr("Operation failed"));
@@ -270,7 +271,7 @@ TEST_F(Models, MoreWordsThanTheModelAllowsAreFoundPerMode) {
   EXPECT_THAT(request("nta5000", rtu("01 03 03 00 00 25")).findings, IsEmpty());  // 37
   EXPECT_THAT(kinds(request("nta5000", rtu("01 03 03 00 00 26"))),
               ElementsAre(RuleKind::too_many_words));  // 38
-  const auto read18 = hex("01 03 03 00 00 12 00");      // ASCII: 17 allowed
+  const auto read18 = hex("01 03 03 00 00 12 00");     // ASCII: 17 allowed
   EXPECT_THAT(kinds(request("nta5000", read18, Mode::ascii)),
               ElementsAre(RuleKind::too_many_words));
   EXPECT_THAT(request("nta5000", hex("01 03 03 00 00 11 00"), Mode::ascii).findings, IsEmpty());
@@ -302,8 +303,7 @@ TEST_F(Models, StationsOutsideTheModelsRangeAreFound) {
 }
 
 TEST_F(Models, ValuesOutsideRangeOrEnumAreFound) {
-  EXPECT_THAT(kinds(request("gd20", rtu("01 06 20 00 00 09"))),
-              ElementsAre(RuleKind::not_in_enum));
+  EXPECT_THAT(kinds(request("gd20", rtu("01 06 20 00 00 09"))), ElementsAre(RuleKind::not_in_enum));
   EXPECT_THAT(kinds(request("gd20", rtu("01 06 20 04 0B B9"))),  // 300.1 %
               ElementsAre(RuleKind::out_of_range));
   const Meaning negative = request("gd20", rtu("01 06 20 04 F4 48"));  // -300.0 %, signed

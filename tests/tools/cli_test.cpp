@@ -79,7 +79,8 @@ std::string raw_capture(const std::string& name, const std::vector<std::vector<u
     const uint16_t crc = modtap::decoder::crc16(body);
     body.push_back(static_cast<uint8_t>(crc & 0xFF));
     body.push_back(static_cast<uint8_t>(crc >> 8));
-    out.write(reinterpret_cast<const char*>(body.data()), static_cast<std::streamsize>(body.size()));
+    out.write(reinterpret_cast<const char*>(body.data()),
+              static_cast<std::streamsize>(body.size()));
   }
   return path.string();
 }
@@ -99,16 +100,17 @@ TEST(Cli, ModelsCheckReportsTheFileAndLine) {
   EXPECT_NE(bad.status, 0);
   ASSERT_EQ(bad.lines.size(), 1u);
   EXPECT_EQ(bad.lines[0], path.string() + ":3: expected text");
-  const Outcome good = run(std::string("models check ") + MODTAP_SOURCE + "/plugins/models/gd20.yaml");
+  const Outcome good =
+      run(std::string("models check ") + MODTAP_SOURCE + "/plugins/models/gd20.yaml");
   EXPECT_EQ(good.status, 0);
 }
 
 TEST(Cli, JsonCarriesRegistersOfTheSlavesModel) {
-  const std::string capture = raw_capture("modtap-models.raw",
-                                          {{0x01, 0x06, 0x25, 0x02, 0x17, 0x70},
-                                           {0x01, 0x06, 0x25, 0x02, 0x17, 0x70},
-                                           {0x02, 0x06, 0x25, 0x02, 0x17, 0x70},
-                                           {0x02, 0x06, 0x25, 0x02, 0x17, 0x70}});
+  const std::string capture =
+      raw_capture("modtap-models.raw", {{0x01, 0x06, 0x25, 0x02, 0x17, 0x70},
+                                        {0x01, 0x06, 0x25, 0x02, 0x17, 0x70},
+                                        {0x02, 0x06, 0x25, 0x02, 0x17, 0x70},
+                                        {0x02, 0x06, 0x25, 0x02, 0x17, 0x70}});
   const Outcome r = run("-r " + capture + " --format raw --mode rtu --model 1=nta5000 -T json");
   ASSERT_EQ(r.status, 0);
   ASSERT_EQ(r.lines.size(), 4u);
@@ -124,9 +126,10 @@ TEST(Cli, JsonCarriesRegistersOfTheSlavesModel) {
 }
 
 TEST(Cli, TextHighlightsRuleFindingsAndIdentifiesGd20) {
-  const std::string capture = raw_capture("modtap-gd20.raw", {{0x03, 0x03, 0x21, 0x03, 0x00, 0x01},
-                                                              {0x03, 0x03, 0x02, 0x01, 0x06},
-                                                              {0x03, 0x03, 0x80, 0x07, 0x00, 0x01}});
+  const std::string capture =
+      raw_capture("modtap-gd20.raw", {{0x03, 0x03, 0x21, 0x03, 0x00, 0x01},
+                                      {0x03, 0x03, 0x02, 0x01, 0x06},
+                                      {0x03, 0x03, 0x80, 0x07, 0x00, 0x01}});
   const Outcome r = run("-r " + capture + " --format raw --mode rtu");
   ASSERT_EQ(r.status, 0);
   ASSERT_GE(r.lines.size(), 3u);
@@ -138,16 +141,17 @@ TEST(Cli, TextHighlightsRuleFindingsAndIdentifiesGd20) {
 TEST(Cli, ModelsDirAddsTheUsersModels) {
   const auto dir = std::filesystem::temp_directory_path() / "modtap-user-models";
   std::filesystem::create_directories(dir);
-  std::ofstream(dir / "pump.yaml") << "model: pump\nextends: gd20\nregisters:\n"
-                                      "  - {address: 0x3000, name: pump_speed, scale: 0.1, unit: rpm}\n";
-  const std::string capture = raw_capture("modtap-pump.raw", {{0x07, 0x03, 0x30, 0x00, 0x00, 0x01},
-                                                              {0x07, 0x03, 0x02, 0x00, 0x64}});
+  std::ofstream(dir / "pump.yaml")
+      << "model: pump\nextends: gd20\nregisters:\n"
+         "  - {address: 0x3000, name: pump_speed, scale: 0.1, unit: rpm}\n";
+  const std::string capture = raw_capture(
+      "modtap-pump.raw", {{0x07, 0x03, 0x30, 0x00, 0x00, 0x01}, {0x07, 0x03, 0x02, 0x00, 0x64}});
   const Outcome listed = run("models --models-dir " + dir.string());
   ASSERT_EQ(listed.status, 0);
   ASSERT_EQ(listed.lines.size(), 6u);
   EXPECT_EQ(listed.lines[5].rfind("pump ", 0), 0u) << listed.lines[5];
-  const Outcome r =
-      run("-r " + capture + " --format raw --mode rtu --models-dir " + dir.string() + " --model 7=pump");
+  const Outcome r = run("-r " + capture + " --format raw --mode rtu --models-dir " + dir.string() +
+                        " --model 7=pump");
   ASSERT_EQ(r.status, 0);
   ASSERT_EQ(r.lines.size(), 2u);
   EXPECT_NE(r.lines[1].find("| pump_speed=10.0 rpm"), std::string::npos) << r.lines[1];

@@ -4,7 +4,8 @@
 For simulated scenarios and the real sigrok captures, modtap writes JSON Lines and a pcapng
 (DLT_USER0); tshark reads the pcapng with plugins/wireshark/modtap.lua and must show, frame
 by frame, the same roles, check verdicts, slaves, function codes, exception codes, request
-pairs and register values. The exported-PDU pcapng must decode with no plugin at all, with
+pairs and register values, and with a device model the same register addresses and names. The
+exported-PDU pcapng must decode with no plugin at all, with
 every frame mbrtu can take classified as a query or a response.
 
 Usage: tshark_agreement.py MODTAP BUSGEN LUA SAMPLES_DIR WORK_DIR
@@ -18,7 +19,8 @@ MODTAP, BUSGEN, LUA, SAMPLES, WORK = sys.argv[1:6]
 TSHARK = "tshark"
 FIELDS = ["frame.number", "modtap.role", "modtap.check", "modtap.request", "mbrtu.unit_id",
           "modbus.func_code", "modbus.exception_code", "modbus.request_frame",
-          "mbrtu.crc16.status", "modbus.regval_uint16"]
+          "mbrtu.crc16.status", "modbus.regval_uint16", "modtap.model", "modtap.register.addr",
+          "modtap.register.name"]
 failures = []
 
 
@@ -45,6 +47,8 @@ def tshark_rows(pcapng, lua=True):
     for line in run(args).splitlines():
         values = line.split("|")
         rows[int(values[0])] = dict(zip(FIELDS, values))
+        if len(values) != len(FIELDS):
+            raise SystemExit(f"tshark row has {len(values)} fields: {line}")
     return rows
 
 
@@ -69,6 +73,14 @@ def compare(name, capture, extra):
         if r["type"] == "noise":
             continue
         where = f"frame {r['index']}"
+        if "model" in r:
+            check(name, row["modtap.model"] == r["model"], f"{where}: model {row['modtap.model']!r}")
+            addrs = [int(a, 16) for a in row["modtap.register.addr"].split(",") if a]
+            names = [n for n in row["modtap.register.name"].split(",") if n]
+            theirs = list(zip(addrs, names))
+            ours = [(reg["addr"], reg["name"] or "-") for reg in r["registers"]]
+            check(name, len(addrs) == len(names) and theirs == ours,
+                  f"{where}: registers {theirs[:4]} != {ours[:4]}")
         check(name, row["modtap.role"] == r["role"], f"{where}: role {row['modtap.role']} != {r['role']}")
         check(name, row["modtap.check"] == r["check"], f"{where}: check {row['modtap.check']} != {r['check']}")
         if r["request"] is not None:
@@ -122,6 +134,7 @@ scenarios = [
     ("frames", simulated("frames", ["-n", "3000", "--seed", "21"], "frames"), []),
     ("sniffer", simulated("sniffer", ["-n", "3000", "--seed", "22"], "sniffer"), []),
     ("bursts", simulated("bursts", ["-n", "3000", "--seed", "23"], "bursts"), []),
+    ("gd20", simulated("gd20", ["-n", "3000", "--seed", "24"], "frames"), ["--model", "gd20"]),
     ("brainchild", os.path.join(SAMPLES, "brainchild-io-16do.sr"),
      ["--baud", "19200", "--parity", "even", "--sigrok-channels", "tx=1,rx=0", "--sigrok-invert"]),
     ("flowmeter", os.path.join(SAMPLES, "flowmeter_target_15liter_per_min.sr"),

@@ -117,8 +117,9 @@ class Sinks {
       : catalog_(load_models(o)),
         interpreter_(catalog_.all(), catalog_.choose(o.models), fan_out_),
         terminal_(make_sink(o, out, channels)),
-        // Only text and JSON show what the models say; the other outputs skip the work.
-        interpret_(o.output == "text" || o.output == "json") {
+        // Only text, JSON and pcapng comments show what the models say; others skip the work.
+        interpret_(o.output == "text" || o.output == "json" ||
+                   (!o.write_file.empty() && o.link != "bare")) {
     fan_out_.add(*terminal_);
     if (o.write_file.empty()) return;
     captures::PcapngOptions options;

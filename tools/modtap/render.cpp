@@ -123,20 +123,6 @@ void append_number(fmt::memory_buffer& out, const decoder::RegisterValue& reg) {
 
 }  // namespace
 
-void append_register_text(fmt::memory_buffer& out, const decoder::RegisterValue& reg) {
-  if (!reg.text.empty() && reg.unit.empty()) {
-    fmt::format_to(std::back_inserter(out), "{} ({})", reg.text, reg.raw);
-    return;
-  }
-  if (!std::isfinite(reg.value)) {
-    fmt::format_to(std::back_inserter(out), "{}", reg.value);
-  } else {
-    append_number(out, reg);
-  }
-  if (!reg.unit.empty()) fmt::format_to(std::back_inserter(out), " {}", reg.unit);
-  if (!reg.text.empty()) fmt::format_to(std::back_inserter(out), " ({})", reg.text);
-}
-
 void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue& reg) {
   auto optional_string = [&](const std::string& text) {
     if (text.empty()) {

@@ -18,8 +18,6 @@ void append_json_string(fmt::memory_buffer& out, std::string_view text);
 void append_json_value(fmt::memory_buffer& out, const decoder::Field& field);
 void append_text_value(fmt::memory_buffer& out, const decoder::Field& field, size_t max_items);
 
-// A register's value as people read it: "60.00 Hz", "Forward running (1)", "Run, Reverse".
-void append_register_text(fmt::memory_buffer& out, const decoder::RegisterValue& reg);
 // The same as a JSON object: {"addr", "name", "raw", "value", "unit", "text"}.
 void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue& reg);
 

@@ -106,7 +106,7 @@ void TextSink::registers_line(const Meaning& meaning) {
       break;
     }
     out_.print("{}{}=", shown == 1 ? "  | " : " ", reg.name);
-    append_register_text(buf, reg);
+    append_value_text(buf, reg);
   }
   for (const RuleFinding& finding : meaning.findings) out_.print("  !! {}", finding.text);
 }
@@ -118,7 +118,7 @@ void TextSink::registers_tree(const Meaning& meaning) {
     out_.print("      {:04X}H {}", reg.address, reg.name.empty() ? "(unknown)" : reg.name);
     if (!reg.label.empty()) out_.print(" \"{}\"", reg.label);
     out_.print(" = 0x{:04X} -> ", reg.raw);
-    append_register_text(buf, reg);
+    append_value_text(buf, reg);
     out_.print("\n");
   }
   for (const RuleFinding& finding : meaning.findings)
