@@ -4,6 +4,8 @@
 #include <linux/serial.h>
 #include <sys/file.h>
 #include <sys/ioctl.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -96,9 +98,23 @@ void SerialPort::configure(const decoder::SerialFormat& f) {
   if (f.stop_bits == 2) tio.c_cflag |= CSTOPB;
   tio.c_cc[VMIN] = 0;
   tio.c_cc[VTIME] = 0;
-  if (tcsetattr(fd_, TCSANOW, &tio) != 0)
+  if (tcsetattr(fd_, TCSANOW, &tio) != 0 && !(errno == EINVAL && is_pty() && set_pty(tio)))
     throw CaptureError(
         fmt::format("{}: cannot set {} baud: {}", path_, f.baud, std::strerror(errno)));
+}
+
+// A pseudo-terminal (UNIX98 slaves have majors 136-143) has no wire: no parity bit and no
+// 7-bit characters. Linux refuses some such settings on one with EINVAL; the bytes are the
+// same without them, and the baud still sets modtap's timing.
+bool SerialPort::is_pty() const {
+  struct stat st {};
+  return fstat(fd_, &st) == 0 && major(st.st_rdev) >= 136 && major(st.st_rdev) <= 143;
+}
+
+bool SerialPort::set_pty(termios tio) {
+  tio.c_cflag &= ~static_cast<tcflag_t>(CSIZE | PARENB | PARODD);
+  tio.c_cflag |= CS8;
+  return tcsetattr(fd_, TCSANOW, &tio) == 0;
 }
 
 // USB adapters hold bytes back to fill a packet; ask for them as soon as they come.

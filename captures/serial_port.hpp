@@ -2,6 +2,8 @@
 // modtap never writes to it and never sets RTS or DTR itself.
 #pragma once
 
+#include <termios.h>
+
 #include <cstdint>
 #include <span>
 #include <string>
@@ -27,6 +29,8 @@ class SerialPort {
 
  private:
   void configure(const decoder::SerialFormat& format);
+  bool is_pty() const;
+  bool set_pty(termios tio);
   void lower_latency();
 
   std::string path_;

@@ -82,13 +82,18 @@ def char_seconds(baud, data_bits, parity, stop_bits):
     return (1 + data_bits + (0 if parity == "none" else 1) + stop_bits) / baud
 
 
-def run_case(name, baud, parity, data_bits, mode, start_slave, run_master):
+def run_case(name, baud, parity, data_bits, mode, start_slave, run_master, settings=None):
+    """`settings` replaces modtap's --baud/--parity arguments (to test --baud auto)."""
     global passed
     m, s, t = Pty(), Pty(), Pty()
     relay = Relay(m, s, t, char_seconds(baud, data_bits, parity, 1))
     relay.start()
-    modtap = subprocess.Popen([MODTAP, "-i", t.path, "--baud", str(baud), "--parity", parity,
-                               "--data-bits", str(data_bits), "--mode", mode, "-T", "json"],
+    settings = settings or ["--baud", str(baud), "--parity", parity]
+    # Every case keeps its raw reads, alternately as pcapng and as a timed hex log.
+    raw_path = os.path.join(WORK, f"case{run_case.count}.{'pcapng' if run_case.count % 2 else 'log'}")
+    run_case.count += 1
+    modtap = subprocess.Popen([MODTAP, "-i", t.path, "--data-bits", str(data_bits), "--mode", mode,
+                               "-T", "json", "--save-raw", raw_path] + settings,
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     slave = start_slave(s.path)
     time.sleep(0.5)
@@ -125,9 +130,21 @@ def run_case(name, baud, parity, data_bits, mode, start_slave, run_master):
         else:
             ok &= check(name, f["request"] == last_request, f"frame {f['index']} paired with {f['request']}")
     ok &= check(name, not relay.tap_wrote, f"modtap wrote {len(relay.tap_wrote)} bytes to the tap")
+    # Read again from the raw recording, modtap must find the same frames.
+    again = subprocess.run([MODTAP, "-r", raw_path, "--baud", str(baud), "--parity", parity,
+                            "--data-bits", str(data_bits), "--mode", mode, "-T", "json"],
+                           capture_output=True, text=True)
+    reread = [json.loads(line) for line in again.stdout.splitlines()]
+    ok &= check(name, [f["raw"] for f in reread if f["type"] == "frame"] == [f["raw"] for f in frames],
+                f"{raw_path} read again gives other frames: {again.stderr}")
+    if "auto" in settings:
+        ok &= check(name, "modtap: using " in err and "listened as" in err, f"no evidence: {err}")
     passed += ok
     print(f"{name}: {len(requests)} requests, {len(responses)} responses, "
           f"{sum(len(v) for v in relay.sent.values())} bytes: {'ok' if ok else 'FAILED'}")
+
+
+run_case.count = 0
 
 
 def libmodbus_slave(baud, parity):
@@ -265,10 +282,16 @@ run_case("pymodbus -> pymodbus, ASCII 115200 8N1", 115200, "none", 8, "auto",
          pymodbus_slave(115200, "ascii"), pymodbus_master(115200, "none", 8, "ascii"))
 run_case("pymodbus -> libmodbus, RTU 115200 8N1, mode auto", 115200, "none", 8, "auto",
          libmodbus_slave(115200, "none"), pymodbus_master(115200, "none", 8, "rtu"))
+# A pty has no baud rate, so every setting reads it cleanly and the first candidate wins; what
+# this shows is that probing never transmits, reports its evidence and loses no byte of the
+# setting it keeps.
+run_case("mbpoll -> libmodbus, --baud auto", 19200, "even", 8, "rtu",
+         libmodbus_slave(19200, "even"), mbpoll_master(19200, "even"),
+         ["--baud", "auto", "--probe-time", "3"])
 error_cases()
 junk_and_clean_exit()
 for f in failures:
     print("FAIL", f)
-cases = 9
+cases = 10
 print(f"{passed} passed, {cases - passed} failed")
 sys.exit(1 if failures else 0)

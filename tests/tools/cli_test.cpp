@@ -85,6 +85,65 @@ std::string raw_capture(const std::string& name, const std::vector<std::vector<u
   return path.string();
 }
 
+const std::string brainchild_lines = std::string("-r ") + MODTAP_SAMPLES +
+                                     "/brainchild-io-16do.sr --sigrok-channels tx=1,rx=0 "
+                                     "--sigrok-invert";
+
+TEST(Cli, AWrongBaudGivesNoiseAndAHintNotACrash) {
+  const Outcome r = run(brainchild_lines + " --baud 9600 --parity even");
+  ASSERT_EQ(r.status, 0);
+  size_t noise = 0;
+  for (const auto& line : r.lines) noise += line.find(" noise ") != std::string::npos;
+  EXPECT_GT(noise, 5u);
+  EXPECT_EQ(r.lines.back().rfind("modtap: hint: only 9% of 119 bytes formed frames with a good "
+                                 "check; are 9600 8E1 the line's settings? try --baud auto",
+                                 0),
+            0u)
+      << r.lines.back();
+}
+
+TEST(Cli, BaudAutoFindsTheLinesSettingsAndShowsItsEvidence) {
+  const Outcome r = run(brainchild_lines + " --baud auto --parity auto -T stats");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_GE(r.lines.size(), 3u);
+  EXPECT_EQ(r.lines[0], "modtap: settings tried on the capture's start:");
+  EXPECT_EQ(r.lines[1], "  * 19200 8E1: 30 of 30 frames good, 100% of 235 bytes");
+  bool all_good = false;
+  for (const auto& line : r.lines) all_good |= line == "  bad checks    0";
+  EXPECT_TRUE(all_good);
+}
+
+TEST(Cli, BaudAutoOnAnUntimedFileSaysItCannotTell) {
+  const std::string capture =
+      raw_capture("modtap-untimed.raw", {{0x01, 0x03, 0x00, 0x00, 0x00, 0x01}});
+  const Outcome r = run("-r " + capture + " --format raw --baud auto -T none");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_EQ(r.lines.size(), 1u);
+  EXPECT_NE(
+      r.lines[0].find("has no timing, so every baud and parity read it alike; using 19200 8E1"),
+      std::string::npos)
+      << r.lines[0];
+}
+
+TEST(Cli, SaveRawKeepsTheReadsToReadAgain) {
+  const auto saved = std::filesystem::temp_directory_path() / "modtap-raw.pcapng";
+  const Outcome first =
+      run(brainchild_lines + " --baud 19200 -T json --save-raw " + saved.string());
+  ASSERT_EQ(first.status, 0);
+  const Outcome again = run("-r " + saved.string() + " --baud 19200 --mode rtu -T json");
+  ASSERT_EQ(again.status, 0);
+  auto raws = [](const Outcome& o) {
+    std::vector<std::string> out;
+    for (const auto& line : o.lines) {
+      const auto at = line.find("\"raw\":\"");
+      if (at != std::string::npos) out.push_back(line.substr(at, line.find('"', at + 7) - at));
+    }
+    return out;
+  };
+  EXPECT_EQ(raws(again), raws(first));
+  EXPECT_EQ(raws(first).size(), 30u);
+}
+
 TEST(Cli, ModelsListsTheBuiltInModels) {
   const Outcome r = run("models");
   ASSERT_EQ(r.status, 0);

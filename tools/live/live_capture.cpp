@@ -13,6 +13,7 @@
 
 #include "captures/chunk_source.hpp"
 #include "captures/serial_port.hpp"
+#include "decoder/format_probe.hpp"
 
 namespace modtap::live {
 namespace {
@@ -25,10 +26,17 @@ void on_signal(int) {
   stop_requested = true;
 }
 
-int64_t now_ns() {
+int64_t clock_ns(clockid_t clock) {
   timespec ts{};
-  clock_gettime(CLOCK_REALTIME, &ts);
+  clock_gettime(clock, &ts);
   return static_cast<int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+// Wall-clock time that never jumps: the real-time clock read once, then advanced by the
+// monotonic clock, so an NTP step cannot fold or stretch the gaps that delimit frames.
+int64_t now_ns() {
+  static const int64_t offset = clock_ns(CLOCK_REALTIME) - clock_ns(CLOCK_MONOTONIC);
+  return clock_ns(CLOCK_MONOTONIC) + offset;
 }
 
 // Counts what went by, for the status line.
@@ -71,6 +79,61 @@ PortSpec parse_port(const std::string& spec) {
   return p;
 }
 
+ProbeResult probe_ports(const std::vector<PortSpec>& specs, const LiveOptions& options,
+                        std::optional<uint32_t> baud, std::optional<decoder::Parity> parity,
+                        int64_t window_ns, const std::atomic<bool>& stop) {
+  const auto& base = options.analyzer.format;
+  std::vector<decoder::FormatTrial> trials;
+  std::vector<std::vector<ReadBytes>> reads;
+  std::vector<decoder::ChannelInfo> channels;
+  for (const auto& spec : specs) channels.push_back({spec.name, spec.role});
+  for (const auto& format :
+       decoder::candidate_formats(baud, parity, base.data_bits, base.stop_bits)) {
+    if (stop) break;
+    std::vector<std::unique_ptr<SerialPort>> ports;
+    for (const auto& spec : specs) ports.push_back(std::make_unique<SerialPort>(spec.path, format));
+    decoder::AnalyzerOptions analyzer = options.analyzer;
+    analyzer.format = format;
+    analyzer.clock = decoder::ClockQuality::per_chunk;
+    const int64_t end = now_ns() + window_ns;
+    std::vector<uint8_t> buffer(4096);
+    size_t turn = 0;
+    std::vector<ReadBytes>& kept = reads.emplace_back();
+    auto next = [&](decoder::Chunk& chunk) {
+      while (!stop && now_ns() < end) {
+        std::vector<pollfd> fds;
+        for (const auto& p : ports) fds.push_back({p->fd(), POLLIN, 0});
+        poll(fds.data(), fds.size(), 50);
+        for (size_t k = 0; k < ports.size(); ++k) {
+          const size_t i = (turn + k) % ports.size();
+          if (!(fds[i].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+          const size_t n = ports[i]->read(buffer);
+          if (!n) continue;
+          turn = i + 1;
+          kept.push_back(
+              {static_cast<uint16_t>(i), now_ns(), {buffer.begin(), buffer.begin() + n}});
+          chunk = {kept.back().channel, kept.back().t_ns, kept.back().bytes};
+          return true;
+        }
+      }
+      return false;
+    };
+    trials.push_back(decoder::try_format(analyzer, channels, next, 64 * 1024));
+    fmt::print(stderr, "modtap: listened as {}\n", decoder::describe(trials.back()));
+    const auto& t = trials.back();
+    if (t.good_frames >= 4 && t.good_frame_bytes * 10 >= t.bytes * 9) break;
+  }
+  if (trials.empty()) return {base, {}};
+  const auto& best = decoder::best_trial(trials);
+  if (best.good_frames == 0) {
+    fmt::print(stderr, "modtap: no setting gave a frame with a good check; using {}\n",
+               decoder::describe(base));
+    return {base, {}};
+  }
+  fmt::print(stderr, "modtap: using {}\n", decoder::describe(best.format));
+  return {best.format, std::move(reads[static_cast<size_t>(&best - trials.data())])};
+}
+
 const std::atomic<bool>& stop_on_signals() {
   struct sigaction action {};
   action.sa_handler = on_signal;
@@ -98,6 +161,11 @@ int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options,
   // Wake often enough to print a frame within t3.5 plus a few milliseconds of its end.
   const int wake_ms =
       static_cast<int>(std::max<int64_t>(1, analyzer_options.format.t35_ns() / 1'000'000));
+  auto take = [&](const decoder::Chunk& chunk) {
+    if (options.on_read) options.on_read(chunk);
+    bus.push(chunk);
+  };
+  for (const auto& read : options.replay) take({read.channel, read.t_ns, read.bytes});
   std::vector<uint8_t> buffer(4096);
   int status = 0;
   int64_t last_status = 0;
@@ -110,7 +178,7 @@ int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options,
       for (size_t i = 0; i < ports.size(); ++i) {
         if (!(fds[i].revents & (POLLIN | POLLHUP | POLLERR))) continue;
         const size_t n = ports[i]->read(buffer);
-        if (n) bus.push({static_cast<uint16_t>(i), now_ns(), {buffer.data(), n}});
+        if (n) take({static_cast<uint16_t>(i), now_ns(), {buffer.data(), n}});
       }
     } catch (const captures::CaptureError& e) {
       fmt::print(stderr, "modtap: {}\n", e.what());

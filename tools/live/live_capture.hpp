@@ -4,6 +4,8 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,17 +22,38 @@ struct PortSpec {
 // Parses "PATH" or "master=PATH" / "slave=PATH"; throws std::invalid_argument.
 PortSpec parse_port(const std::string& spec);
 
+// Bytes read before the capture proper (while probing settings), to be analysed first.
+struct ReadBytes {
+  uint16_t channel = 0;
+  int64_t t_ns = 0;
+  std::vector<uint8_t> bytes;
+};
+
 struct LiveOptions {
   decoder::AnalyzerOptions analyzer;  // its clock is set to per_chunk
   bool reconnect = false;             // wait for an unplugged port instead of ending
   bool status_line = false;           // a rate/frames/errors line on stderr, once a second
   bool announce = true;               // say on stderr what is being listened to
+  std::vector<ReadBytes> replay;      // analysed before the first read
+  std::function<void(const decoder::Chunk&)> on_read;  // every read, as read (--save-raw)
 };
 
 // Runs until `stop` is set (a signal) or a port disappears without --reconnect; then
 // finishes the analyzer so every sink can close its files. Returns the exit status.
 int run_live(const std::vector<PortSpec>& ports, const LiveOptions& options,
              decoder::RecordSink& sink, const std::atomic<bool>& stop);
+
+struct ProbeResult {
+  decoder::SerialFormat format;
+  std::vector<ReadBytes> read;  // what was read under that format, so no byte is lost
+};
+
+// --baud auto on live ports: listens under each candidate format in turn (never transmitting)
+// for up to `window_ns`, and returns the one under which the most bytes formed good frames.
+// Says on stderr what it tried. A fixed baud or parity narrows the search.
+ProbeResult probe_ports(const std::vector<PortSpec>& ports, const LiveOptions& options,
+                        std::optional<uint32_t> baud, std::optional<decoder::Parity> parity,
+                        int64_t window_ns, const std::atomic<bool>& stop);
 
 // Installs SIGINT and SIGTERM handlers that set the returned flag.
 const std::atomic<bool>& stop_on_signals();

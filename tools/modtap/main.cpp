@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,8 +13,11 @@
 
 #include "captures/open_capture.hpp"
 #include "captures/pcapng_sink.hpp"
+#include "captures/raw_recorder.hpp"
 #include "decoder/analyzer.hpp"
+#include "decoder/format_probe.hpp"
 #include "tools/live/live_capture.hpp"
+#include "tools/modtap/auto_format.hpp"
 #include "tools/modtap/json_sink.hpp"
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/output.hpp"
@@ -32,7 +36,7 @@ struct Options {
   std::string mode = "auto";
   std::string output = "text";
   bool verbose = false;
-  uint32_t baud = 19200;
+  std::string baud = "19200";  // or "auto"
   std::string parity = "even";
   unsigned stop_bits = 1;
   unsigned data_bits = 8;
@@ -46,6 +50,8 @@ struct Options {
   int dlt = 147;
   std::vector<std::string> models;
   std::string models_dir;
+  double probe_s = 2.0;
+  std::string save_raw;
 };
 
 // Hands every record to each of several sinks (the terminal and a pcapng file, say).
@@ -66,10 +72,22 @@ class FanOut final : public decoder::RecordSink {
   std::vector<decoder::RecordSink*> sinks_;
 };
 
+std::optional<uint32_t> fixed_baud(const Options& o) {
+  if (o.baud == "auto") return std::nullopt;
+  return static_cast<uint32_t>(std::stoul(o.baud));
+}
+
+std::optional<decoder::Parity> fixed_parity(const Options& o);
+
 decoder::Parity parse_parity(const std::string& s) {
   if (s == "none") return decoder::Parity::none;
   if (s == "odd") return decoder::Parity::odd;
   return decoder::Parity::even;
+}
+
+std::optional<decoder::Parity> fixed_parity(const Options& o) {
+  if (o.parity == "auto") return std::nullopt;
+  return parse_parity(o.parity);
 }
 
 decoder::ModeChoice parse_mode(const std::string& s) {
@@ -87,7 +105,7 @@ std::unique_ptr<decoder::RecordSink> make_sink(const Options& o, tools::Output& 
 }
 
 decoder::SerialFormat serial_format(const Options& o) {
-  return {o.baud, static_cast<uint8_t>(o.data_bits), parse_parity(o.parity),
+  return {fixed_baud(o).value_or(19200), static_cast<uint8_t>(o.data_bits), parse_parity(o.parity),
           static_cast<uint8_t>(o.stop_bits)};
 }
 
@@ -156,6 +174,28 @@ void print_summary(const Options& o, tools::Output& out, Sinks& sinks) {
   print_stats(out, static_cast<tools::StatsSink&>(sinks.terminal()).stats());
 }
 
+std::unique_ptr<captures::RawRecorder> raw_recorder(
+    const Options& o, const std::vector<decoder::ChannelInfo>& channels,
+    const decoder::SerialFormat& format) {
+  if (o.save_raw.empty()) return nullptr;
+  return std::make_unique<captures::RawRecorder>(o.save_raw, channels, format.char_time_ns());
+}
+
+// After a run whose traffic made little sense, or came faster than the baud allows, say so.
+void hint_settings(const Options& o, const decoder::LineHealth& health,
+                   const decoder::ChunkPace& pace) {
+  if (pace.too_fast())
+    fmt::print(stderr,
+               "modtap: hint: bytes arrive faster than {} baud allows ({} of {} reads); "
+               "the line is faster: try --baud auto\n",
+               decoder::describe(serial_format(o)), pace.fast_reads, pace.reads);
+  else if (health.looks_wrong())
+    fmt::print(stderr,
+               "modtap: hint: only {:.0f}% of {} bytes formed frames with a good check; are {} "
+               "the line's settings? try --baud auto\n",
+               100 * health.good_share(), health.bytes, decoder::describe(serial_format(o)));
+}
+
 int read_file(const Options& o) {
   captures::OpenOptions open;
   open.format = captures::parse_format(o.format);
@@ -163,15 +203,29 @@ int read_file(const Options& o) {
   if (!o.sigrok_channels.empty())
     open.sigrok.lines = captures::parse_sigrok_channels(o.sigrok_channels);
   open.sigrok.invert = o.sigrok_invert;
+  if (o.baud == "auto" || o.parity == "auto")
+    open.serial = tools::choose_file_format(o.read_file, open, analyzer_options(o, {}),
+                                            fixed_baud(o), fixed_parity(o));
   auto source = captures::open_capture(o.read_file, open);
 
   tools::Output out(stdout);
   Sinks sinks(o, out, source->channels());
-  decoder::Analyzer bus(analyzer_options(o, source->clock()), source->channels(), sinks.all());
+  decoder::LineHealth health(&sinks.all());
+  decoder::AnalyzerOptions options = analyzer_options(o, source->clock());
+  options.format = open.serial;
+  decoder::Analyzer bus(options, source->channels(), health);
+  decoder::ChunkPace pace(open.serial);
+  auto raw = raw_recorder(o, source->channels(), open.serial);
   decoder::Chunk chunk;
-  while (source->next(chunk)) bus.push(chunk);
+  while (source->next(chunk)) {
+    if (source->clock() == decoder::ClockQuality::per_chunk) pace.add(chunk);
+    if (raw) raw->write(chunk);
+    bus.push(chunk);
+  }
   bus.finish();
   print_summary(o, out, sinks);
+  out.flush();
+  hint_settings(o, health, pace);
   return 0;
 }
 
@@ -188,6 +242,14 @@ int listen(const Options& o) {
   Sinks sinks(o, out, channels);
   live::LiveOptions options;
   options.analyzer = analyzer_options(o, decoder::ClockQuality::per_chunk);
+  if (o.baud == "auto" || o.parity == "auto") {
+    auto probed = live::probe_ports(ports, options, fixed_baud(o), fixed_parity(o),
+                                    static_cast<int64_t>(o.probe_s * 1e9), stop);
+    options.analyzer.format = probed.format;
+    options.replay = std::move(probed.read);  // the winning setting's bytes are analysed too
+  }
+  auto raw = raw_recorder(o, channels, options.analyzer.format);
+  if (raw) options.on_read = [&](const decoder::Chunk& chunk) { raw->write(chunk); };
   options.reconnect = o.reconnect;
   options.status_line = isatty(STDERR_FILENO) && o.output != "text";
   const int status = live::run_live(ports, options, sinks.all(), stop);
@@ -215,13 +277,21 @@ int main(int argc, char** argv) {
                                 "or none with -w)")
                      ->check(CLI::IsMember({"text", "json", "stats", "none"}));
   app.add_option("-w,--write", o.write_file, "Write every frame and noise record as pcapng");
+  app.add_option("--save-raw", o.save_raw,
+                 "Keep every read as it came, with its time, to read again with other settings: "
+                 "FILE.pcapng, or a timed hex log for any other name");
   app.add_option("--link", o.link, "pcapng link: user (DLT_USER + modtap.lua), exported-pdu, bare")
       ->check(CLI::IsMember({"user", "exported-pdu", "bare"}));
   app.add_option("--dlt", o.dlt, "DLT_USER link type for --link user or bare")
       ->check(CLI::Range(147, 162));
   app.add_flag("-V,--verbose", o.verbose, "Print each frame's field tree");
-  app.add_option("--baud", o.baud, "Baud rate")->check(CLI::Range(50u, 4'000'000u));
-  app.add_option("--parity", o.parity, "Parity")->check(CLI::IsMember({"none", "even", "odd"}));
+  app.add_option("--baud", o.baud, "Baud rate, or auto to tell it from the traffic")
+      ->check(CLI::IsMember({"auto"}) | CLI::Range(50u, 4'000'000u));
+  app.add_option("--probe-time", o.probe_s,
+                 "With --baud auto on a port: seconds to listen under each setting")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--parity", o.parity, "Parity: none, even, odd, or auto")
+      ->check(CLI::IsMember({"none", "even", "odd", "auto"}));
   app.add_option("--stop-bits", o.stop_bits, "Stop bits")->check(CLI::IsMember({1u, 2u}));
   app.add_option("--data-bits", o.data_bits, "Data bits")->check(CLI::IsMember({7u, 8u}));
   app.add_option("--timeout", o.timeout_s, "Seconds of silence before a request times out")

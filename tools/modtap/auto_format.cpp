@@ -1,0 +1,82 @@
+#include "tools/modtap/auto_format.hpp"
+
+#include <fmt/format.h>
+
+#include "decoder/format_probe.hpp"
+
+namespace modtap::tools {
+
+using namespace decoder;
+
+namespace {
+
+constexpr uint64_t probe_bytes = 256 * 1024;  // enough traffic to judge, little enough to be quick
+
+FormatTrial trial(const std::string& path, captures::OpenOptions open, AnalyzerOptions analyzer,
+                  const SerialFormat& format) {
+  open.serial = format;
+  auto source = captures::open_capture(path, open);
+  analyzer.format = format;
+  analyzer.clock = source->clock();
+  return try_format(
+      analyzer, source->channels(), [&](Chunk& chunk) { return source->next(chunk); }, probe_bytes);
+}
+
+void report(const std::vector<FormatTrial>& trials, const FormatTrial& best) {
+  fmt::print(stderr, "modtap: settings tried on the capture's start:\n");
+  for (const auto& t : trials)
+    fmt::print(stderr, "  {}{}\n", &t == &best ? "* " : "  ", describe(t));
+}
+
+}  // namespace
+
+SerialFormat choose_file_format(const std::string& path, captures::OpenOptions open,
+                                AnalyzerOptions analyzer, std::optional<uint32_t> baud,
+                                std::optional<Parity> parity) {
+  const SerialFormat fallback{baud.value_or(19200), open.serial.data_bits,
+                              parity.value_or(Parity::even), open.serial.stop_bits};
+  const ClockQuality clock = captures::open_capture(path, open)->clock();
+  if (clock == ClockQuality::none) {
+    fmt::print(stderr,
+               "modtap: {} has no timing, so every baud and parity read it alike; using {}\n", path,
+               describe(fallback));
+    return fallback;
+  }
+  // A logic-analyzer capture is decoded into bytes per format: every candidate matters. Bytes
+  // timed per read only move the t3.5 gaps, so parity cannot be told from them.
+  const auto candidates =
+      candidate_formats(baud, clock == ClockQuality::per_byte ? parity : fallback.parity,
+                        open.serial.data_bits, open.serial.stop_bits);
+  std::vector<FormatTrial> trials;
+  for (const auto& format : candidates) {
+    trials.push_back(trial(path, open, analyzer, format));
+    const auto& t = trials.back();
+    // A clean, sizeable read is evidence enough; the common settings come first.
+    if (t.good_frames >= 4 && t.good_frame_bytes * 10 >= t.bytes * 9) break;
+  }
+  // An early stop leaves the other parities at the winning baud untried: try them, since a
+  // line with long stop gaps can read cleanly under more than one.
+  const SerialFormat leader = best_trial(trials).format;
+  for (const auto& format : candidates) {
+    if (format.baud != leader.baud) continue;
+    bool tried = false;
+    for (const auto& t : trials)
+      tried |= t.format.parity == format.parity && t.format.baud == format.baud;
+    if (!tried) trials.push_back(trial(path, open, analyzer, format));
+  }
+  const FormatTrial& best = best_trial(trials);
+  report(trials, best);
+  for (const auto& t : trials)
+    if (&t != &best && t.format.baud == best.format.baud && t.good_frames > 0 &&
+        t.good_frame_bytes == best.good_frame_bytes)
+      fmt::print(stderr, "modtap: {} reads as well as {}: this capture cannot tell them apart\n",
+                 describe(t.format), describe(best.format));
+  if (best.good_frames == 0) {
+    fmt::print(stderr, "modtap: no setting gave a frame with a good check; using {}\n",
+               describe(fallback));
+    return fallback;
+  }
+  return best.format;
+}
+
+}  // namespace modtap::tools
