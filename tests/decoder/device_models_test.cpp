@@ -465,3 +465,56 @@ TEST(ModelFiles, YamlSyntaxErrorsNameTheLine) {
 
 }  // namespace
 }  // namespace modtap::decoder
+
+namespace modtap::decoder {
+namespace {
+
+// Value types that the built-in models do not use, on a model of their own.
+TEST(ModelTypes, MultiWordStringBcdAndOffsetValuesDecode) {
+  const DeviceModel model = parse_model(
+      "model: types\n"
+      "registers:\n"
+      "  - {address: 0, name: energy, type: u32, unit: kWh}\n"
+      "  - {address: 2, name: counter, type: u32, order: low_first}\n"
+      "  - {address: 4, name: delta, type: s32, scale: 0.1}\n"
+      "  - {address: 6, name: flow, type: f32, unit: m3/h}\n"
+      "  - {address: 8, name: serial, type: string, words: 3}\n"
+      "  - {address: 11, name: version, type: bcd}\n"
+      "  - {address: 12, name: temperature, type: s16, scale: 0.1, offset: -40, unit: C}\n"
+      "  - {address: 13, name: blob, type: raw}\n",
+      "types.yaml");
+  const std::vector<uint16_t> words = {0x0001, 0x86A0,          // 100000
+                                       0x86A0, 0x0001,          // 100000, low word first
+                                       0xFFFF, 0xFF9C,          // -100 -> -10.0
+                                       0x4148, 0x0000,          // 12.5f
+                                       0x4142, 0x4344, 0x4500,  // "ABCDE"
+                                       0x1234,                  // BCD 1234
+                                       0x0258,                  // 600 * 0.1 - 40 = 20.0
+                                       0xBEEF};
+  std::vector<RegisterValue> out;
+  decode_registers(model, Table::holding, 0, words, out);
+  ASSERT_EQ(out.size(), 8u);
+  EXPECT_EQ(out[0].raw, 100000u);
+  EXPECT_DOUBLE_EQ(out[0].value, 100000);
+  EXPECT_DOUBLE_EQ(out[1].value, 100000);
+  EXPECT_DOUBLE_EQ(out[2].value, -10.0);
+  EXPECT_DOUBLE_EQ(out[3].value, 12.5);
+  EXPECT_EQ(out[4].text, "ABCDE");
+  EXPECT_DOUBLE_EQ(out[5].value, 1234);
+  EXPECT_DOUBLE_EQ(out[6].value, 20.0);
+  EXPECT_EQ(out[7].address, 13);
+  EXPECT_DOUBLE_EQ(out[7].value, 0xBEEF);
+}
+
+TEST(ModelTypes, AValueCutShortByTheFrameDecodesAsItsRawWord) {
+  const DeviceModel model =
+      parse_model("model: t\nregisters:\n  - {address: 0, name: energy, type: u32}\n", "t.yaml");
+  const std::vector<uint16_t> words = {0x0001};
+  std::vector<RegisterValue> out;
+  decode_registers(model, Table::holding, 0, words, out);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].raw, 1u);
+}
+
+}  // namespace
+}  // namespace modtap::decoder

@@ -267,6 +267,43 @@ def junk_and_clean_exit():
     print(f"1 MB of junk: {len(records)} records, peak RSS {peak_kb} kB: {'ok' if ok else 'FAILED'}")
 
 
+def port_disappears():
+    """An adapter unplugged mid-capture: a clear message, the frames so far, a valid pcapng."""
+    global passed
+    t = Pty()
+    pcapng = os.path.join(WORK, "unplugged.pcapng")
+    modtap = subprocess.Popen([MODTAP, "-i", t.path, "-T", "json", "-w", pcapng, "--baud", "19200"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(0.5)
+    request = bytes.fromhex("010300000001840a")
+    response = bytes.fromhex("010302002a399b")
+    for frame in (request, response):
+        os.write(t.master, frame)
+        time.sleep(0.05)
+    os.close(t.master)  # the other end of the line goes away, as an unplugged adapter does
+    try:
+        out, err = modtap.communicate(timeout=10)
+    except subprocess.TimeoutExpired:
+        modtap.kill()
+        out, err = modtap.communicate()
+    frames = [json.loads(line) for line in out.splitlines() if '"type":"frame"' in line]
+    ok = check("unplugged", modtap.returncode == 1, f"exit status {modtap.returncode}")
+    ok &= check("unplugged", t.path in err, f"no message naming the port: {err!r}")
+    ok &= check("unplugged", [f["raw"] for f in frames] == [request.hex(), response.hex()],
+                f"frames {[f['raw'] for f in frames]}")
+    read = subprocess.run(["tshark", "-r", pcapng, "-T", "fields", "-e", "frame.number"],
+                          capture_output=True, text=True)
+    ok &= check("unplugged", read.returncode == 0 and len(read.stdout.split()) == 2,
+                f"pcapng: {read.stdout!r} {read.stderr!r}")
+    try:
+        os.close(t.slave)
+    except OSError:
+        pass
+    passed += ok
+    print(f"port unplugged: {err.strip().splitlines()[-1] if err.strip() else '(no message)'}: "
+          f"{'ok' if ok else 'FAILED'}")
+
+
 os.makedirs(WORK, exist_ok=True)
 run_case("mbpoll -> libmodbus, RTU 9600 8E1", 9600, "even", 8, "rtu",
          libmodbus_slave(9600, "even"), mbpoll_master(9600, "even"))
@@ -289,9 +326,10 @@ run_case("mbpoll -> libmodbus, --baud auto", 19200, "even", 8, "rtu",
          libmodbus_slave(19200, "even"), mbpoll_master(19200, "even"),
          ["--baud", "auto", "--probe-time", "3"])
 error_cases()
+port_disappears()
 junk_and_clean_exit()
 for f in failures:
     print("FAIL", f)
-cases = 10
+cases = 11
 print(f"{passed} passed, {cases - passed} failed")
 sys.exit(1 if failures else 0)

@@ -4,7 +4,8 @@
 A pty stands in for a serial port: MODTAP_EXTCAP_PORTS names it, so `tshark -D` lists it as
 modtap:/dev/pts/N. `tshark -i modtap:/dev/pts/N` then captures while known RTU traffic is
 written into the pty at 115200 baud, and the packets must be those frames, decoded by
-Wireshark's Modbus dissector with the request/response roles modtap gave them.
+Wireshark's Modbus dissector with the request/response roles modtap gave them, and with the
+registers named by the device model chosen in the capture options.
 
 Wireshark 4.0 looks for extcaps only in its global folder (and ignores WIRESHARK_EXTCAP_DIR
 when run as root), so the test links the build's modtap-extcap there for its duration, unless
@@ -72,7 +73,8 @@ def capture_with_tshark(port, pcapng):
         raise SystemExit(f"tshark -D does not list modtap:{port}:\n{listed}")
     pref = "extcap.modtap_" + "".join(c if c.isalnum() else "_" for c in port)
     return subprocess.Popen(["tshark", "-i", f"modtap:{port}", "-o", f"{pref}.baud:115200",
-                             "-o", f"{pref}.parity:none", "-a", "duration:6", "-w", pcapng],
+                             "-o", f"{pref}.parity:none", "-o", f"{pref}.model:nta5000", "-a", "duration:6",
+                             "-w", pcapng],
                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
 
 
@@ -82,7 +84,7 @@ def capture_with_fifo(port, pcapng):
         os.unlink(fifo)
     os.mkfifo(fifo)
     extcap = subprocess.Popen([EXTCAP, "--capture", "--extcap-interface", f"modtap:{port}",
-                               "--fifo", fifo, "--baud", "115200", "--parity", "none"])
+                               "--fifo", fifo, "--baud", "115200", "--parity", "none", "--model", "nta5000"])
     reader = subprocess.Popen(["tshark", "-r", fifo, "-w", pcapng],
                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     threading.Timer(6.0, extcap.terminate).start()
@@ -121,4 +123,12 @@ unclassified = [line for line in classified.splitlines() if "Unable to classify"
 if unclassified:
     print("unclassified:", unclassified[:3])
     sys.exit(1)
-print("ok: every frame captured live, with modtap's roles, and classified by Wireshark")
+# The registers come named by the model chosen in the capture options: F00.00 is at 0000H.
+names = subprocess.run(["tshark", "-n", "-r", pcapng, "-X", f"lua_script:{LUA}", "-T", "fields",
+                        "-e", "modtap.model", "-e", "modtap.register.name", "-c", "1"],
+                       capture_output=True, text=True).stdout.strip()
+if names != "nta5000\tF00.00":
+    print("registers not named by the chosen model:", repr(names))
+    sys.exit(1)
+print("ok: every frame captured live, with modtap's roles and the model's register names, and "
+      "classified by Wireshark")

@@ -14,6 +14,7 @@
 #include "captures/pcapng_sink.hpp"
 #include "captures/pcapng_writer.hpp"
 #include "tools/live/live_capture.hpp"
+#include "tools/modtap/model_catalog.hpp"
 
 namespace {
 
@@ -51,7 +52,7 @@ void print_interfaces() {
                port);
 }
 
-void print_config() {
+void print_config(const tools::ModelCatalog& catalog) {
   int n = 0;
   auto selector = [&](const char* call, const char* display, const char* fallback,
                       std::initializer_list<const char*> values) {
@@ -67,6 +68,12 @@ void print_config() {
   selector("data-bits", "Data bits", "8", {"7", "8"});
   selector("stop-bits", "Stop bits", "1", {"1", "2"});
   selector("mode", "Mode", "auto", {"auto", "rtu", "ascii"});
+  // The device model the registers are read with (a GD20 that identifies itself is found
+  // whatever is chosen here).
+  fmt::print("arg {{number={}}}{{call=--model}}{{display=Device model}}{{type=selector}}\n", n);
+  for (const auto& entry : catalog.entries())
+    fmt::print("value {{arg={}}}{{value={}}}{{display={}}}{{default={}}}\n", n, entry.model.name,
+               entry.model.title, entry.model.name == "generic" ? "true" : "false");
 }
 
 }  // namespace
@@ -75,7 +82,7 @@ int main(int argc, char** argv) {
   CLI::App app{"modtap-extcap: modtap's serial Modbus capture for Wireshark"};
   app.allow_extras();  // Wireshark may add options of its own in later versions
   bool interfaces = false, dlts = false, config = false, capture = false;
-  std::string interface, fifo, version, filter, parity = "even", mode = "auto";
+  std::string interface, fifo, version, filter, parity = "even", mode = "auto", model = "generic";
   uint32_t baud = 19200;
   unsigned data_bits = 8, stop_bits = 1;
   app.add_flag("--extcap-interfaces", interfaces);
@@ -91,6 +98,7 @@ int main(int argc, char** argv) {
   app.add_option("--data-bits", data_bits);
   app.add_option("--stop-bits", stop_bits);
   app.add_option("--mode", mode);
+  app.add_option("--model", model);
   CLI11_PARSE(app, argc, argv);
 
   if (interfaces) {
@@ -105,8 +113,10 @@ int main(int argc, char** argv) {
     fmt::print("dlt {{number=147}}{{name=USER0}}{{display=Modbus serial with modtap verdicts}}\n");
     return 0;
   }
+  tools::ModelCatalog catalog;
+  catalog.load_builtin();
   if (config) {
-    print_config();
+    print_config(catalog);
     return 0;
   }
   if (!capture || fifo.empty()) {
@@ -120,7 +130,8 @@ int main(int argc, char** argv) {
     if (!out) throw std::runtime_error(fifo + ": cannot open the FIFO");
     captures::PcapngWriter writer(out, true);
     const std::vector<decoder::ChannelInfo> channels{{port, decoder::ChannelRole::bus}};
-    captures::PcapngSink sink(writer, channels, {});
+    captures::PcapngSink pcapng(writer, channels, {});
+    decoder::ModelInterpreter sink(catalog.all(), catalog.choose({model}), pcapng);
     live::LiveOptions options;
     options.announce = false;  // Wireshark reads anything on stderr as an error
     options.analyzer.format = {baud, static_cast<uint8_t>(data_bits),
