@@ -45,27 +45,6 @@ PacketDirection direction_of(Role role, ChannelRole channel) {
   return PacketDirection::unknown;
 }
 
-const char* finding_name(uint32_t bit) {
-  switch (bit) {
-    case finding_broadcast:
-      return "broadcast";
-    case finding_unsolicited:
-      return "unsolicited";
-    case finding_length_mismatch:
-      return "length-mismatch";
-    case finding_echo_mismatch:
-      return "echo-mismatch";
-    case finding_bad_check:
-      return "bad-check";
-    case finding_fast_turnaround:
-      return "fast-turnaround";
-    case finding_illegal_broadcast:
-      return "illegal-broadcast";
-    default:
-      return "finding";
-  }
-}
-
 // The device model's reading, one line each after the verdicts, for modtap.lua and for people:
 // "register 2502H frequency_command = 60.00 Hz" and "note read_only_write: ... is read-only".
 void append_meaning(std::string& comment, const Meaning& meaning) {
@@ -99,8 +78,8 @@ std::string frame_comment(const Frame& f) {
   if (f.request) c += fmt::format(" request={}", *f.request);
   if (f.latency_ns)
     c += fmt::format(" latency_us={:.3f}", static_cast<double>(*f.latency_ns) / 1e3);
-  for (uint32_t bit = 1; bit != 0 && bit <= f.findings; bit <<= 1)
-    if (f.findings & bit) c += fmt::format(" finding={}", finding_name(bit));
+  for (const auto& [bit, name] : finding_names())
+    if (f.findings & bit) c += fmt::format(" finding={}", name);
   if (f.meaning) append_meaning(c, *f.meaning);
   return c;
 }

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -17,6 +18,13 @@
 namespace modtap::decoder {
 
 enum class ModeChoice : uint8_t { automatic, rtu, ascii };
+
+// "rtu", "ascii"; anything else is automatic.
+constexpr ModeChoice mode_named(std::string_view name) {
+  return name == "rtu"     ? ModeChoice::rtu
+         : name == "ascii" ? ModeChoice::ascii
+                           : ModeChoice::automatic;
+}
 
 struct AnalyzerOptions {
   ModeChoice mode = ModeChoice::automatic;

@@ -9,6 +9,19 @@ uint16_t Frame::wire_check() const {
   return mode == Mode::rtu ? wire_crc(adu) : adu.back();
 }
 
+std::span<const FindingName> finding_names() {
+  static constexpr FindingName names[] = {
+      {finding_bad_check, "bad-check"},
+      {finding_broadcast, "broadcast"},
+      {finding_illegal_broadcast, "illegal-broadcast"},
+      {finding_unsolicited, "unsolicited"},
+      {finding_length_mismatch, "length-mismatch"},
+      {finding_echo_mismatch, "echo-mismatch"},
+      {finding_fast_turnaround, "fast-turnaround"},
+  };
+  return names;
+}
+
 const char* to_string(NoiseReason reason) {
   switch (reason) {
     case NoiseReason::junk:

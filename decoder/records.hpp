@@ -53,6 +53,13 @@ enum Finding : uint32_t {
   finding_illegal_broadcast = 1u << 6  // a read sent to slave 0
 };
 
+// Each finding bit's name, as text, JSON and pcapng comments spell it, in the order shown.
+struct FindingName {
+  Finding bit;
+  const char* name;
+};
+std::span<const FindingName> finding_names();
+
 // A Modbus ADU. The spans point into the framer's buffer and are valid during the callback.
 struct Frame {
   uint64_t index = 0;

@@ -2,10 +2,16 @@
 #pragma once
 
 #include <cstdint>
+#include <string_view>
 
 namespace modtap::decoder {
 
 enum class Parity : uint8_t { none, even, odd };
+
+// "none", "odd"; anything else is even, the Modbus default (callers validate their input).
+constexpr Parity parity_named(std::string_view name) {
+  return name == "none" ? Parity::none : name == "odd" ? Parity::odd : Parity::even;
+}
 
 struct SerialFormat {
   uint32_t baud = 19200;

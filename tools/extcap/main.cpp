@@ -134,14 +134,9 @@ int main(int argc, char** argv) {
     decoder::ModelInterpreter sink(catalog.all(), catalog.choose({model}), pcapng);
     live::LiveOptions options;
     options.announce = false;  // Wireshark reads anything on stderr as an error
-    options.analyzer.format = {baud, static_cast<uint8_t>(data_bits),
-                               parity == "none"  ? decoder::Parity::none
-                               : parity == "odd" ? decoder::Parity::odd
-                                                 : decoder::Parity::even,
+    options.analyzer.format = {baud, static_cast<uint8_t>(data_bits), decoder::parity_named(parity),
                                static_cast<uint8_t>(stop_bits)};
-    options.analyzer.mode = mode == "rtu"     ? decoder::ModeChoice::rtu
-                            : mode == "ascii" ? decoder::ModeChoice::ascii
-                                              : decoder::ModeChoice::automatic;
+    options.analyzer.mode = decoder::mode_named(mode);
     const int status =
         live::run_live({{port, port, decoder::ChannelRole::bus}}, options, sink, stop);
     writer.flush();

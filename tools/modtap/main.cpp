@@ -79,21 +79,9 @@ std::optional<uint32_t> fixed_baud(const Options& o) {
 
 std::optional<decoder::Parity> fixed_parity(const Options& o);
 
-decoder::Parity parse_parity(const std::string& s) {
-  if (s == "none") return decoder::Parity::none;
-  if (s == "odd") return decoder::Parity::odd;
-  return decoder::Parity::even;
-}
-
 std::optional<decoder::Parity> fixed_parity(const Options& o) {
   if (o.parity == "auto") return std::nullopt;
-  return parse_parity(o.parity);
-}
-
-decoder::ModeChoice parse_mode(const std::string& s) {
-  if (s == "rtu") return decoder::ModeChoice::rtu;
-  if (s == "ascii") return decoder::ModeChoice::ascii;
-  return decoder::ModeChoice::automatic;
+  return decoder::parity_named(o.parity);
 }
 
 std::unique_ptr<decoder::RecordSink> make_sink(const Options& o, tools::Output& out,
@@ -105,13 +93,13 @@ std::unique_ptr<decoder::RecordSink> make_sink(const Options& o, tools::Output& 
 }
 
 decoder::SerialFormat serial_format(const Options& o) {
-  return {fixed_baud(o).value_or(19200), static_cast<uint8_t>(o.data_bits), parse_parity(o.parity),
-          static_cast<uint8_t>(o.stop_bits)};
+  return {fixed_baud(o).value_or(19200), static_cast<uint8_t>(o.data_bits),
+          decoder::parity_named(o.parity), static_cast<uint8_t>(o.stop_bits)};
 }
 
 decoder::AnalyzerOptions analyzer_options(const Options& o, decoder::ClockQuality clock) {
   decoder::AnalyzerOptions analyzer;
-  analyzer.mode = parse_mode(o.mode);
+  analyzer.mode = decoder::mode_named(o.mode);
   analyzer.format = serial_format(o);
   analyzer.clock = clock;
   analyzer.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);

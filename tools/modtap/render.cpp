@@ -146,19 +146,6 @@ void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue&
   fmt::format_to(std::back_inserter(out), "}}");
 }
 
-std::span<const FindingName> finding_names() {
-  static constexpr std::array<FindingName, 7> names{{
-      {decoder::finding_bad_check, "bad-check"},
-      {decoder::finding_broadcast, "broadcast"},
-      {decoder::finding_illegal_broadcast, "illegal-broadcast"},
-      {decoder::finding_unsolicited, "unsolicited"},
-      {decoder::finding_length_mismatch, "length-mismatch"},
-      {decoder::finding_echo_mismatch, "echo-mismatch"},
-      {decoder::finding_fast_turnaround, "fast-turnaround"},
-  }};
-  return names;
-}
-
 std::string function_label(uint8_t fc) {
   if (const char* name = decoder::function_name(fc)) return name;
   return fmt::format("Function 0x{:02X}", fc & 0x7F);

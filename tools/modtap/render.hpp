@@ -21,13 +21,6 @@ void append_text_value(fmt::memory_buffer& out, const decoder::Field& field, siz
 // The same as a JSON object: {"addr", "name", "raw", "value", "unit", "text"}.
 void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue& reg);
 
-// Each finding bit's name, for text and JSON alike.
-struct FindingName {
-  decoder::Finding bit;
-  const char* name;
-};
-std::span<const FindingName> finding_names();
-
 // "Read Holding Registers", or "Function 0x41" for a code the standard does not name.
 std::string function_label(uint8_t fc);
 
