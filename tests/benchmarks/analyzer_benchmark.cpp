@@ -3,7 +3,9 @@
 
 #include "decoder/analyzer.hpp"
 #include "decoder/checksum.hpp"
+#include "decoder/model_interpreter.hpp"
 #include "tools/busgen/bus_simulator.hpp"
+#include "tools/modtap/model_catalog.hpp"
 
 namespace {
 
@@ -47,6 +49,30 @@ void BM_AnalyzeUntimed(benchmark::State& state) {
   state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * c.bytes.size()));
 }
 BENCHMARK(BM_AnalyzeUntimed)->Unit(benchmark::kMillisecond);
+
+// The same, with every frame read through a device model (the stage text and JSON output use).
+void BM_AnalyzeWithModel(benchmark::State& state, const char* model) {
+  const auto& c = capture();
+  tools::ModelCatalog catalog;
+  catalog.load_builtin();
+  uint64_t frames = 0;
+  for (auto _ : state) {
+    Counting sink;
+    decoder::ModelInterpreter interpreter(catalog.all(), catalog.choose({model}), sink);
+    decoder::AnalyzerOptions o;
+    o.mode = decoder::ModeChoice::rtu;
+    o.clock = decoder::ClockQuality::none;
+    decoder::Analyzer analyzer(o, {{"bench", decoder::ChannelRole::bus}}, interpreter);
+    for (size_t at = 0; at < c.bytes.size(); at += 65536)
+      analyzer.push({0, 0, {c.bytes.data() + at, std::min<size_t>(65536, c.bytes.size() - at)}});
+    analyzer.finish();
+    frames += sink.frames;
+  }
+  state.counters["frames/s"] =
+      benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsRate);
+}
+BENCHMARK_CAPTURE(BM_AnalyzeWithModel, generic, "generic")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_AnalyzeWithModel, gd20, "gd20")->Unit(benchmark::kMillisecond);
 
 void BM_Crc16(benchmark::State& state) {
   const auto& c = capture();

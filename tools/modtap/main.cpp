@@ -120,13 +120,19 @@ tools::ModelCatalog load_models(const Options& o) {
 class Sinks {
  public:
   Sinks(const Options& o, tools::Output& out, const std::vector<decoder::ChannelInfo>& channels)
-      : catalog_(load_models(o)),
-        interpreter_(catalog_.all(), catalog_.choose(o.models), fan_out_),
-        terminal_(make_sink(o, out, channels)),
-        // Only text, JSON and pcapng comments show what the models say; others skip the work.
-        interpret_(o.output == "text" || o.output == "json" ||
-                   (!o.write_file.empty() && o.link != "bare")) {
+      : terminal_(make_sink(o, out, channels)) {
     fan_out_.add(*terminal_);
+    // Only text, JSON and pcapng comments show what the models say; the other outputs skip
+    // the work, and the YAML is not even read unless models were asked for.
+    const bool interpret = o.output == "text" || o.output == "json" ||
+                           (!o.write_file.empty() && o.link != "bare");
+    if (interpret || !o.models.empty() || !o.models_dir.empty()) {
+      catalog_ = load_models(o);
+      auto choice = catalog_.choose(o.models);
+      if (interpret)
+        interpreter_ =
+            std::make_unique<decoder::ModelInterpreter>(catalog_.all(), choice, fan_out_);
+    }
     if (o.write_file.empty()) return;
     captures::PcapngOptions options;
     options.link = captures::parse_link(o.link);
@@ -136,16 +142,15 @@ class Sinks {
     fan_out_.add(*pcapng_sink_);
   }
   decoder::RecordSink& all() {
-    return interpret_ ? static_cast<decoder::RecordSink&>(interpreter_) : fan_out_;
+    return interpreter_ ? static_cast<decoder::RecordSink&>(*interpreter_) : fan_out_;
   }
   decoder::RecordSink& terminal() { return *terminal_; }
 
  private:
-  tools::ModelCatalog catalog_;
   FanOut fan_out_;
-  decoder::ModelInterpreter interpreter_;
   std::unique_ptr<decoder::RecordSink> terminal_;
-  bool interpret_;
+  tools::ModelCatalog catalog_;
+  std::unique_ptr<decoder::ModelInterpreter> interpreter_;
   std::unique_ptr<captures::PcapngWriter> pcapng_;
   std::unique_ptr<captures::PcapngSink> pcapng_sink_;
 };
