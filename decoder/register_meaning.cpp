@@ -326,23 +326,23 @@ void append_value_text(fmt::memory_buffer& out, const RegisterValue& reg) {
 const char* to_string(RuleKind kind) {
   switch (kind) {
     case RuleKind::reserved_write:
-      return "reserved_write";
+      return "reserved-write";
     case RuleKind::read_only_write:
-      return "read_only_write";
+      return "read-only-write";
     case RuleKind::write_only_read:
-      return "write_only_read";
+      return "write-only-read";
     case RuleKind::closed_group:
-      return "closed_group";
+      return "closed-group";
     case RuleKind::too_many_words:
-      return "too_many_words";
+      return "too-many-words";
     case RuleKind::crosses_group:
-      return "crosses_group";
+      return "crosses-group";
     case RuleKind::out_of_range:
-      return "out_of_range";
+      return "out-of-range";
     case RuleKind::not_in_enum:
-      return "not_in_enum";
+      return "not-in-enum";
     case RuleKind::station_out_of_range:
-      return "station_out_of_range";
+      return "station-out-of-range";
     case RuleKind::exception:
       return "exception";
     case RuleKind::identified:

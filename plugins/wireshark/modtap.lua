@@ -55,7 +55,7 @@ local mbrtu = Dissector.get("mbrtu")
 
 -- "modtap index=3 mode=rtu role=response check=ok request=2 finding=... model=gd20", then a
 -- line per register ("register 2502H frequency_command = 60.00 Hz") and per model finding
--- ("note read_only_write: ...") -> table
+-- ("note read-only-write: ...") -> table
 local function verdicts()
   local v = {findings = {}, registers = {}, notes = {}}
   for _, c in ipairs({comment_field()}) do
