@@ -34,6 +34,20 @@ const std::string brainchild = std::string("-r ") + MODTAP_SAMPLES +
                                "/brainchild-io-16do.sr --baud 19200 --parity even "
                                "--sigrok-channels tx=1,rx=0 --sigrok-invert";
 
+// A raw RTU capture of `bodies` (slave + PDU, CRC added) in a temporary file.
+std::string raw_capture(const std::string& name, const std::vector<std::vector<uint8_t>>& bodies) {
+  const auto path = std::filesystem::temp_directory_path() / name;
+  std::ofstream out(path, std::ios::binary);
+  for (auto body : bodies) {
+    const uint16_t crc = modtap::decoder::crc16(body);
+    body.push_back(static_cast<uint8_t>(crc & 0xFF));
+    body.push_back(static_cast<uint8_t>(crc >> 8));
+    out.write(reinterpret_cast<const char*>(body.data()),
+              static_cast<std::streamsize>(body.size()));
+  }
+  return path.string();
+}
+
 TEST(Cli, JsonLinesCarryTheDocumentedKeys) {
   const Outcome r = run(brainchild + " -T json");
   ASSERT_EQ(r.status, 0);
@@ -61,6 +75,23 @@ TEST(Cli, StatsSummariseTheCapture) {
   ASSERT_EQ(r.status, 0);
   ASSERT_FALSE(r.lines.empty());
   EXPECT_EQ(r.lines[0], "frames          30");
+  EXPECT_EQ(r.lines[r.lines.size() - 2],
+            "slave  requests  responses  exceptions  timeouts  latency mean/max ms");
+  EXPECT_EQ(r.lines.back(), "    1        15         15           0         0  2.086 / 2.116");
+}
+
+TEST(Cli, StatsCountTheModelsFindingsByKind) {
+  const std::string capture =
+      raw_capture("modtap-stats-model.raw", {{0x01, 0x06, 0x25, 0x20, 0x00, 0x01},
+                                             {0x01, 0x86, 0x52},
+                                             {0x01, 0x06, 0x25, 0x03, 0x00, 0x01}});
+  const Outcome r = run("-r " + capture + " --format raw --mode rtu --model nta5000 -T stats");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_GE(r.lines.size(), 4u);
+  const std::vector<std::string> tail(r.lines.end() - 4, r.lines.end());
+  EXPECT_EQ(tail,
+            (std::vector<std::string>{"model findings", "  exception             1",
+                                      "  read-only-write       1", "  reserved-write        1"}));
 }
 
 TEST(Cli, AMissingFileIsAClearErrorAndAnExitStatus) {
@@ -69,20 +100,6 @@ TEST(Cli, AMissingFileIsAClearErrorAndAnExitStatus) {
   ASSERT_FALSE(r.lines.empty());
   EXPECT_EQ(r.lines.back().rfind("modtap: /nonexistent/capture.pcap: cannot open", 0), 0u)
       << r.lines.back();
-}
-
-// A raw RTU capture of `bodies` (slave + PDU, CRC added) in a temporary file.
-std::string raw_capture(const std::string& name, const std::vector<std::vector<uint8_t>>& bodies) {
-  const auto path = std::filesystem::temp_directory_path() / name;
-  std::ofstream out(path, std::ios::binary);
-  for (auto body : bodies) {
-    const uint16_t crc = modtap::decoder::crc16(body);
-    body.push_back(static_cast<uint8_t>(crc & 0xFF));
-    body.push_back(static_cast<uint8_t>(crc >> 8));
-    out.write(reinterpret_cast<const char*>(body.data()),
-              static_cast<std::streamsize>(body.size()));
-  }
-  return path.string();
 }
 
 const std::string brainchild_lines = std::string("-r ") + MODTAP_SAMPLES +

@@ -122,9 +122,10 @@ class Sinks {
   Sinks(const Options& o, tools::Output& out, const std::vector<decoder::ChannelInfo>& channels)
       : terminal_(make_sink(o, out, channels)) {
     fan_out_.add(*terminal_);
-    // Only text, JSON and pcapng comments show what the models say; the other outputs skip
-    // the work, and the YAML is not even read unless models were asked for.
+    // Only text, JSON, pcapng comments and statistics with --model show what the models say;
+    // the other outputs skip the work, and the YAML is not read unless models are asked for.
     const bool interpret = o.output == "text" || o.output == "json" ||
+                           (o.output == "stats" && !o.models.empty()) ||
                            (!o.write_file.empty() && o.link != "bare");
     if (interpret || !o.models.empty() || !o.models_dir.empty()) {
       catalog_ = load_models(o);

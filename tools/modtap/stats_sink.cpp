@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "decoder/register_meaning.hpp"
+
 namespace modtap::tools {
 
 using namespace decoder;
@@ -22,6 +24,23 @@ void StatsSink::on_frame(const Frame& frame) {
     s.latency_sum_ns += *frame.latency_ns;
     s.latency_max_ns = std::max(s.latency_max_ns, *frame.latency_ns);
     ++s.latency_count;
+  }
+  if (frame.slave() != 0 && frame.check_ok) count_slave(frame);
+  if (frame.meaning)
+    for (const RuleFinding& finding : frame.meaning->findings)
+      ++s.model_findings[to_string(finding.kind)];
+}
+
+// Only frames with a good check: a corrupted address byte would invent slaves.
+void StatsSink::count_slave(const Frame& frame) {
+  SlaveStats& slave = stats_.slaves[frame.slave()];
+  slave.requests += frame.role == Role::request;
+  slave.responses += frame.role == Role::response;
+  slave.exceptions += frame.is_exception();
+  if (frame.latency_ns) {
+    slave.latency_sum_ns += *frame.latency_ns;
+    slave.latency_max_ns = std::max(slave.latency_max_ns, *frame.latency_ns);
+    ++slave.latency_count;
   }
 }
 
@@ -50,6 +69,20 @@ void print_stats(Output& out, const BusStats& s) {
               static_cast<double>(s.latency_sum_ns) / static_cast<double>(s.latency_count) / 1e6,
               static_cast<double>(s.latency_max_ns) / 1e6, s.latency_count);
   }
+  if (!s.slaves.empty())
+    out.print("slave  requests  responses  exceptions  timeouts  latency mean/max ms\n");
+  for (const auto& [id, slave] : s.slaves) {
+    out.print("{:5}  {:8}  {:9}  {:10}  {:8}", id, slave.requests, slave.responses,
+              slave.exceptions, slave.timeouts);
+    if (slave.latency_count)
+      out.print("  {:.3f} / {:.3f}",
+                static_cast<double>(slave.latency_sum_ns) /
+                    static_cast<double>(slave.latency_count) / 1e6,
+                static_cast<double>(slave.latency_max_ns) / 1e6);
+    out.print("\n");
+  }
+  if (!s.model_findings.empty()) out.print("model findings\n");
+  for (const auto& [kind, count] : s.model_findings) out.print("  {:<20}  {}\n", kind, count);
   out.flush();
 }
 
