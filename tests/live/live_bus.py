@@ -312,6 +312,44 @@ def port_disappears():
           f"{'ok' if ok else 'FAILED'}")
 
 
+def reconnects():
+    """With --reconnect, an unplugged port is waited for and read again when it comes back.
+    The port is a symbolic link, as udev's /dev/serial/by-id names are, moved to a new pty."""
+    global passed
+    link = os.path.join(WORK, "ttyMODTAP")
+    first = Pty()
+    if os.path.lexists(link):
+        os.unlink(link)
+    os.symlink(first.path, link)
+    modtap = subprocess.Popen([MODTAP, "-i", link, "--reconnect", "-T", "json", "--baud", "19200"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(0.5)
+    before = bytes.fromhex("010300000001840a")
+    after = bytes.fromhex("010302002a399b")
+    os.write(first.master, before)
+    time.sleep(0.2)
+    os.close(first.master)  # unplugged
+    time.sleep(0.5)
+    second = Pty()  # plugged in again, under another pty that the link now names
+    os.unlink(link)
+    os.symlink(second.path, link)
+    time.sleep(2.0)  # modtap retries once a second
+    os.write(second.master, after)
+    time.sleep(0.5)
+    modtap.send_signal(signal.SIGTERM)
+    out, err = modtap.communicate(timeout=10)
+    frames = [json.loads(line)["raw"] for line in out.splitlines() if '"type":"frame"' in line]
+    ok = check("reconnect", frames == [before.hex(), after.hex()], f"frames {frames}; {err!r}")
+    ok &= check("reconnect", "is back" in err and modtap.returncode == 0, f"{modtap.returncode}: {err!r}")
+    for fd in (first.slave, second.master, second.slave):
+        try:
+            os.close(fd)
+        except OSError:
+            pass
+    passed += ok
+    print(f"port unplugged and back with --reconnect: {'ok' if ok else 'FAILED'}")
+
+
 os.makedirs(WORK, exist_ok=True)
 run_case("mbpoll -> libmodbus, RTU 9600 8E1", 9600, "even", 8, "rtu",
          libmodbus_slave(9600, "even"), mbpoll_master(9600, "even"))
@@ -335,9 +373,10 @@ run_case("mbpoll -> libmodbus, --baud auto", 19200, "even", 8, "rtu",
          ["--baud", "auto", "--probe-time", "3"])
 error_cases()
 port_disappears()
+reconnects()
 junk_and_clean_exit()
 for f in failures:
     print("FAIL", f)
-cases = 11
+cases = 12
 print(f"{passed} passed, {cases - passed} failed")
 sys.exit(1 if failures else 0)

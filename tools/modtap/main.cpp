@@ -245,7 +245,8 @@ int listen(const Options& o) {
   auto raw = raw_recorder(o, channels, options.analyzer.format);
   if (raw) options.on_read = [&](const decoder::Chunk& chunk) { raw->write(chunk); };
   options.reconnect = o.reconnect;
-  options.status_line = isatty(STDERR_FILENO) && o.output != "text";
+  // A status line on the terminal, unless frame lines are printed on that same terminal.
+  options.status_line = isatty(STDERR_FILENO) && (o.output != "text" || !isatty(STDOUT_FILENO));
   const int status = live::run_live(ports, options, sinks.all(), stop);
   print_summary(o, out, sinks);
   return status;
