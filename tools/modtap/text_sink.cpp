@@ -24,6 +24,16 @@ const char* role_tag(Role role) {
   return "?";
 }
 
+// Register addresses as the manuals write them (2502H), so a line can be read beside the manual;
+// JSON keeps them as numbers.
+void append_field(fmt::memory_buffer& buf, const Field& f, size_t max_items) {
+  if (f.kind == Field::Kind::number && f.key.ends_with("address")) {
+    fmt::format_to(std::back_inserter(buf), "{:04X}H", f.number);
+  } else {
+    append_text_value(buf, f, max_items);
+  }
+}
+
 }  // namespace
 
 TextSink::TextSink(Output& out, const std::vector<ChannelInfo>& channels, bool verbose)
@@ -49,7 +59,7 @@ void TextSink::on_frame(const Frame& frame) {
   for (const Field& f : decoded.fields) {
     if (f.kind == Field::Kind::items || f.key == "byte_count") continue;
     out_.print(" {}=", f.key);
-    append_text_value(buf, f, line_items);
+    append_field(buf, f, line_items);
   }
   const char* check = frame.mode == Mode::rtu ? "crc" : "lrc";
   if (frame.check_ok) {
@@ -79,7 +89,7 @@ void TextSink::tree(const Frame& frame) {
   const DecodedPdu decoded = decode_pdu(frame.role, frame.pdu(), frame.request_pdu);
   for (const Field& f : decoded.fields) {
     out_.print("    {}: ", f.key);
-    append_text_value(buf, f, SIZE_MAX);
+    append_field(buf, f, SIZE_MAX);
     out_.print("\n");
   }
   if (decoded.truncated) out_.print("    [PDU shorter than its fields]\n");
