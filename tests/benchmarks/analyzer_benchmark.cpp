@@ -30,42 +30,40 @@ const busgen::BusCapture& capture() {
   return c;
 }
 
-void BM_AnalyzeUntimed(benchmark::State& state) {
+// Frames the whole capture, untimed, in 64 KiB chunks, into `sink`.
+void analyze(decoder::RecordSink& sink) {
   const auto& c = capture();
+  decoder::AnalyzerOptions o;
+  o.mode = decoder::ModeChoice::rtu;
+  o.clock = decoder::ClockQuality::none;
+  decoder::Analyzer analyzer(o, {{"bench", decoder::ChannelRole::bus}}, sink);
+  for (size_t at = 0; at < c.bytes.size(); at += 65536)
+    analyzer.push({0, 0, {c.bytes.data() + at, std::min<size_t>(65536, c.bytes.size() - at)}});
+  analyzer.finish();
+}
+
+void BM_AnalyzeUntimed(benchmark::State& state) {
   uint64_t frames = 0;
   for (auto _ : state) {
     Counting sink;
-    decoder::AnalyzerOptions o;
-    o.mode = decoder::ModeChoice::rtu;
-    o.clock = decoder::ClockQuality::none;
-    decoder::Analyzer analyzer(o, {{"bench", decoder::ChannelRole::bus}}, sink);
-    for (size_t at = 0; at < c.bytes.size(); at += 65536)
-      analyzer.push({0, 0, {c.bytes.data() + at, std::min<size_t>(65536, c.bytes.size() - at)}});
-    analyzer.finish();
+    analyze(sink);
     frames += sink.frames;
   }
   state.counters["frames/s"] =
       benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsRate);
-  state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * c.bytes.size()));
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * capture().bytes.size()));
 }
 BENCHMARK(BM_AnalyzeUntimed)->Unit(benchmark::kMillisecond);
 
 // The same, with every frame read through a device model (the stage text and JSON output use).
 void BM_AnalyzeWithModel(benchmark::State& state, const char* model) {
-  const auto& c = capture();
   tools::ModelCatalog catalog;
   catalog.load_builtin();
   uint64_t frames = 0;
   for (auto _ : state) {
     Counting sink;
     decoder::ModelInterpreter interpreter(catalog.all(), catalog.choose({model}), sink);
-    decoder::AnalyzerOptions o;
-    o.mode = decoder::ModeChoice::rtu;
-    o.clock = decoder::ClockQuality::none;
-    decoder::Analyzer analyzer(o, {{"bench", decoder::ChannelRole::bus}}, interpreter);
-    for (size_t at = 0; at < c.bytes.size(); at += 65536)
-      analyzer.push({0, 0, {c.bytes.data() + at, std::min<size_t>(65536, c.bytes.size() - at)}});
-    analyzer.finish();
+    analyze(interpreter);
     frames += sink.frames;
   }
   state.counters["frames/s"] =

@@ -17,17 +17,11 @@ import threading
 import time
 import tty
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from modbus import with_crc  # noqa: E402
+
 MODTAP = sys.argv[1]
 BAUDS = [int(b) for b in sys.argv[2:]] or [9600, 115200]
-
-
-def crc(body):
-    c = 0xFFFF
-    for b in body:
-        c ^= b
-        for _ in range(8):
-            c = (c >> 1) ^ 0xA001 if c & 1 else c >> 1
-    return bytes(body) + bytes([c & 0xFF, c >> 8])
 
 
 def measure(baud, pairs=200):
@@ -51,7 +45,7 @@ def measure(baud, pairs=200):
     written = {}
     index = 0
     for i in range(pairs):
-        for frame in (crc([1, 3, 0, i % 100, 0, 1]), crc([1, 3, 2, 0, i % 100])):
+        for frame in (with_crc([1, 3, 0, i % 100, 0, 1]), with_crc([1, 3, 2, 0, i % 100])):
             os.write(master, frame)
             index += 1
             written[index] = time.monotonic()

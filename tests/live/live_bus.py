@@ -19,6 +19,9 @@ import threading
 import time
 import tty
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from modbus import with_crc  # noqa: E402
+
 MODTAP, LIBMODBUS_SLAVE, WORK = sys.argv[1:4]
 failures = []
 passed = 0
@@ -283,8 +286,8 @@ def port_disappears():
     modtap = subprocess.Popen([MODTAP, "-i", t.path, "-T", "json", "-w", pcapng, "--baud", "19200"],
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     time.sleep(0.5)
-    request = bytes.fromhex("010300000001840a")
-    response = bytes.fromhex("010302002a399b")
+    request = with_crc([1, 3, 0, 0, 0, 1])
+    response = with_crc([1, 3, 2, 0, 42])
     for frame in (request, response):
         os.write(t.master, frame)
         time.sleep(0.05)
@@ -324,8 +327,8 @@ def reconnects():
     modtap = subprocess.Popen([MODTAP, "-i", link, "--reconnect", "-T", "json", "--baud", "19200"],
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     time.sleep(0.5)
-    before = bytes.fromhex("010300000001840a")
-    after = bytes.fromhex("010302002a399b")
+    before = with_crc([1, 3, 0, 0, 0, 1])
+    after = with_crc([1, 3, 2, 0, 42])
     os.write(first.master, before)
     time.sleep(0.2)
     os.close(first.master)  # unplugged

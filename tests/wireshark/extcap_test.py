@@ -21,27 +21,21 @@ import threading
 import time
 import tty
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from modbus import with_crc  # noqa: E402
+
 EXTCAP, LUA, WORK = sys.argv[1:4]
 GLOBAL_EXTCAP = "/usr/lib/x86_64-linux-gnu/wireshark/extcap"
-
-
-def crc(body):
-    c = 0xFFFF
-    for b in body:
-        c ^= b
-        for _ in range(8):
-            c = (c >> 1) ^ 0xA001 if c & 1 else c >> 1
-    return bytes(body) + bytes([c & 0xFF, c >> 8])
 
 
 def traffic():
     """50 transactions of the echo codes Wireshark cannot classify by length, and reads."""
     frames = []
     for i in range(25):
-        write = crc([1, 0x06, 0x00, i, 0x12, 0x34])
+        write = with_crc([1, 0x06, 0x00, i, 0x12, 0x34])
         frames += [("request", write), ("response", write)]
-        frames += [("request", crc([2, 0x03, 0x00, i, 0x00, 0x02])),
-                   ("response", crc([2, 0x03, 0x04, 0x00, i, 0x12, 0x34]))]
+        frames += [("request", with_crc([2, 0x03, 0x00, i, 0x00, 0x02])),
+                   ("response", with_crc([2, 0x03, 0x04, 0x00, i, 0x12, 0x34]))]
     return frames
 
 
