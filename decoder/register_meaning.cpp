@@ -252,6 +252,42 @@ void explain_exception(const DeviceModel& model, const Frame& frame,
            : fmt::format("exception {:02X}H is not one {} documents", code, model.name)});
 }
 
+// Coils and discrete inputs, LSB of the first byte first. Only the bits the model names are
+// listed: a read of 2000 coils of an unknown device would bury the line.
+void decode_bits(const DeviceModel& model, Table table, uint16_t start,
+                 std::span<const uint8_t> packed, size_t count, std::vector<RegisterValue>& out) {
+  for (size_t i = 0; i < count && i / 8 < packed.size(); ++i) {
+    const auto address = static_cast<uint16_t>(start + i);
+    const RegisterLookup lookup = find_register(model, table, address);
+    const RegisterDef* def = lookup.listed;
+    if (!def) continue;
+    RegisterValue v;
+    v.address = address;
+    v.name = def->name;
+    v.label = def->label;
+    v.raw = (packed[i / 8] >> (i % 8)) & 1;
+    v.value = v.raw;
+    if (def->values)
+      if (auto it = def->values->find(v.raw); it != def->values->end()) v.text = it->second;
+    out.push_back(std::move(v));
+  }
+}
+
+// FC05 writes FF00H for on and 0000H for off, FC0F packed bits after its byte count.
+void decode_coil_write(const DeviceModel& model, std::span<const uint8_t> pdu,
+                       std::vector<RegisterValue>& out) {
+  if (pdu.size() < 5) return;
+  const uint16_t start = be16(pdu, 1);
+  if (pdu[0] == 0x05) {
+    const uint16_t state = be16(pdu, 3);
+    if (state != 0xFF00 && state != 0x0000) return;
+    const uint8_t bit = state == 0xFF00 ? 1 : 0;
+    decode_bits(model, Table::coil, start, {&bit, 1}, 1, out);
+  } else if (pdu[0] == 0x0F && pdu.size() > 6) {
+    decode_bits(model, Table::coil, start, pdu.subspan(6), be16(pdu, 3), out);
+  }
+}
+
 void interpret_request(const DeviceModel& model, const Frame& frame, Meaning& meaning) {
   check_station(model, frame, meaning.findings);
   for (const RegisterAccess& access : accesses_of(frame.pdu())) {
@@ -261,6 +297,7 @@ void interpret_request(const DeviceModel& model, const Frame& frame, Meaning& me
       decode_span(model, access.table, access.start, access.values, meaning.registers,
                   &meaning.findings);
   }
+  decode_coil_write(model, frame.pdu(), meaning.registers);
 }
 
 void interpret_response(const DeviceModel& model, const Frame& frame, Meaning& meaning) {
@@ -282,6 +319,19 @@ void interpret_response(const DeviceModel& model, const Frame& frame, Meaning& m
         const uint16_t value = be16(pdu, 3);
         decode_span(model, Table::holding, be16(pdu, 1), {&value, 1}, meaning.registers, nullptr);
       }
+      break;
+    case 0x01:
+    case 0x02: {
+      uint16_t start = 0;
+      if (pdu.size() < 2 || !response_start_address(frame.request_pdu, start)) return;
+      const size_t count = frame.request_pdu.size() >= 5 ? be16(frame.request_pdu, 3) : 0;
+      decode_bits(model, pdu[0] == 0x01 ? Table::coil : Table::discrete, start,
+                  pdu.subspan(2, std::min<size_t>(pdu[1], pdu.size() - 2)), count,
+                  meaning.registers);
+      break;
+    }
+    case 0x05:
+      decode_coil_write(model, pdu, meaning.registers);
       break;
     default:
       break;

@@ -518,3 +518,47 @@ TEST(ModelTypes, AValueCutShortByTheFrameDecodesAsItsRawWord) {
 
 }  // namespace
 }  // namespace modtap::decoder
+
+namespace modtap::decoder {
+namespace {
+
+TEST(ModelTypes, NamedCoilsAndInputsDecodeAsBits) {
+  const DeviceModel model = parse_model(
+      "model: io\n"
+      "registers:\n"
+      "  - {address: 1, table: coil, name: pump, values: {0: Off, 1: Running}}\n"
+      "  - {address: 3, table: coil, name: valve}\n"
+      "  - {address: 2, table: discrete, name: door_open, access: R}\n",
+      "io.yaml");
+  auto frame = [](const std::vector<uint8_t>& adu, Role role) {
+    Frame f;
+    f.adu = adu;
+    f.raw = adu;
+    f.role = role;
+    f.check_ok = true;
+    return f;
+  };
+  // FC01 of coils 0-7 answered 0000 1010: coil 1 and coil 3 on.
+  const std::vector<uint8_t> read = {1, 0x01, 0, 0, 0, 8, 0, 0};
+  const std::vector<uint8_t> answer = {1, 0x01, 1, 0x0A, 0, 0};
+  Frame rsp_frame = frame(answer, Role::response);
+  rsp_frame.request_pdu = std::span<const uint8_t>(read).subspan(1, 5);
+  const Meaning rsp = interpret(model, rsp_frame);
+  ASSERT_EQ(rsp.registers.size(), 2u);
+  EXPECT_EQ(rsp.registers[0].name, "pump");
+  EXPECT_EQ(rsp.registers[0].text, "Running");
+  EXPECT_EQ(rsp.registers[1].name, "valve");
+  EXPECT_EQ(rsp.registers[1].raw, 1u);
+  // FC05 off to coil 1.
+  const std::vector<uint8_t> off = {1, 0x05, 0, 1, 0, 0, 0, 0};
+  const Meaning write = interpret(model, frame(off, Role::request));
+  ASSERT_EQ(write.registers.size(), 1u);
+  EXPECT_EQ(write.registers[0].text, "Off");
+  // A write to a read-only input is not possible by function code; a coil write to an unknown
+  // coil lists nothing.
+  const std::vector<uint8_t> unknown = {1, 0x05, 0, 9, 0xFF, 0, 0, 0};
+  EXPECT_TRUE(interpret(model, frame(unknown, Role::request)).registers.empty());
+}
+
+}  // namespace
+}  // namespace modtap::decoder
