@@ -109,8 +109,4 @@ struct RegisterLookup {
 
 RegisterLookup find_register(const DeviceModel& model, Table table, uint16_t address);
 
-const char* to_string(Table table);
-const char* to_string(Access access);
-const char* to_string(ValueType type);
-
 }  // namespace modtap::decoder

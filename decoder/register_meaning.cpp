@@ -248,7 +248,8 @@ void explain_exception(const DeviceModel& model, const Frame& frame,
   found.push_back(
       {RuleKind::exception, std::nullopt,
        it != model.exceptions.end()
-           ? fmt::format("exception {:02X}H: {} ({})", code, it->second, model.name)
+           ? fmt::format("{}exception {:02X}H: {} ({})", model.vendor_exceptions ? "vendor " : "",
+                         code, it->second, model.name)
            : fmt::format("exception {:02X}H is not one {} documents", code, model.name)});
 }
 

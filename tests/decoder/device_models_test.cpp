@@ -128,7 +128,7 @@ TEST_F(Models, Nta5000ExceptionIsExplainedWithTheVendorsMeaning) {
   const auto req = rtu("01 06 25 02 17 70");
   const Meaning m = response("nta5000", req, hex("01 86 52 C3 9D"));  // 4.3, fault response
   ASSERT_THAT(kinds(m), ElementsAre(RuleKind::exception));
-  EXPECT_THAT(m.findings[0].text, HasSubstr("Address error"));
+  EXPECT_EQ(m.findings[0].text, "vendor exception 52H: Address error (nta5000)");
 }
 
 TEST_F(Models, Nta5000StatusBitsAndFaultCodeHaveTheirNames) {
@@ -322,7 +322,7 @@ TEST_F(Models, GenericModelNamesNothingAndExplainsStandardExceptions) {
   EXPECT_EQ(m.registers[0].name, "");
   EXPECT_DOUBLE_EQ(m.registers[0].value, 42);
   const Meaning e = response("generic", rtu("01 03 00 00 00 01"), rtu("01 83 02"));
-  EXPECT_THAT(e.findings[0].text, HasSubstr("Illegal data address"));
+  EXPECT_EQ(e.findings[0].text, "exception 02H: Illegal data address (generic)");
 }
 
 // --- Identification ----------------------------------------------------------------------

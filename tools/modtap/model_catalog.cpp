@@ -129,8 +129,9 @@ int check_model_file(const std::string& file) {
       throw ModelError(
           {fmt::format("{}: extends '{}', which is not a built-in model", file, base_name)});
     const DeviceModel model = decoder::parse_model(yaml, file, base);
-    fmt::print("{}: model {} ({}): {} registers, {} exception codes{}\n", file, model.name,
-               model.title, model.registers.size(), model.exceptions.size(),
+    fmt::print("{}: model {} ({}{}{}): {} registers, {} exception codes{}\n", file, model.name,
+               model.title, model.source.empty() ? "" : ", from ", model.source,
+               model.registers.size(), model.exceptions.size(),
                model.groups ? ", parameter groups by rule" : "");
     return 0;
   } catch (const ModelError& e) {
