@@ -2,18 +2,22 @@
 """tshark captures live through modtap-extcap, as a Wireshark user would.
 
 A pty stands in for a serial port: MODTAP_EXTCAP_PORTS names it, so `tshark -D` lists it as
-modtap:/dev/pts/N. `tshark -i modtap:/dev/pts/N` then captures while known RTU traffic is
-written into the pty at 115200 baud, and the packets must be those frames, decoded by
-Wireshark's Modbus dissector with the request/response roles modtap gave them, and with the
-registers named by the device model chosen in the capture options.
+modtap:/dev/pts/N. `tshark -i modtap:/dev/pts/N` then captures twice while traffic is written
+into the pty: known frames at 115200 baud (with the NTA5000 model chosen in the capture
+options, so the registers come named), and the bus simulator's mix of every function code,
+exceptions, broadcasts and silent slaves at 19200 8E1, replayed with its own timing. The
+packets must be the frames written, with the roles modtap gives the same traffic from a file,
+decoded by Wireshark's Modbus dissector.
 
 Wireshark 4.0 looks for extcaps only in its global folder (and ignores WIRESHARK_EXTCAP_DIR
 when run as root), so the test links the build's modtap-extcap there for its duration, unless
 an installed one is already there; it then drives the build's program through the extcap
 protocol itself (--capture --fifo), exactly as tshark would, and reads the FIFO with tshark.
 
-Usage: extcap_test.py EXTCAP LUA WORK_DIR
+Usage: extcap_test.py EXTCAP LUA WORK_DIR MODTAP BUSGEN
 """
+import datetime
+import json
 import os
 import subprocess
 import sys
@@ -24,7 +28,7 @@ import tty
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
 from modbus import with_crc  # noqa: E402
 
-EXTCAP, LUA, WORK = sys.argv[1:4]
+EXTCAP, LUA, WORK, MODTAP, BUSGEN = sys.argv[1:6]
 GLOBAL_EXTCAP = "/usr/lib/x86_64-linux-gnu/wireshark/extcap"
 
 
@@ -39,11 +43,32 @@ def traffic():
     return frames
 
 
-def feed(master_fd, frames):
-    time.sleep(2.0)  # tshark starts the extcap, which opens the port
-    for _, frame in frames:
-        os.write(master_fd, frame)
-        time.sleep(0.005)  # a gap well over t3.5 (1.75 ms) between frames
+def feed(master_fd, blocks):
+    """Writes (seconds, bytes) blocks at their times, after the extcap has opened the port."""
+    time.sleep(2.0)
+    t0 = time.monotonic()
+    for at, data in blocks:
+        time.sleep(max(0.0, t0 + at - time.monotonic()))
+        os.write(master_fd, data)
+
+
+def known_blocks():
+    # A gap well over t3.5 (1.75 ms at 115200) between frames.
+    return [(i * 0.005, frame) for i, (_, frame) in enumerate(traffic())]
+
+
+def simulated_blocks(log):
+    """The simulator's frames as timed blocks, from its jpnevulator-style log."""
+    blocks, first = [], None
+    for line in open(log):
+        line = line.strip()
+        if line.endswith(":"):
+            stamp = datetime.datetime.strptime(line[:-1], "%Y-%m-%d %H:%M:%S.%f").timestamp()
+            first = stamp if first is None else first
+            blocks.append((stamp - first, bytearray()))
+        elif line:
+            blocks[-1][1].extend(bytes.fromhex(line))
+    return [(at, bytes(data)) for at, data in blocks]
 
 
 def link_extcap():
@@ -60,69 +85,106 @@ def link_extcap():
     return "tshark", lambda: os.unlink(target)
 
 
-def capture_with_tshark(port, pcapng):
+def capture_with_tshark(port, pcapng, settings):
     env = dict(os.environ, MODTAP_EXTCAP_PORTS=port)
     listed = subprocess.run(["tshark", "-D"], capture_output=True, text=True, env=env).stdout
     if f"modtap:{port}" not in listed:
         raise SystemExit(f"tshark -D does not list modtap:{port}:\n{listed}")
     pref = "extcap.modtap_" + "".join(c if c.isalnum() else "_" for c in port)
-    return subprocess.Popen(["tshark", "-i", f"modtap:{port}", "-o", f"{pref}.baud:115200",
-                             "-o", f"{pref}.parity:none", "-o", f"{pref}.model:nta5000", "-a", "duration:6",
-                             "-w", pcapng],
+    options = [x for key, value in settings.items() for x in ("-o", f"{pref}.{key}:{value}")]
+    return subprocess.Popen(["tshark", "-i", f"modtap:{port}"] + options + ["-a", "duration:8", "-w", pcapng],
                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
 
 
-def capture_with_fifo(port, pcapng):
+def capture_with_fifo(port, pcapng, settings):
     fifo = os.path.join(WORK, "extcap.fifo")
     if os.path.exists(fifo):
         os.unlink(fifo)
     os.mkfifo(fifo)
+    options = [x for key, value in settings.items() for x in (f"--{key}", value)]
     extcap = subprocess.Popen([EXTCAP, "--capture", "--extcap-interface", f"modtap:{port}",
-                               "--fifo", fifo, "--baud", "115200", "--parity", "none", "--model", "nta5000"])
+                               "--fifo", fifo] + options)
     reader = subprocess.Popen(["tshark", "-r", fifo, "-w", pcapng],
                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    threading.Timer(6.0, extcap.terminate).start()
+    threading.Timer(8.0, extcap.terminate).start()
     return reader
 
 
+def capture(name, blocks, settings):
+    """Captures `blocks` written into a fresh pty; returns tshark's rows for the packets."""
+    master, slave = os.openpty()
+    tty.setraw(master)
+    tty.setraw(slave)
+    port = os.ttyname(slave)
+    pcapng = os.path.join(WORK, name + ".pcapng")
+    how, cleanup = link_extcap()
+    try:
+        start = capture_with_tshark if how == "tshark" else capture_with_fifo
+        process = start(port, pcapng, settings)
+        feed(master, blocks)
+        _, err = process.communicate(timeout=60)
+    finally:
+        cleanup()
+        os.close(master)
+        os.close(slave)
+    fields = ["modtap.role", "modtap.check", "mbrtu.unit_id", "modbus.func_code", "frame.len",
+              "modtap.model", "modtap.register.name"]
+    args = ["tshark", "-n", "-r", pcapng, "-X", f"lua_script:{LUA}", "-o", "mbrtu.tcp.port:502",
+            "-T", "fields", "-E", "separator=|"] + [x for f in fields for x in ("-e", f)]
+    rows = [dict(zip(fields, line.split("|"))) for line in run(args).splitlines()]
+    text = run(["tshark", "-n", "-r", pcapng, "-X", f"lua_script:{LUA}", "-o", "mbrtu.tcp.port:502"])
+    unclassified = [line for line in text.splitlines() if "Unable to classify" in line]
+    print(f"{name}: captured through {how}, {len(rows)} packets")
+    return rows, unclassified, err
+
+
+def run(args):
+    return subprocess.run(args, capture_output=True, text=True).stdout
+
+
+failures = []
+
+
+def check(name, condition, message):
+    if not condition:
+        failures.append(f"{name}: {message}")
+
+
 os.makedirs(WORK, exist_ok=True)
-master, slave = os.openpty()
-tty.setraw(master)
-tty.setraw(slave)
-port = os.ttyname(slave)
-pcapng = os.path.join(WORK, "extcap.pcapng")
+
+# Known frames, and the model chosen in the capture options names the registers.
 frames = traffic()
-how, cleanup = link_extcap()
-try:
-    capture = capture_with_tshark(port, pcapng) if how == "tshark" else capture_with_fifo(port, pcapng)
-    feed(master, frames)
-    _, err = capture.communicate(timeout=60)
-finally:
-    cleanup()
-rows = subprocess.run(["tshark", "-n", "-r", pcapng, "-X", f"lua_script:{LUA}", "-o",
-                       "mbrtu.tcp.port:502", "-T", "fields", "-E", "separator=|", "-e", "modtap.role",
-                       "-e", "modtap.check", "-e", "mbrtu.unit_id", "-e", "modbus.func_code",
-                       "-e", "frame.len", "-Y", "mbrtu"],
-                      capture_output=True, text=True).stdout.splitlines()
-expected = [f"{role}|ok|{frame[0]}|{frame[1]}|{len(frame)}" for role, frame in frames]
-print(f"captured through {how}: {len(rows)} frames, {len(expected)} written")
-if rows != expected:
-    print("tshark's stderr:", err)
-    for got, want in list(zip(rows, expected))[:10]:
-        print(f"  got {got!r}, want {want!r}")
+rows, unclassified, err = capture("known", known_blocks(),
+                                  {"baud": "115200", "parity": "none", "model": "nta5000"})
+got = [(r["modtap.role"], r["modtap.check"], r["mbrtu.unit_id"], r["modbus.func_code"],
+        r["frame.len"]) for r in rows]
+want = [(role, "ok", str(frame[0]), str(frame[1]), str(len(frame))) for role, frame in frames]
+check("known", got == want, f"{got[:3]} != {want[:3]} ({err})")
+check("known", not unclassified, f"unclassified: {unclassified[:3]}")
+check("known", rows and (rows[0]["modtap.model"], rows[0]["modtap.register.name"]) == ("nta5000", "F00.00"),
+      f"registers not named by the chosen model: {rows[:1]}")
+
+# The simulator's traffic, replayed with its timing: the same frames and roles as modtap finds
+# in the simulator's file.
+log = os.path.join(WORK, "simulated.log")
+subprocess.run([BUSGEN, "-n", "100", "--seed", "31", "--format", "hexlog", "--delivery", "frames",
+                "-o", log], check=True, capture_output=True)
+expected = [json.loads(line) for line in run([MODTAP, "-r", log, "-T", "json"]).splitlines()]
+expected = [r for r in expected if r["type"] == "frame"]
+rows, unclassified, err = capture("simulated", simulated_blocks(log), {"baud": "19200", "parity": "even"})
+frames_seen = [r for r in rows if r["modtap.role"]]
+check("simulated", [(r["modtap.role"], r["modtap.check"], int(r["frame.len"])) for r in frames_seen] ==
+      [(r["role"], r["check"], len(r["raw"]) // 2) for r in expected],
+      f"{len(frames_seen)} frames captured, {len(expected)} in the file ({err})")
+decodable = [r for r in expected if r["slave"] != 0 and len(r["raw"]) >= 10]
+decoded = [r for r in frames_seen if r["mbrtu.unit_id"]]
+check("simulated", len(decoded) == len(decodable),
+      f"Wireshark decoded {len(decoded)} of {len(decodable)} frames it can take")
+check("simulated", not unclassified, f"unclassified: {unclassified[:3]}")
+
+for f in failures:
+    print("FAIL", f)
+if failures:
     sys.exit(1)
-classified = subprocess.run(["tshark", "-n", "-r", pcapng, "-X", f"lua_script:{LUA}", "-o",
-                             "mbrtu.tcp.port:502"], capture_output=True, text=True).stdout
-unclassified = [line for line in classified.splitlines() if "Unable to classify" in line]
-if unclassified:
-    print("unclassified:", unclassified[:3])
-    sys.exit(1)
-# The registers come named by the model chosen in the capture options: F00.00 is at 0000H.
-names = subprocess.run(["tshark", "-n", "-r", pcapng, "-X", f"lua_script:{LUA}", "-T", "fields",
-                        "-e", "modtap.model", "-e", "modtap.register.name", "-c", "1"],
-                       capture_output=True, text=True).stdout.strip()
-if names != "nta5000\tF00.00":
-    print("registers not named by the chosen model:", repr(names))
-    sys.exit(1)
-print("ok: every frame captured live, with modtap's roles and the model's register names, and "
-      "classified by Wireshark")
+print("ok: every frame captured live through the extcap, with modtap's roles, classified by "
+      "Wireshark, and named by the chosen model")
