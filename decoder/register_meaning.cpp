@@ -103,7 +103,7 @@ std::string string_text(std::span<const uint16_t> words) {
 std::string bits_text(const RegisterDef& def, uint32_t raw) {
   std::string text;
   for (const BitField& field : def.bits) {
-    const uint32_t mask = (1u << field.width) - 1;
+    const uint32_t mask = field.width >= 32 ? ~0u : (1u << field.width) - 1;
     const uint32_t value = (raw >> field.lsb) & mask;
     std::string part;
     if (auto it = field.values.find(value); it != field.values.end()) {
@@ -120,6 +120,11 @@ std::string bits_text(const RegisterDef& def, uint32_t raw) {
   return text;
 }
 
+// Named values are written as the manual does, signed for signed registers (-1: "no fault").
+int64_t enum_key(const RegisterDef& def, uint32_t raw) {
+  return static_cast<int64_t>(typed_value(def, raw));
+}
+
 uint32_t combine(const RegisterDef& def, uint16_t first, uint16_t second) {
   return def.order == WordOrder::high_first ? (uint32_t{first} << 16 | second)
                                             : (uint32_t{second} << 16 | first);
@@ -132,7 +137,7 @@ void check_value(const RegisterDef& def, const RegisterValue& v, std::vector<Rul
                       fmt::format("{} = {:.{}f} is outside {:g}..{:g}", v.name, v.value, v.decimals,
                                   def.min.value_or(-INFINITY), def.max.value_or(INFINITY))});
   }
-  if (def.values && !def.values->count(static_cast<int64_t>(v.raw)))
+  if (def.values && !def.values->count(enum_key(def, v.raw)))
     found->push_back({RuleKind::not_in_enum, v.address,
                       fmt::format("{} = {} is not one of its named values", v.name, v.raw)});
 }
@@ -170,7 +175,7 @@ void decode_span(const DeviceModel& model, Table table, uint16_t start,
     v.value = typed_value(*def, v.raw) * def->scale + def->offset;
     v.decimals = decimals_of(def->scale);
     if (def->values) {
-      if (auto it = def->values->find(static_cast<int64_t>(v.raw)); it != def->values->end())
+      if (auto it = def->values->find(enum_key(*def, v.raw)); it != def->values->end())
         v.text = it->second;
     } else if (!def->bits.empty()) {
       v.text = bits_text(*def, v.raw);

@@ -562,3 +562,27 @@ TEST(ModelTypes, NamedCoilsAndInputsDecodeAsBits) {
 
 }  // namespace
 }  // namespace modtap::decoder
+
+namespace modtap::decoder {
+namespace {
+
+TEST(ModelTypes, SignedRegistersMatchNegativeNamedValuesAndWideBitFieldsAreSafe) {
+  const DeviceModel model = parse_model(
+      "model: s\n"
+      "registers:\n"
+      "  - {address: 0, name: state, type: s16, values: {-1: No fault, 0: Fault}}\n"
+      "  - address: 1\n"
+      "    name: wide\n"
+      "    type: u32\n"
+      "    bits: [{bits: [0, 31], name: everything}]\n",
+      "s.yaml");
+  const std::vector<uint16_t> words = {0xFFFF, 0x1234, 0x5678};
+  std::vector<RegisterValue> out;
+  decode_registers(model, Table::holding, 0, words, out);
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_EQ(out[0].text, "No fault");
+  EXPECT_EQ(out[1].text, fmt::format("everything={}", 0x12345678u));
+}
+
+}  // namespace
+}  // namespace modtap::decoder
