@@ -22,8 +22,8 @@ std::string join_lines(const std::vector<std::string>& problems) {
 class Problems {
  public:
   explicit Problems(std::string file) : file_(std::move(file)) {}
-  void add(const YAML::Node& at, const std::string& message) {
-    const YAML::Mark mark = at.Mark();
+  void add(const YAML::Node& at, const std::string& message) { add(at.Mark(), message); }
+  void add(const YAML::Mark& mark, const std::string& message) {
     list_.push_back(mark.is_null() ? fmt::format("{}: {}", file_, message)
                                    : fmt::format("{}:{}: {}", file_, mark.line + 1, message));
   }
@@ -418,7 +418,11 @@ DeviceModel parse_model(std::string_view yaml, const std::string& file, const De
   model.title = base ? "based on " + base->name : "";
   if (root.IsMap() && root["extends"] && !base)
     problems.add(root["extends"], "extends a model that is not loaded");
-  ModelReader(model, problems).read(root);
+  try {
+    ModelReader(model, problems).read(root);
+  } catch (const YAML::Exception& e) {  // a node of an unexpected kind, a list as a key, ...
+    problems.add(e.mark.is_null() ? root.Mark() : e.mark, e.msg);
+  }
   if (!root.IsMap() && !root.IsNull()) problems.add(root, "a model file must be a YAML map");
   problems.throw_if_any();
   return model;

@@ -460,6 +460,13 @@ TEST(ModelFiles, YamlSyntaxErrorsNameTheLine) {
       },
       ModelError);
   EXPECT_THROW(parse_model("- just\n- a list\n", "list.yaml"), ModelError);
+  // A list where a name belongs: the line of the offending node, not a crash.
+  try {
+    parse_model("model: x\nenums:\n  ? [1, 2]\n  : {1: a}\n", "kinds.yaml");
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("kinds.yaml:3:"));
+  }
   EXPECT_THROW(parse_model("", "empty.yaml"), ModelError);
 }
 
