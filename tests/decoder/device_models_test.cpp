@@ -11,6 +11,7 @@
 #include "decoder/model_interpreter.hpp"
 #include "decoder/model_yaml.hpp"
 #include "decoder/register_meaning.hpp"
+#include "plugins/models/builtin_models.hpp"
 #include "tools/modtap/model_catalog.hpp"
 
 namespace modtap::decoder {
@@ -589,6 +590,44 @@ TEST(ModelTypes, SignedRegistersMatchNegativeNamedValuesAndWideBitFieldsAreSafe)
   ASSERT_EQ(out.size(), 2u);
   EXPECT_EQ(out[0].text, "No fault");
   EXPECT_EQ(out[1].text, fmt::format("everything={}", 0x12345678u));
+}
+
+}  // namespace
+}  // namespace modtap::decoder
+
+namespace modtap::decoder {
+namespace {
+
+// Damaged copies of the real model files: cut short, a character changed, a line duplicated.
+// Each must load or give ModelError with its file and line, never another exception or a crash.
+TEST(ModelFiles, DamagedFilesGiveModelErrorsOnly) {
+  size_t tried = 0, refused = 0;
+  for (const auto& builtin : models::builtin_models()) {
+    const std::string text(builtin.yaml);
+    std::vector<std::string> damaged;
+    for (size_t at = 0; at < text.size(); at += 53) {
+      damaged.push_back(text.substr(0, at));
+      std::string changed = text;
+      changed[at] = "[]{}:,-#'\"x9 \n"[at % 14];
+      damaged.push_back(changed);
+      const size_t line = text.rfind('\n', at);
+      if (line != std::string::npos) damaged.push_back(text.substr(0, line) + text.substr(line));
+    }
+    for (const auto& yaml : damaged) {
+      ++tried;
+      try {
+        const std::string base = model_base(yaml, std::string(builtin.file));
+        DeviceModel base_model;
+        parse_model(yaml, std::string(builtin.file), base.empty() ? nullptr : &base_model);
+      } catch (const ModelError& e) {
+        ++refused;
+        ASSERT_FALSE(e.problems().empty());
+        EXPECT_EQ(e.problems()[0].rfind(std::string(builtin.file) + ":", 0), 0u) << e.what();
+      }
+    }
+  }
+  EXPECT_GT(tried, 500u);
+  EXPECT_GT(refused, tried / 4);  // the damage is mostly noticed
 }
 
 }  // namespace
