@@ -38,6 +38,17 @@ std::vector<uint8_t> rtu(const std::string& body) {
   return adu;
 }
 
+// A frame as the matcher hands it on; `adu` must outlive it.
+Frame frame_of(const std::vector<uint8_t>& adu, Role role, Mode mode = Mode::rtu) {
+  Frame f;
+  f.adu = adu;
+  f.raw = adu;
+  f.role = role;
+  f.mode = mode;
+  f.check_ok = true;
+  return f;
+}
+
 class Models : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -53,13 +64,7 @@ class Models : public ::testing::Test {
   }
 
   Frame frame(const std::vector<uint8_t>& adu, Role role, Mode mode = Mode::rtu) {
-    Frame f;
-    f.adu = adu;
-    f.raw = adu;
-    f.role = role;
-    f.mode = mode;
-    f.check_ok = true;
-    return f;
+    return frame_of(adu, role, mode);
   }
 
   Meaning request(const char* name, const std::vector<uint8_t>& adu, Mode mode = Mode::rtu) {
@@ -471,12 +476,6 @@ TEST(ModelFiles, YamlSyntaxErrorsNameTheLine) {
   EXPECT_THROW(parse_model("", "empty.yaml"), ModelError);
 }
 
-}  // namespace
-}  // namespace modtap::decoder
-
-namespace modtap::decoder {
-namespace {
-
 // Value types that the built-in models do not use, on a model of their own.
 TEST(ModelTypes, MultiWordStringBcdAndOffsetValuesDecode) {
   const DeviceModel model = parse_model(
@@ -524,12 +523,6 @@ TEST(ModelTypes, AValueCutShortByTheFrameDecodesAsItsRawWord) {
   EXPECT_EQ(out[0].raw, 1u);
 }
 
-}  // namespace
-}  // namespace modtap::decoder
-
-namespace modtap::decoder {
-namespace {
-
 TEST(ModelTypes, NamedCoilsAndInputsDecodeAsBits) {
   const DeviceModel model = parse_model(
       "model: io\n"
@@ -538,14 +531,7 @@ TEST(ModelTypes, NamedCoilsAndInputsDecodeAsBits) {
       "  - {address: 3, table: coil, name: valve}\n"
       "  - {address: 2, table: discrete, name: door_open, access: R}\n",
       "io.yaml");
-  auto frame = [](const std::vector<uint8_t>& adu, Role role) {
-    Frame f;
-    f.adu = adu;
-    f.raw = adu;
-    f.role = role;
-    f.check_ok = true;
-    return f;
-  };
+  const auto frame = [](const std::vector<uint8_t>& adu, Role role) { return frame_of(adu, role); };
   // FC01 of coils 0-7 answered 0000 1010: coil 1 and coil 3 on.
   const std::vector<uint8_t> read = {1, 0x01, 0, 0, 0, 8, 0, 0};
   const std::vector<uint8_t> answer = {1, 0x01, 1, 0x0A, 0, 0};
@@ -568,12 +554,6 @@ TEST(ModelTypes, NamedCoilsAndInputsDecodeAsBits) {
   EXPECT_TRUE(interpret(model, frame(unknown, Role::request)).registers.empty());
 }
 
-}  // namespace
-}  // namespace modtap::decoder
-
-namespace modtap::decoder {
-namespace {
-
 TEST(ModelTypes, SignedRegistersMatchNegativeNamedValuesAndWideBitFieldsAreSafe) {
   const DeviceModel model = parse_model(
       "model: s\n"
@@ -591,12 +571,6 @@ TEST(ModelTypes, SignedRegistersMatchNegativeNamedValuesAndWideBitFieldsAreSafe)
   EXPECT_EQ(out[0].text, "No fault");
   EXPECT_EQ(out[1].text, fmt::format("everything={}", 0x12345678u));
 }
-
-}  // namespace
-}  // namespace modtap::decoder
-
-namespace modtap::decoder {
-namespace {
 
 // Damaged copies of the real model files: cut short, a character changed, a line duplicated.
 // Each must load or give ModelError with its file and line, never another exception or a crash.
