@@ -77,8 +77,6 @@ std::optional<uint32_t> fixed_baud(const Options& o) {
   return static_cast<uint32_t>(std::stoul(o.baud));
 }
 
-std::optional<decoder::Parity> fixed_parity(const Options& o);
-
 std::optional<decoder::Parity> fixed_parity(const Options& o) {
   if (o.parity == "auto") return std::nullopt;
   return decoder::parity_named(o.parity);
@@ -176,18 +174,18 @@ std::unique_ptr<captures::RawRecorder> raw_recorder(
 }
 
 // After a run whose traffic made little sense, or came faster than the baud allows, say so.
-void hint_settings(const Options& o, const decoder::LineHealth& health,
+void hint_settings(const decoder::SerialFormat& format, const decoder::LineHealth& health,
                    const decoder::ChunkPace& pace) {
   if (pace.too_fast())
     fmt::print(stderr,
-               "modtap: hint: bytes arrive faster than {} baud allows ({} of {} reads); "
+               "modtap: hint: bytes arrive faster than {} allows ({} of {} reads); "
                "the line is faster: try --baud auto\n",
-               decoder::describe(serial_format(o)), pace.fast_reads, pace.reads);
+               decoder::describe(format), pace.fast_reads, pace.reads);
   else if (health.looks_wrong())
     fmt::print(stderr,
                "modtap: hint: only {:.0f}% of {} bytes formed frames with a good check; are {} "
                "the line's settings? try --baud auto\n",
-               100 * health.good_share(), health.bytes, decoder::describe(serial_format(o)));
+               100 * health.good_share(), health.bytes, decoder::describe(format));
 }
 
 int read_file(const Options& o) {
@@ -219,7 +217,7 @@ int read_file(const Options& o) {
   bus.finish();
   print_summary(o, out, sinks);
   out.flush();
-  hint_settings(o, health, pace);
+  hint_settings(open.serial, health, pace);
   return 0;
 }
 
