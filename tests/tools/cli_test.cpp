@@ -233,6 +233,23 @@ TEST(Cli, ModelsDirAddsTheUsersModels) {
   EXPECT_NE(r.lines[1].find("| pump_speed=10.0 rpm"), std::string::npos) << r.lines[1];
 }
 
+TEST(Cli, TheDrivesSampleReadsInEachDrivesTerms) {
+  const Outcome r = run(std::string("-r ") + MODTAP_SAMPLES +
+                        "/drives-manual-examples.log --model 1=nta5000 --model 2=n3");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_EQ(r.lines.size(), 30u);
+  auto line_has = [&](size_t i, const std::string& text) {
+    EXPECT_NE(r.lines[i].find(text), std::string::npos) << r.lines[i];
+  };
+  line_has(3, "| frequency_command=60.00 Hz");
+  line_has(9, "!! vendor exception 53H: Data amount error (nta5000)");
+  line_has(13, "| frequency_command=50.00 Hz");
+  line_has(17, "!! slave 3 identifies as gd20");
+  line_has(19, "| control_command=Forward running (1)");
+  line_has(23, "output_torque=-10.0 %");
+  line_has(26, "!! P00.01 = 3 is outside 0..2");
+}
+
 TEST(Cli, AnUnknownModelIsAClearError) {
   const Outcome r = run(brainchild + " --model nosuch");
   EXPECT_NE(r.status, 0);

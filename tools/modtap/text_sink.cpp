@@ -24,11 +24,13 @@ const char* role_tag(Role role) {
   return "?";
 }
 
-// Register addresses as the manuals write them (2502H), so a line can be read beside the manual;
-// JSON keeps them as numbers.
+// Register addresses and exception codes as the manuals write them (2502H, 52H), so a line can
+// be read beside the manual; JSON keeps them as numbers.
 void append_field(fmt::memory_buffer& buf, const Field& f, size_t max_items) {
   if (f.kind == Field::Kind::number && f.key.ends_with("address")) {
     fmt::format_to(std::back_inserter(buf), "{:04X}H", f.number);
+  } else if (f.kind == Field::Kind::number && f.key == "exception_code") {
+    fmt::format_to(std::back_inserter(buf), "{:02X}H", f.number);  // vendors' tables say 52H
   } else {
     append_text_value(buf, f, max_items);
   }
