@@ -55,6 +55,9 @@ struct FormatTrial {
   uint64_t good_frame_bytes = 0;
   uint64_t frames = 0;
   uint64_t good_frames = 0;
+
+  // A clean, sizeable read: evidence enough to stop trying (the common settings come first).
+  bool convincing() const { return good_frames >= 4 && good_frame_bytes * 10 >= bytes * 9; }
 };
 
 // Settings to try, the common ones first: a fixed value narrows its dimension to itself.

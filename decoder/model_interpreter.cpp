@@ -45,7 +45,7 @@ void ModelInterpreter::identify(const Frame& frame) {
     if (chosen == model) return;
     std::string text = fmt::format("slave {} identifies as {} ({:04X}H = {:04X}H)", slave,
                                    model->name, id->address, id->value);
-    if (choice_.by_slave.count(slave) || !choice_.apply_identified) {
+    if (choice_.by_slave.count(slave)) {
       text += fmt::format(", but is decoded as {}", chosen ? chosen->name : "nothing");
     } else {
       identified_[slave] = model;

@@ -13,7 +13,6 @@ namespace modtap::decoder {
 struct ModelChoice {
   const DeviceModel* bus = nullptr;                // for slaves not named below
   std::map<uint8_t, const DeviceModel*> by_slave;  // --model SLAVE=MODEL
-  bool apply_identified = true;  // decode a slave that identifies itself with its model
 };
 
 class ModelInterpreter final : public RecordSink {

@@ -160,6 +160,9 @@ void decode_span(const DeviceModel& model, Table table, uint16_t start,
     }
     v.name = lookup.via_alias ? def->name + " (RAM)" : def->name;
     v.label = def->label;
+    if (lookup.via_alias)  // say what the alias does: "RAM only, not stored in EEPROM"
+      v.label = v.label.empty() ? model.alias->label
+                                : fmt::format("{} ({})", v.label, model.alias->label);
     v.unit = def->unit;
     if (def->type == ValueType::string) {
       const size_t n = std::min<size_t>(def->words, words.size() - i);

@@ -271,6 +271,7 @@ TEST_F(Models, ReadsOfWriteOnlyRegistersAndAliasesAreFound) {
   const Meaning alias_write = request("gd20", rtu("01 06 80 07 00 05"));
   EXPECT_THAT(alias_write.findings, IsEmpty());
   EXPECT_EQ(alias_write.registers[0].name, "P00.07 (RAM)");
+  EXPECT_EQ(alias_write.registers[0].label, "RAM only, not stored in EEPROM");
 }
 
 TEST_F(Models, MoreWordsThanTheModelAllowsAreFoundPerMode) {

@@ -120,8 +120,7 @@ ProbeResult probe_ports(const std::vector<PortSpec>& specs, const LiveOptions& o
     };
     trials.push_back(decoder::try_format(analyzer, channels, next, 64 * 1024));
     fmt::print(stderr, "modtap: listened as {}\n", decoder::describe(trials.back()));
-    const auto& t = trials.back();
-    if (t.good_frames >= 4 && t.good_frame_bytes * 10 >= t.bytes * 9) break;
+    if (trials.back().convincing()) break;
   }
   if (trials.empty()) return {base, {}};
   const auto& best = decoder::best_trial(trials);

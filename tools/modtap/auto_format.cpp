@@ -50,9 +50,7 @@ SerialFormat choose_file_format(const std::string& path, captures::OpenOptions o
   std::vector<FormatTrial> trials;
   for (const auto& format : candidates) {
     trials.push_back(trial(path, open, analyzer, format));
-    const auto& t = trials.back();
-    // A clean, sizeable read is evidence enough; the common settings come first.
-    if (t.good_frames >= 4 && t.good_frame_bytes * 10 >= t.bytes * 9) break;
+    if (trials.back().convincing()) break;
   }
   // An early stop leaves the other parities at the winning baud untried: try them, since a
   // line with long stop gaps can read cleanly under more than one.
