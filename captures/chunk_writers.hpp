@@ -3,10 +3,11 @@
 // traffic to modtap's own readers and to tshark.
 #pragma once
 
-#include <cstdio>
-#include <memory>
 #include <string>
 
+#include <fmt/format.h>
+
+#include "captures/output_file.hpp"
 #include "decoder/records.hpp"
 
 struct pcap;
@@ -16,7 +17,7 @@ namespace modtap::captures {
 
 class PcapChunkWriter {
  public:
-  // Throws CaptureError when the file cannot be created.
+  // Throws CaptureError when the file cannot be created, WriteError when it cannot be written.
   PcapChunkWriter(const std::string& path, int dlt);
   ~PcapChunkWriter();
   PcapChunkWriter(const PcapChunkWriter&) = delete;
@@ -27,6 +28,7 @@ class PcapChunkWriter {
  private:
   pcap* dead_ = nullptr;
   pcap_dumper* dumper_ = nullptr;
+  std::string path_;
 };
 
 class HexlogWriter {
@@ -34,9 +36,11 @@ class HexlogWriter {
   // `char_time_ns` lets the stamp name the block's first byte, as jpnevulator's read does.
   HexlogWriter(const std::string& path, int64_t char_time_ns);
   void write(const decoder::Chunk& chunk, const std::string& tty = {});
+  void close() { file_.close(); }
 
  private:
-  std::unique_ptr<FILE, int (*)(FILE*)> file_;
+  OutputFile file_;
+  fmt::memory_buffer line_;
   int64_t char_time_ns_;
 };
 

@@ -1,12 +1,6 @@
 #include "captures/pcapng_writer.hpp"
 
-#include <cerrno>
-#include <cstring>
 #include <vector>
-
-#include <fmt/format.h>
-
-#include "captures/chunk_source.hpp"
 
 namespace modtap::captures {
 namespace {
@@ -57,28 +51,30 @@ class Body {
 
 }  // namespace
 
-PcapngWriter::PcapngWriter(const std::string& path) : owned_(path != "-"), path_(path) {
-  file_ = owned_ ? std::fopen(path.c_str(), "wb") : stdout;
-  if (!file_) throw CaptureError(fmt::format("{}: cannot create: {}", path, std::strerror(errno)));
+PcapngWriter::PcapngWriter(const std::string& path) : file_(path) {
   write_section_header();
 }
 
-PcapngWriter::PcapngWriter(FILE* stream, bool live) : file_(stream), live_(live), path_("stream") {
+PcapngWriter::PcapngWriter(FILE* stream, std::string name, bool live)
+    : file_(stream, std::move(name)), live_(live) {
   write_section_header();
   flush();
 }
 
-PcapngWriter::~PcapngWriter() {
-  flush();
-  if (owned_) std::fclose(file_);
-}
-
+// One write per block, so a failure leaves the file whole up to its last complete block
+// (as far as the C library's buffer allows: it writes whole buffers, never half a call).
 void PcapngWriter::write_block(uint32_t type, std::span<const uint8_t> body) {
   const uint32_t total = static_cast<uint32_t>(12 + body.size());
-  std::fwrite(&type, 4, 1, file_);
-  std::fwrite(&total, 4, 1, file_);
-  std::fwrite(body.data(), 1, body.size(), file_);
-  std::fwrite(&total, 4, 1, file_);
+  block_.clear();
+  auto put = [&](const void* p, size_t n) {
+    const auto* b = static_cast<const uint8_t*>(p);
+    block_.insert(block_.end(), b, b + n);
+  };
+  put(&type, 4);
+  put(&total, 4);
+  put(body.data(), body.size());
+  put(&total, 4);
+  file_.write(block_);
 }
 
 void PcapngWriter::write_section_header() {
@@ -126,7 +122,11 @@ void PcapngWriter::write_packet(uint32_t interface, int64_t t_ns, std::span<cons
 }
 
 void PcapngWriter::flush() {
-  std::fflush(file_);
+  file_.flush();
+}
+
+void PcapngWriter::close() {
+  file_.close();
 }
 
 }  // namespace modtap::captures

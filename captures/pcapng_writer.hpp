@@ -9,6 +9,9 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
+
+#include "captures/output_file.hpp"
 
 namespace modtap::captures {
 
@@ -16,11 +19,10 @@ enum class PacketDirection : uint8_t { unknown = 0, inbound = 1, outbound = 2 };
 
 class PcapngWriter {
  public:
-  // Throws CaptureError when the file cannot be created. "-" writes to standard output.
+  // Throws WriteError when the file cannot be created or written. "-" is standard output.
   explicit PcapngWriter(const std::string& path);
   // Takes an open stream (an extcap FIFO); flushes after every packet when `live`.
-  PcapngWriter(FILE* stream, bool live);
-  ~PcapngWriter();
+  PcapngWriter(FILE* stream, std::string name, bool live);
   PcapngWriter(const PcapngWriter&) = delete;
   PcapngWriter& operator=(const PcapngWriter&) = delete;
 
@@ -29,16 +31,17 @@ class PcapngWriter {
   void write_packet(uint32_t interface, int64_t t_ns, std::span<const uint8_t> data,
                     PacketDirection direction, std::string_view comment);
   void flush();
+  // Writes out what is buffered and closes the file, reporting any failure.
+  void close();
 
  private:
   void write_section_header();
   void write_block(uint32_t type, std::span<const uint8_t> body);
 
-  FILE* file_ = nullptr;
-  bool owned_ = false;
+  OutputFile file_;
+  std::vector<uint8_t> block_;  // the block being written, kept to reuse its memory
   bool live_ = false;
   uint32_t interfaces_ = 0;
-  std::string path_;
 };
 
 }  // namespace modtap::captures

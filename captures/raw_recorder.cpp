@@ -38,4 +38,9 @@ void RawRecorder::flush() {
   if (pcapng_) pcapng_->flush();
 }
 
+void RawRecorder::close() {
+  if (pcapng_) pcapng_->close();
+  if (hexlog_) hexlog_->close();
+}
+
 }  // namespace modtap::captures

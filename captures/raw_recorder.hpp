@@ -16,11 +16,12 @@ namespace modtap::captures {
 
 class RawRecorder {
  public:
-  // Throws CaptureError when the file cannot be created.
+  // Throws WriteError when the file cannot be created or written.
   RawRecorder(const std::string& path, std::vector<decoder::ChannelInfo> channels,
               int64_t char_time_ns);
   void write(const decoder::Chunk& chunk);
   void flush();
+  void close();
 
  private:
   std::vector<decoder::ChannelInfo> channels_;

@@ -16,9 +16,9 @@ struct Outcome {
   std::vector<std::string> lines;
 };
 
-Outcome run(const std::string& args) {
+// Runs a shell command; its standard output as lines.
+Outcome run_shell(const std::string& command) {
   Outcome r;
-  const std::string command = std::string(MODTAP_BINARY) + " " + args + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   char buf[65536];
   while (pipe && std::fgets(buf, sizeof buf, pipe)) {
@@ -28,6 +28,10 @@ Outcome run(const std::string& args) {
   }
   r.status = pipe ? pclose(pipe) : -1;
   return r;
+}
+
+Outcome run(const std::string& args) {
+  return run_shell(std::string(MODTAP_BINARY) + " " + args + " 2>&1");
 }
 
 const std::string brainchild = std::string("-r ") + MODTAP_SAMPLES +
@@ -255,6 +259,95 @@ TEST(Cli, AnUnknownModelIsAClearError) {
   EXPECT_NE(r.status, 0);
   ASSERT_FALSE(r.lines.empty());
   EXPECT_EQ(r.lines.back(), "modtap: no model named 'nosuch' (modtap models lists them)");
+}
+
+// Writes that fail: a full disk, a closed pipe, outputs that would destroy the input.
+
+// A raw capture of `n` read requests, big enough to fill pipes and small size limits.
+std::string many_requests(const std::string& name, int n) {
+  std::vector<std::vector<uint8_t>> bodies;
+  for (int i = 0; i < n; ++i)
+    bodies.push_back({1, 0x03, static_cast<uint8_t>(i >> 8), static_cast<uint8_t>(i), 0, 1});
+  return raw_capture(name, bodies);
+}
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+TEST(Cli, AFullDeviceIsAnErrorNamingTheFileNotASilentSuccess) {
+  const std::string capture = many_requests("full-device.raw", 50);
+  for (const char* args :
+       {" -w /dev/full 2>&1", " -T json 2>&1 >/dev/full", " -T none --save-raw /dev/full 2>&1"}) {
+    const Outcome r =
+        run_shell(std::string(MODTAP_BINARY) + " -r " + capture + " --baud 9600" + args);
+    EXPECT_NE(r.status, 0) << args;
+    ASSERT_FALSE(r.lines.empty()) << args;
+    const std::string name =
+        std::string(args).find(">/dev/full") != std::string::npos ? "standard output" : "/dev/full";
+    EXPECT_EQ(r.lines.back(), "modtap: cannot write " + name + ": No space left on device") << args;
+  }
+}
+
+TEST(Cli, ADiskThatFillsLeavesAPcapngThatReadsUpToItsLastCompleteBlock) {
+  const std::string capture = many_requests("disk-fills.raw", 2000);
+  const auto cut = (std::filesystem::temp_directory_path() / "disk-fills.pcapng").string();
+  // The shell's file-size limit stands in for a full disk: writes past it fail with EFBIG.
+  const std::string limited = "sh -c 'trap \"\" XFSZ; ulimit -f 64; " + std::string(MODTAP_BINARY) +
+                              " -r " + capture + " --baud 9600 -w " + cut + "' 2>&1";
+  FILE* pipe = popen(limited.c_str(), "r");
+  char message[512] = {};
+  const bool said = std::fgets(message, sizeof message, pipe) != nullptr;
+  EXPECT_NE(pclose(pipe), 0);
+  ASSERT_TRUE(said);
+  EXPECT_EQ(std::string(message), "modtap: cannot write " + cut + ": File too large\n");
+
+  const Outcome back = run("-r " + cut + " -T json");
+  EXPECT_NE(back.status, 0);  // the file is cut: reading it says so, after its frames
+  ASSERT_GT(back.lines.size(), 100u);
+  EXPECT_NE(back.lines.back().find("truncated"), std::string::npos) << back.lines.back();
+  for (size_t i = 0; i + 1 < back.lines.size(); ++i) {
+    ASSERT_EQ(back.lines[i].find("\"check\":\"bad\""), std::string::npos) << back.lines[i];
+    ASSERT_EQ(back.lines[i].find("noise"), std::string::npos) << back.lines[i];
+  }
+}
+
+TEST(Cli, AClosedPipeEndsTheRunWithoutAMessageAndClosesItsFiles) {
+  const std::string capture = many_requests("closed-pipe.raw", 20000);
+  const auto dir = std::filesystem::temp_directory_path();
+  const auto errors = (dir / "closed-pipe.err").string(),
+             kept = (dir / "closed-pipe.pcapng").string();
+  const std::string command = std::string(MODTAP_BINARY) + " -r " + capture +
+                              " --baud 9600 -T json -w " + kept + " 2>" + errors +
+                              " | head -1 >/dev/null";
+  ASSERT_EQ(std::system(command.c_str()), 0);  // head's status: the pipeline ran
+  EXPECT_EQ(read_text(errors), "");
+  // The pcapng beside the pipe ends on a whole block: it reads back without an error.
+  const Outcome back = run("-r " + kept + " -T none");
+  EXPECT_EQ(back.status, 0);
+  EXPECT_TRUE(back.lines.empty()) << back.lines[0];
+}
+
+TEST(Cli, RefusesOutputsThatWouldOverwriteTheInputOrEachOther) {
+  const std::string capture = many_requests("refused.raw", 10);
+  const auto size = std::filesystem::file_size(capture);
+  const auto other = (std::filesystem::temp_directory_path() / "refused.pcapng").string();
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {"-w " + capture, "modtap: -w " + capture + " would overwrite the capture being read"},
+      {"--save-raw " + capture,
+       "modtap: --save-raw " + capture + " would overwrite the capture being read"},
+      {"-w " + other + " --save-raw " + other, "modtap: -w and --save-raw both name " + other},
+      {"-w - -T text", "modtap: -w - and -T text would both write to standard output"},
+      {"-w - -T json", "modtap: -w - and -T json would both write to standard output"},
+  };
+  for (const auto& [args, message] : cases) {
+    const Outcome r = run("-r " + capture + " --baud 9600 " + args);
+    EXPECT_EQ(r.status >> 8, 2) << args;
+    ASSERT_EQ(r.lines.size(), 1u) << args;
+    EXPECT_EQ(r.lines[0], message);
+  }
+  EXPECT_EQ(std::filesystem::file_size(capture), size);
 }
 
 }  // namespace

@@ -27,14 +27,11 @@ int write(const busgen::BusCapture& capture, const std::string& format, busgen::
   } else if (format == "hexlog") {
     captures::HexlogWriter writer(path, char_ns);
     for (const auto& c : chunks) writer.write(chunk(c));
+    writer.close();
   } else {
-    FILE* f = path == "-" ? stdout : std::fopen(path.c_str(), "wb");
-    if (!f) {
-      std::perror(path.c_str());
-      return 2;
-    }
-    std::fwrite(capture.bytes.data(), 1, capture.bytes.size(), f);
-    if (f != stdout) std::fclose(f);
+    captures::OutputFile file(path);
+    file.write(capture.bytes);
+    file.close();
   }
   return 0;
 }

@@ -3,6 +3,7 @@
 // --capture --fifo PATH; it writes pcapng (DLT_USER0 with modtap's verdicts) to the FIFO.
 #include <dirent.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -128,7 +129,7 @@ int main(int argc, char** argv) {
     const auto& stop = live::stop_on_signals();
     FILE* out = std::fopen(fifo.c_str(), "wb");
     if (!out) throw std::runtime_error(fifo + ": cannot open the FIFO");
-    captures::PcapngWriter writer(out, true);
+    captures::PcapngWriter writer(out, fifo, true);
     const std::vector<decoder::ChannelInfo> channels{{port, decoder::ChannelRole::bus}};
     captures::PcapngSink pcapng(writer, channels, {});
     decoder::ModelInterpreter sink(catalog.all(), catalog.choose({model}), pcapng);
@@ -139,8 +140,8 @@ int main(int argc, char** argv) {
     options.analyzer.mode = decoder::mode_named(mode);
     const int status =
         live::run_live({{port, port, decoder::ChannelRole::bus}}, options, sink, stop);
-    writer.flush();
-    std::fclose(out);
+    writer.close();
+    if (std::fclose(out) != 0) throw captures::WriteError(fifo, errno);
     return status;
   } catch (const std::exception& e) {
     fmt::print(stderr, "modtap-extcap: {}\n", e.what());

@@ -2,7 +2,9 @@
 // sink together; the work happens in decoder/ and captures/.
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
@@ -144,6 +146,10 @@ class Sinks {
     return interpreter_ ? static_cast<decoder::RecordSink&>(*interpreter_) : fan_out_;
   }
   decoder::RecordSink& terminal() { return *terminal_; }
+  // The end of a run: the pcapng file is complete, or its failure is reported.
+  void close() {
+    if (pcapng_) pcapng_->close();
+  }
 
  private:
   FanOut fan_out_;
@@ -153,6 +159,35 @@ class Sinks {
   std::unique_ptr<captures::PcapngWriter> pcapng_;
   std::unique_ptr<captures::PcapngSink> pcapng_sink_;
 };
+
+bool same_file(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  if (fs::equivalent(a, b, error)) return true;
+  return fs::weakly_canonical(a, error) == fs::weakly_canonical(b, error) && !error;
+}
+
+// Outputs that would destroy the input or each other, or mix two formats on one stream.
+std::optional<std::string> refuse_outputs(const Options& o) {
+  const std::vector<std::pair<const char*, std::string>> files{{"-w", o.write_file},
+                                                               {"--save-raw", o.save_raw}};
+  for (size_t i = 0; i < files.size(); ++i) {
+    const auto& [option, path] = files[i];
+    if (path.empty() || path == "-") continue;
+    if (!o.read_file.empty() && o.read_file != "-" && same_file(path, o.read_file))
+      return fmt::format("{} {} would overwrite the capture being read", option, path);
+    for (size_t j = i + 1; j < files.size(); ++j)
+      if (!files[j].second.empty() && same_file(path, files[j].second))
+        return fmt::format("{} and {} both name {}", option, files[j].first, path);
+  }
+  const bool terminal_output = o.output == "text" || o.output == "json" || o.output == "stats";
+  if (terminal_output && (o.write_file == "-" || o.save_raw == "-"))
+    return fmt::format("{} - and -T {} would both write to standard output",
+                       o.write_file == "-" ? "-w" : "--save-raw", o.output);
+  if (o.write_file == "-" && o.save_raw == "-")
+    return std::string("-w - and --save-raw - would both write to standard output");
+  return std::nullopt;
+}
 
 int list_models(const Options& o) {
   const tools::ModelCatalog catalog = load_models(o);
@@ -200,7 +235,8 @@ int read_file(const Options& o) {
                                             fixed_baud(o), fixed_parity(o));
   auto source = captures::open_capture(o.read_file, open);
 
-  tools::Output out(stdout);
+  captures::OutputFile standard_output(stdout, "standard output");
+  tools::Output out(standard_output);
   Sinks sinks(o, out, source->channels());
   decoder::LineHealth health(&sinks.all());
   decoder::AnalyzerOptions options = analyzer_options(o, source->clock());
@@ -209,14 +245,24 @@ int read_file(const Options& o) {
   decoder::ChunkPace pace(open.serial);
   auto raw = raw_recorder(o, source->channels(), open.serial);
   decoder::Chunk chunk;
-  while (source->next(chunk)) {
-    if (source->clock() == decoder::ClockQuality::per_chunk) pace.add(chunk);
-    if (raw) raw->write(chunk);
-    bus.push(chunk);
+  // A capture that breaks off (a truncated file) still gives everything read before the
+  // break, in every output, and then the error.
+  std::optional<captures::CaptureError> broken;
+  try {
+    while (source->next(chunk)) {
+      if (source->clock() == decoder::ClockQuality::per_chunk) pace.add(chunk);
+      if (raw) raw->write(chunk);
+      bus.push(chunk);
+    }
+  } catch (const captures::CaptureError& e) {
+    broken = e;
   }
   bus.finish();
   print_summary(o, out, sinks);
   out.flush();
+  sinks.close();
+  if (raw) raw->close();
+  if (broken) throw *broken;
   hint_settings(open.serial, health, pace);
   return 0;
 }
@@ -229,7 +275,8 @@ int listen(const Options& o) {
     channels.push_back({ports.back().name, ports.back().role});
   }
   const auto& stop = live::stop_on_signals();
-  tools::Output out(stdout);
+  captures::OutputFile standard_output(stdout, "standard output");
+  tools::Output out(standard_output);
   out.set_line_buffered(true);
   Sinks sinks(o, out, channels);
   live::LiveOptions options;
@@ -247,6 +294,9 @@ int listen(const Options& o) {
   options.status_line = isatty(STDERR_FILENO) && (o.output != "text" || !isatty(STDOUT_FILENO));
   const int status = live::run_live(ports, options, sinks.all(), stop);
   print_summary(o, out, sinks);
+  out.flush();
+  sinks.close();
+  if (raw) raw->close();
   return status;
 }
 
@@ -306,6 +356,7 @@ int main(int argc, char** argv) {
   auto* check = models->add_subcommand("check", "Validate a model file");
   check->add_option("FILE", check_file, "Model file (YAML)")->required();
   CLI11_PARSE(app, argc, argv);
+  signal(SIGPIPE, SIG_IGN);  // a closed pipe is a failed write (EPIPE), handled below
   if (!o.write_file.empty() && output->count() == 0) o.output = "none";  // as tshark -w
   try {
     if (check->parsed()) return tools::check_model_file(check_file);
@@ -318,7 +369,16 @@ int main(int argc, char** argv) {
       fmt::print(stderr, "modtap: at most two ports (master=PATH slave=PATH)\n");
       return 2;
     }
+    if (auto refusal = refuse_outputs(o)) {
+      fmt::print(stderr, "modtap: {}\n", *refusal);
+      return 2;
+    }
     return o.interfaces.empty() ? read_file(o) : listen(o);
+  } catch (const captures::WriteError& e) {
+    // The reader went away (`| head`): no message, but not success either, as with tshark.
+    if (e.broken_pipe()) return 2;
+    fmt::print(stderr, "modtap: cannot write {}\n", e.what());
+    return 2;
   } catch (const std::exception& e) {
     std::fflush(stdout);
     fmt::print(stderr, "modtap: {}\n", e.what());

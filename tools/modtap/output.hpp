@@ -1,17 +1,24 @@
 // A buffered writer for sinks: records are appended with fmt::format_to and written out about
-// every 64 KiB, so there is no string and no system call per record.
+// every 64 KiB, so there is no string and no system call per record. Writes are checked
+// (captures::OutputFile): a failure throws WriteError.
 #pragma once
 
-#include <cstdio>
-
 #include <fmt/format.h>
+
+#include "captures/output_file.hpp"
 
 namespace modtap::tools {
 
 class Output {
  public:
-  explicit Output(FILE* file) : file_(file) {}
-  ~Output() { flush(); }
+  explicit Output(captures::OutputFile& file) : file_(file) {}
+  ~Output() {
+    try {
+      flush();
+    } catch (const captures::WriteError&) {
+      // Unwinding already: the failure that matters is being reported.
+    }
+  }
   Output(const Output&) = delete;
   Output& operator=(const Output&) = delete;
 
@@ -25,14 +32,14 @@ class Output {
     if (buffer_.size() >= (1 << 16) || line_buffered_) flush();
   }
   void flush() {
-    if (buffer_.size()) std::fwrite(buffer_.data(), 1, buffer_.size(), file_);
+    file_.write(std::string_view(buffer_.data(), buffer_.size()));
     buffer_.clear();
-    std::fflush(file_);
+    file_.flush();
   }
   void set_line_buffered(bool on) { line_buffered_ = on; }
 
  private:
-  FILE* file_;
+  captures::OutputFile& file_;
   fmt::memory_buffer buffer_;
   bool line_buffered_ = false;
 };
