@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string_view>
 #include <variant>
@@ -31,6 +32,7 @@ struct AnalyzerOptions {
   SerialFormat format;
   ClockQuality clock = ClockQuality::per_chunk;
   int64_t timeout_ns = 1'000'000'000;
+  std::map<uint8_t, int64_t> slave_timeout_ns;  // slaves whose model sets their own time-out
   int64_t ascii_char_timeout_ns = 1'000'000'000;
   int64_t chunk_jitter_ns = 20'000'000;
 };

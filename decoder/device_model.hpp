@@ -15,7 +15,8 @@
 namespace modtap::decoder {
 
 enum class Table : uint8_t { coil, discrete, holding, input };
-enum class ValueType : uint8_t { u16, s16, u32, s32, f32, bcd, string, raw };
+// `code`: a 16-bit value the manual writes in hex (an identifying code, 0106H), shown so.
+enum class ValueType : uint8_t { u16, s16, u32, s32, f32, bcd, string, code, raw };
 enum class Access : uint8_t { read, write, read_write };
 enum class WordOrder : uint8_t { high_first, low_first };
 
@@ -86,6 +87,10 @@ struct DeviceModel {
   bool vendor_exceptions = false;  // the codes mean what the vendor says, not what Modbus says
   WordLimits rtu_limits;
   WordLimits ascii_limits;
+  // How long the master waits for a response, and how often it then asks again (N3: 400 ms,
+  // 2 retries): modtap's time-out for these slaves unless --timeout is given.
+  std::optional<int64_t> response_timeout_ns;
+  std::optional<uint8_t> retries;
   bool same_group_only = false;  // a multi-register access must stay inside one GGxxH block
   std::optional<ParameterGroups> groups;
   std::optional<WriteOnlyAlias> alias;

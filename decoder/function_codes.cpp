@@ -40,6 +40,7 @@ L device_identification_response(std::span<const uint8_t> p) {
 
 L request_length(std::span<const uint8_t> p) {
   const uint8_t fc = p[1];
+  if (fc & 0x80) return L::invalid();  // the exception bit: only responses carry it
   auto quantity_at_4 = [&](unsigned lo, unsigned hi) {
     if (p.size() < 6) return L::need_more();
     return in_range(be16(p, 4), lo, hi) ? L::known(6) : L::invalid();

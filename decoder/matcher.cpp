@@ -84,12 +84,13 @@ void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
 Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role) const {
   if (channel_role == ChannelRole::master) return Role::request;
   if (channel_role == ChannelRole::slave) return Role::response;
+  // The exception bit says response, even on a damaged frame or an unexpected slave.
+  if (frame.is_exception()) return Role::response;
   if (frame.fit.request && !frame.fit.response) return Role::request;
   if (frame.fit.response && !frame.fit.request) return Role::response;
   // Both or neither: an echo, or a frame too damaged to tell. What the bus waits for decides.
   if (pending_matches(frame)) return Role::response;
-  if (frame.fit.request) return Role::request;
-  return frame.is_exception() ? Role::response : Role::unknown;
+  return frame.fit.request ? Role::request : Role::unknown;
 }
 
 bool Matcher::pending_matches(const Frame& frame) const {
@@ -107,13 +108,23 @@ void Matcher::on_request(Frame& frame) {
     return;
   }
   const auto pdu = frame.pdu();
+  if (unanswered_ && unanswered_->slave == frame.slave() &&
+      std::equal(pdu.begin(), pdu.end(), unanswered_->pdu.begin(),
+                 unanswered_->pdu.begin() + unanswered_->size)) {
+    frame.findings |= finding_retry;
+    frame.retries = static_cast<uint8_t>(std::min(unanswered_->retries + 1, 255));
+  }
+  unanswered_ = nullptr;
   Pending& p = slots_[next_slot_];
   next_slot_ ^= 1;
   p.index = frame.index;
   p.channel = frame.channel;
   p.end_ns = frame.end_ns;
   p.slave = frame.slave();
+  p.timeout_ns =
+      options_.slave_timeout_ns[p.slave] ? options_.slave_timeout_ns[p.slave] : options_.timeout_ns;
   p.adu_size = static_cast<uint16_t>(frame.adu.size());
+  p.retries = frame.retries;
   p.size = static_cast<uint16_t>(std::min(pdu.size(), p.pdu.size()));
   std::copy_n(pdu.begin(), p.size, p.pdu.begin());
   set_pending(&p);
@@ -137,8 +148,8 @@ void Matcher::on_response(Frame& frame) {
 }
 
 void Matcher::advance(int64_t now_ns) {
-  if (pending_ && options_.timed && now_ns - pending_->end_ns > options_.timeout_ns)
-    expire(pending_->end_ns + options_.timeout_ns, TimeoutReason::silence);
+  if (pending_ && options_.timed && now_ns - pending_->end_ns > pending_->timeout_ns)
+    expire(pending_->end_ns + pending_->timeout_ns, TimeoutReason::silence);
 }
 
 void Matcher::finish(int64_t end_ns) {
@@ -155,6 +166,7 @@ void Matcher::expire(int64_t now_ns, TimeoutReason reason) {
   t.t_ns = now_ns;
   t.waited_ns = now_ns - pending_->end_ns;
   t.reason = reason;
+  unanswered_ = pending_;
   set_pending(nullptr);
   on_timeout_(t);
 }

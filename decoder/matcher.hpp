@@ -14,7 +14,8 @@ namespace modtap::decoder {
 
 struct MatcherOptions {
   int64_t timeout_ns = 1'000'000'000;
-  int64_t t35_ns = 0;        // below this a response counts as a fast turnaround
+  std::array<int64_t, 256> slave_timeout_ns{};  // a slave's own time-out; 0: timeout_ns
+  int64_t t35_ns = 0;                           // below this a response counts as a fast turnaround
   bool timed = true;         // false when the source has no clock: no latency, no silence
   bool exact_clock = false;  // latencies are exact enough to judge turnaround
 };
@@ -39,8 +40,10 @@ class Matcher {
     uint64_t index = 0;
     uint16_t channel = 0;
     int64_t end_ns = 0;
+    int64_t timeout_ns = 0;
     uint8_t slave = 0;
     uint16_t adu_size = 0;
+    uint8_t retries = 0;
     uint16_t size = 0;             // PDU bytes kept (enough for echo and fit checks)
     std::array<uint8_t, 256> pdu;  // left uninitialised: only `size` bytes are ever read
   };
@@ -57,8 +60,9 @@ class Matcher {
   // no request is copied on the hot path.
   std::array<Pending, 2> slots_;
   uint8_t next_slot_ = 0;
-  Pending* pending_ = nullptr;  // the open transaction
-  Expectation expectation_;     // what pending_ means to a framer, kept in step with it
+  Pending* pending_ = nullptr;     // the open transaction
+  Pending* unanswered_ = nullptr;  // the request that last timed out, until another is sent
+  Expectation expectation_;        // what pending_ means to a framer, kept in step with it
 
   void set_pending(Pending* pending);
 };

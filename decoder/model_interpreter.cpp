@@ -6,6 +6,17 @@
 
 namespace modtap::decoder {
 
+std::map<uint8_t, int64_t> model_timeouts(const ModelChoice& choice) {
+  std::map<uint8_t, int64_t> timeouts;
+  for (unsigned slave = 1; slave <= 255; ++slave) {
+    const auto it = choice.by_slave.find(static_cast<uint8_t>(slave));
+    const DeviceModel* model = it != choice.by_slave.end() ? it->second : choice.bus;
+    if (model && model->response_timeout_ns)
+      timeouts[static_cast<uint8_t>(slave)] = *model->response_timeout_ns;
+  }
+  return timeouts;
+}
+
 ModelInterpreter::ModelInterpreter(std::vector<const DeviceModel*> known, ModelChoice choice,
                                    RecordSink& next)
     : known_(std::move(known)), choice_(std::move(choice)), next_(next) {}

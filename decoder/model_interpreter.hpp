@@ -15,6 +15,10 @@ struct ModelChoice {
   std::map<uint8_t, const DeviceModel*> by_slave;  // --model SLAVE=MODEL
 };
 
+// The time-out each slave's model sets (N3: 400 ms), for the matcher; slaves whose model sets
+// none are left out.
+std::map<uint8_t, int64_t> model_timeouts(const ModelChoice& choice);
+
 class ModelInterpreter final : public RecordSink {
  public:
   // `known` are the models whose identification rule may match the traffic.

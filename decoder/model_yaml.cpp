@@ -1,6 +1,8 @@
 #include "decoder/model_yaml.hpp"
 
 #include <charconv>
+#include <cmath>
+#include <cstdlib>
 #include <set>
 
 #include <fmt/format.h>
@@ -92,11 +94,25 @@ bool read_integer(const YAML::Node& node, Problems& problems, T& out, int64_t mi
   return true;
 }
 
+// A number, or a ratio as the manuals write scales: "10/1024" for "1024 / 10V".
 bool read_number(const YAML::Node& node, Problems& problems, double& out) {
   int64_t integer = 0;
   if (node.IsScalar() && parse_integer(node.Scalar(), integer)) {
     out = static_cast<double>(integer);
     return true;
+  }
+  if (const auto slash = node.IsScalar() ? node.Scalar().find('/') : std::string::npos;
+      slash != std::string::npos) {
+    const std::string& text = node.Scalar();
+    char* end = nullptr;
+    const double numerator = std::strtod(text.c_str(), &end);
+    const bool numerator_whole = end == text.c_str() + slash;
+    const double denominator = std::strtod(text.c_str() + slash + 1, &end);
+    if (numerator_whole && *end == '\0' && denominator != 0 && std::isfinite(numerator) &&
+        std::isfinite(denominator)) {
+      out = numerator / denominator;
+      return true;
+    }
   }
   try {
     out = node.as<double>();
@@ -152,9 +168,10 @@ class ModelReader {
   ModelReader(DeviceModel& model, Problems& problems) : model_(model), problems_(problems) {}
 
   void read(const YAML::Node& root) {
-    MapReader map(root, problems_,
-                  {"model", "extends", "title", "source", "stations", "limits", "exceptions",
-                   "enums", "groups", "alias", "identify", "registers", "parameters"});
+    MapReader map(
+        root, problems_,
+        {"model", "extends", "title", "source", "stations", "limits", "timeout", "exceptions",
+         "enums", "groups", "alias", "identify", "registers", "parameters"});
     if (!root.IsMap()) return;
     if (map["model"]) model_.name = read_text(map["model"], problems_);
     if (model_.name.empty()) problems_.add(root, "a model needs 'model: NAME'");
@@ -162,6 +179,7 @@ class ModelReader {
     if (map["source"]) model_.source = read_text(map["source"], problems_);
     if (map["stations"]) read_stations(map["stations"]);
     if (map["limits"]) read_limits(map["limits"]);
+    if (map["timeout"]) read_timeout(map["timeout"]);
     if (map["exceptions"]) read_exceptions(map["exceptions"]);
     if (map["enums"]) read_enums(map["enums"]);
     if (map["groups"]) read_groups(map["groups"]);
@@ -192,6 +210,14 @@ class ModelReader {
     if (map["rtu"]) read_word_limits(map["rtu"], model_.rtu_limits);
     if (map["ascii"]) read_word_limits(map["ascii"], model_.ascii_limits);
     if (map["same_group_only"]) model_.same_group_only = read_flag(map["same_group_only"]);
+  }
+
+  void read_timeout(const YAML::Node& node) {
+    MapReader map(node, problems_, {"response_ms", "retries"});
+    unsigned ms = 0;
+    if (map["response_ms"] && read_integer(map["response_ms"], problems_, ms, 1, 60'000))
+      model_.response_timeout_ns = int64_t{ms} * 1'000'000;
+    if (map["retries"]) read_integer(map["retries"], problems_, model_.retries.emplace(), 0, 100);
   }
 
   bool read_flag(const YAML::Node& node) {
@@ -334,6 +360,7 @@ class ModelReader {
                  {"f32", ValueType::f32},
                  {"bcd", ValueType::bcd},
                  {"string", ValueType::string},
+                 {"code", ValueType::code},
                  {"raw", ValueType::raw}},
                 def.type);
   }

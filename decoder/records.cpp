@@ -18,6 +18,7 @@ std::span<const FindingName> finding_names() {
       {finding_length_mismatch, "length-mismatch"},
       {finding_echo_mismatch, "echo-mismatch"},
       {finding_fast_turnaround, "fast-turnaround"},
+      {finding_retry, "retry"},
   };
   return names;
 }

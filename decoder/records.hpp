@@ -44,13 +44,14 @@ struct RoleFit {
 // Facts about a record that sinks render; a bit set, so records stay plain values.
 enum Finding : uint32_t {
   finding_none = 0,
-  finding_broadcast = 1u << 0,         // slave 0: no response expected
-  finding_unsolicited = 1u << 1,       // a response with no pending request
-  finding_length_mismatch = 1u << 2,   // response content does not fit its request
-  finding_echo_mismatch = 1u << 3,     // an echo response differs from its request
-  finding_bad_check = 1u << 4,         // CRC or LRC wrong
-  finding_fast_turnaround = 1u << 5,   // the slave answered before t3.5 of silence
-  finding_illegal_broadcast = 1u << 6  // a read sent to slave 0
+  finding_broadcast = 1u << 0,          // slave 0: no response expected
+  finding_unsolicited = 1u << 1,        // a response with no pending request
+  finding_length_mismatch = 1u << 2,    // response content does not fit its request
+  finding_echo_mismatch = 1u << 3,      // an echo response differs from its request
+  finding_bad_check = 1u << 4,          // CRC or LRC wrong
+  finding_fast_turnaround = 1u << 5,    // the slave answered before t3.5 of silence
+  finding_illegal_broadcast = 1u << 6,  // a read sent to slave 0
+  finding_retry = 1u << 7,              // the request that just went unanswered, sent again
 };
 
 // Each finding bit's name, as text, JSON and pcapng comments spell it, in the order shown.
@@ -75,6 +76,7 @@ struct Frame {
   bool check_ok = false;
   uint16_t expected_check = 0;  // what the CRC/LRC should have been
   uint32_t findings = finding_none;
+  uint8_t retries = 0;  // a request: how often it went out unanswered just before (saturates)
   std::optional<uint64_t> request;       // index of the matched request
   std::optional<int64_t> latency_ns;     // end of request to start of response
   std::span<const uint8_t> request_pdu;  // the matched request's PDU, during the callback

@@ -177,6 +177,7 @@ void decode_span(const DeviceModel& model, Table table, uint16_t start,
     }
     v.value = typed_value(*def, v.raw) * def->scale + def->offset;
     v.decimals = decimals_of(def->scale);
+    v.code = def->type == ValueType::code;
     if (def->values) {
       if (auto it = def->values->find(enum_key(*def, v.raw)); it != def->values->end())
         v.text = it->second;
@@ -192,6 +193,15 @@ std::string hex_address(uint16_t address) {
   return fmt::format("{:04X}H", address);
 }
 
+// The address of the last parameter in the group `address` is in, when the model counts them.
+std::optional<uint16_t> group_end(const DeviceModel& model, Table table, uint16_t address) {
+  if (!model.groups || model.groups->table != table) return std::nullopt;
+  const auto it = model.groups->counts.find(address >> 8);
+  if (it == model.groups->counts.end() || it->second == 0 || (address & 0xFF) >= it->second)
+    return std::nullopt;
+  return static_cast<uint16_t>((address & 0xFF00) | (it->second - 1));
+}
+
 void check_limits(const DeviceModel& model, Mode mode, const RegisterAccess& access,
                   std::vector<RuleFinding>& found) {
   if (access.table == Table::coil || access.table == Table::discrete) return;
@@ -203,21 +213,40 @@ void check_limits(const DeviceModel& model, Mode mode, const RegisterAccess& acc
                                  access.write ? "writes" : "reads", access.count, model.name, limit,
                                  to_string(mode))});
   const unsigned last = access.start + std::max<unsigned>(access.count, 1) - 1;
-  if (model.same_group_only && (access.start >> 8) != (last >> 8))
+  if (!model.same_group_only) return;
+  if ((access.start >> 8) != (last >> 8)) {
     found.push_back(
         {RuleKind::crosses_group, access.start,
          fmt::format("{}..{} crosses a parameter group; {} allows one group per access",
                      hex_address(access.start), hex_address(last & 0xFFFF), model.name)});
+  } else if (const auto end = group_end(model, access.table, access.start); end && last > *end) {
+    // A group ends at its last parameter, not at the next high byte: F03.48 is NTA5000's last.
+    found.push_back({RuleKind::crosses_group, access.start,
+                     fmt::format("{}..{} runs past {}, the last of its group; {} allows one "
+                                 "group per access",
+                                 hex_address(access.start), hex_address(last & 0xFFFF),
+                                 hex_address(*end), model.name)});
+  }
+}
+
+// Whether the model describes `table` at all: the generic model maps nothing, so nothing is
+// unmapped there.
+bool maps_table(const DeviceModel& model, Table table) {
+  if (model.groups && model.groups->table == table) return true;
+  const auto it = model.registers.lower_bound({table, 0});
+  return it != model.registers.end() && it->first.first == table;
 }
 
 void check_registers(const DeviceModel& model, const RegisterAccess& access,
                      std::vector<RuleFinding>& found) {
   bool closed_reported = false;
+  unsigned mapped = 0;
   for (unsigned i = 0; i < access.count && access.start + i <= 0xFFFF; ++i) {
     const auto address = static_cast<uint16_t>(access.start + i);
     const RegisterLookup lookup = find_register(model, access.table, address);
     const RegisterDef* def = lookup.def();
     if (!def) continue;
+    ++mapped;
     if (lookup.closed_group && !closed_reported) {
       found.push_back({RuleKind::closed_group, address,
                        fmt::format("{} is in a group {} does not let a master read or write",
@@ -239,14 +268,30 @@ void check_registers(const DeviceModel& model, const RegisterAccess& access,
                        fmt::format("{} ({}) is read-only", def->name, hex_address(address))});
     }
   }
+  // Said only when the access reaches nothing the model knows (000's FC03 example at A023H):
+  // a read that runs past a group's end is the group rule's to report.
+  if (mapped == 0 && access.count > 0 && maps_table(model, access.table))
+    found.push_back(
+        {RuleKind::unmapped_register, access.start,
+         fmt::format("{} is in none of {}'s tables", hex_address(access.start), model.name)});
 }
 
+// Addresses 248-255 are reserved by Modbus over Serial Line (2.2); a model may still allow
+// them (N3: stations 1-254). Said of every frame to such an address; a station the model
+// does not allow otherwise is said of the request.
 void check_station(const DeviceModel& model, const Frame& frame, std::vector<RuleFinding>& found) {
+  constexpr uint8_t first_reserved = 248;
   const uint8_t slave = frame.slave();
   if (slave == 0 || (slave >= model.station_min && slave <= model.station_max)) return;
-  found.push_back({RuleKind::station_out_of_range, std::nullopt,
-                   fmt::format("station {} is outside {}'s range {}..{}", slave, model.name,
-                               model.station_min, model.station_max)});
+  if (slave >= first_reserved) {
+    found.push_back({RuleKind::reserved_address, std::nullopt,
+                     fmt::format("address {} is reserved by Modbus (248-255); {} allows {}..{}",
+                                 slave, model.name, model.station_min, model.station_max)});
+  } else if (frame.role == Role::request) {
+    found.push_back({RuleKind::station_out_of_range, std::nullopt,
+                     fmt::format("station {} is outside {}'s range {}..{}", slave, model.name,
+                                 model.station_min, model.station_max)});
+  }
 }
 
 void explain_exception(const DeviceModel& model, const Frame& frame,
@@ -298,7 +343,11 @@ void decode_coil_write(const DeviceModel& model, std::span<const uint8_t> pdu,
 }
 
 void interpret_request(const DeviceModel& model, const Frame& frame, Meaning& meaning) {
-  check_station(model, frame, meaning.findings);
+  if (model.retries && frame.retries > *model.retries)
+    meaning.findings.push_back(
+        {RuleKind::too_many_retries, std::nullopt,
+         fmt::format("retry {} of an unanswered request; {} masters retry at most {} times",
+                     frame.retries, model.name, *model.retries)});
   for (const RegisterAccess& access : accesses_of(frame.pdu())) {
     check_limits(model, frame.mode, access, meaning.findings);
     check_registers(model, access, meaning.findings);
@@ -358,6 +407,7 @@ Meaning interpret(const DeviceModel& model, const Frame& frame) {
   Meaning meaning;
   meaning.model = &model;
   if (frame.adu.size() < 2 + frame.check_size()) return meaning;
+  check_station(model, frame, meaning.findings);
   if (frame.is_exception()) {
     if (frame.role != Role::request) explain_exception(model, frame, meaning.findings);
     return meaning;
@@ -369,6 +419,14 @@ Meaning interpret(const DeviceModel& model, const Frame& frame) {
 
 void append_value_text(fmt::memory_buffer& out, const RegisterValue& reg) {
   auto put = std::back_inserter(out);
+  if (reg.code) {
+    if (reg.text.empty()) {
+      fmt::format_to(put, "{:04X}H", reg.raw);
+    } else {
+      fmt::format_to(put, "{} ({:04X}H)", reg.text, reg.raw);
+    }
+    return;
+  }
   if (!reg.text.empty() && reg.unit.empty()) {
     fmt::format_to(put, "{} ({})", reg.text, reg.raw);
     return;
@@ -402,6 +460,12 @@ const char* to_string(RuleKind kind) {
       return "not-in-enum";
     case RuleKind::station_out_of_range:
       return "station-out-of-range";
+    case RuleKind::reserved_address:
+      return "reserved-address";
+    case RuleKind::too_many_retries:
+      return "too-many-retries";
+    case RuleKind::unmapped_register:
+      return "unmapped-register";
     case RuleKind::exception:
       return "exception";
     case RuleKind::identified:

@@ -22,7 +22,8 @@ struct RegisterValue {
   double value = 0;   // raw, signed by type, scaled and offset
   int decimals = 0;   // digits after the point that the scale implies
   std::string unit;
-  std::string text;  // an enum's meaning, the set bits' names, or a string register's text
+  std::string text;   // an enum's meaning, the set bits' names, or a string register's text
+  bool code = false;  // shown in hex as the manual writes it (0106H)
 };
 
 enum class RuleKind : uint8_t {
@@ -35,7 +36,10 @@ enum class RuleKind : uint8_t {
   out_of_range,     // a value outside the register's min/max
   not_in_enum,      // a value the register's named values do not include
   station_out_of_range,
-  exception,  // an exception response, explained with the model's meaning
+  unmapped_register,  // an address in none of the model's tables
+  too_many_retries,   // a request sent again more often than the model's masters do
+  reserved_address,   // 248-255, which Modbus reserves, to a slave whose model does not allow it
+  exception,          // an exception response, explained with the model's meaning
   identified,
 };
 

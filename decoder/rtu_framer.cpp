@@ -9,14 +9,20 @@ namespace modtap::decoder {
 namespace {
 
 constexpr uint16_t crc_size = 2;
-constexpr uint16_t min_adu = 4;  // slave, function, CRC
-constexpr uint8_t max_unicast_slave = 247;
+constexpr uint16_t min_adu = 4;             // slave, function, CRC
+constexpr uint8_t max_unicast_slave = 247;  // 248-255 are reserved (Serial Line 2.2)
 // Compact the buffer once this much has been consumed, so memmove stays rare.
 constexpr size_t compact_after = 1 << 16;
 // A frame found by CRC search may be confirmed by following ones found the same way (FC08
 // Return Query Data requests and their echoes, back to back); CRC hits are rare, so each
 // level costs one more bounded scan.
 constexpr int max_search = 8;
+
+// Reserved addresses still carry frames where a device uses them (N3 answers to 248-254), but
+// only with a public function code: a turnaround's 0xFF must not start a frame of any length.
+bool plausible_start(uint8_t slave, uint8_t fc) {
+  return (fc & 0x7F) != 0 && (slave <= max_unicast_slave || is_public_function(fc));
+}
 
 bool crc_ok(const uint8_t* p, size_t n) {
   return crc16({p, n - crc_size}) == wire_crc({p, n});
@@ -81,11 +87,9 @@ void RtuFramer::resolve(bool final) {
 RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const {
   const uint64_t avail = end_ - at;
   const uint8_t* p = at_ptr(at);
-  if (avail < 1) return need_more();
-  if (p[0] > max_unicast_slave) return {};
   if (avail < 2) return need_more();
   const uint8_t fc = p[1];
-  if ((fc & 0x7F) == 0) return {};
+  if (!plausible_start(p[0], fc)) return {};
 
   const bool broadcast = p[0] == 0;
   const bool may_request =
@@ -149,7 +153,7 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
         if (avail < expected.echo_size) return need_more();
         if (crc_ok(p, expected.echo_size)) return {Match::Kind::found, expected.echo_size, fit};
       }
-      if (search <= 0) return {};
+      if (search <= 0 || p[0] > max_unicast_slave) return {};
       // A bounded CRC search. A CRC match alone is weak evidence (a trailing 0x00 keeps a
       // zero residue zero), so the end must also be confirmed by a gap or the next frame;
       // only when nothing confirms that way may a turnaround glitch stand in between. A
@@ -270,7 +274,7 @@ void RtuFramer::emit_unframed(uint64_t begin, uint64_t end) {
 void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
   const uint64_t size = end - begin;
   const uint8_t* p = at_ptr(begin);
-  if (size >= min_adu && size <= max_rtu_adu && p[0] <= max_unicast_slave) {
+  if (size >= min_adu && size <= max_rtu_adu && plausible_start(p[0], p[1])) {
     RoleFit fit{options_.role != ChannelRole::slave && fits_role(Role::request, begin, size),
                 options_.role != ChannelRole::master && fits_role(Role::response, begin, size)};
     if (fit.request || fit.response) {
@@ -293,7 +297,7 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
   NoiseReason reason = NoiseReason::junk;
   if (size == 1 && (p[0] == 0x00 || p[0] == 0xFF)) {
     reason = NoiseReason::glitch;
-  } else if (size >= 2 && p[0] <= max_unicast_slave && is_public_function(p[1])) {
+  } else if (size >= 2 && is_public_function(p[1])) {
     reason = NoiseReason::truncated;
   }
   // Long runs of junk leave as several records so each stays printable and memory stays flat.

@@ -24,6 +24,18 @@ TEST(AsciiFramer, FramesColonToCrLfAndChecksTheLrc) {
   EXPECT_EQ(frames[0].raw, bytes(":010300000001FB\r\n"));
 }
 
+TEST(AsciiFramer, FramesReservedAddressesAsRtuDoes) {
+  // N3 allows stations up to 254; 248-255 are reserved by Modbus but still frames.
+  const auto out =
+      analyze_untimed(bytes(":FE0301200001DD\r\n:FE03020005F8\r\n"), {}, ModeChoice::ascii);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_TRUE(frames[0].check_ok);
+  EXPECT_EQ(frames[0].role, Role::request);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+}
+
 TEST(AsciiFramer, ReportsABadLrcWithTheExpectedValue) {
   const auto out = analyze_untimed(bytes(":010300000001FA\r\n"), {}, ModeChoice::ascii);
   const auto frames = out.frames();

@@ -265,8 +265,8 @@ TEST_F(Models, ReadsOfWriteOnlyRegistersAndAliasesAreFound) {
   const Meaning alias_read = request("gd20", rtu("01 03 80 07 00 01"));
   ASSERT_THAT(kinds(alias_read), ElementsAre(RuleKind::write_only_read));
   EXPECT_THAT(alias_read.findings[0].text, HasSubstr("P00.07"));
-  EXPECT_THAT(kinds(request("gd20", rtu("01 03 20 00 00 01"))),
-              ElementsAre(RuleKind::write_only_read));
+  EXPECT_THAT(kinds(request("gd20", rtu("01 03 20 02 00 01"))),
+              ElementsAre(RuleKind::write_only_read));  // 2002H PID reference: "W" in both
   // Writing the alias is what it is for: RAM only, and silent.
   const Meaning alias_write = request("gd20", rtu("01 06 80 07 00 05"));
   EXPECT_THAT(alias_write.findings, IsEmpty());
@@ -290,7 +290,7 @@ TEST_F(Models, MoreWordsThanTheModelAllowsAreFoundPerMode) {
 }
 
 TEST_F(Models, AccessesAcrossParameterGroupsAreFound) {
-  const Meaning m = request("nta5000", rtu("01 03 01 17 00 02"));  // F01.23 and 0118H ... no
+  const Meaning m = request("nta5000", rtu("01 03 01 16 00 02"));  // F01.22 and F01.23
   EXPECT_THAT(m.findings, IsEmpty());
   EXPECT_THAT(kinds(request("nta5000", rtu("01 03 01 FF 00 02"))),
               ElementsAre(RuleKind::crosses_group));
@@ -303,10 +303,113 @@ TEST_F(Models, StationsOutsideTheModelsRangeAreFound) {
   EXPECT_THAT(request("nta5000", rtu("40 03 25 20 00 01")).findings, IsEmpty());
   EXPECT_THAT(request("n3", rtu("FE 03 01 20 00 01")).findings, IsEmpty());
   EXPECT_THAT(kinds(request("n3", rtu("FF 03 01 20 00 01"))),
-              ElementsAre(RuleKind::station_out_of_range));
+              ElementsAre(RuleKind::reserved_address));
   EXPECT_THAT(kinds(request("gd20", rtu("F8 03 21 00 00 01"))),
-              ElementsAre(RuleKind::station_out_of_range));
+              ElementsAre(RuleKind::reserved_address));
   EXPECT_THAT(request("gd20", rtu("00 06 20 00 00 05")).findings, IsEmpty());  // broadcast
+}
+
+// --- What the manuals say that the models first left out ----------------------------------
+
+TEST_F(Models, ReservedAddressesAreFoundUnlessTheModelAllowsThem) {
+  // N3 1.3: "Max to No. 254 (FEH)"; Modbus reserves 248-255 (Serial Line 2.2).
+  EXPECT_THAT(request("n3", rtu("FE 03 01 20 00 01")).findings, IsEmpty());
+  const auto req = rtu("FE 03 01 20 00 01");
+  const Meaning generic_request = request("generic", req);
+  ASSERT_THAT(kinds(generic_request), ElementsAre(RuleKind::reserved_address));
+  EXPECT_THAT(generic_request.findings[0].text, HasSubstr("address 254 is reserved"));
+  EXPECT_THAT(kinds(response("generic", req, rtu("FE 03 02 00 05"))),
+              ElementsAre(RuleKind::reserved_address));  // said of the response too
+}
+
+TEST_F(Models, Nta5000ChineseExceptionTextsComeFromTheChineseChapter) {
+  // 001, 3.错误代码: "53 校验码错误" (check code error), "54 数据设定错误" (data setting error);
+  // the English chapter says "53 Data Amount Error", "54 DATA Over Range".
+  const auto req = rtu("01 03 03 00 00 28");
+  auto text_of = [&](const char* model_name, const char* exception) {
+    const Meaning m = response(model_name, req, rtu(exception));
+    return m.findings.empty() ? std::string() : m.findings[0].text;
+  };
+  EXPECT_THAT(text_of("nta5000-cn", "01 83 53"), HasSubstr("Check code error (校验码错误)"));
+  EXPECT_THAT(text_of("nta5000-cn", "01 83 54"), HasSubstr("Data setting error (数据设定错误)"));
+  EXPECT_THAT(text_of("nta5000", "01 83 53"), HasSubstr("Data amount error"));
+  EXPECT_THAT(text_of("nta5000", "01 83 54"), HasSubstr("Data over range"));
+}
+
+TEST_F(Models, AnalogInputsAreScaledAsTheManualsState) {
+  // 000: "252CH TM2 AI1 input value (100% / 10V)"; 001: "（1000 / 10V）"; N3: "(1024 / 10V)".
+  const auto ai1 = rtu("01 03 25 2C 00 01");
+  const Meaning english = response("nta5000", ai1, rtu("01 03 02 01 F4"));  // 500 counts
+  ASSERT_EQ(english.registers.size(), 1u);
+  EXPECT_DOUBLE_EQ(english.registers[0].value, 50.0);
+  EXPECT_EQ(english.registers[0].unit, "%");
+  const Meaning chinese = response("nta5000-cn", ai1, rtu("01 03 02 01 F4"));
+  EXPECT_DOUBLE_EQ(chinese.registers[0].value, 5.0);
+  EXPECT_EQ(chinese.registers[0].unit, "V");
+  const Meaning n3 = response("n3", rtu("01 03 01 2C 00 03"), rtu("01 03 06 04 00 02 00 00 00"));
+  ASSERT_EQ(n3.registers.size(), 3u);
+  EXPECT_DOUBLE_EQ(n3.registers[0].value, 10.0);  // 1024 counts
+  EXPECT_DOUBLE_EQ(n3.registers[1].value, 5.0);   // 512
+  EXPECT_EQ(n3.registers[2].unit, "V");
+}
+
+TEST_F(Models, Nta5000PidInputIsSignedAsTheChineseChapterSays) {
+  // 001: "252BH PID输入量（100% / 最大输出频率，10/1% 附符号）": sign attached, in both models.
+  for (const char* name : {"nta5000", "nta5000-cn"}) {
+    const Meaning m = response(name, rtu("01 03 25 2B 00 01"), rtu("01 03 02 FF 9C"));
+    ASSERT_EQ(m.registers.size(), 1u) << name;
+    EXPECT_DOUBLE_EQ(m.registers[0].value, -10.0) << name;
+  }
+}
+
+TEST_F(Models, Gd20ControlWordsMayBeReadBack) {
+  // 7.4.2 says "W" for 2000H and 2001H; the table beside the 7.5 examples says "W/R".
+  EXPECT_THAT(request("gd20", rtu("01 03 20 00 00 02")).findings, IsEmpty());
+}
+
+TEST_F(Models, AReadRunningPastAGroupsLastParameterCrossesTheGroup) {
+  // 000: "Can only continuous read the address of the same Group"; F03.48 (0330H) is F03's last.
+  const Meaning past_end = request("nta5000", rtu("01 03 03 2F 00 04"));  // F03.47 .. 0332H
+  ASSERT_THAT(kinds(past_end), ElementsAre(RuleKind::crosses_group));
+  EXPECT_THAT(past_end.findings[0].text, HasSubstr("runs past 0330H"));
+  EXPECT_THAT(request("nta5000", rtu("01 03 03 2F 00 02")).findings, IsEmpty());  // to F03.48
+}
+
+TEST_F(Models, N3SetsItsOwnTimeoutAndRetries) {
+  // N3 2.3: "TIME-OUT (400ms) & RETRY (max. : 2 times)".
+  const DeviceModel& n3 = model("n3");
+  ASSERT_TRUE(n3.response_timeout_ns.has_value());
+  EXPECT_EQ(*n3.response_timeout_ns, 400'000'000);
+  EXPECT_EQ(n3.retries, 2);
+  EXPECT_FALSE(model("generic").response_timeout_ns.has_value());
+  ModelChoice choice;
+  choice.bus = &model("generic");
+  choice.by_slave[2] = &n3;
+  const auto timeouts = model_timeouts(choice);
+  ASSERT_EQ(timeouts.size(), 1u);
+  EXPECT_EQ(timeouts.at(2), 400'000'000);
+  // A third retry is more than an N3 master makes.
+  const auto adu = rtu("02 03 01 20 00 01");
+  Frame third = frame(adu, Role::request);
+  third.retries = 3;
+  EXPECT_THAT(kinds(interpret(n3, third)), ElementsAre(RuleKind::too_many_retries));
+  third.retries = 2;
+  EXPECT_THAT(interpret(n3, third).findings, IsEmpty());
+}
+
+TEST_F(Models, Nta5000FaultyFc03ExampleDecodesAsWhatItIs) {
+  // 000 prints the FC03 request as 01 03 A0 23 00 01 with CRC 57H C0H: a good CRC over the
+  // wrong address. It is a read of A023H, which is in no table of the manual.
+  const auto req = hex("01 03 A0 23 00 01 57 C0");
+  const Meaning asked = request("nta5000", req);
+  ASSERT_THAT(kinds(asked), ElementsAre(RuleKind::unmapped_register));
+  EXPECT_THAT(asked.findings[0].text, HasSubstr("A023H"));
+  const Meaning m = response("nta5000", req, rtu("01 03 02 07 D0"));
+  ASSERT_EQ(m.registers.size(), 1u);
+  EXPECT_EQ(m.registers[0].address, 0xA023);
+  EXPECT_EQ(m.registers[0].name, "");
+  // The generic model has no register map: nothing is unmapped there.
+  EXPECT_THAT(request("generic", req).findings, IsEmpty());
 }
 
 TEST_F(Models, ValuesOutsideRangeOrEnumAreFound) {

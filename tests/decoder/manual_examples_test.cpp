@@ -82,5 +82,20 @@ TEST(ManualAsciiExample, Nta5000ReadDecodesWithItsLrc) {
   EXPECT_EQ(frames[1].request, frames[0].index);
 }
 
+TEST(ManualAsciiExample, Nta5000Fc08ExceptionPrintedLrcIsBad) {
+  // 000, 4.1 ASCII, FC08 exception: 01 88 20 with LRC printed as 37H 35H ("75"); the LRC of
+  // 01 88 20 is 57H, as 001 prints it. The printed frame is the exception with a bad check.
+  for (const auto& [text, good] : {std::pair{":01882075\r\n", false}, {":01882057\r\n", true}}) {
+    const std::string line = text;
+    const auto out = analyze_untimed({line.begin(), line.end()}, {}, ModeChoice::ascii);
+    ASSERT_EQ(out.stream().size(), 1u) << line;
+    const auto frame = out.stream()[0];
+    EXPECT_EQ(frame.type, testing::Record::Type::frame) << line;
+    EXPECT_EQ(frame.check_ok, good) << line;
+    EXPECT_EQ(frame.expected_check, 0x57) << line;
+    EXPECT_EQ(frame.role, Role::response) << line;
+  }
+}
+
 }  // namespace
 }  // namespace modtap::decoder

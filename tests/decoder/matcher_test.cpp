@@ -72,6 +72,36 @@ TEST(Matcher, PairsAnExceptionWithItsRequest) {
   EXPECT_EQ(frames[1].request, frames[0].index);
 }
 
+TEST(Matcher, TakesAnExceptionForAResponseEvenWithABadCheckFromAnotherSlave) {
+  // N3's RTU error example: 02 83 52 printed with the CRC of 01 83 52, after a request to 01.
+  const auto out = analyze_untimed(join({"01 03 25 23 00 01 7e cc", "02 83 52 c0 cd"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_FALSE(frames[1].check_ok);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].expected_check, 0xCD30);  // wire order 30 CD, as 000 prints it
+}
+
+TEST(Matcher, CountsTheSameRequestAfterNoAnswerAsARetry) {
+  const auto out = analyze_untimed(join({"01 03 00 00 00 0a c5 cd", "01 03 00 00 00 0a c5 cd",
+                                         "01 03 00 00 00 0a c5 cd", "01 03 00 01 00 0a 94 0d"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 4u);
+  EXPECT_FALSE(frames[0].findings & finding_retry);
+  EXPECT_TRUE(frames[1].findings & finding_retry);
+  EXPECT_TRUE(frames[2].findings & finding_retry);
+  EXPECT_FALSE(frames[3].findings & finding_retry);  // another request: the next poll
+}
+
+TEST(Matcher, AnAnsweredRequestAskedAgainIsNoRetry) {
+  const auto out = analyze_untimed(
+      join({"01 03 00 00 00 01 84 0a", "01 03 02 00 05 78 47", "01 03 00 00 00 01 84 0a"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_FALSE(frames[2].findings & finding_retry);
+}
+
 TEST(ResponseFit, CountersOfDiagnosticsNeedNotEcho) {
   EXPECT_EQ(check_response_fit(hex("08 00 0b 00 00"), hex("08 00 0b 01 23")), finding_none);
   EXPECT_EQ(check_response_fit(hex("08 00 00 12 ab"), hex("08 00 00 12 ac")),

@@ -110,6 +110,25 @@ TEST(RtuFramer, KeepsEveryByteOfEndlessJunkInBoundedNoiseRecords) {
   EXPECT_LT(out.frames().size(), 20u);
 }
 
+TEST(RtuFramer, FramesReservedAddressesWithPublicFunctionCodes) {
+  // N3 answers to stations up to 254 (FEH): "Max to No. 254 (FEH)".
+  const auto bytes = concat({hex("fe 03 01 20 00 01 90 33"), hex("fe 03 02 00 05 6c 53")});
+  const auto frames = analyze_untimed(bytes).frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].role, Role::request);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  expect_same_at_every_split(bytes);
+}
+
+TEST(RtuFramer, StartsNoCrcSearchAtAReservedAddress) {
+  // FFH then an unknown function code: a glitch and junk, not a frame found by CRC search.
+  const auto junk = hex("ff 41 00 00 00 00 00 00 00 00");
+  const auto frames = analyze_untimed(concat({junk, read_request})).frames();
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_EQ(frames[0].raw, read_request);
+}
+
 TEST(RtuFramer, FindsAnUnknownFunctionCodeByCrcWhenTheNextFrameConfirmsIt) {
   const auto vendor = hex("05 41 01 02 03");
   std::vector<uint8_t> frame = vendor;

@@ -132,12 +132,14 @@ int main(int argc, char** argv) {
     captures::PcapngWriter writer(out, fifo, true);
     const std::vector<decoder::ChannelInfo> channels{{port, decoder::ChannelRole::bus}};
     captures::PcapngSink pcapng(writer, channels, {});
-    decoder::ModelInterpreter sink(catalog.all(), catalog.choose({model}), pcapng);
+    const decoder::ModelChoice choice = catalog.choose({model});
+    decoder::ModelInterpreter sink(catalog.all(), choice, pcapng);
     live::LiveOptions options;
     options.announce = false;  // Wireshark reads anything on stderr as an error
     options.analyzer.format = {baud, static_cast<uint8_t>(data_bits), decoder::parity_named(parity),
                                static_cast<uint8_t>(stop_bits)};
     options.analyzer.mode = decoder::mode_named(mode);
+    options.analyzer.slave_timeout_ns = decoder::model_timeouts(choice);
     const int status =
         live::run_live({{port, port, decoder::ChannelRole::bus}}, options, sink, stop);
     writer.close();

@@ -5,6 +5,7 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -43,6 +44,7 @@ struct Options {
   unsigned stop_bits = 1;
   unsigned data_bits = 8;
   double timeout_s = 1.0;
+  bool timeout_given = false;  // --timeout wins over the models' own time-outs
   double ascii_timeout_s = 1.0;
   double jitter_ms = 20.0;
   std::string sigrok_channels;
@@ -130,6 +132,7 @@ class Sinks {
     if (interpret || !o.models.empty() || !o.models_dir.empty()) {
       catalog_ = load_models(o);
       auto choice = catalog_.choose(o.models);
+      if (!o.timeout_given) model_timeouts_ = decoder::model_timeouts(choice);
       if (interpret)
         interpreter_ =
             std::make_unique<decoder::ModelInterpreter>(catalog_.all(), choice, fan_out_);
@@ -146,6 +149,8 @@ class Sinks {
     return interpreter_ ? static_cast<decoder::RecordSink&>(*interpreter_) : fan_out_;
   }
   decoder::RecordSink& terminal() { return *terminal_; }
+  // The slaves whose model sets a response time-out, unless --timeout was given.
+  const std::map<uint8_t, int64_t>& model_timeouts() const { return model_timeouts_; }
   // The end of a run: the pcapng file is complete, or its failure is reported.
   void close() {
     if (pcapng_) pcapng_->close();
@@ -156,6 +161,7 @@ class Sinks {
   std::unique_ptr<decoder::RecordSink> terminal_;
   tools::ModelCatalog catalog_;
   std::unique_ptr<decoder::ModelInterpreter> interpreter_;
+  std::map<uint8_t, int64_t> model_timeouts_;
   std::unique_ptr<captures::PcapngWriter> pcapng_;
   std::unique_ptr<captures::PcapngSink> pcapng_sink_;
 };
@@ -241,6 +247,7 @@ int read_file(const Options& o) {
   decoder::LineHealth health(&sinks.all());
   decoder::AnalyzerOptions options = analyzer_options(o, source->clock());
   options.format = open.serial;
+  options.slave_timeout_ns = sinks.model_timeouts();
   decoder::Analyzer bus(options, source->channels(), health);
   decoder::ChunkPace pace(open.serial);
   auto raw = raw_recorder(o, source->channels(), open.serial);
@@ -281,6 +288,7 @@ int listen(const Options& o) {
   Sinks sinks(o, out, channels);
   live::LiveOptions options;
   options.analyzer = analyzer_options(o, decoder::ClockQuality::per_chunk);
+  options.analyzer.slave_timeout_ns = sinks.model_timeouts();
   if (o.baud == "auto" || o.parity == "auto") {
     auto probed = live::probe_ports(ports, options, fixed_baud(o), fixed_parity(o),
                                     static_cast<int64_t>(o.probe_s * 1e9), stop);
@@ -337,8 +345,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"none", "even", "odd", "auto"}));
   app.add_option("--stop-bits", o.stop_bits, "Stop bits")->check(CLI::IsMember({1u, 2u}));
   app.add_option("--data-bits", o.data_bits, "Data bits")->check(CLI::IsMember({7u, 8u}));
-  app.add_option("--timeout", o.timeout_s, "Seconds of silence before a request times out")
-      ->check(CLI::PositiveNumber);
+  auto* timeout = app.add_option("--timeout", o.timeout_s,
+                                 "Seconds of silence before a request times out (1, or what the "
+                                 "slave's model says)")
+                      ->check(CLI::PositiveNumber);
   app.add_option("--ascii-timeout", o.ascii_timeout_s, "ASCII inter-character time-out, seconds")
       ->check(CLI::PositiveNumber);
   app.add_option("--chunk-jitter", o.jitter_ms,
@@ -356,7 +366,8 @@ int main(int argc, char** argv) {
   auto* check = models->add_subcommand("check", "Validate a model file");
   check->add_option("FILE", check_file, "Model file (YAML)")->required();
   CLI11_PARSE(app, argc, argv);
-  signal(SIGPIPE, SIG_IGN);  // a closed pipe is a failed write (EPIPE), handled below
+  signal(SIGPIPE, SIG_IGN);
+  o.timeout_given = timeout->count() > 0;  // a closed pipe is a failed write (EPIPE), handled below
   if (!o.write_file.empty() && output->count() == 0) o.output = "none";  // as tshark -w
   try {
     if (check->parsed()) return tools::check_model_file(check_file);

@@ -36,6 +36,15 @@ void append_field(fmt::memory_buffer& buf, const Field& f, size_t max_items) {
   }
 }
 
+// A check as the manuals print it, in wire order: CRC 0xCC7E is sent, and written, "7E CC".
+void append_check(fmt::memory_buffer& buf, uint16_t check, Mode mode) {
+  if (mode == Mode::rtu) {
+    fmt::format_to(std::back_inserter(buf), "{:02X} {:02X}", check & 0xFF, check >> 8);
+  } else {
+    fmt::format_to(std::back_inserter(buf), "{:02X}", check);
+  }
+}
+
 }  // namespace
 
 TextSink::TextSink(Output& out, const std::vector<ChannelInfo>& channels, bool verbose)
@@ -58,8 +67,12 @@ void TextSink::on_frame(const Frame& frame) {
              function_label(frame.function()));
   const DecodedPdu decoded = decode_pdu(frame.role, frame.pdu(), frame.request_pdu);
   auto& buf = out_.buffer();
+  // Where the model gives exceptions the vendor's meanings, the standard's name would mislead
+  // (GD20's 04H is "Operation failed", not "Server Device Failure"): the model's text stands.
+  const bool vendor_exceptions = frame.meaning && frame.meaning->model->vendor_exceptions;
   for (const Field& f : decoded.fields) {
     if (f.kind == Field::Kind::items || f.key == "byte_count") continue;
+    if (vendor_exceptions && f.key == "exception_name") continue;
     out_.print(" {}=", f.key);
     append_field(buf, f, line_items);
   }
@@ -67,7 +80,9 @@ void TextSink::on_frame(const Frame& frame) {
   if (frame.check_ok) {
     out_.print("  {} ok", check);
   } else {
-    out_.print("  {} BAD (expected 0x{:04x})", check, frame.expected_check);
+    out_.print("  {} BAD (expected ", check);
+    append_check(buf, frame.expected_check, frame.mode);
+    out_.print(")");
   }
   if (frame.request) out_.print("  req #{}", *frame.request);
   if (frame.latency_ns) out_.print(" {:.3f} ms", static_cast<double>(*frame.latency_ns) / 1e6);
@@ -95,10 +110,13 @@ void TextSink::tree(const Frame& frame) {
     out_.print("\n");
   }
   if (decoded.truncated) out_.print("    [PDU shorter than its fields]\n");
-  const int width = frame.mode == Mode::rtu ? 4 : 2;
-  out_.print("    {}: 0x{:0{}x} ({})", frame.mode == Mode::rtu ? "CRC" : "LRC", frame.wire_check(),
-             width, frame.check_ok ? "ok" : "bad");
-  if (!frame.check_ok) out_.print(", expected 0x{:0{}x}", frame.expected_check, width);
+  out_.print("    {}: ", frame.mode == Mode::rtu ? "CRC" : "LRC");
+  append_check(buf, frame.wire_check(), frame.mode);
+  out_.print(" ({})", frame.check_ok ? "ok" : "bad");
+  if (!frame.check_ok) {
+    out_.print(", expected ");
+    append_check(buf, frame.expected_check, frame.mode);
+  }
   out_.print("\n");
   if (frame.request) out_.print("    Request in frame: {}\n", *frame.request);
   if (frame.latency_ns)
