@@ -254,6 +254,48 @@ TEST(Cli, TheDrivesSampleReadsInEachDrivesTerms) {
   line_has(26, "!! P00.01 = 3 is outside 0..2");
 }
 
+// A timed hex log: one "time:" line, then the frame's bytes, per frame.
+std::string hexlog(const std::string& name, const std::vector<std::string>& timed_frames) {
+  const auto path = std::filesystem::temp_directory_path() / name;
+  std::ofstream out(path);
+  for (size_t i = 0; i + 1 < timed_frames.size(); i += 2)
+    out << "2026-11-22 09:00:" << timed_frames[i] << ":\n" << timed_frames[i + 1] << "\n";
+  return path.string();
+}
+
+TEST(Cli, AnN3SlaveTimesOutAfterItsManualsTimeUnlessTimeoutSaysOtherwise) {
+  // 002, 2.3 "TIME-OUT (400ms) & RETRY (max. : 2 times)": an answer 500 ms late is too late.
+  const std::string log = hexlog("modtap-n3-late.log", {"00.000000", "02 03 01 20 00 01 84 0F",
+                                                        "00.500000", "02 03 02 00 05 3C 47"});
+  const Outcome n3 = run("-r " + log + " --model 2=n3");
+  ASSERT_EQ(n3.status, 0);
+  ASSERT_EQ(n3.lines.size(), 3u);
+  EXPECT_NE(n3.lines[1].find("TIMEOUT request #1 slave 2 Read Holding Registers: no response "
+                             "after 400.000 ms"),
+            std::string::npos)
+      << n3.lines[1];
+  EXPECT_NE(n3.lines[2].find("[unsolicited]"), std::string::npos) << n3.lines[2];
+  const Outcome told = run("-r " + log + " --model 2=n3 --timeout 1");
+  ASSERT_EQ(told.lines.size(), 2u);
+  EXPECT_NE(told.lines[1].find("req #1 495.417 ms"), std::string::npos) << told.lines[1];
+  const Outcome generic = run("-r " + log);  // 1 s by default
+  ASSERT_EQ(generic.lines.size(), 2u);
+  EXPECT_NE(generic.lines[1].find("req #1"), std::string::npos) << generic.lines[1];
+}
+
+TEST(Cli, AThirdRetryIsMoreThanAnN3MasterMakes) {
+  std::vector<std::string> asked;
+  for (const char* t : {"00.000000", "00.450000", "00.900000", "01.350000"})
+    asked.insert(asked.end(), {t, "02 03 01 20 00 01 84 0F"});
+  const Outcome r = run("-r " + hexlog("modtap-n3-retries.log", asked) + " --model 2=n3 -T json");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_EQ(r.lines.size(), 8u);  // four requests, each timed out
+  EXPECT_NE(r.lines[0].find("\"findings\":[]"), std::string::npos) << r.lines[0];
+  EXPECT_NE(r.lines[2].find("\"findings\":[\"retry\"]"), std::string::npos) << r.lines[2];
+  EXPECT_NE(r.lines[6].find("\"findings\":[\"retry\",\"too-many-retries\"]"), std::string::npos)
+      << r.lines[6];
+}
+
 TEST(Cli, AnUnknownModelIsAClearError) {
   const Outcome r = run(brainchild + " --model nosuch");
   EXPECT_NE(r.status, 0);
