@@ -1,4 +1,5 @@
 // The modtap program end to end: its JSON Lines on a real capture, and its errors.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -237,6 +238,15 @@ TEST(Cli, ModelsDirAddsTheUsersModels) {
   EXPECT_NE(r.lines[1].find("| pump_speed=10.0 rpm"), std::string::npos) << r.lines[1];
 }
 
+// A timed hex log: one "time:" line, then the frame's bytes, per frame.
+std::string hexlog(const std::string& name, const std::vector<std::string>& timed_frames) {
+  const auto path = std::filesystem::temp_directory_path() / name;
+  std::ofstream out(path);
+  for (size_t i = 0; i + 1 < timed_frames.size(); i += 2)
+    out << "2026-11-22 09:00:" << timed_frames[i] << ":\n" << timed_frames[i + 1] << "\n";
+  return path.string();
+}
+
 TEST(Cli, TheDrivesSampleReadsInEachDrivesTerms) {
   const Outcome r = run(std::string("-r ") + MODTAP_SAMPLES +
                         "/drives-manual-examples.log --model 1=nta5000 --model 2=n3");
@@ -249,18 +259,27 @@ TEST(Cli, TheDrivesSampleReadsInEachDrivesTerms) {
   line_has(9, "!! vendor exception 53H: Data amount error (nta5000)");
   line_has(13, "| frequency_command=50.00 Hz");
   line_has(17, "!! slave 3 identifies as gd20");
+  line_has(17, "identifying_code=Goodrive20 vector inverter (0106H)");  // as 7.4.2 writes it
   line_has(19, "| control_command=Forward running (1)");
   line_has(23, "output_torque=-10.0 %");
   line_has(26, "!! P00.01 = 3 is outside 0..2");
+  // GD20's 04H is its own "Operation failed", not also Modbus's "Server Device Failure".
+  line_has(27, "exception_code=04H  crc ok");
+  line_has(27, "!! vendor exception 04H: Operation failed");
+  EXPECT_EQ(r.lines[27].find("Failure"), std::string::npos) << r.lines[27];
 }
 
-// A timed hex log: one "time:" line, then the frame's bytes, per frame.
-std::string hexlog(const std::string& name, const std::vector<std::string>& timed_frames) {
-  const auto path = std::filesystem::temp_directory_path() / name;
-  std::ofstream out(path);
-  for (size_t i = 0; i + 1 < timed_frames.size(); i += 2)
-    out << "2026-11-22 09:00:" << timed_frames[i] << ":\n" << timed_frames[i + 1] << "\n";
-  return path.string();
+TEST(Cli, N3sErrorExampleIsAResponseWithItsExpectedCrcInWireOrder) {
+  // 002, 3.Error code: slave 02, 83H, 52H, CRC printed C0H CDH (that of 01 83 52).
+  const std::string log = hexlog("modtap-n3-error.log", {"00.000000", "02 83 52 C0 CD"});
+  const Outcome r = run("-r " + log + " --model 2=n3 -V");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_GE(r.lines.size(), 8u);
+  EXPECT_NE(r.lines[0].find("rsp slave 2"), std::string::npos) << r.lines[0];
+  EXPECT_NE(r.lines[0].find("crc BAD (expected 30 CD)"), std::string::npos) << r.lines[0];
+  EXPECT_NE(r.lines[0].find("!! vendor exception 52H: Address error (n3)"), std::string::npos)
+      << r.lines[0];
+  EXPECT_THAT(r.lines, ::testing::Contains("    CRC: C0 CD (bad), expected 30 CD"));
 }
 
 TEST(Cli, AnN3SlaveTimesOutAfterItsManualsTimeUnlessTimeoutSaysOtherwise) {
