@@ -113,6 +113,8 @@ struct Noise {
   NoiseReason reason = NoiseReason::junk;
 };
 
+// Why a request's wait ended without a response. end_of_capture is no time-out: the input
+// ended while the request still waited, so it is only unanswered.
 enum class TimeoutReason : uint8_t { next_request, silence, end_of_capture };
 
 struct Timeout {
@@ -124,6 +126,8 @@ struct Timeout {
   int64_t t_ns = 0;       // when the time-out was known
   int64_t waited_ns = 0;  // from the end of the request to then
   TimeoutReason reason = TimeoutReason::silence;
+
+  bool timed_out() const { return reason != TimeoutReason::end_of_capture; }
 };
 
 const char* to_string(NoiseReason reason);

@@ -267,6 +267,10 @@ TEST(Cli, TheDrivesSampleReadsInEachDrivesTerms) {
   line_has(27, "exception_code=04H  crc ok");
   line_has(27, "!! vendor exception 04H: Operation failed");
   EXPECT_EQ(r.lines[27].find("Failure"), std::string::npos) << r.lines[27];
+  // The log ends while the last request waits: unanswered, not a time-out "after 0 ms".
+  EXPECT_EQ(r.lines[29],
+            "-         0.764953 UNANSWERED request #29 slave 1 Read Holding "
+            "Registers: the capture ends 0.000 ms after it");
 }
 
 TEST(Cli, N3sErrorExampleIsAResponseWithItsExpectedCrcInWireOrder) {
@@ -308,11 +312,16 @@ TEST(Cli, AThirdRetryIsMoreThanAnN3MasterMakes) {
     asked.insert(asked.end(), {t, "02 03 01 20 00 01 84 0F"});
   const Outcome r = run("-r " + hexlog("modtap-n3-retries.log", asked) + " --model 2=n3 -T json");
   ASSERT_EQ(r.status, 0);
-  ASSERT_EQ(r.lines.size(), 8u);  // four requests, each timed out
+  ASSERT_EQ(r.lines.size(), 8u);  // four requests, three timed out, the last unanswered
   EXPECT_NE(r.lines[0].find("\"findings\":[]"), std::string::npos) << r.lines[0];
   EXPECT_NE(r.lines[2].find("\"findings\":[\"retry\"]"), std::string::npos) << r.lines[2];
   EXPECT_NE(r.lines[6].find("\"findings\":[\"retry\",\"too-many-retries\"]"), std::string::npos)
       << r.lines[6];
+  EXPECT_EQ(r.lines[7].rfind("{\"type\":\"unanswered\",\"request\":4,", 0), 0u) << r.lines[7];
+  const Outcome stats =
+      run("-r " + hexlog("modtap-n3-retries.log", asked) + " --model 2=n3 -T stats");
+  EXPECT_THAT(stats.lines, ::testing::Contains("timeouts        3"));
+  EXPECT_THAT(stats.lines, ::testing::Contains("unanswered at end of capture  1"));
 }
 
 TEST(Cli, AnUnknownModelIsAClearError) {

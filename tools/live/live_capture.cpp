@@ -53,7 +53,7 @@ class Counting final : public decoder::RecordSink {
     next_.on_noise(n);
   }
   void on_timeout(const decoder::Timeout& t) override {
-    ++timeouts;
+    timeouts += t.timed_out();
     next_.on_timeout(t);
   }
   uint64_t frames = 0, errors = 0, noise = 0, timeouts = 0;

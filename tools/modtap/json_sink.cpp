@@ -105,7 +105,8 @@ void JsonSink::on_noise(const Noise& noise) {
 }
 
 void JsonSink::on_timeout(const Timeout& t) {
-  out_.print("{{\"type\":\"timeout\",\"request\":{},\"t_ns\":{}", t.request, t.t_ns);
+  out_.print("{{\"type\":\"{}\",\"request\":{},\"t_ns\":{}",
+             t.timed_out() ? "timeout" : "unanswered", t.request, t.t_ns);
   channel(t.channel);
   out_.print(",\"slave\":{},\"fc\":{},\"waited_us\":{:.3f},\"reason\":\"{}\"}}\n", t.slave,
              t.function, static_cast<double>(t.waited_ns) / 1e3, to_string(t.reason));

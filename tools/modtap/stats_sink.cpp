@@ -61,6 +61,7 @@ void print_stats(Output& out, const BusStats& s) {
   out.print("  unsolicited   {}\n", s.unsolicited);
   out.print("  mismatched    {}\n", s.mismatches);
   out.print("timeouts        {}\n", s.timeouts);
+  if (s.unanswered) out.print("unanswered at end of capture  {}\n", s.unanswered);
   out.print("noise records   {} ({} bytes)\n", s.noise_records, s.noise_bytes);
   out.print("bytes           {} ({:.3f}% in frames)\n", bytes,
             bytes ? 100.0 * static_cast<double>(s.frame_bytes) / static_cast<double>(bytes) : 0.0);

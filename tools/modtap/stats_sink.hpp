@@ -20,6 +20,7 @@ struct SlaveStats {
 struct BusStats {
   uint64_t frames = 0, bad_checks = 0, requests = 0, responses = 0, unknown_roles = 0;
   uint64_t exceptions = 0, broadcasts = 0, unsolicited = 0, mismatches = 0, timeouts = 0;
+  uint64_t unanswered = 0;  // still waiting when the capture ended: no time-out
   uint64_t noise_records = 0, noise_bytes = 0, frame_bytes = 0;
   int64_t latency_sum_ns = 0, latency_max_ns = 0;
   uint64_t latency_count = 0;
@@ -32,6 +33,10 @@ class StatsSink final : public decoder::RecordSink {
   void on_frame(const decoder::Frame& frame) override;
   void on_noise(const decoder::Noise& noise) override;
   void on_timeout(const decoder::Timeout& timeout) override {
+    if (!timeout.timed_out()) {
+      ++stats_.unanswered;
+      return;
+    }
     ++stats_.timeouts;
     ++stats_.slaves[timeout.slave].timeouts;
   }

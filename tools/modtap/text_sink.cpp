@@ -168,9 +168,14 @@ void TextSink::on_noise(const Noise& noise) {
 void TextSink::on_timeout(const Timeout& t) {
   out_.print("{:6} {:11.6f}", "-", seconds(t.t_ns));
   channel_column(t.channel);
-  out_.print(" TIMEOUT request #{} slave {} {}: no response after {:.3f} ms ({})\n", t.request,
-             t.slave, function_label(t.function), static_cast<double>(t.waited_ns) / 1e6,
-             to_string(t.reason));
+  const double waited_ms = static_cast<double>(t.waited_ns) / 1e6;
+  if (t.timed_out()) {
+    out_.print(" TIMEOUT request #{} slave {} {}: no response after {:.3f} ms ({})\n", t.request,
+               t.slave, function_label(t.function), waited_ms, to_string(t.reason));
+  } else {
+    out_.print(" UNANSWERED request #{} slave {} {}: the capture ends {:.3f} ms after it\n",
+               t.request, t.slave, function_label(t.function), waited_ms);
+  }
   out_.end_record();
 }
 
