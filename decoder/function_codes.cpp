@@ -38,23 +38,18 @@ L device_identification_response(std::span<const uint8_t> p) {
   return L::known(at);
 }
 
+// A request's length follows from its structure alone: a quantity or value outside the
+// standard's limits is still a frame (a master may ask for 126 registers and get exception 03),
+// reported by request_spec_findings.
 L request_length(std::span<const uint8_t> p) {
   const uint8_t fc = p[1];
   if (fc & 0x80) return L::invalid();  // the exception bit: only responses carry it
-  auto quantity_at_4 = [&](unsigned lo, unsigned hi) {
-    if (p.size() < 6) return L::need_more();
-    return in_range(be16(p, 4), lo, hi) ? L::known(6) : L::invalid();
-  };
   switch (fc) {
     case 0x01:
     case 0x02:
-      return quantity_at_4(1, 2000);
     case 0x03:
     case 0x04:
-      return quantity_at_4(1, 125);
     case 0x05:
-      if (p.size() < 6) return L::need_more();
-      return (be16(p, 4) == 0xFF00 || be16(p, 4) == 0x0000) ? L::known(6) : L::invalid();
     case 0x06:
       return L::known(6);
     case 0x07:
@@ -65,30 +60,16 @@ L request_length(std::span<const uint8_t> p) {
     case 0x08:
       if (p.size() < 4) return L::need_more();
       return be16(p, 2) == 0x0000 ? L::variable(4) : L::known(6);
-    case 0x0F: {
-      if (p.size() < 7) return L::need_more();
-      unsigned qty = be16(p, 4);
-      if (!in_range(qty, 1, 1968) || p[6] != (qty + 7) / 8) return L::invalid();
-      return L::known(7 + p[6]);
-    }
-    case 0x10: {
-      if (p.size() < 7) return L::need_more();
-      unsigned qty = be16(p, 4);
-      if (!in_range(qty, 1, 123) || p[6] != qty * 2) return L::invalid();
-      return L::known(7 + p[6]);
-    }
+    case 0x0F:
+    case 0x10:
+      return counted(p, 6, 1);
     case 0x14:
     case 0x15:
       return counted(p, 2, 7, 245);
     case 0x16:
       return L::known(8);
-    case 0x17: {
-      if (p.size() < 11) return L::need_more();
-      unsigned read_qty = be16(p, 4), write_qty = be16(p, 8);
-      if (!in_range(read_qty, 1, 125) || !in_range(write_qty, 1, 121) || p[10] != write_qty * 2)
-        return L::invalid();
-      return L::known(11 + p[10]);
-    }
+    case 0x17:
+      return counted(p, 10, 1);
     case 0x18:
       return L::known(4);
     case 0x2B:
@@ -178,7 +159,48 @@ const FunctionInfo* find(uint8_t fc) {
   return nullptr;
 }
 
+// The standard's quantity limits per request (Modbus Application Protocol V1.1b3, 6.x).
+struct QuantityRule {
+  uint8_t fc;
+  uint8_t quantity_at;  // in the PDU
+  uint16_t max;
+  uint8_t count_at;       // the byte count that must match, or 0
+  uint8_t bits_per_item;  // 1 for coils, 16 for registers
+};
+
+constexpr std::array<QuantityRule, 7> quantity_rules{{
+    {0x01, 3, 2000, 0, 1},
+    {0x02, 3, 2000, 0, 1},
+    {0x03, 3, 125, 0, 16},
+    {0x04, 3, 125, 0, 16},
+    {0x0F, 3, 1968, 5, 1},
+    {0x10, 3, 123, 5, 16},
+    {0x17, 7, 121, 9, 16},  // the write quantity; the read one is checked like FC03's
+}};
+
+uint32_t quantity_findings(const QuantityRule& rule, std::span<const uint8_t> pdu) {
+  if (pdu.size() < rule.quantity_at + 2u) return finding_none;
+  const unsigned quantity = be16(pdu, rule.quantity_at);
+  uint32_t found = in_range(quantity, 1, rule.max) ? finding_none : finding_quantity_out_of_spec;
+  if (rule.count_at && pdu.size() > rule.count_at &&
+      pdu[rule.count_at] != (quantity * rule.bits_per_item + 7) / 8)
+    found |= finding_byte_count_mismatch;
+  return found;
+}
+
 }  // namespace
+
+uint32_t request_spec_findings(std::span<const uint8_t> pdu) {
+  if (pdu.empty()) return finding_none;
+  uint32_t found = finding_none;
+  for (const QuantityRule& rule : quantity_rules)
+    if (rule.fc == pdu[0]) found |= quantity_findings(rule, pdu);
+  if (pdu[0] == 0x17 && pdu.size() >= 5 && !in_range(be16(pdu, 3), 1, 125))
+    found |= finding_quantity_out_of_spec;
+  if (pdu[0] == 0x05 && pdu.size() >= 5 && be16(pdu, 3) != 0xFF00 && be16(pdu, 3) != 0x0000)
+    found |= finding_value_out_of_spec;
+  return found;
+}
 
 BodyLength body_length(Role role, std::span<const uint8_t> prefix) {
   if (prefix.size() < 2) return BodyLength::need_more();

@@ -31,6 +31,10 @@ struct BodyLength {
 // `prefix` starts at the slave address. Role must be request or response.
 BodyLength body_length(Role role, std::span<const uint8_t> prefix);
 
+// What a request (`pdu` from the function code on) asks beyond the standard's limits:
+// finding_quantity_out_of_spec, finding_byte_count_mismatch, finding_value_out_of_spec.
+uint32_t request_spec_findings(std::span<const uint8_t> pdu);
+
 // Whether `fc` (without the exception bit) is a public function code.
 bool is_public_function(uint8_t fc);
 // Writes may be broadcast to slave 0; reads may not (Modbus Application Protocol 4.1).

@@ -102,6 +102,7 @@ void Matcher::on_request(Frame& frame) {
   if (pending_) expire(frame.t_ns, TimeoutReason::next_request);
   // A slave ignores a request whose check fails, so it opens no transaction.
   if (!frame.check_ok) return;
+  frame.findings |= request_spec_findings(frame.pdu());
   if (frame.slave() == 0) {
     frame.findings |= finding_broadcast;
     if (!may_broadcast(frame.function())) frame.findings |= finding_illegal_broadcast;

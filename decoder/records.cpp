@@ -19,6 +19,9 @@ std::span<const FindingName> finding_names() {
       {finding_echo_mismatch, "echo-mismatch"},
       {finding_fast_turnaround, "fast-turnaround"},
       {finding_retry, "retry"},
+      {finding_quantity_out_of_spec, "quantity-out-of-spec"},
+      {finding_byte_count_mismatch, "byte-count-mismatch"},
+      {finding_value_out_of_spec, "value-out-of-spec"},
   };
   return names;
 }

@@ -207,7 +207,10 @@ void check_limits(const DeviceModel& model, Mode mode, const RegisterAccess& acc
   if (access.table == Table::coil || access.table == Table::discrete) return;
   const WordLimits& limits = model.limits(mode);
   const uint16_t limit = access.write ? limits.write : limits.read;
-  if (access.count > limit)
+  // Beyond the standard's own limit is the decoder's quantity-out-of-spec; a model speaks only
+  // of the tighter limits its device sets.
+  const uint16_t standard = access.write ? WordLimits{}.write : WordLimits{}.read;
+  if (access.count > limit && limit < standard)
     found.push_back({RuleKind::too_many_words, access.start,
                      fmt::format("{} {} registers; {} allows at most {} in {}",
                                  access.write ? "writes" : "reads", access.count, model.name, limit,

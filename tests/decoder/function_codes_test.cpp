@@ -17,11 +17,28 @@ BodyLength response(const char* h) {
   return body_length(Role::response, hex(h));
 }
 
-TEST(BodyLength, ReadRequestsAreSixBytesWithALegalQuantity) {
+TEST(BodyLength, ReadRequestsAreSixBytesWhateverTheirQuantity) {
   EXPECT_EQ(request("01 03 00 00 00 0a").bytes, 6);
-  EXPECT_EQ(request("01 03 00 00 00 7e").kind, K::invalid);  // 126 registers
-  EXPECT_EQ(request("01 01 00 00 07 d0").kind, K::known);    // 2000 coils
-  EXPECT_EQ(request("01 03 00").kind, K::need_more);
+  EXPECT_EQ(request("01 03 00 00 00 7e").bytes, 6);  // 126 registers: out of spec, still a frame
+  EXPECT_EQ(request("01 01 00 00 07 d0").kind, K::known);   // 2000 coils
+  EXPECT_EQ(request("01 0f 00 00 00").kind, K::need_more);  // the byte count has not come
+}
+
+TEST(RequestSpec, QuantitiesOutsideTheStandardsLimitsAreFound) {
+  auto found = [](const char* pdu) { return request_spec_findings(hex(pdu)); };
+  EXPECT_EQ(found("03 00 00 00 7d"), finding_none);                  // 125
+  EXPECT_EQ(found("03 00 00 00 7e"), finding_quantity_out_of_spec);  // mbpoll -c 126
+  EXPECT_EQ(found("04 00 00 00 00"), finding_quantity_out_of_spec);  // 0
+  EXPECT_EQ(found("01 00 00 07 d0"), finding_none);                  // 2000 coils
+  EXPECT_EQ(found("02 00 00 07 d1"), finding_quantity_out_of_spec);
+  EXPECT_EQ(found("10 00 00 00 7c f8"), finding_quantity_out_of_spec);                // 124 written
+  EXPECT_EQ(found("10 00 00 00 02 05 00 01 00 02 00"), finding_byte_count_mismatch);  // odd
+  EXPECT_EQ(found("0f 00 00 00 0a 01 ff"), finding_byte_count_mismatch);  // 10 coils, 1 byte
+  EXPECT_EQ(found("0f 00 00 00 0a 02 ff 03"), finding_none);
+  EXPECT_EQ(found("17 00 00 00 7e 00 10 00 01 02 00 00"), finding_quantity_out_of_spec);
+  EXPECT_EQ(found("17 00 00 00 01 00 10 00 7a f4"), finding_quantity_out_of_spec);  // 122
+  EXPECT_EQ(found("05 00 01 12 34"), finding_value_out_of_spec);
+  EXPECT_EQ(found("05 00 01 ff 00"), finding_none);
 }
 
 TEST(BodyLength, ResponsesCarryTheirByteCount) {
@@ -33,7 +50,8 @@ TEST(BodyLength, ResponsesCarryTheirByteCount) {
 
 TEST(BodyLength, WriteMultipleCountsMustFitTheQuantity) {
   EXPECT_EQ(request("01 10 00 00 00 02 04").bytes, 11);
-  EXPECT_EQ(request("01 10 00 00 00 02 05").kind, K::invalid);
+  EXPECT_EQ(request("01 10 00 00 00 02 05").bytes, 12);         // the byte count says; a finding
+  EXPECT_EQ(request("01 10 00 00 00 02 00").kind, K::invalid);  // nothing to write
   EXPECT_EQ(request("01 0f 00 00 00 0a 02").bytes, 9);
   EXPECT_EQ(response("01 10").bytes, 6);
 }

@@ -38,6 +38,13 @@ std::vector<uint8_t> concat(std::initializer_list<std::vector<uint8_t>> parts) {
   return out;
 }
 
+std::vector<uint8_t> with_crc(std::vector<uint8_t> body) {
+  const uint16_t crc = crc16(body);
+  body.push_back(static_cast<uint8_t>(crc & 0xFF));
+  body.push_back(static_cast<uint8_t>(crc >> 8));
+  return body;
+}
+
 TEST(RtuFramer, SplitsARequestAndItsResponseWithNoGapBetweenThem) {
   const auto bytes = concat({read_request, read_response});
   const auto out = analyze_untimed(bytes);
@@ -49,6 +56,28 @@ TEST(RtuFramer, SplitsARequestAndItsResponseWithNoGapBetweenThem) {
   EXPECT_EQ(frames[1].role, Role::response);
   EXPECT_EQ(frames[1].request, frames[0].index);
   EXPECT_TRUE(out.noise().empty());
+}
+
+TEST(RtuFramer, ARequestOutsideTheSpecsLimitsIsARequestWithAFinding) {
+  // What mbpoll and pymodbus send for 126 registers, and a pymodbus slave's exception 03.
+  const auto asked = hex("01 03 00 00 00 7e c5 ea"), refused = hex("01 83 03 01 31");
+  // 10 coils in one byte, and FC10 with an odd byte count: the byte count still says the length.
+  const auto coils = with_crc(hex("01 0f 00 00 00 0a 01 ff"));
+  const auto odd = with_crc(hex("01 10 00 00 00 02 05 00 01 00 02 00"));
+  const auto bytes = concat({asked, refused, coils, odd});
+  const auto out = analyze_untimed(bytes);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 4u);
+  EXPECT_TRUE(out.noise().empty());
+  EXPECT_EQ(frames[0].role, Role::request);
+  EXPECT_EQ(frames[0].findings, finding_quantity_out_of_spec);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[2].raw, coils);
+  EXPECT_EQ(frames[2].findings, finding_byte_count_mismatch);
+  EXPECT_EQ(frames[3].raw, odd);
+  EXPECT_EQ(frames[3].findings, finding_byte_count_mismatch);
+  expect_same_at_every_split(bytes);
 }
 
 TEST(RtuFramer, GivesTheSameRecordsWhereverTheInputIsCut) {

@@ -87,6 +87,7 @@ def char_seconds(baud, data_bits, parity, stop_bits):
 
 def run_case(name, baud, parity, data_bits, mode, start_slave, run_master, settings=None):
     """`settings` replaces modtap's --baud/--parity arguments (to test --baud auto)."""
+    over_limit = run_master.__name__ == "run_pymodbus"  # its first request asks for 126
     global passed
     m, s, t = Pty(), Pty(), Pty()
     relay = Relay(m, s, t, char_seconds(baud, data_bits, parity, 1))
@@ -132,6 +133,13 @@ def run_case(name, baud, parity, data_bits, mode, start_slave, run_master, setti
             last_request = f["index"]
         else:
             ok &= check(name, f["request"] == last_request, f"frame {f['index']} paired with {f['request']}")
+    asked_126 = [f for f in requests if f["fc"] == 3 and f.get("quantity") == 126]
+    if over_limit:
+        ok &= check(name, len(asked_126) == 1 and asked_126[0]["findings"] == ["quantity-out-of-spec"],
+                    f"the request for 126 registers: {asked_126}")
+        answer = [f for f in responses if asked_126 and f["request"] == asked_126[0]["index"]]
+        ok &= check(name, len(answer) == 1 and answer[0]["exception"] == 3,
+                    f"the answer to 126 registers: {answer}")
     ok &= check(name, not relay.tap_wrote, f"modtap wrote {len(relay.tap_wrote)} bytes to the tap")
     # Read again from the raw recording, modtap must find the same frames.
     again = subprocess.run([MODTAP, "-r", raw_path, "--baud", str(baud), "--parity", parity,
@@ -192,6 +200,8 @@ from pymodbus.transaction import ModbusAsciiFramer, ModbusRtuFramer
 port, baud, parity, bits, mode = sys.argv[1], int(sys.argv[2]), sys.argv[3], int(sys.argv[4]), sys.argv[5]
 client = ModbusSerialClient(framer=ModbusAsciiFramer if mode == "ascii" else ModbusRtuFramer, port=port, baudrate=baud, parity=parity, bytesize=bits, stopbits=1, timeout=1, strict=False)
 client.connect()
+# Over the standard's limit of 125: the slave answers exception 03, modtap must show both.
+client.read_holding_registers(0, 126, slave=1)
 for _ in range(2):
     client.read_holding_registers(0, 10, slave=1)
     client.read_input_registers(3, 2, slave=1)
@@ -214,8 +224,11 @@ def pymodbus_slave(baud, mode):
 
 def pymodbus_master(baud, parity, bits, mode):
     p = {"none": "N", "even": "E", "odd": "O"}[parity]
-    return lambda path: subprocess.run(["/usr/bin/python3", "-c", PYMODBUS_CLIENT, path, str(baud),
-                                        p, str(bits), mode], capture_output=True, timeout=60)
+
+    def run_pymodbus(path):
+        subprocess.run(["/usr/bin/python3", "-c", PYMODBUS_CLIENT, path, str(baud), p, str(bits),
+                        mode], capture_output=True, timeout=60)
+    return run_pymodbus
 
 
 def error_cases():
