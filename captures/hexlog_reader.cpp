@@ -20,6 +20,14 @@ int number(const std::string& s, size_t at, size_t n) {
   return std::stoi(s.substr(at, n));
 }
 
+// Binary junk in a message would upset the terminal: show it as \xNN.
+std::string printable(const std::string& s) {
+  std::string out;
+  for (unsigned char c : s)
+    out += std::isprint(c) ? std::string(1, static_cast<char>(c)) : fmt::format("\\x{:02x}", c);
+  return out;
+}
+
 int hex_digit(char c) {
   if (c >= '0' && c <= '9') return c - '0';
   if (c >= 'A' && c <= 'F') return c - 'A' + 10;
@@ -51,8 +59,16 @@ uint16_t HexlogReader::channel_for(const std::string& name) {
   return it->second;
 }
 
-// jpnevulator prints local time without a zone; mktime reads it back the same way.
+// jpnevulator prints local time without a zone; mktime reads it back the same way. A stamp
+// that is no calendar time (month 13, year 9999) is an error, not a time mktime wraps.
 void HexlogReader::start_block(const std::string& s) {
+  const bool calendar = number(s, 0, 4) >= 1970 && number(s, 0, 4) <= 2200 &&
+                        number(s, 5, 2) >= 1 && number(s, 5, 2) <= 12 && number(s, 8, 2) >= 1 &&
+                        number(s, 8, 2) <= 31 && number(s, 11, 2) <= 23 && number(s, 14, 2) <= 59 &&
+                        number(s, 17, 2) <= 60;
+  if (!calendar)
+    throw CaptureError(fmt::format("{}: line {}: \"{}\" is not a time stamp", lines_.path(),
+                                   lines_.line_number(), s.substr(0, stamp_size - 1)));
   std::tm tm{};
   tm.tm_year = number(s, 0, 4) - 1900;
   tm.tm_mon = number(s, 5, 2) - 1;
@@ -87,7 +103,7 @@ bool HexlogReader::next(decoder::Chunk& chunk) {
       if (hi < 0 || lo < 0 || (i + 2 < hex.size() && hex[i + 2] != ' '))
         throw CaptureError(fmt::format("{}: line {}, column {}: expected a hex byte, found \"{}\"",
                                        lines_.path(), lines_.line_number(), i + 1,
-                                       hex.substr(i, 8)));
+                                       printable(hex.substr(i, 8))));
       bytes_.push_back(static_cast<uint8_t>(hi << 4 | lo));
       i += 2;
     }

@@ -23,17 +23,9 @@ struct SigrokReader::Stream {
   uint64_t line = 0;
 };
 
-namespace {
-
-struct CaptureShape {
-  uint64_t samplerate = 0;
-  std::vector<std::string> channels;
-};
-
 // `sigrok-cli --show` on an input file prints "Samplerate: N" and "- NAME: logic" lines.
-CaptureShape show(const std::string& path, const std::string& program) {
-  const std::string text = run_to_string({program, "-i", path, "--show"}, path);
-  CaptureShape shape;
+SigrokShape parse_sigrok_show(const std::string& text, const std::string& path) {
+  SigrokShape shape;
   std::istringstream in(text);
   for (std::string line; std::getline(in, line);) {
     if (line.rfind("Samplerate: ", 0) == 0) {
@@ -47,6 +39,19 @@ CaptureShape show(const std::string& path, const std::string& program) {
     throw CaptureError(fmt::format("{}: sigrok-cli reports no sample rate", path));
   return shape;
 }
+
+// Lines look like "31179-31597 uart-1: 01": the sample range of the data bits, then the byte.
+std::optional<SigrokByte> parse_sigrok_byte(const char* line) {
+  uint64_t first = 0, last = 0;
+  unsigned value = 0;
+  char tag[64];
+  if (std::sscanf(line, "%" SCNu64 "-%" SCNu64 " %63s %x", &first, &last, tag, &value) != 4 ||
+      value > 0xFF)
+    return std::nullopt;
+  return SigrokByte{first, static_cast<uint8_t>(value)};
+}
+
+namespace {
 
 const char* parity_name(decoder::Parity p) {
   switch (p) {
@@ -89,7 +94,8 @@ std::vector<SigrokLine> parse_sigrok_channels(const std::string& spec) {
 
 SigrokReader::SigrokReader(const std::string& path, const SigrokOptions& options)
     : path_(path), options_(options) {
-  const CaptureShape shape = show(path, options.program);
+  const SigrokShape shape =
+      parse_sigrok_show(run_to_string({options.program, "-i", path, "--show"}, path), path);
   samplerate_ = shape.samplerate;
   std::vector<SigrokLine> lines = options.lines;
   if (lines.empty()) {
@@ -120,7 +126,6 @@ SigrokReader::SigrokReader(const std::string& path, const SigrokOptions& options
 
 SigrokReader::~SigrokReader() = default;
 
-// Lines look like "31179-31597 uart-1: 01": the sample range of the data bits, then the byte.
 bool SigrokReader::refill(Stream& s) {
   s.has_byte = false;
   if (!s.process) return false;
@@ -135,17 +140,14 @@ bool SigrokReader::refill(Stream& s) {
     return false;
   }
   ++s.line;
-  uint64_t first = 0, last = 0;
-  unsigned value = 0;
-  char tag[64];
-  if (std::sscanf(text, "%" SCNu64 "-%" SCNu64 " %63s %x", &first, &last, tag, &value) != 4 ||
-      value > 0xFF)
+  const std::optional<SigrokByte> byte = parse_sigrok_byte(text);
+  if (!byte)
     throw CaptureError(
         fmt::format("{}: sigrok-cli output line {} on channel {} is not a UART byte: {}", path_,
                     s.line, s.name, text));
   s.has_byte = true;
-  s.sample = first;
-  s.byte = static_cast<uint8_t>(value);
+  s.sample = byte->sample;
+  s.byte = byte->value;
   return true;
 }
 

@@ -3,7 +3,9 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "captures/chunk_source.hpp"
 #include "decoder/serial_format.hpp"
@@ -21,6 +23,21 @@ struct SigrokOptions {
   decoder::SerialFormat format;
   std::string program = "sigrok-cli";
 };
+
+// What `sigrok-cli --show` says of a capture. Throws CaptureError naming `path` when it
+// gives no sample rate.
+struct SigrokShape {
+  uint64_t samplerate = 0;
+  std::vector<std::string> channels;
+};
+SigrokShape parse_sigrok_show(const std::string& text, const std::string& path);
+
+// One line of the UART decoder's output: where the data bits start, and the byte.
+struct SigrokByte {
+  uint64_t sample = 0;
+  uint8_t value = 0;
+};
+std::optional<SigrokByte> parse_sigrok_byte(const char* line);
 
 // Parses "tx=NAME,rx=NAME" or "bus=NAME"; throws std::invalid_argument.
 std::vector<SigrokLine> parse_sigrok_channels(const std::string& spec);

@@ -115,11 +115,17 @@ void Analyzer::start_framer(uint16_t id, Mode mode) {
 }
 
 void Analyzer::push(const Chunk& chunk) {
-  Channel& c = channel(chunk.channel);
   if (options_.clock != ClockQuality::none) {
+    clock_steps_back_ += chunk.t_ns < last_ns_;
     last_ns_ = std::max(last_ns_, chunk.t_ns);
-    matcher_.advance(chunk.t_ns);
   }
+  feed(chunk);
+}
+
+// Pushed chunks, and those the mode probe kept and replays once the mode is known.
+void Analyzer::feed(const Chunk& chunk) {
+  Channel& c = channel(chunk.channel);
+  if (options_.clock != ClockQuality::none) matcher_.advance(chunk.t_ns);
   if (probe_) {
     if (probe_->push(chunk, c.info.role)) settle_mode();
     return;
@@ -143,7 +149,7 @@ void Analyzer::settle_mode() {
   const auto probe = std::move(probe_);
   mode_ = probe->verdict();
   for (uint16_t id = 0; id < channels_.size(); ++id) start_framer(id, *mode_);
-  probe->replay([this](const Chunk& kept) { push(kept); });
+  probe->replay([this](const Chunk& kept) { feed(kept); });
 }
 
 void Analyzer::finish() {

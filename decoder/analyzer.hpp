@@ -56,6 +56,9 @@ class Analyzer final : private FrameSink {
 
   // The mode the bus settled on (automatic mode decides from the first frames).
   std::optional<Mode> mode() const { return mode_; }
+  // How often a chunk's time stamp was earlier than one before it (a capture whose clock
+  // stepped back); latencies across such a step are not measured.
+  uint64_t clock_steps_back() const { return clock_steps_back_; }
 
  private:
   class ModeProbe;
@@ -67,6 +70,7 @@ class Analyzer final : private FrameSink {
   };
 
   Channel& channel(uint16_t id);
+  void feed(const Chunk& chunk);
   void start_framer(uint16_t id, Mode mode);
   void settle_mode();
   void on_frame(Frame& frame) override;
@@ -82,6 +86,7 @@ class Analyzer final : private FrameSink {
   std::optional<Mode> mode_;
   uint64_t next_index_ = 1;
   int64_t last_ns_ = 0;
+  uint64_t clock_steps_back_ = 0;
 };
 
 }  // namespace modtap::decoder

@@ -138,7 +138,9 @@ void Matcher::on_response(Frame& frame) {
   }
   frame.request = pending_->index;
   frame.request_pdu = {pending_->pdu.data(), pending_->size};
-  if (options_.timed) {
+  // A clock that steps back, or stamps reads later than the bytes ended, can put a response
+  // before its request's end: that latency is not measured rather than negative.
+  if (options_.timed && frame.t_ns >= pending_->end_ns) {
     frame.latency_ns = frame.t_ns - pending_->end_ns;
     if (options_.exact_clock && *frame.latency_ns < options_.t35_ns)
       frame.findings |= finding_fast_turnaround;
@@ -164,8 +166,9 @@ void Matcher::expire(int64_t now_ns, TimeoutReason reason) {
   t.channel = pending_->channel;
   t.slave = pending_->slave;
   t.function = pending_->pdu[0];
-  t.t_ns = now_ns;
-  t.waited_ns = now_ns - pending_->end_ns;
+  // A clock that stepped back may put `now` before the request's end: it waited no time.
+  t.t_ns = std::max(now_ns, pending_->end_ns);
+  t.waited_ns = t.t_ns - pending_->end_ns;
   t.reason = reason;
   unanswered_ = pending_;
   set_pending(nullptr);

@@ -244,7 +244,11 @@ void check_registers(const DeviceModel& model, const RegisterAccess& access,
                      std::vector<RuleFinding>& found) {
   bool closed_reported = false;
   unsigned mapped = 0;
-  for (unsigned i = 0; i < access.count && access.start + i <= 0xFFFF; ++i) {
+  // A request beyond the standard's limits (2000 coils, 125 registers) is still read, but
+  // only as far as the standard goes: a quantity of 65535 must not cost 65535 lookups.
+  constexpr unsigned most_checked = 2000;
+  const unsigned count = std::min<unsigned>(access.count, most_checked);
+  for (unsigned i = 0; i < count && access.start + i <= 0xFFFF; ++i) {
     const auto address = static_cast<uint16_t>(access.start + i);
     const RegisterLookup lookup = find_register(model, access.table, address);
     const RegisterDef* def = lookup.def();

@@ -324,6 +324,21 @@ TEST(Cli, AThirdRetryIsMoreThanAnN3MasterMakes) {
   EXPECT_THAT(stats.lines, ::testing::Contains("unanswered at end of capture  1"));
 }
 
+TEST(Cli, TimeStampsThatGoBackwardsWarnOnceAndGiveNoNegativeLatency) {
+  const std::string log = hexlog("modtap-backwards.log", {"00.500000", "02 03 01 20 00 01 84 0F",
+                                                          "00.100000", "02 03 02 00 05 3C 47"});
+  const Outcome r = run("-r " + log + " -T json");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_EQ(r.lines.size(), 3u);  // the warning (standard error) and two frames
+  EXPECT_THAT(r.lines, ::testing::Contains("modtap: warning: " + log +
+                                           ": the time stamps go backwards 1 times; latencies "
+                                           "across those steps are not measured"));
+  for (const auto& line : r.lines)
+    if (line.find("\"role\":\"response\"") != std::string::npos) {
+      EXPECT_NE(line.find("\"request\":1,\"latency_us\":null"), std::string::npos) << line;
+    }
+}
+
 TEST(Cli, AnUnknownModelIsAClearError) {
   const Outcome r = run(brainchild + " --model nosuch");
   EXPECT_NE(r.status, 0);

@@ -269,6 +269,11 @@ int read_file(const Options& o) {
   out.flush();
   sinks.close();
   if (raw) raw->close();
+  if (bus.clock_steps_back())
+    fmt::print(stderr,
+               "modtap: warning: {}: the time stamps go backwards {} times; latencies across "
+               "those steps are not measured\n",
+               o.read_file, bus.clock_steps_back());
   if (broken) throw *broken;
   hint_settings(open.serial, health, pace);
   return 0;

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets with clang (ASan+UBSan) in build-fuzz/ and runs each on its seed
+# corpus (tests/fuzz/corpus/TARGET). New inputs go to build-fuzz/corpus/TARGET; an input that
+# fails is written to build-fuzz/findings/ and stops that fuzzer with a non-zero exit.
+#
+#   scripts/fuzz.sh                 every target for 30 s (what CI runs)
+#   scripts/fuzz.sh 3600            every target for an hour
+#   scripts/fuzz.sh 0 10000000 rtu  the RTU framer for 10 million runs
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-30}
+runs=${2:--1}
+shift $(( $# > 2 ? 2 : $# ))
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(rtu ascii pdu hexlog pcap sigrok model_yaml)
+
+CC=clang CXX=clang++ cmake -S . -B build-fuzz -DMODTAP_FUZZ=ON -DMODTAP_TESTS=OFF \
+  -DMODTAP_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+cmake --build build-fuzz -j"$(nproc)" --target "${targets[@]/#/fuzz_}" >build-fuzz/build.log 2>&1 ||
+  { tail -30 build-fuzz/build.log; exit 1; }
+
+mkdir -p build-fuzz/findings
+status=0
+for t in "${targets[@]}"; do
+  mkdir -p "build-fuzz/corpus/$t"
+  args=(-rss_limit_mb=1024 -max_len=8192 -timeout=10 -print_final_stats=1
+        "-artifact_prefix=build-fuzz/findings/$t-" "-runs=$runs")
+  [ "$seconds" -gt 0 ] && args+=("-max_total_time=$seconds")
+  echo "== fuzz_$t"
+  if ! "build-fuzz/tests/fuzz/fuzz_$t" "${args[@]}" "build-fuzz/corpus/$t" "tests/fuzz/corpus/$t" \
+      "tests/fuzz/regressions/$t" 2>"build-fuzz/fuzz_$t.log"; then
+    status=1
+    grep -E "property failed|ERROR|SUMMARY" "build-fuzz/fuzz_$t.log" | head -5
+  fi
+  grep -E "stat::number_of_executed_units|stat::peak_rss_mb" "build-fuzz/fuzz_$t.log" | tr '\n' ' '
+  echo
+done
+exit $status
