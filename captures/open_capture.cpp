@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -78,7 +79,22 @@ Format detect_format(const std::string& path) {
                   path));
 }
 
+namespace {
+
+// What no reader can take, said plainly before any reader tries.
+void check_readable(const std::string& path) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error))
+    throw CaptureError(fmt::format("{}: is a directory, not a capture file", path));
+  const auto size = std::filesystem::file_size(path, error);
+  if (!error && size == 0 && std::filesystem::is_regular_file(path, error))
+    throw CaptureError(fmt::format("{}: the file is empty", path));
+}
+
+}  // namespace
+
 std::unique_ptr<ChunkSource> open_capture(const std::string& path, const OpenOptions& options) {
+  check_readable(path);
   const Format format = options.format == Format::automatic ? detect_format(path) : options.format;
   switch (format) {
     case Format::raw:

@@ -2,12 +2,14 @@
 #include <pcap/pcap.h>
 
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
 #include "captures/hexlog_reader.hpp"
 #include "captures/open_capture.hpp"
 #include "captures/pcap_reader.hpp"
+#include "captures/pcapng_writer.hpp"
 #include "captures/raw_reader.hpp"
 #include "tests/support/collector.hpp"
 
@@ -26,6 +28,13 @@ class TempDir : public ::testing::Test {
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
+
+ public:
+  std::string write_file(const std::string& name, const std::string& content) {
+    return write(name, content);
+  }
+
+ protected:
   std::string write(const std::string& name, const std::string& content) {
     const auto path = (dir_ / name).string();
     std::ofstream(path, std::ios::binary) << content;
@@ -122,6 +131,59 @@ TEST_F(TempDir, TruncatedPcapNamesTheOffset) {
   const std::string error = error_of(path);
   EXPECT_NE(error.find(path + ": offset 48, after packet 1: truncated"), std::string::npos)
       << error;
+}
+
+// Reads `content` cut at every offset: each cut reads up to a packet and then either ends
+// (a cut between packets) or names the file and offset; never more bytes than the whole.
+void expect_every_cut_is_clear(TempDir& dir, const std::string& name, const std::string& content,
+                               size_t whole_bytes) {
+  for (size_t cut = 1; cut < content.size(); ++cut) {
+    const auto path = dir.write_file(name, content.substr(0, cut));
+    size_t bytes = 0;
+    try {
+      PcapReader reader(path);
+      decoder::Chunk chunk;
+      while (reader.next(chunk)) bytes += chunk.bytes.size();
+    } catch (const CaptureError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(path + ": offset ", 0), 0u) << cut << ": " << e.what();
+    }
+    EXPECT_LE(bytes, whole_bytes) << cut;
+  }
+}
+
+TEST_F(TempDir, APcapCutAtEveryOffsetReadsUpToTheCutOrNamesTheOffset) {
+  const auto good = write_pcap("whole.pcap", 147,
+                               {hex("01 03 00 00 00 0a c5 cd"), hex("01 03 14 00 01 00 02"),
+                                hex("00 03 00 04 00 05 00 06 00 07 00 08 00 09 00 0a 8f 16")});
+  std::ifstream in(good, std::ios::binary);
+  expect_every_cut_is_clear(*this, "cut.pcap", {std::istreambuf_iterator<char>(in), {}}, 33);
+}
+
+TEST_F(TempDir, APcapngCutAtEveryOffsetReadsUpToTheCutOrNamesTheOffset) {
+  const auto path = (dir_ / "whole.pcapng").string();
+  {
+    PcapngWriter writer(path);
+    const uint32_t tx = writer.add_interface(147, "tx"), rx = writer.add_interface(147, "rx");
+    writer.write_packet(tx, 1'700'000'000'000'000'000, hex("01 03 00 00 00 0a c5 cd"),
+                        PacketDirection::outbound, "request");
+    writer.write_packet(rx, 1'700'000'000'010'000'000, hex("01 83 02 c0 f1"),
+                        PacketDirection::inbound, "");
+    writer.close();
+  }
+  std::ifstream in(path, std::ios::binary);
+  expect_every_cut_is_clear(*this, "cut.pcapng", {std::istreambuf_iterator<char>(in), {}}, 13);
+}
+
+TEST_F(TempDir, APacketLengthThatLiesIsAnErrorNotAnAllocation) {
+  const auto good = write_pcap("whole.pcap", 147, {hex("01 03 00 00 00 0a c5 cd")});
+  std::ifstream in(good, std::ios::binary);
+  std::string content{std::istreambuf_iterator<char>(in), {}};
+  // The record header after the 24-byte file header: ts_sec, ts_usec, caplen, len.
+  for (const uint32_t lie : {0x7FFFFFFFu, 9u, 0xFFFFFFFFu}) {
+    std::memcpy(content.data() + 24 + 8, &lie, 4);
+    const auto path = write("lying.pcap", content);
+    EXPECT_EQ(error_of(path).rfind(path + ": offset", 0), 0u) << lie << ": " << error_of(path);
+  }
 }
 
 TEST_F(TempDir, UnknownContentWithAnUnknownNameIsAnError) {

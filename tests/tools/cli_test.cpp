@@ -111,6 +111,23 @@ const std::string brainchild_lines = std::string("-r ") + MODTAP_SAMPLES +
                                      "/brainchild-io-16do.sr --sigrok-channels tx=1,rx=0 "
                                      "--sigrok-invert";
 
+TEST(Cli, AnEmptyFileOrADirectoryIsSaidPlainly) {
+  const auto dir = std::filesystem::temp_directory_path() / "modtap-a-directory";
+  std::filesystem::create_directories(dir);
+  const auto empty = std::filesystem::temp_directory_path() / "modtap-empty.pcap";
+  std::ofstream{empty};
+  const Outcome on_dir = run("-r " + dir.string());
+  EXPECT_EQ(on_dir.status >> 8, 2);
+  EXPECT_THAT(on_dir.lines, ::testing::ElementsAre("modtap: " + dir.string() +
+                                                   ": is a directory, not a capture file"));
+  for (const char* format : {"", " --format raw", " --format pcap"}) {
+    const Outcome on_empty = run("-r " + empty.string() + format);
+    EXPECT_EQ(on_empty.status >> 8, 2) << format;
+    EXPECT_THAT(on_empty.lines,
+                ::testing::ElementsAre("modtap: " + empty.string() + ": the file is empty"));
+  }
+}
+
 TEST(Cli, AWrongBaudGivesNoiseAndAHintNotACrash) {
   const Outcome r = run(brainchild_lines + " --baud 9600 --parity even");
   ASSERT_EQ(r.status, 0);
