@@ -88,9 +88,35 @@ Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role) const {
   if (frame.is_exception()) return Role::response;
   if (frame.fit.request && !frame.fit.response) return Role::request;
   if (frame.fit.response && !frame.fit.request) return Role::response;
-  // Both or neither: an echo, or a frame too damaged to tell. What the bus waits for decides.
-  if (pending_matches(frame)) return Role::response;
+  // Both or neither: an echo, or a frame too damaged to tell. What the bus waits for decides,
+  // unless the frame is the pending request again, sent long after an answer was due.
+  if (pending_matches(frame))
+    return copies_pending(frame) && judge_copy(frame) == Copy::retry ? Role::request
+                                                                     : Role::response;
   return frame.fit.request ? Role::request : Role::unknown;
+}
+
+bool Matcher::copies_pending(const Frame& frame) const {
+  const auto pdu = frame.pdu();
+  return frame.slave() == pending_->slave &&
+         std::equal(pdu.begin(), pdu.end(), pending_->pdu.begin(),
+                    pending_->pdu.begin() + pending_->size);
+}
+
+// A master that gets no answer sends the same request again after its own time-out (50 ms to
+// 1 s in practice); for the echo codes that copy is byte for byte what the response would be.
+// The slave's turnaround, learned from answers no retry could fake, tells them apart: a copy
+// much later than the slave ever answered is a retry. With no clock, or nothing learned and a
+// copy late enough to be a retry, it is taken for the response and marked ambiguous.
+Matcher::Copy Matcher::judge_copy(const Frame& frame) const {
+  constexpr int64_t earliest_retry_ns = 50'000'000;
+  constexpr int64_t slack_ns = 20'000'000;
+  if (!options_.timed) return Copy::ambiguous;
+  const int64_t waited = frame.t_ns - pending_->end_ns;
+  const int64_t learned =
+      turnaround_ns_[pending_->slave] ? turnaround_ns_[pending_->slave] : bus_turnaround_ns_;
+  if (learned) return waited > 2 * learned + slack_ns ? Copy::retry : Copy::response;
+  return waited >= earliest_retry_ns ? Copy::ambiguous : Copy::response;
 }
 
 bool Matcher::pending_matches(const Frame& frame) const {
@@ -138,12 +164,15 @@ void Matcher::on_response(Frame& frame) {
   }
   frame.request = pending_->index;
   frame.request_pdu = {pending_->pdu.data(), pending_->size};
+  const bool copy = copies_pending(frame);
+  if (copy && judge_copy(frame) == Copy::ambiguous) frame.findings |= finding_ambiguous_echo;
   // A clock that steps back, or stamps reads later than the bytes ended, can put a response
   // before its request's end: that latency is not measured rather than negative.
   if (options_.timed && frame.t_ns >= pending_->end_ns) {
     frame.latency_ns = frame.t_ns - pending_->end_ns;
     if (options_.exact_clock && *frame.latency_ns < options_.t35_ns)
       frame.findings |= finding_fast_turnaround;
+    if (!copy && frame.check_ok) learn_turnaround(pending_->slave, *frame.latency_ns);
   }
   if (frame.check_ok)
     frame.findings |= check_response_fit({pending_->pdu.data(), pending_->size}, frame.pdu());

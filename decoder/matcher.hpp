@@ -2,6 +2,7 @@
 // and reports time-outs, broadcasts, unsolicited responses and responses that do not fit.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -48,6 +49,15 @@ class Matcher {
     std::array<uint8_t, 256> pdu;  // left uninitialised: only `size` bytes are ever read
   };
 
+  // What an exact copy of the pending echo request is: its response or the master's retry.
+  enum class Copy : uint8_t { response, retry, ambiguous };
+  Copy judge_copy(const Frame& frame) const;
+  bool copies_pending(const Frame& frame) const;
+  void learn_turnaround(uint8_t slave, int64_t latency_ns) {
+    turnaround_ns_[slave] = std::max(turnaround_ns_[slave], latency_ns);
+    bus_turnaround_ns_ = std::max(bus_turnaround_ns_, latency_ns);
+  }
+
   Role decide_role(const Frame& frame, ChannelRole channel_role) const;
   void on_request(Frame& frame);
   void on_response(Frame& frame);
@@ -63,6 +73,9 @@ class Matcher {
   Pending* pending_ = nullptr;     // the open transaction
   Pending* unanswered_ = nullptr;  // the request that last timed out, until another is sent
   Expectation expectation_;        // what pending_ means to a framer, kept in step with it
+  // The longest turnaround seen per slave, and on the bus, from pairs no retry could fake.
+  std::array<int64_t, 256> turnaround_ns_{};
+  int64_t bus_turnaround_ns_ = 0;
 
   void set_pending(Pending* pending);
 };

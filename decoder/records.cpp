@@ -22,6 +22,7 @@ std::span<const FindingName> finding_names() {
       {finding_quantity_out_of_spec, "quantity-out-of-spec"},
       {finding_byte_count_mismatch, "byte-count-mismatch"},
       {finding_value_out_of_spec, "value-out-of-spec"},
+      {finding_ambiguous_echo, "ambiguous-echo"},
   };
   return names;
 }

@@ -102,6 +102,73 @@ TEST(Matcher, AnAnsweredRequestAskedAgainIsNoRetry) {
   EXPECT_FALSE(frames[2].findings & finding_retry);
 }
 
+// Frames at given times through a timed matcher on one bus channel; returns them with their
+// verdicts, and the time-outs in `timeouts`.
+struct Timed {
+  const char* bytes;
+  int64_t t_ms;
+};
+std::vector<Frame> match_timed(std::initializer_list<Timed> frames, std::vector<Timeout>& timeouts,
+                               std::vector<std::vector<uint8_t>>& keep) {
+  MatcherOptions options;
+  Matcher matcher(options, [&](const Timeout& t) { timeouts.push_back(t); });
+  std::vector<Frame> out;
+  uint64_t index = 0;
+  for (const Timed& f : frames) {
+    keep.push_back(hex(f.bytes));
+    Frame frame;
+    frame.index = ++index;
+    frame.adu = frame.raw = keep.back();
+    frame.check_ok = true;
+    frame.fit = {true, true};  // the echo codes read both ways
+    frame.t_ns = f.t_ms * 1'000'000;
+    frame.end_ns = frame.t_ns + static_cast<int64_t>(frame.adu.size()) * 573'000;  // 19200 8E1
+    matcher.on_frame(frame, ChannelRole::bus);
+    out.push_back(frame);
+  }
+  matcher.finish(out.back().end_ns);
+  return out;
+}
+
+TEST(Matcher, AnEchoCopyLongAfterTheSlavesTurnaroundIsARetry) {
+  // Slave 1 answers a read in 5 ms; then a write goes unanswered and the master, after its
+  // 100 ms time-out, sends it again, byte for byte what the echo would have been.
+  std::vector<Timeout> timeouts;
+  std::vector<std::vector<uint8_t>> keep;
+  const auto frames = match_timed({{"01 03 00 00 00 01 84 0a", 0},
+                                   {"01 03 02 00 05 78 47", 10},
+                                   {"01 06 00 01 00 03 98 0b", 100},
+                                   {"01 06 00 01 00 03 98 0b", 205},
+                                   {"01 06 00 01 00 03 98 0b", 215}},
+                                  timeouts, keep);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[2].role, Role::request);
+  EXPECT_EQ(frames[3].role, Role::request);  // the retry, not the slave coming alive
+  EXPECT_TRUE(frames[3].findings & finding_retry);
+  ASSERT_EQ(timeouts.size(), 1u);
+  EXPECT_EQ(timeouts[0].request, frames[2].index);
+  EXPECT_EQ(frames[4].role, Role::response);  // 5 ms after the retry: the answer
+  EXPECT_EQ(frames[4].request, frames[3].index);
+  EXPECT_FALSE(frames[4].findings & finding_ambiguous_echo);
+}
+
+TEST(Matcher, AnEchoCopyWithNothingToJudgeByIsAResponseMarkedAmbiguous) {
+  std::vector<Timeout> timeouts;
+  std::vector<std::vector<uint8_t>> keep;
+  // No answer learned yet: a copy 5 ms on is the response, a copy 120 ms on may be a retry.
+  const auto soon = match_timed({{"01 06 00 01 00 03 98 0b", 0}, {"01 06 00 01 00 03 98 0b", 10}},
+                                timeouts, keep);
+  EXPECT_EQ(soon[1].role, Role::response);
+  EXPECT_FALSE(soon[1].findings & finding_ambiguous_echo);
+  const auto late = match_timed({{"01 06 00 01 00 03 98 0b", 0}, {"01 06 00 01 00 03 98 0b", 125}},
+                                timeouts, keep);
+  EXPECT_EQ(late[1].role, Role::response);
+  EXPECT_TRUE(late[1].findings & finding_ambiguous_echo);
+  // With no clock at all (a raw file), every echo pair is ambiguous.
+  const auto out = analyze_untimed(join({"01 06 25 02 17 70 2d 12", "01 06 25 02 17 70 2d 12"}));
+  EXPECT_TRUE(out.frames()[1].findings & finding_ambiguous_echo);
+}
+
 TEST(ResponseFit, CountersOfDiagnosticsNeedNotEcho) {
   EXPECT_EQ(check_response_fit(hex("08 00 0b 00 00"), hex("08 00 0b 01 23")), finding_none);
   EXPECT_EQ(check_response_fit(hex("08 00 00 12 ab"), hex("08 00 00 12 ac")),
