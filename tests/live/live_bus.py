@@ -284,7 +284,8 @@ def junk_and_clean_exit():
     read = subprocess.run(["tshark", "-r", pcapng, "-T", "fields", "-e", "frame.number"],
                           capture_output=True, text=True)
     ok &= check("junk", read.returncode == 0 and len(read.stdout.split()) == len(records) - sum(
-        1 for r in records if r["type"] == "timeout"), f"pcapng after SIGTERM: {read.stderr}")
+        1 for r in records if r["type"] in ("timeout", "unanswered")),
+        f"pcapng after SIGTERM: {read.stderr}")
     t.close()
     passed += ok
     print(f"1 MB of junk: {len(records)} records, peak RSS {start_kb} kB at start, {peak_kb} kB "
@@ -366,6 +367,62 @@ def reconnects():
     print(f"port unplugged and back with --reconnect: {'ok' if ok else 'FAILED'}")
 
 
+def unprivileged_and_read_only():
+    """As an ordinary user in the dialout group, modtap opens the tap read-only and never
+    writes to it: strace shows the open's flags and every write; the pty's other side stays
+    empty. Without dialout the same port is a clear permission error."""
+    global passed
+    import grp
+    import shutil
+    import tempfile
+    t = Pty()
+    os.chown(t.path, 0, grp.getgrnam("dialout").gr_gid)  # as udev sets a serial adapter
+    os.chmod(t.path, 0o660)
+    home = tempfile.mkdtemp(prefix="modtap-unprivileged-")
+    os.chmod(home, 0o755)  # the checkout may be closed to other users; the copy is not
+    binary = shutil.copy(MODTAP, os.path.join(home, "modtap"))
+    trace = os.path.join(home, "strace.log")
+    as_user = ["setpriv", "--reuid=nobody", "--regid=dialout", "--clear-groups"]
+    modtap = subprocess.Popen(["strace", "-f", "-qq", "-e", "trace=open,openat,write,writev,pwrite64",
+                               "-o", trace] + as_user + [binary, "-i", t.path, "-T", "json",
+                                                        "--baud", "19200"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              start_new_session=True)
+    time.sleep(1.0)
+    request, response = with_crc([1, 3, 0, 0, 0, 1]), with_crc([1, 3, 2, 0, 42])
+    for frame in (request, response):
+        os.write(t.master, frame)
+        time.sleep(0.05)
+    time.sleep(0.5)
+    os.killpg(modtap.pid, signal.SIGTERM)
+    out, err = modtap.communicate(timeout=20)
+    frames = [json.loads(line)["raw"] for line in out.splitlines() if '"type":"frame"' in line]
+    ok = check("unprivileged", frames == [request.hex(), response.hex()], f"frames {frames}: {err}")
+    lines = open(trace).read().splitlines()
+    opens = [l for l in lines if f'"{t.path}"' in l and "open" in l]
+    fd = opens[0].rsplit("=", 1)[1].strip() if opens else None
+    ok &= check("unprivileged", opens and "O_RDONLY" in opens[0] and "O_RDWR" not in opens[0],
+                f"the tap's open: {opens}")
+    writes = [l for l in lines if fd and any(f"{call}({fd}," in l for call in ("write", "writev", "pwrite64"))]
+    ok &= check("unprivileged", fd is not None and not writes, f"writes to the tap (fd {fd}): {writes[:3]}")
+    os.set_blocking(t.master, False)
+    try:
+        echoed = os.read(t.master, 4096)
+    except BlockingIOError:
+        echoed = b""
+    ok &= check("unprivileged", not echoed, f"the other side of the tap received {echoed!r}")
+    refused = subprocess.run(["setpriv", "--reuid=nobody", "--regid=nogroup", "--clear-groups",
+                              binary, "-i", t.path], capture_output=True, text=True, timeout=10)
+    ok &= check("unprivileged", refused.returncode != 0 and "Permission denied" in refused.stderr,
+                f"without dialout: {refused.returncode} {refused.stderr!r}")
+    t.close()
+    shutil.rmtree(home, ignore_errors=True)
+    passed += ok
+    print(f"as nobody in dialout, the tap opened {'O_RDONLY' if opens and 'O_RDONLY' in opens[0] else '?'}"
+          f" and never written: {'ok' if ok else 'FAILED'}; without dialout: "
+          f"{refused.stderr.strip()}")
+
+
 os.makedirs(WORK, exist_ok=True)
 run_case("mbpoll -> libmodbus, RTU 9600 8E1", 9600, "even", 8, "rtu",
          libmodbus_slave(9600, "even"), mbpoll_master(9600, "even"))
@@ -391,8 +448,9 @@ error_cases()
 port_disappears()
 reconnects()
 junk_and_clean_exit()
+unprivileged_and_read_only()
 for f in failures:
     print("FAIL", f)
-cases = 12
+cases = 13
 print(f"{passed} passed, {cases - passed} failed")
 sys.exit(1 if failures else 0)
