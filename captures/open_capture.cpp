@@ -11,6 +11,7 @@
 
 #include "captures/hexlog_reader.hpp"
 #include "captures/pcap_reader.hpp"
+#include "captures/pcapng_reader.hpp"
 #include "captures/raw_reader.hpp"
 
 namespace modtap::captures {
@@ -91,6 +92,13 @@ void check_readable(const std::string& path) {
     throw CaptureError(fmt::format("{}: the file is empty", path));
 }
 
+bool is_pcapng(const std::string& path) {
+  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
+  uint8_t magic[4] = {};
+  return file && std::fread(magic, 1, 4, file.get()) == 4 && magic[0] == 0x0A && magic[1] == 0x0D &&
+         magic[2] == 0x0D && magic[3] == 0x0A;
+}
+
 }  // namespace
 
 std::unique_ptr<ChunkSource> open_capture(const std::string& path, const OpenOptions& options) {
@@ -102,6 +110,8 @@ std::unique_ptr<ChunkSource> open_capture(const std::string& path, const OpenOpt
     case Format::hexlog:
       return std::make_unique<HexlogReader>(path, options.serial.char_time_ns());
     case Format::pcap:
+      if (is_pcapng(path))
+        return std::make_unique<PcapngReader>(path, options.serial.char_time_ns());
       return std::make_unique<PcapReader>(path);
     case Format::sigrok: {
       SigrokOptions sigrok = options.sigrok;

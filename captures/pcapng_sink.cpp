@@ -71,8 +71,9 @@ PcapngLink parse_link(const std::string& name) {
 }
 
 std::string frame_comment(const Frame& f) {
-  std::string c = fmt::format("modtap index={} mode={} role={} check={}", f.index,
-                              to_string(f.mode), to_string(f.role), f.check_ok ? "ok" : "bad");
+  std::string c = fmt::format("modtap index={} mode={} role={} check={} duration_ns={}", f.index,
+                              to_string(f.mode), to_string(f.role), f.check_ok ? "ok" : "bad",
+                              f.end_ns - f.t_ns);
   if (!f.check_ok)
     c += fmt::format(" expected=0x{:0{}x}", f.expected_check, f.mode == Mode::rtu ? 4 : 2);
   if (f.request) c += fmt::format(" request={}", *f.request);
@@ -85,20 +86,32 @@ std::string frame_comment(const Frame& f) {
 }
 
 std::string noise_comment(const Noise& n) {
-  return fmt::format("modtap index={} mode={} noise={}", n.index, to_string(n.mode),
-                     to_string(n.reason));
+  return fmt::format("modtap index={} mode={} noise={} duration_ns={}", n.index, to_string(n.mode),
+                     to_string(n.reason), n.end_ns - n.t_ns);
+}
+
+std::string interface_comment(ChannelRole role, ClockQuality clock) {
+  return fmt::format("{} role={} clock={}", interface_convention, to_string(role),
+                     to_string(clock));
 }
 
 PcapngSink::PcapngSink(PcapngWriter& writer, const std::vector<ChannelInfo>& channels,
                        const PcapngOptions& options)
     : writer_(writer), channels_(channels), options_(options) {}
 
+// Every channel's interface is written before the first packet, so a reader knows all the
+// channels before it reads a packet.
 uint32_t PcapngSink::interface_for(uint16_t channel) {
-  if (interface_of_channel_.size() <= channel) interface_of_channel_.resize(channel + 1u, -1);
-  if (interface_of_channel_[channel] < 0) {
+  const size_t count = std::max<size_t>(channels_.size(), channel + 1u);
+  while (interface_of_channel_.size() < count) {
+    const size_t c = interface_of_channel_.size();
     const int dlt = options_.link == PcapngLink::exported_pdu ? exported_pdu_dlt : options_.dlt;
-    const std::string name = channel < channels_.size() ? channels_[channel].name : "modtap";
-    interface_of_channel_[channel] = writer_.add_interface(dlt, name);
+    const std::string name = c < channels_.size() ? channels_[c].name : "modtap";
+    const ChannelRole role = c < channels_.size() ? channels_[c].role : ChannelRole::bus;
+    interface_of_channel_.push_back(static_cast<int>(writer_.add_interface(
+        dlt, name,
+        options_.link == PcapngLink::bare ? std::string()
+                                          : interface_comment(role, options_.clock))));
   }
   return static_cast<uint32_t>(interface_of_channel_[channel]);
 }

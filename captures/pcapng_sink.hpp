@@ -23,6 +23,8 @@ struct PcapngOptions {
   // `-o mbrtu.tcp.port:502` tells Wireshark which frames are requests.
   uint32_t slave_port = 502;
   uint32_t master_port = 50200;
+  // How well the source knew each byte's time: said in the file, so a reread times alike.
+  decoder::ClockQuality clock = decoder::ClockQuality::per_chunk;
 };
 
 // Parses "user", "exported-pdu" or "bare"; throws std::invalid_argument.
@@ -53,6 +55,13 @@ class PcapngSink final : public decoder::RecordSink {
 };
 
 // The comment modtap writes on a frame: "modtap key=value ...", parsed by modtap.lua.
+// What modtap says of each interface it writes: how its time stamps are meant, so that
+// modtap reads its own files back to the same records, and the channel's role (a split tap).
+inline constexpr std::string_view interface_convention =
+    "modtap: a packet is stamped at the start of its first byte; its comment's duration_ns "
+    "runs to the end of its last byte;";
+std::string interface_comment(decoder::ChannelRole role, decoder::ClockQuality clock);
+
 std::string frame_comment(const decoder::Frame& frame);
 std::string noise_comment(const decoder::Noise& noise);
 

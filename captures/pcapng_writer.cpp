@@ -88,11 +88,13 @@ void PcapngWriter::write_section_header() {
   write_block(section_header_block, b.bytes());
 }
 
-uint32_t PcapngWriter::add_interface(int link_type, std::string_view name) {
+uint32_t PcapngWriter::add_interface(int link_type, std::string_view name,
+                                     std::string_view comment) {
   Body b;
   b.put(static_cast<uint16_t>(link_type));
   b.put(uint16_t{0});
   b.put(uint32_t{0});  // no snap length
+  if (!comment.empty()) b.option(opt_comment, comment);
   b.option(if_name, name);
   const uint8_t nanoseconds = 9;
   b.option(if_tsresol, std::span<const uint8_t>(&nanoseconds, 1));

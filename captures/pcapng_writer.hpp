@@ -27,7 +27,7 @@ class PcapngWriter {
   PcapngWriter& operator=(const PcapngWriter&) = delete;
 
   // Returns the interface id for the packets that follow.
-  uint32_t add_interface(int link_type, std::string_view name);
+  uint32_t add_interface(int link_type, std::string_view name, std::string_view comment = {});
   void write_packet(uint32_t interface, int64_t t_ns, std::span<const uint8_t> data,
                     PacketDirection direction, std::string_view comment);
   void flush();

@@ -67,6 +67,30 @@ const char* to_string(Role role) {
   return "?";
 }
 
+const char* to_string(ClockQuality clock) {
+  switch (clock) {
+    case ClockQuality::per_byte:
+      return "per-byte";
+    case ClockQuality::none:
+      return "none";
+    case ClockQuality::per_chunk:
+      break;
+  }
+  return "per-chunk";
+}
+
+const char* to_string(ChannelRole role) {
+  switch (role) {
+    case ChannelRole::master:
+      return "master";
+    case ChannelRole::slave:
+      return "slave";
+    case ChannelRole::bus:
+      break;
+  }
+  return "bus";
+}
+
 const char* to_string(Mode mode) {
   return mode == Mode::rtu ? "rtu" : "ascii";
 }

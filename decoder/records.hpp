@@ -55,7 +55,7 @@ enum Finding : uint32_t {
   finding_quantity_out_of_spec = 1u << 8,  // a quantity of 0 or over the standard's limit
   finding_byte_count_mismatch = 1u << 9,   // a byte count that disagrees with its quantity
   finding_value_out_of_spec = 1u << 10,    // FC05 with a value other than FF00H or 0000H
-  finding_ambiguous_echo = 1u << 11,  // an echo taken for the response that may be a retry
+  finding_ambiguous_echo = 1u << 11,       // an echo taken for the response that may be a retry
 };
 
 // Each finding bit's name, as text, JSON and pcapng comments spell it, in the order shown.
@@ -138,5 +138,7 @@ const char* to_string(NoiseReason reason);
 const char* to_string(TimeoutReason reason);
 const char* to_string(Role role);
 const char* to_string(Mode mode);
+const char* to_string(ChannelRole role);
+const char* to_string(ClockQuality clock);  // per-byte, per-chunk, none
 
 }  // namespace modtap::decoder

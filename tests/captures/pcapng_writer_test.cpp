@@ -86,9 +86,11 @@ TEST(PcapngSink, CommentsCarryTheVerdictsForTheLuaDissector) {
   frame.request = 6;
   frame.latency_ns = 2'500'000;
   frame.findings = decoder::finding_bad_check;
+  frame.t_ns = 1'000'000;
+  frame.end_ns = 4'645'833;  // 7 bytes at 19200 8E1: what a reread needs to time it again
   EXPECT_EQ(frame_comment(frame),
-            "modtap index=7 mode=rtu role=response check=bad expected=0xe8bb request=6 "
-            "latency_us=2500.000 finding=bad-check");
+            "modtap index=7 mode=rtu role=response check=bad duration_ns=3645833 "
+            "expected=0xe8bb request=6 latency_us=2500.000 finding=bad-check");
 }
 
 }  // namespace

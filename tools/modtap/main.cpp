@@ -121,7 +121,8 @@ tools::ModelCatalog load_models(const Options& o) {
 // stage that reads frames through the device models.
 class Sinks {
  public:
-  Sinks(const Options& o, tools::Output& out, const std::vector<decoder::ChannelInfo>& channels)
+  Sinks(const Options& o, tools::Output& out, const std::vector<decoder::ChannelInfo>& channels,
+        decoder::ClockQuality clock)
       : terminal_(make_sink(o, out, channels)) {
     fan_out_.add(*terminal_);
     // Only text, JSON, pcapng comments and statistics with --model show what the models say;
@@ -141,6 +142,7 @@ class Sinks {
     captures::PcapngOptions options;
     options.link = captures::parse_link(o.link);
     options.dlt = o.dlt;
+    options.clock = clock;
     pcapng_ = std::make_unique<captures::PcapngWriter>(o.write_file);
     pcapng_sink_ = std::make_unique<captures::PcapngSink>(*pcapng_, channels, options);
     fan_out_.add(*pcapng_sink_);
@@ -243,7 +245,7 @@ int read_file(const Options& o) {
 
   captures::OutputFile standard_output(stdout, "standard output");
   tools::Output out(standard_output);
-  Sinks sinks(o, out, source->channels());
+  Sinks sinks(o, out, source->channels(), source->clock());
   decoder::LineHealth health(&sinks.all());
   decoder::AnalyzerOptions options = analyzer_options(o, source->clock());
   options.format = open.serial;
@@ -290,7 +292,7 @@ int listen(const Options& o) {
   captures::OutputFile standard_output(stdout, "standard output");
   tools::Output out(standard_output);
   out.set_line_buffered(true);
-  Sinks sinks(o, out, channels);
+  Sinks sinks(o, out, channels, decoder::ClockQuality::per_chunk);
   live::LiveOptions options;
   options.analyzer = analyzer_options(o, decoder::ClockQuality::per_chunk);
   options.analyzer.slave_timeout_ns = sinks.model_timeouts();

@@ -1,0 +1,255 @@
+#include "captures/pcapng_reader.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
+#include <fmt/format.h>
+
+#include "captures/pcap_reader.hpp"
+#include "captures/pcapng_sink.hpp"
+
+namespace modtap::captures {
+namespace {
+
+// Block types and options of the pcapng specification (draft-ietf-opsawg-pcapng).
+constexpr uint32_t section_header_block = 0x0A0D0D0A;
+constexpr uint32_t interface_description_block = 1;
+constexpr uint32_t obsolete_packet_block = 2;
+constexpr uint32_t simple_packet_block = 3;
+constexpr uint32_t enhanced_packet_block = 6;
+constexpr uint32_t byte_order_magic = 0x1A2B3C4D;
+constexpr uint16_t opt_end = 0, opt_comment = 1, if_name = 2, if_tsresol = 9;
+constexpr int exported_pdu_dlt = 252;
+
+uint32_t swap32(uint32_t v) {
+  return __builtin_bswap32(v);
+}
+
+bool serial_link(int link_type) {
+  return (link_type >= PcapReader::first_user_dlt && link_type <= PcapReader::last_user_dlt) ||
+         link_type == exported_pdu_dlt;
+}
+
+// Exported-PDU tags (big-endian type and length, values padded to 4) come before the bytes.
+std::span<const uint8_t> after_exported_pdu_tags(std::span<const uint8_t> data) {
+  size_t at = 0;
+  while (at + 4 <= data.size()) {
+    const unsigned type = data[at] << 8 | data[at + 1];
+    const size_t length = data[at + 2] << 8 | data[at + 3];
+    at += 4;
+    if (type == 0) return data.subspan(at);
+    at += (length + 3) & ~size_t{3};
+  }
+  return {};
+}
+
+}  // namespace
+
+struct PcapngReader::Block {
+  uint32_t type = 0;
+};
+
+PcapngReader::PcapngReader(const std::string& path, int64_t char_time_ns)
+    : path_(path),
+      char_time_ns_(char_time_ns),
+      file_(std::fopen(path.c_str(), "rb"), &std::fclose) {
+  if (!file_) throw CaptureError(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
+  // The interfaces come before their packets; read them now, so the channels are known before
+  // the first packet. An interface described later is added when it comes.
+  Block block;
+  while (read_block(block)) {
+    if (block.type == section_header_block) {
+      section_header(block);
+    } else if (block.type == interface_description_block) {
+      interface_description(block);
+    } else if (block.type == enhanced_packet_block || block.type == simple_packet_block ||
+               block.type == obsolete_packet_block) {
+      std::fseek(file_.get(), static_cast<long>(offset_), SEEK_SET);  // read it again in next()
+      break;
+    }
+  }
+  if (channels_.empty()) channels_.push_back({path_, decoder::ChannelRole::bus});
+}
+
+void PcapngReader::fail(const std::string& what) const {
+  throw CaptureError(fmt::format("{}: offset {}: {}", path_, offset_, what));
+}
+
+// One block: its type, and its body (without the type and the two lengths) in body_.
+bool PcapngReader::read_block(Block& block) {
+  offset_ = static_cast<uint64_t>(std::ftell(file_.get()));
+  uint32_t head[2];
+  const size_t got = std::fread(head, 1, sizeof head, file_.get());
+  if (got == 0) return false;
+  if (got < sizeof head) fail("truncated pcapng block header");
+  block.type = head[0];
+  if (block.type == section_header_block) {
+    // The byte order is the section's own: read it from the magic after the length.
+    uint32_t magic = 0;
+    if (std::fread(&magic, 1, 4, file_.get()) != 4) fail("truncated section header");
+    if (magic != byte_order_magic && magic != swap32(byte_order_magic))
+      fail("not a pcapng section header");
+    swapped_ = magic != byte_order_magic;
+    have_section_ = true;
+    std::fseek(file_.get(), -4, SEEK_CUR);
+  } else {
+    if (!have_section_) fail("no section header before the first block");
+    if (swapped_) block.type = swap32(block.type);
+  }
+  const uint32_t length = swapped_ ? swap32(head[1]) : head[1];
+  if (length < 12 || length % 4 != 0 || length > max_block)
+    fail(fmt::format("block length {} is not a pcapng block's", length));
+  body_.resize(length - 12);
+  uint32_t trailer = 0;
+  if (std::fread(body_.data(), 1, body_.size(), file_.get()) != body_.size() ||
+      std::fread(&trailer, 1, 4, file_.get()) != 4)
+    fail(fmt::format("truncated pcapng block of {} bytes", length));
+  if ((swapped_ ? swap32(trailer) : trailer) != length)
+    fail("block lengths at its start and end differ");
+  return true;
+}
+
+void PcapngReader::section_header(const Block&) {
+  // A new section starts its own interface numbering.
+  interfaces_.clear();
+}
+
+void PcapngReader::interface_description(const Block&) {
+  auto u16 = [&](size_t at) {
+    uint16_t v;
+    std::memcpy(&v, body_.data() + at, 2);
+    return swapped_ ? static_cast<uint16_t>(v >> 8 | v << 8) : v;
+  };
+  if (body_.size() < 8) fail("interface description too short");
+  Interface i;
+  i.link_type = u16(0);
+  std::string name, comment;
+  for (size_t at = 8; at + 4 <= body_.size();) {
+    const uint16_t code = u16(at), length = u16(at + 2);
+    at += 4;
+    if (code == opt_end || at + length > body_.size()) break;
+    const std::string value(reinterpret_cast<const char*>(body_.data() + at), length);
+    if (code == if_name) name = value;
+    if (code == opt_comment) comment = value;
+    if (code == if_tsresol && length >= 1) {  // 10^-n s, or 2^-n s with the top bit set
+      const int exponent = std::min(body_[at] & 0x7F, (body_[at] & 0x80) ? 62 : 18);
+      i.ticks_per_second = 1;
+      for (int e = 0; e < exponent; ++e) i.ticks_per_second *= (body_[at] & 0x80) ? 2 : 10;
+    }
+    at += (length + 3u) & ~3u;
+  }
+  if (!serial_link(i.link_type))
+    fail(fmt::format(
+        "link type {} does not carry serial bytes; modtap reads DLT_USER0..15 "
+        "({}..{}) and exported PDUs ({})",
+        i.link_type, PcapReader::first_user_dlt, PcapReader::last_user_dlt, exported_pdu_dlt));
+  i.modtap = comment.starts_with(interface_convention);
+  if (i.modtap && interfaces_.empty()) {
+    if (comment.find("clock=per-byte") != std::string::npos)
+      clock_ = decoder::ClockQuality::per_byte;
+    if (comment.find("clock=none") != std::string::npos) clock_ = decoder::ClockQuality::none;
+  }
+  decoder::ChannelRole role = decoder::ChannelRole::bus;
+  if (i.modtap && comment.find("role=master") != std::string::npos)
+    role = decoder::ChannelRole::master;
+  if (i.modtap && comment.find("role=slave") != std::string::npos)
+    role = decoder::ChannelRole::slave;
+  i.channel = static_cast<uint16_t>(channels_.size());
+  channels_.push_back({name.empty() ? path_ : name, role});
+  interfaces_.push_back(i);
+}
+
+bool PcapngReader::next(decoder::Chunk& chunk) {
+  if (rest_at_) {  // the rest of a modtap packet
+    const auto rest = std::span<const uint8_t>(bytes_).subspan(rest_at_);
+    if (clock_ == decoder::ClockQuality::per_byte && rest.size() > 1) {
+      const auto last = static_cast<int64_t>(bytes_.size() - 1);
+      const auto k = static_cast<int64_t>(rest_at_);
+      chunk = {rest_channel_, first_end_ns_ + (rest_end_ns_ - first_end_ns_) * k / last,
+               rest.first(1)};
+      ++rest_at_;
+      return true;
+    }
+    chunk = {rest_channel_, rest_end_ns_, rest};
+    rest_at_ = 0;
+    return true;
+  }
+  Block block;
+  while (read_block(block)) {
+    if (block.type == section_header_block) {
+      section_header(block);
+    } else if (block.type == interface_description_block) {
+      interface_description(block);
+    } else if (packet(block, chunk)) {
+      return true;
+    }
+  }
+  return false;
+}
+
+bool PcapngReader::packet(const Block& block, decoder::Chunk& chunk) {
+  auto u32 = [&](size_t at) {
+    uint32_t v;
+    std::memcpy(&v, body_.data() + at, 4);
+    return swapped_ ? swap32(v) : v;
+  };
+  uint32_t interface = 0, caplen = 0;
+  uint64_t stamp = 0;
+  size_t data_at = 0;
+  if (block.type == enhanced_packet_block || block.type == obsolete_packet_block) {
+    if (body_.size() < 20) fail("packet block too short");
+    interface = block.type == enhanced_packet_block ? u32(0) : (u32(0) & 0xFFFF);
+    stamp = uint64_t{u32(4)} << 32 | u32(8);
+    caplen = u32(12);
+    data_at = 20;
+  } else if (block.type == simple_packet_block) {
+    if (body_.size() < 4) fail("packet block too short");
+    caplen = std::min<uint32_t>(u32(0), static_cast<uint32_t>(body_.size() - 4));
+    data_at = 4;
+  } else {
+    return false;  // statistics, name resolution, custom blocks: nothing to read
+  }
+  if (interface >= interfaces_.size())
+    fail(fmt::format("packet of undescribed interface {}", interface));
+  if (caplen > body_.size() - data_at)
+    fail(fmt::format("packet length {} exceeds its block", caplen));
+  const Interface& i = interfaces_[interface];
+  std::span<const uint8_t> data(body_.data() + data_at, caplen);
+  std::string comment;
+  for (size_t at = data_at + ((caplen + 3u) & ~3u); at + 4 <= body_.size();) {
+    uint16_t code, length;
+    std::memcpy(&code, body_.data() + at, 2);
+    std::memcpy(&length, body_.data() + at + 2, 2);
+    if (swapped_) code = static_cast<uint16_t>(code >> 8 | code << 8);
+    if (swapped_) length = static_cast<uint16_t>(length >> 8 | length << 8);
+    at += 4;
+    if (code == opt_end || at + length > body_.size()) break;
+    if (code == opt_comment)
+      comment.assign(reinterpret_cast<const char*>(body_.data() + at), length);
+    at += (length + 3u) & ~3u;
+  }
+  if (i.link_type == exported_pdu_dlt) data = after_exported_pdu_tags(data);
+  bytes_.assign(data.begin(), data.end());
+  if (bytes_.empty()) return false;
+  const auto t_ns = static_cast<int64_t>(static_cast<__int128>(stamp) * 1'000'000'000 /
+                                         static_cast<__int128>(i.ticks_per_second));
+  // modtap stamps a record at its first byte and says how long it lasted; other writers stamp a
+  // packet when its last byte was read, as every reader of a serial port does.
+  const auto duration_at = comment.find(" duration_ns=");
+  if (i.modtap && duration_at != std::string::npos) {
+    const int64_t duration = std::strtoll(comment.c_str() + duration_at + 13, nullptr, 10);
+    first_end_ns_ = t_ns + char_time_ns_;
+    chunk = {i.channel, first_end_ns_, std::span<const uint8_t>(bytes_).first(1)};
+    if (bytes_.size() > 1) {
+      rest_at_ = 1;
+      rest_end_ns_ = t_ns + duration;
+      rest_channel_ = i.channel;
+    }
+    return true;
+  }
+  chunk = {i.channel, t_ns, bytes_};
+  return true;
+}
+
+}  // namespace modtap::captures
