@@ -356,6 +356,20 @@ TEST(Cli, TimeStampsThatGoBackwardsWarnOnceAndGiveNoNegativeLatency) {
     }
 }
 
+TEST(Cli, ItsOwnPcapngReadsBackToTheSameRecordsOnBothChannels) {
+  // A logic-analyzer capture of a split tap: per-byte times, two channels with their roles.
+  for (const char* link : {"user", "exported-pdu"}) {
+    const auto path =
+        std::filesystem::temp_directory_path() / (std::string("modtap-rt-") + link + ".pcapng");
+    const Outcome first = run(brainchild + " -T json --link " + link + " -w " + path.string());
+    const Outcome again = run("-r " + path.string() + " --baud 19200 --parity even -T json");
+    ASSERT_EQ(first.status, 0);
+    ASSERT_EQ(again.status, 0) << link;
+    EXPECT_EQ(again.lines, first.lines) << link;
+    EXPECT_NE(again.lines[1].find("\"channel\":\"rx:0\""), std::string::npos) << again.lines[1];
+  }
+}
+
 TEST(Cli, AnUnknownModelIsAClearError) {
   const Outcome r = run(brainchild + " --model nosuch");
   EXPECT_NE(r.status, 0);
