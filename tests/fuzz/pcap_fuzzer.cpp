@@ -1,8 +1,9 @@
-// pcap and pcapng input through libpcap and modtap's reader. Properties: it reads to the end or
-// stops with a CaptureError naming the file; it never gives more bytes than the file holds.
+// pcap (through libpcap) and pcapng (modtap's own block reader) as modtap opens them.
+// Properties: it reads to the end or stops with a CaptureError naming the file; it never gives
+// more bytes than the file holds; every chunk is on a channel the reader announced.
 #include <string>
 
-#include "captures/pcap_reader.hpp"
+#include "captures/open_capture.hpp"
 #include "tests/fuzz/file_fuzzer.hpp"
 #include "tests/fuzz/fuzz_input.hpp"
 
@@ -11,10 +12,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = fuzz::write_temp_file(data, size, ".pcap");
   uint64_t bytes = 0;
   try {
-    captures::PcapReader reader(path);
+    captures::OpenOptions options;
+    options.format = captures::Format::pcap;
+    const auto reader = captures::open_capture(path, options);
     decoder::Chunk chunk;
-    while (reader.next(chunk)) {
-      FUZZ_EXPECT(chunk.channel < reader.channels().size());
+    while (reader->next(chunk)) {
+      FUZZ_EXPECT(chunk.channel < reader->channels().size());
       bytes += chunk.bytes.size();
     }
   } catch (const captures::CaptureError& e) {
