@@ -423,6 +423,59 @@ def unprivileged_and_read_only():
           f"{refused.stderr.strip()}")
 
 
+def byte_streams(path):
+    """What modtap reads from a file: the bytes of its frames and noise, per channel."""
+    run = subprocess.run([MODTAP, "-r", path, "--baud", "115200", "-T", "json"],
+                         capture_output=True, text=True)
+    streams = {}
+    for line in run.stdout.splitlines():
+        r = json.loads(line)
+        if r["type"] in ("frame", "noise"):
+            streams[r["channel"]] = streams.get(r["channel"], "") + r["raw"]
+    return run.returncode, run.stderr, streams
+
+
+def signals_at_random_moments(runs=50):
+    """SIGINT or SIGTERM at random moments while traffic flows: every run exits 0, its -w
+    pcapng reads back whole, and holds every byte its --save-raw recording read."""
+    global passed
+    import random
+    rng = random.Random(7)
+    frames = [with_crc([1, 3, 0, i, 0, 4]) for i in range(8)] + [with_crc([1, 3, 8] + [i] * 8) for i in range(8)]
+    ok, total = True, 0
+    for run in range(runs):
+        t = Pty()
+        out, raw = os.path.join(WORK, "signal.pcapng"), os.path.join(WORK, "signal-raw.pcapng")
+        modtap = subprocess.Popen([MODTAP, "-i", t.path, "--baud", "115200", "-T", "none", "-w", out,
+                                   "--save-raw", raw], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                  text=True)
+        time.sleep(0.3)
+        stop_at = time.time() + rng.uniform(0.01, 0.4)
+        while time.time() < stop_at:
+            frame = frames[rng.randrange(len(frames))]
+            cut = rng.randrange(len(frame) + 1)  # a read may end mid-frame
+            os.write(t.master, frame[:cut])
+            os.write(t.master, frame[cut:])
+            time.sleep(rng.uniform(0, 0.003))
+        modtap.send_signal(signal.SIGINT if run % 2 else signal.SIGTERM)
+        _, err = modtap.communicate(timeout=20)
+        t.close()
+        ok &= check("signals", modtap.returncode == 0, f"run {run}: exit {modtap.returncode}: {err}")
+        status_out, err_out, written = byte_streams(out)
+        status_raw, err_raw, read = byte_streams(raw)
+        ok &= check("signals", status_out == 0 and status_raw == 0, f"run {run}: {err_out} {err_raw}")
+        ok &= check("signals", bool(read), f"run {run}: nothing read before the signal")
+        same = "".join(written.values()) == "".join(read.values())
+        total += sum(map(len, read.values())) // 2
+        ok &= check("signals", same, f"run {run}: -w holds {sum(map(len, written.values())) // 2} bytes, "
+                                     f"--save-raw {sum(map(len, read.values())) // 2}")
+        if not ok:
+            break
+    passed += ok
+    print(f"SIGINT/SIGTERM at {runs} random moments, {total} bytes read in all: "
+          f"{'ok' if ok else 'FAILED'}")
+
+
 os.makedirs(WORK, exist_ok=True)
 run_case("mbpoll -> libmodbus, RTU 9600 8E1", 9600, "even", 8, "rtu",
          libmodbus_slave(9600, "even"), mbpoll_master(9600, "even"))
@@ -449,8 +502,9 @@ port_disappears()
 reconnects()
 junk_and_clean_exit()
 unprivileged_and_read_only()
+signals_at_random_moments()
 for f in failures:
     print("FAIL", f)
-cases = 13
+cases = 14
 print(f"{passed} passed, {cases - passed} failed")
 sys.exit(1 if failures else 0)
