@@ -74,8 +74,9 @@ std::string frame_comment(const Frame& f) {
   std::string c = fmt::format("modtap index={} mode={} role={} check={} duration_ns={}", f.index,
                               to_string(f.mode), to_string(f.role), f.check_ok ? "ok" : "bad",
                               f.end_ns - f.t_ns);
-  if (!f.check_ok)
+  if (!f.check_ok && f.damage != Damage::cut)
     c += fmt::format(" expected=0x{:0{}x}", f.expected_check, f.mode == Mode::rtu ? 4 : 2);
+  if (const char* damage = to_string(f.damage)) c += fmt::format(" damage={}", damage);
   if (f.request) c += fmt::format(" request={}", *f.request);
   if (f.latency_ns)
     c += fmt::format(" latency_us={:.3f}", static_cast<double>(*f.latency_ns) / 1e3);

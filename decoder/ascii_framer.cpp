@@ -111,7 +111,10 @@ void AsciiFramer::emit_frame() {
   frame.end_ns = pending_end_ns_;
   frame.expected_check = lrc(frame.adu.first(decoded_.size() - 1));
   frame.check_ok = frame.expected_check == decoded_.back();
-  if (!frame.check_ok) frame.findings |= finding_bad_check;
+  if (!frame.check_ok) {
+    frame.findings |= finding_bad_check;
+    frame.damage = Damage::corrupted;  // ':' and CR LF say where it ends
+  }
   const bool broadcast = decoded_[0] == 0;
   frame.fit.request = options_.role != ChannelRole::slave && fits(Role::request, frame.adu);
   frame.fit.response =

@@ -29,7 +29,9 @@ const DeviceModel* ModelInterpreter::model_for(uint8_t slave) const {
 
 void ModelInterpreter::on_frame(const Frame& frame) {
   const DeviceModel* model = model_for(frame.slave());
-  if (!model) return next_.on_frame(frame);
+  // A frame cut short or run into holds no values to trust.
+  if (!model || frame.damage == Damage::cut || frame.damage == Damage::collision)
+    return next_.on_frame(frame);
   meaning_ = interpret(*model, frame);
   identify(frame);
   Frame annotated = frame;

@@ -79,6 +79,20 @@ const char* to_string(ClockQuality clock) {
   return "per-chunk";
 }
 
+const char* to_string(Damage damage) {
+  switch (damage) {
+    case Damage::corrupted:
+      return "corrupted";
+    case Damage::cut:
+      return "cut";
+    case Damage::collision:
+      return "collision";
+    case Damage::none:
+      break;
+  }
+  return nullptr;
+}
+
 const char* to_string(ChannelRole role) {
   switch (role) {
     case ChannelRole::master:

@@ -65,6 +65,14 @@ struct FindingName {
 };
 std::span<const FindingName> finding_names();
 
+// What happened to a frame whose check failed, where its structure tells.
+enum class Damage : uint8_t {
+  none,
+  corrupted,  // as long as its structure says, with a wrong check: bytes changed on the way
+  cut,        // the awaited response broke off before its structure's end (silence or a frame)
+  collision,  // the awaited response ran on past its end: something else talked into it
+};
+
 // A Modbus ADU. The spans point into the framer's buffer and are valid during the callback.
 struct Frame {
   uint64_t index = 0;
@@ -78,7 +86,8 @@ struct Frame {
   std::span<const uint8_t> raw;  // exact wire bytes (ASCII: ':' .. CRLF)
   std::span<const uint8_t> adu;  // slave .. check, binary (ASCII: decoded hex)
   bool check_ok = false;
-  uint16_t expected_check = 0;  // what the CRC/LRC should have been
+  uint16_t expected_check = 0;  // what the CRC/LRC should have been (none for a cut frame)
+  Damage damage = Damage::none;
   uint32_t findings = finding_none;
   uint8_t retries = 0;  // a request: how often it went out unanswered just before (saturates)
   std::optional<uint64_t> request;       // index of the matched request
@@ -139,6 +148,7 @@ const char* to_string(TimeoutReason reason);
 const char* to_string(Role role);
 const char* to_string(Mode mode);
 const char* to_string(ChannelRole role);
+const char* to_string(Damage damage);       // "corrupted", "cut", "collision"; none: nullptr
 const char* to_string(ClockQuality clock);  // per-byte, per-chunk, none
 
 }  // namespace modtap::decoder

@@ -271,9 +271,46 @@ void RtuFramer::emit_unframed(uint64_t begin, uint64_t end) {
   }
 }
 
+// The awaited response, when these bytes start it: how long its structure says it is.
+std::optional<uint16_t> RtuFramer::awaited_length(uint64_t begin, uint64_t size) const {
+  const uint8_t* p = at_ptr(begin);
+  if (size < 3 || options_.role == ChannelRole::master || !expected_.pending ||
+      expected_.slave != p[0] || expected_.function != (p[1] & 0x7F))
+    return std::nullopt;
+  const BodyLength body = body_length(Role::response, {p, static_cast<size_t>(size)});
+  if (body.kind != BodyLength::Kind::known) return std::nullopt;
+  return static_cast<uint16_t>(body.bytes + crc_size);
+}
+
+// A damaged response: reported as a frame with a bad check, so it stays in the slave's
+// picture. Cut short, it has no check to expect; run on, its end is where its structure says.
+void RtuFramer::emit_damaged(uint64_t begin, uint64_t end, Damage damage) {
+  const uint8_t* p = at_ptr(begin);
+  const auto size = static_cast<size_t>(end - begin);
+  Frame frame;
+  frame.channel = channel_;
+  frame.mode = Mode::rtu;
+  frame.fit = {false, true};
+  frame.offset = begin;
+  frame.raw = frame.adu = {p, size};
+  frame.t_ns = end_time(begin) - char_ns_;
+  frame.end_ns = end_time(end - 1);
+  frame.damage = damage;
+  if (damage != Damage::cut) frame.expected_check = crc16({p, size - crc_size});
+  frame.check_ok = false;
+  frame.findings = finding_bad_check;
+  sink_.on_frame(frame);
+  consume(end);
+}
+
 void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
   const uint64_t size = end - begin;
   const uint8_t* p = at_ptr(begin);
+  if (const auto length = awaited_length(begin, size); length && *length != size) {
+    if (size < *length) return emit_damaged(begin, end, Damage::cut);
+    emit_damaged(begin, begin + *length, Damage::collision);
+    return emit_piece(begin + *length, end);
+  }
   if (size >= min_adu && size <= max_rtu_adu && plausible_start(p[0], p[1])) {
     RoleFit fit{options_.role != ChannelRole::slave && fits_role(Role::request, begin, size),
                 options_.role != ChannelRole::master && fits_role(Role::response, begin, size)};
@@ -289,6 +326,7 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
       frame.expected_check = crc16({p, static_cast<size_t>(size - crc_size)});
       frame.check_ok = frame.expected_check == wire_crc(frame.adu);
       frame.findings = frame.check_ok ? finding_none : finding_bad_check;
+      if (!frame.check_ok) frame.damage = Damage::corrupted;
       sink_.on_frame(frame);
       consume(end);
       return;

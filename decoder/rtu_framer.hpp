@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <optional>
 #include <vector>
 
 #include "decoder/frame_sink.hpp"
@@ -66,6 +67,8 @@ class RtuFramer {
   void emit_frame(uint64_t at, const Match& match);
   void emit_unframed(uint64_t begin, uint64_t end);
   void emit_piece(uint64_t begin, uint64_t end);
+  std::optional<uint16_t> awaited_length(uint64_t begin, uint64_t size) const;
+  void emit_damaged(uint64_t begin, uint64_t end, Damage damage);
   void emit_noise(uint64_t begin, uint64_t end, NoiseReason reason);
   void consume(uint64_t to);
 

@@ -165,6 +165,7 @@ TEST_P(BusScenario, WrittenAsPcapngReadsBackToTheSameRecords) {
     EXPECT_EQ(b.raw, a.raw) << i;
     EXPECT_EQ(b.role, a.role) << i;
     EXPECT_EQ(b.check_ok, a.check_ok) << i;
+    EXPECT_EQ(b.damage, a.damage) << i;
     EXPECT_EQ(b.findings, a.findings) << i;
     EXPECT_EQ(b.request, a.request) << i;
     EXPECT_EQ(b.latency_ns, a.latency_ns) << i;

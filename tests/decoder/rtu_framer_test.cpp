@@ -80,6 +80,37 @@ TEST(RtuFramer, ARequestOutsideTheSpecsLimitsIsARequestWithAFinding) {
   expect_same_at_every_split(bytes);
 }
 
+TEST(RtuFramer, AnAwaitedResponseCutShortIsABadFrameInItsSlavesPicture) {
+  // The response broke off after 6 of its 25 bytes; the master moved on.
+  const auto cut = std::vector<uint8_t>(read_response.begin(), read_response.begin() + 6);
+  const auto out = analyze_untimed(concat({read_request, cut, read_request}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].raw, cut);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_FALSE(frames[1].check_ok);
+  EXPECT_EQ(frames[1].damage, Damage::cut);
+  EXPECT_TRUE(out.noise().empty());
+}
+
+TEST(RtuFramer, AnAwaitedResponseRunIntoEndsWhereItsStructureSays) {
+  // Another device talked over the tail: its bytes follow the response, whose CRC broke.
+  auto hit = read_response;
+  hit[24] ^= 0x5A;  // the last CRC byte
+  const auto bytes = concat({read_request, hit, hex("a5 5a 33"), read_request});
+  const auto out = analyze_untimed(bytes);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].raw, hit);
+  EXPECT_EQ(frames[1].damage, Damage::collision);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[1].expected_check, 0x168F);  // the response's own CRC, 8F 16 on the wire
+  ASSERT_EQ(out.noise().size(), 1u);
+  EXPECT_EQ(out.noise()[0].raw, hex("a5 5a 33"));
+  EXPECT_EQ(out.bytes_of(0), bytes);
+}
+
 TEST(RtuFramer, GivesTheSameRecordsWhereverTheInputIsCut) {
   expect_same_at_every_split(concat({read_request, read_response, hex("00"), read_request,
                                      hex("11 22"), read_request, read_response}));

@@ -19,6 +19,7 @@ struct Record {
   decoder::Role role = decoder::Role::unknown;
   bool check_ok = false;
   uint16_t expected_check = 0;
+  decoder::Damage damage = decoder::Damage::none;
   uint32_t findings = 0;
   std::optional<uint64_t> request;
   std::optional<int64_t> latency_ns;
@@ -39,6 +40,7 @@ class Collector final : public decoder::RecordSink {
     r.role = f.role;
     r.check_ok = f.check_ok;
     r.expected_check = f.expected_check;
+    r.damage = f.damage;
     r.findings = f.findings;
     r.request = f.request;
     r.latency_ns = f.latency_ns;

@@ -26,8 +26,18 @@ void JsonSink::on_frame(const Frame& frame) {
   append_json_string(buf, function_label(frame.function()));
   out_.print(",\"raw\":\"");
   append_hex(buf, frame.raw, false);
-  out_.print("\",\"check\":\"{}\",\"check_value\":{},\"expected_check\":{}",
-             frame.check_ok ? "ok" : "bad", frame.wire_check(), frame.expected_check);
+  out_.print("\",\"check\":\"{}\",\"check_value\":{}", frame.check_ok ? "ok" : "bad",
+             frame.wire_check());
+  if (frame.damage == Damage::cut) {
+    out_.print(",\"expected_check\":null");
+  } else {
+    out_.print(",\"expected_check\":{}", frame.expected_check);
+  }
+  if (const char* damage = to_string(frame.damage)) {
+    out_.print(",\"damage\":\"{}\"", damage);
+  } else {
+    out_.print(",\"damage\":null");
+  }
   if (frame.is_exception() && frame.adu.size() > 2) {
     out_.print(",\"exception\":{}", frame.adu[2]);
   } else {

@@ -79,9 +79,12 @@ void TextSink::on_frame(const Frame& frame) {
   const char* check = frame.mode == Mode::rtu ? "crc" : "lrc";
   if (frame.check_ok) {
     out_.print("  {} ok", check);
+  } else if (frame.damage == Damage::cut) {
+    out_.print("  {} BAD (cut)", check);
   } else {
     out_.print("  {} BAD (expected ", check);
     append_check(buf, frame.expected_check, frame.mode);
+    if (frame.damage == Damage::collision) out_.print(", collision");
     out_.print(")");
   }
   if (frame.request) out_.print("  req #{}", *frame.request);
