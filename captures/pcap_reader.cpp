@@ -1,5 +1,7 @@
 #include "captures/pcap_reader.hpp"
 
+#include "captures/pcapng_format.hpp"
+
 #include <pcap/pcap.h>
 
 #include <fmt/format.h>
@@ -12,13 +14,13 @@ PcapReader::PcapReader(const std::string& path) : path_(path) {
       pcap_open_offline_with_tstamp_precision(path.c_str(), PCAP_TSTAMP_PRECISION_NANO, error);
   if (!handle_) throw CaptureError(fmt::format("{}: offset 0: {}", path, error));
   const int dlt = pcap_datalink(handle_);
-  if (dlt < first_user_dlt || dlt > last_user_dlt) {
+  if (dlt < pcapng::first_user_dlt || dlt > pcapng::last_user_dlt) {
     const char* name = pcap_datalink_val_to_name(dlt);
     pcap_close(handle_);
     handle_ = nullptr;
     throw CaptureError(fmt::format(
         "{}: link type {} ({}) does not carry serial bytes; modtap reads DLT_USER0..15 ({}..{})",
-        path, dlt, name ? name : "unknown", first_user_dlt, last_user_dlt));
+        path, dlt, name ? name : "unknown", pcapng::first_user_dlt, pcapng::last_user_dlt));
   }
   channels_.push_back({path, decoder::ChannelRole::bus});
 }

@@ -20,9 +20,6 @@ class PcapReader final : public ChunkSource {
   bool absolute_time() const override { return true; }
   const std::vector<decoder::ChannelInfo>& channels() const override { return channels_; }
 
-  static constexpr int first_user_dlt = 147;
-  static constexpr int last_user_dlt = 162;
-
  private:
   uint64_t file_offset() const;
 

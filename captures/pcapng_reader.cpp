@@ -6,28 +6,20 @@
 
 #include <fmt/format.h>
 
-#include "captures/pcap_reader.hpp"
+#include "captures/pcapng_format.hpp"
 #include "captures/pcapng_sink.hpp"
 
 namespace modtap::captures {
 namespace {
 
-// Block types and options of the pcapng specification (draft-ietf-opsawg-pcapng).
-constexpr uint32_t section_header_block = 0x0A0D0D0A;
-constexpr uint32_t interface_description_block = 1;
-constexpr uint32_t obsolete_packet_block = 2;
-constexpr uint32_t simple_packet_block = 3;
-constexpr uint32_t enhanced_packet_block = 6;
-constexpr uint32_t byte_order_magic = 0x1A2B3C4D;
-constexpr uint16_t opt_end = 0, opt_comment = 1, if_name = 2, if_tsresol = 9;
-constexpr int exported_pdu_dlt = 252;
+using namespace pcapng;
 
 uint32_t swap32(uint32_t v) {
   return __builtin_bswap32(v);
 }
 
 bool serial_link(int link_type) {
-  return (link_type >= PcapReader::first_user_dlt && link_type <= PcapReader::last_user_dlt) ||
+  return (link_type >= first_user_dlt && link_type <= last_user_dlt) ||
          link_type == exported_pdu_dlt;
 }
 
@@ -59,12 +51,9 @@ PcapngReader::PcapngReader(const std::string& path, int64_t char_time_ns)
   // the first packet. An interface described later is added when it comes.
   Block block;
   while (read_block(block)) {
-    if (block.type == section_header_block) {
-      section_header(block);
-    } else if (block.type == interface_description_block) {
-      interface_description(block);
-    } else if (block.type == enhanced_packet_block || block.type == simple_packet_block ||
-               block.type == obsolete_packet_block) {
+    if (describes(block)) continue;
+    if (block.type == enhanced_packet_block || block.type == simple_packet_block ||
+        block.type == obsolete_packet_block) {
       std::fseek(file_.get(), static_cast<long>(offset_), SEEK_SET);  // read it again in next()
       break;
     }
@@ -110,12 +99,19 @@ bool PcapngReader::read_block(Block& block) {
   return true;
 }
 
-void PcapngReader::section_header(const Block&) {
-  // A new section starts its own interface numbering.
-  interfaces_.clear();
+// Section headers and interface descriptions say what the packets after them mean.
+bool PcapngReader::describes(const Block& block) {
+  if (block.type == section_header_block) {
+    interfaces_.clear();  // a new section numbers its interfaces anew
+  } else if (block.type == interface_description_block) {
+    interface_description();
+  } else {
+    return false;
+  }
+  return true;
 }
 
-void PcapngReader::interface_description(const Block&) {
+void PcapngReader::interface_description() {
   auto u16 = [&](size_t at) {
     uint16_t v;
     std::memcpy(&v, body_.data() + at, 2);
@@ -128,7 +124,7 @@ void PcapngReader::interface_description(const Block&) {
   for (size_t at = 8; at + 4 <= body_.size();) {
     const uint16_t code = u16(at), length = u16(at + 2);
     at += 4;
-    if (code == opt_end || at + length > body_.size()) break;
+    if (code == opt_endofopt || at + length > body_.size()) break;
     const std::string value(reinterpret_cast<const char*>(body_.data() + at), length);
     if (code == if_name) name = value;
     if (code == opt_comment) comment = value;
@@ -140,10 +136,10 @@ void PcapngReader::interface_description(const Block&) {
     at += (length + 3u) & ~3u;
   }
   if (!serial_link(i.link_type))
-    fail(fmt::format(
-        "link type {} does not carry serial bytes; modtap reads DLT_USER0..15 "
-        "({}..{}) and exported PDUs ({})",
-        i.link_type, PcapReader::first_user_dlt, PcapReader::last_user_dlt, exported_pdu_dlt));
+    fail(
+        fmt::format("link type {} does not carry serial bytes; modtap reads DLT_USER0..15 "
+                    "({}..{}) and exported PDUs ({})",
+                    i.link_type, first_user_dlt, last_user_dlt, exported_pdu_dlt));
   i.modtap = comment.starts_with(interface_convention);
   if (i.modtap && interfaces_.empty()) {
     if (comment.find("clock=per-byte") != std::string::npos)
@@ -176,15 +172,8 @@ bool PcapngReader::next(decoder::Chunk& chunk) {
     return true;
   }
   Block block;
-  while (read_block(block)) {
-    if (block.type == section_header_block) {
-      section_header(block);
-    } else if (block.type == interface_description_block) {
-      interface_description(block);
-    } else if (packet(block, chunk)) {
-      return true;
-    }
-  }
+  while (read_block(block))
+    if (!describes(block) && packet(block, chunk)) return true;
   return false;
 }
 
@@ -224,7 +213,7 @@ bool PcapngReader::packet(const Block& block, decoder::Chunk& chunk) {
     if (swapped_) code = static_cast<uint16_t>(code >> 8 | code << 8);
     if (swapped_) length = static_cast<uint16_t>(length >> 8 | length << 8);
     at += 4;
-    if (code == opt_end || at + length > body_.size()) break;
+    if (code == opt_endofopt || at + length > body_.size()) break;
     if (code == opt_comment)
       comment.assign(reinterpret_cast<const char*>(body_.data() + at), length);
     at += (length + 3u) & ~3u;

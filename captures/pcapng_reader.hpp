@@ -37,8 +37,8 @@ class PcapngReader final : public ChunkSource {
   struct Block;
 
   bool read_block(Block& block);
-  void section_header(const Block& block);
-  void interface_description(const Block& block);
+  bool describes(const Block& block);
+  void interface_description();
   bool packet(const Block& block, decoder::Chunk& chunk);
   [[noreturn]] void fail(const std::string& what) const;
 

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include "captures/pcapng_format.hpp"
 #include "decoder/register_meaning.hpp"
 
 namespace modtap::captures {
@@ -106,7 +107,8 @@ uint32_t PcapngSink::interface_for(uint16_t channel) {
   const size_t count = std::max<size_t>(channels_.size(), channel + 1u);
   while (interface_of_channel_.size() < count) {
     const size_t c = interface_of_channel_.size();
-    const int dlt = options_.link == PcapngLink::exported_pdu ? exported_pdu_dlt : options_.dlt;
+    const int dlt =
+        options_.link == PcapngLink::exported_pdu ? pcapng::exported_pdu_dlt : options_.dlt;
     const std::string name = c < channels_.size() ? channels_[c].name : "modtap";
     const ChannelRole role = c < channels_.size() ? channels_[c].role : ChannelRole::bus;
     interface_of_channel_.push_back(static_cast<int>(writer_.add_interface(

@@ -39,8 +39,6 @@ class PcapngSink final : public decoder::RecordSink {
   void on_noise(const decoder::Noise& noise) override;
   void on_timeout(const decoder::Timeout&) override {}
 
-  static constexpr int exported_pdu_dlt = 252;
-
  private:
   uint32_t interface_for(uint16_t channel);
   std::span<const uint8_t> exported_pdu(std::string_view protocol, bool from_master,

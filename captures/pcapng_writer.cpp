@@ -2,19 +2,12 @@
 
 #include <vector>
 
+#include "captures/pcapng_format.hpp"
+
 namespace modtap::captures {
 namespace {
 
-// Block types and option codes from the pcapng specification (draft-ietf-opsawg-pcapng).
-constexpr uint32_t section_header_block = 0x0A0D0D0A;
-constexpr uint32_t interface_description_block = 1;
-constexpr uint32_t enhanced_packet_block = 6;
-constexpr uint16_t opt_endofopt = 0;
-constexpr uint16_t opt_comment = 1;
-constexpr uint16_t shb_userappl = 4;
-constexpr uint16_t if_name = 2;
-constexpr uint16_t if_tsresol = 9;
-constexpr uint16_t epb_flags = 2;
+using namespace pcapng;
 
 // Blocks are written in the machine's byte order; the byte-order magic tells readers which.
 class Body {
@@ -79,7 +72,7 @@ void PcapngWriter::write_block(uint32_t type, std::span<const uint8_t> body) {
 
 void PcapngWriter::write_section_header() {
   Body b;
-  b.put(uint32_t{0x1A2B3C4D});
+  b.put(byte_order_magic);
   b.put(uint16_t{1});
   b.put(uint16_t{0});
   b.put(int64_t{-1});  // section length not known in advance

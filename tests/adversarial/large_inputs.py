@@ -2,7 +2,7 @@
 """Whole-process runs on inputs no one commits: a long capture streamed through a pipe (memory
 must stay flat, every frame found), a frame every microsecond, and a hex log with binary junk.
 
-    large_inputs.py MODTAP BUSGEN WORKDIR MEGABYTES
+    large_inputs.py MODTAP BUSGEN WORKDIR MEGABYTES RSS_LIMIT_MB
 """
 import os
 import resource
@@ -11,7 +11,8 @@ import subprocess
 import sys
 import time
 
-MODTAP, BUSGEN, WORK, MEGABYTES = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+MODTAP, BUSGEN, WORK = sys.argv[1:4]
+MEGABYTES, RSS_LIMIT_MB = int(sys.argv[4]), int(sys.argv[5])
 os.makedirs(WORK, exist_ok=True)
 failures = []
 
@@ -56,7 +57,7 @@ check("long capture", status == 0, f"exit {status}")
 check("long capture", stats(out, "frames ") == frames_one * copies,
       f"{stats(out, 'frames ')} frames, expected {frames_one * copies}")
 check("long capture", stats(out, "noise records") == 0, "noise in clean traffic")
-check("long capture", rss_kb < 64 * 1024, f"peak RSS {rss_kb} kB for {copies * len(one)} bytes")
+check("long capture", rss_kb < RSS_LIMIT_MB * 1024, f"peak RSS {rss_kb} kB for {copies * len(one)} bytes")
 print(f"{copies * len(one) / 1e6:.0f} MB through a pipe in {seconds:.1f} s, "
       f"{stats(out, 'frames ')} frames, peak RSS {rss_kb} kB")
 
