@@ -25,6 +25,9 @@ class ChunkSource {
   // True when t_ns counts from the Unix epoch, false when from the start of the capture.
   virtual bool absolute_time() const = 0;
   virtual const std::vector<decoder::ChannelInfo>& channels() const = 0;
+  // Characters whose parity bit was wrong so far, where the source sees parity bits at all
+  // (a logic analyzer does; a serial port or a file of bytes does not).
+  virtual uint64_t parity_errors() const { return 0; }
 };
 
 }  // namespace modtap::captures

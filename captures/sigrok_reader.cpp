@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -116,8 +117,8 @@ SigrokReader::SigrokReader(const std::string& path, const SigrokOptions& options
     stream->channel = static_cast<uint16_t>(channels_.size());
     stream->name = line.name;
     stream->process = std::make_unique<Subprocess>(
-        std::vector<std::string>{options.program, "-i", path, "-P", decoder, "-A", "uart=rx-data",
-                                 "--protocol-decoder-samplenum"});
+        std::vector<std::string>{options.program, "-i", path, "-P", decoder, "-A",
+                                 "uart=rx-data:rx-parity-err", "--protocol-decoder-samplenum"});
     channels_.push_back({line.role + ":" + line.name, role_of(line.role)});
     streams_.push_back(std::move(stream));
   }
@@ -140,6 +141,11 @@ bool SigrokReader::refill(Stream& s) {
     return false;
   }
   ++s.line;
+  // The decoder's verdict on the byte that follows: evidence for --parity auto.
+  if (std::string_view(text).find(": Parity error") != std::string_view::npos) {
+    ++parity_errors_;
+    return refill(s);
+  }
   const std::optional<SigrokByte> byte = parse_sigrok_byte(text);
   if (!byte)
     throw CaptureError(

@@ -53,6 +53,7 @@ class SigrokReader final : public ChunkSource {
   const std::vector<decoder::ChannelInfo>& channels() const override { return channels_; }
 
   uint64_t samplerate() const { return samplerate_; }
+  uint64_t parity_errors() const override { return parity_errors_; }
 
  private:
   struct Stream;
@@ -64,6 +65,7 @@ class SigrokReader final : public ChunkSource {
   std::vector<std::unique_ptr<Stream>> streams_;
   std::vector<decoder::ChannelInfo> channels_;
   uint8_t byte_ = 0;
+  uint64_t parity_errors_ = 0;
 };
 
 }  // namespace modtap::captures

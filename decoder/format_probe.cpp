@@ -74,7 +74,9 @@ FormatTrial try_format(const AnalyzerOptions& options, const std::vector<Channel
 const FormatTrial& best_trial(const std::vector<FormatTrial>& trials) {
   const FormatTrial* best = &trials.front();
   for (const auto& t : trials)
-    if (t.good_frame_bytes > best->good_frame_bytes) best = &t;
+    if (t.good_frame_bytes > best->good_frame_bytes ||
+        (t.good_frame_bytes == best->good_frame_bytes && t.parity_errors < best->parity_errors))
+      best = &t;
   return *best;
 }
 
@@ -85,8 +87,10 @@ std::string describe(const SerialFormat& f) {
 
 std::string describe(const FormatTrial& t) {
   const double share = t.bytes ? 100.0 * static_cast<double>(t.good_frame_bytes) / t.bytes : 0;
-  return fmt::format("{}: {} of {} frames good, {:.0f}% of {} bytes", describe(t.format),
-                     t.good_frames, t.frames, share, t.bytes);
+  std::string text = fmt::format("{}: {} of {} frames good, {:.0f}% of {} bytes",
+                                 describe(t.format), t.good_frames, t.frames, share, t.bytes);
+  if (t.parity_errors) text += fmt::format(", {} parity errors", t.parity_errors);
+  return text;
 }
 
 }  // namespace modtap::decoder

@@ -55,9 +55,12 @@ struct FormatTrial {
   uint64_t good_frame_bytes = 0;
   uint64_t frames = 0;
   uint64_t good_frames = 0;
+  uint64_t parity_errors = 0;  // where the source sees parity bits (a logic analyzer)
 
   // A clean, sizeable read: evidence enough to stop trying (the common settings come first).
-  bool convincing() const { return good_frames >= 4 && good_frame_bytes * 10 >= bytes * 9; }
+  bool convincing() const {
+    return good_frames >= 4 && good_frame_bytes * 10 >= bytes * 9 && parity_errors == 0;
+  }
 };
 
 // Settings to try, the common ones first: a fixed value narrows its dimension to itself.
@@ -70,7 +73,8 @@ std::vector<SerialFormat> candidate_formats(std::optional<uint32_t> baud,
 FormatTrial try_format(const AnalyzerOptions& options, const std::vector<ChannelInfo>& channels,
                        const std::function<bool(Chunk&)>& next, uint64_t byte_budget);
 
-// The trial with the most bytes in good frames; the earlier one on a tie.
+// The trial with the most bytes in good frames, then the fewest parity errors; the earlier one
+// on a tie.
 const FormatTrial& best_trial(const std::vector<FormatTrial>& trials);
 
 // "19200 8E1: 30 of 30 frames good, 100% of 119 bytes"

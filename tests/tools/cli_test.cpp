@@ -152,6 +152,34 @@ TEST(Cli, BaudAutoFindsTheLinesSettingsAndShowsItsEvidence) {
   EXPECT_TRUE(all_good);
 }
 
+TEST(Cli, ParityAutoOnALogicAnalyzerCaptureCountsParityErrors) {
+  // The flow meter's line is 8N1: under even and odd parity sigrok flags parity errors, which
+  // decide between settings whose frames read alike.
+  const Outcome r = run(std::string("-r ") + MODTAP_SAMPLES +
+                        "/flowmeter_graph_tool.sr --sigrok-channels bus=RXTX --baud 9600 "
+                        "--parity auto -T none");
+  ASSERT_EQ(r.status, 0);
+  EXPECT_THAT(r.lines,
+              ::testing::ElementsAre(
+                  "modtap: settings tried on the capture's start:",
+                  "    9600 8E1: 18 of 18 frames good, 100% of 153 bytes, 111 parity errors",
+                  "  * 9600 8N1: 18 of 18 frames good, 100% of 153 bytes",
+                  "    9600 8O1: 18 of 18 frames good, 100% of 153 bytes, 42 parity errors"));
+}
+
+TEST(Cli, ALogicAnalyzerCaptureThatReadsAsNothingSuggestsInversionAndChannels) {
+  const Outcome r = run(std::string("-r ") + MODTAP_SAMPLES +
+                        "/brainchild-io-16do.sr --baud 19200 --parity even "
+                        "--sigrok-channels tx=1,rx=0 -T none");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_FALSE(r.lines.empty());
+  EXPECT_EQ(r.lines.back().rfind("modtap: hint: no frame had a good check; is the line inverted "
+                                 "(try --sigrok-invert), are the channels right",
+                                 0),
+            0u)
+      << r.lines.back();
+}
+
 TEST(Cli, BaudAutoOnAnUntimedFileSaysItCannotTell) {
   const std::string capture =
       raw_capture("modtap-untimed.raw", {{0x01, 0x03, 0x00, 0x00, 0x00, 0x01}});

@@ -18,8 +18,10 @@ FormatTrial trial(const std::string& path, captures::OpenOptions open, AnalyzerO
   auto source = captures::open_capture(path, open);
   analyzer.format = format;
   analyzer.clock = source->clock();
-  return try_format(
+  FormatTrial t = try_format(
       analyzer, source->channels(), [&](Chunk& chunk) { return source->next(chunk); }, probe_bytes);
+  t.parity_errors = source->parity_errors();
+  return t;
 }
 
 void report(const std::vector<FormatTrial>& trials, const FormatTrial& best) {
@@ -42,8 +44,9 @@ SerialFormat choose_file_format(const std::string& path, captures::OpenOptions o
                describe(fallback));
     return fallback;
   }
-  // A logic-analyzer capture is decoded into bytes per format: every candidate matters. Bytes
-  // timed per read only move the t3.5 gaps, so parity cannot be told from them.
+  // A logic-analyzer capture is decoded into bytes per format: every candidate matters, and the
+  // decoder's parity errors tell the parities apart. Bytes timed per read only move the t3.5
+  // gaps, so parity cannot be told from them.
   const auto candidates =
       candidate_formats(baud, clock == ClockQuality::per_byte ? parity : fallback.parity,
                         open.serial.data_bits, open.serial.stop_bits);
@@ -66,7 +69,7 @@ SerialFormat choose_file_format(const std::string& path, captures::OpenOptions o
   report(trials, best);
   for (const auto& t : trials)
     if (&t != &best && t.format.baud == best.format.baud && t.good_frames > 0 &&
-        t.good_frame_bytes == best.good_frame_bytes)
+        t.good_frame_bytes == best.good_frame_bytes && t.parity_errors == best.parity_errors)
       fmt::print(stderr, "modtap: {} reads as well as {}: this capture cannot tell them apart\n",
                  describe(t.format), describe(best.format));
   if (best.good_frames == 0) {

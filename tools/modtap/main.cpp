@@ -218,7 +218,18 @@ std::unique_ptr<captures::RawRecorder> raw_recorder(
 
 // After a run whose traffic made little sense, or came faster than the baud allows, say so.
 void hint_settings(const decoder::SerialFormat& format, const decoder::LineHealth& health,
-                   const decoder::ChunkPace& pace) {
+                   const decoder::ChunkPace& pace, const captures::ChunkSource& source) {
+  // A logic-analyzer capture that reads as nothing is usually a line inverted (RS-232 levels)
+  // or probes swapped, which no baud rate mends.
+  if (source.clock() == decoder::ClockQuality::per_byte && health.looks_wrong() &&
+      health.good_frames == 0) {
+    fmt::print(stderr,
+               "modtap: hint: no frame had a good check; is the line inverted (try "
+               "--sigrok-invert), are the channels right (--sigrok-channels tx=NAME,rx=NAME), "
+               "or are {} not the line's settings (try --baud auto)?\n",
+               decoder::describe(format));
+    return;
+  }
   if (pace.too_fast())
     fmt::print(stderr,
                "modtap: hint: bytes arrive faster than {} allows ({} of {} reads); "
@@ -277,7 +288,7 @@ int read_file(const Options& o) {
                "those steps are not measured\n",
                o.read_file, bus.clock_steps_back());
   if (broken) throw *broken;
-  hint_settings(open.serial, health, pace);
+  hint_settings(open.serial, health, pace, *source);
   return 0;
 }
 
