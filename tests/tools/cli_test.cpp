@@ -331,6 +331,17 @@ TEST(Cli, N3sErrorExampleIsAResponseWithItsExpectedCrcInWireOrder) {
   EXPECT_THAT(r.lines, ::testing::Contains("    CRC: C0 CD (bad), expected 30 CD"));
 }
 
+TEST(Cli, AResponseCutShortSaysSoInsteadOfAnExpectedCheck) {
+  // 6 of the response's 25 bytes, then silence and the master's next request.
+  const std::string log =
+      hexlog("modtap-cut.log", {"00.000000", "01 03 00 00 00 0a c5 cd", "00.010000",
+                                "01 03 14 00 01 00", "00.500000", "01 03 00 00 00 0a c5 cd"});
+  const Outcome r = run("-r " + log + " -V");
+  ASSERT_EQ(r.status, 0);
+  EXPECT_THAT(r.lines, ::testing::Contains(::testing::HasSubstr("crc BAD (cut)  req #1")));
+  EXPECT_THAT(r.lines, ::testing::Contains("    CRC: 01 00 (bad), cut"));
+}
+
 TEST(Cli, AnN3SlaveTimesOutAfterItsManualsTimeUnlessTimeoutSaysOtherwise) {
   // 002, 2.3 "TIME-OUT (400ms) & RETRY (max. : 2 times)": an answer 500 ms late is too late.
   const std::string log = hexlog("modtap-n3-late.log", {"00.000000", "02 03 01 20 00 01 84 0F",

@@ -45,6 +45,17 @@ void append_check(fmt::memory_buffer& buf, uint16_t check, Mode mode) {
   }
 }
 
+// What a bad check says: the check it should have been, and how the frame was damaged.
+void append_bad_check(fmt::memory_buffer& buf, const Frame& frame) {
+  if (frame.damage == Damage::cut) {
+    fmt::format_to(std::back_inserter(buf), "cut");
+    return;
+  }
+  fmt::format_to(std::back_inserter(buf), "expected ");
+  append_check(buf, frame.expected_check, frame.mode);
+  if (frame.damage == Damage::collision) fmt::format_to(std::back_inserter(buf), ", collision");
+}
+
 }  // namespace
 
 TextSink::TextSink(Output& out, const std::vector<ChannelInfo>& channels, bool verbose)
@@ -79,12 +90,9 @@ void TextSink::on_frame(const Frame& frame) {
   const char* check = frame.mode == Mode::rtu ? "crc" : "lrc";
   if (frame.check_ok) {
     out_.print("  {} ok", check);
-  } else if (frame.damage == Damage::cut) {
-    out_.print("  {} BAD (cut)", check);
   } else {
-    out_.print("  {} BAD (expected ", check);
-    append_check(buf, frame.expected_check, frame.mode);
-    if (frame.damage == Damage::collision) out_.print(", collision");
+    out_.print("  {} BAD (", check);
+    append_bad_check(buf, frame);
     out_.print(")");
   }
   if (frame.request) out_.print("  req #{}", *frame.request);
@@ -117,8 +125,8 @@ void TextSink::tree(const Frame& frame) {
   append_check(buf, frame.wire_check(), frame.mode);
   out_.print(" ({})", frame.check_ok ? "ok" : "bad");
   if (!frame.check_ok) {
-    out_.print(", expected ");
-    append_check(buf, frame.expected_check, frame.mode);
+    out_.print(", ");
+    append_bad_check(buf, frame);
   }
   out_.print("\n");
   if (frame.request) out_.print("    Request in frame: {}\n", *frame.request);
