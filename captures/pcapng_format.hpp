@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string_view>
 
 namespace modtap::captures::pcapng {
 
@@ -26,5 +27,11 @@ inline constexpr uint16_t epb_flags = 2;
 inline constexpr int first_user_dlt = 147;
 inline constexpr int last_user_dlt = 162;
 inline constexpr int exported_pdu_dlt = 252;
+
+// How modtap means the times it writes, said at the start of each interface's comment, so that
+// modtap reads its own files back to the same records.
+inline constexpr std::string_view interface_convention =
+    "modtap: a packet is stamped at the start of its first byte; its comment's duration_ns "
+    "runs to the end of its last byte;";
 
 }  // namespace modtap::captures::pcapng

@@ -7,7 +7,6 @@
 #include <fmt/format.h>
 
 #include "captures/pcapng_format.hpp"
-#include "captures/pcapng_sink.hpp"
 
 namespace modtap::captures {
 namespace {
@@ -38,10 +37,6 @@ std::span<const uint8_t> after_exported_pdu_tags(std::span<const uint8_t> data) 
 
 }  // namespace
 
-struct PcapngReader::Block {
-  uint32_t type = 0;
-};
-
 PcapngReader::PcapngReader(const std::string& path, int64_t char_time_ns)
     : path_(path),
       char_time_ns_(char_time_ns),
@@ -49,11 +44,11 @@ PcapngReader::PcapngReader(const std::string& path, int64_t char_time_ns)
   if (!file_) throw CaptureError(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
   // The interfaces come before their packets; read them now, so the channels are known before
   // the first packet. An interface described later is added when it comes.
-  Block block;
-  while (read_block(block)) {
-    if (describes(block)) continue;
-    if (block.type == enhanced_packet_block || block.type == simple_packet_block ||
-        block.type == obsolete_packet_block) {
+  uint32_t type = 0;
+  while (read_block(type)) {
+    if (describes(type)) continue;
+    if (type == enhanced_packet_block || type == simple_packet_block ||
+        type == obsolete_packet_block) {
       std::fseek(file_.get(), static_cast<long>(offset_), SEEK_SET);  // read it again in next()
       break;
     }
@@ -66,14 +61,14 @@ void PcapngReader::fail(const std::string& what) const {
 }
 
 // One block: its type, and its body (without the type and the two lengths) in body_.
-bool PcapngReader::read_block(Block& block) {
+bool PcapngReader::read_block(uint32_t& type) {
   offset_ = static_cast<uint64_t>(std::ftell(file_.get()));
   uint32_t head[2];
   const size_t got = std::fread(head, 1, sizeof head, file_.get());
   if (got == 0) return false;
   if (got < sizeof head) fail("truncated pcapng block header");
-  block.type = head[0];
-  if (block.type == section_header_block) {
+  type = head[0];
+  if (type == section_header_block) {
     // The byte order is the section's own: read it from the magic after the length.
     uint32_t magic = 0;
     if (std::fread(&magic, 1, 4, file_.get()) != 4) fail("truncated section header");
@@ -84,7 +79,7 @@ bool PcapngReader::read_block(Block& block) {
     std::fseek(file_.get(), -4, SEEK_CUR);
   } else {
     if (!have_section_) fail("no section header before the first block");
-    if (swapped_) block.type = swap32(block.type);
+    if (swapped_) type = swap32(type);
   }
   const uint32_t length = swapped_ ? swap32(head[1]) : head[1];
   if (length < 12 || length % 4 != 0 || length > max_block)
@@ -100,10 +95,10 @@ bool PcapngReader::read_block(Block& block) {
 }
 
 // Section headers and interface descriptions say what the packets after them mean.
-bool PcapngReader::describes(const Block& block) {
-  if (block.type == section_header_block) {
+bool PcapngReader::describes(uint32_t type) {
+  if (type == section_header_block) {
     interfaces_.clear();  // a new section numbers its interfaces anew
-  } else if (block.type == interface_description_block) {
+  } else if (type == interface_description_block) {
     interface_description();
   } else {
     return false;
@@ -111,30 +106,46 @@ bool PcapngReader::describes(const Block& block) {
   return true;
 }
 
+uint16_t PcapngReader::u16(size_t at) const {
+  uint16_t v;
+  std::memcpy(&v, body_.data() + at, 2);
+  return swapped_ ? static_cast<uint16_t>(v >> 8 | v << 8) : v;
+}
+
+uint32_t PcapngReader::u32(size_t at) const {
+  uint32_t v;
+  std::memcpy(&v, body_.data() + at, 4);
+  return swapped_ ? swap32(v) : v;
+}
+
+// The options from `at` to the block's end, each as code and value, up to opt_endofopt.
+template <typename Visit>
+void PcapngReader::options(size_t at, Visit visit) const {
+  while (at + 4 <= body_.size()) {
+    const uint16_t code = u16(at), length = u16(at + 2);
+    at += 4;
+    if (code == opt_endofopt || at + length > body_.size()) return;
+    visit(code, std::span<const uint8_t>(body_.data() + at, length));
+    at += (length + 3u) & ~3u;
+  }
+}
+
 void PcapngReader::interface_description() {
-  auto u16 = [&](size_t at) {
-    uint16_t v;
-    std::memcpy(&v, body_.data() + at, 2);
-    return swapped_ ? static_cast<uint16_t>(v >> 8 | v << 8) : v;
-  };
   if (body_.size() < 8) fail("interface description too short");
   Interface i;
   i.link_type = u16(0);
   std::string name, comment;
-  for (size_t at = 8; at + 4 <= body_.size();) {
-    const uint16_t code = u16(at), length = u16(at + 2);
-    at += 4;
-    if (code == opt_endofopt || at + length > body_.size()) break;
-    const std::string value(reinterpret_cast<const char*>(body_.data() + at), length);
-    if (code == if_name) name = value;
-    if (code == opt_comment) comment = value;
-    if (code == if_tsresol && length >= 1) {  // 10^-n s, or 2^-n s with the top bit set
-      const int exponent = std::min(body_[at] & 0x7F, (body_[at] & 0x80) ? 62 : 18);
+  options(8, [&](uint16_t code, std::span<const uint8_t> value) {
+    const std::string text(value.begin(), value.end());
+    if (code == if_name) name = text;
+    if (code == opt_comment) comment = text;
+    if (code == if_tsresol && !value.empty()) {  // 10^-n s, or 2^-n s with the top bit set
+      const bool binary = value[0] & 0x80;
+      const int exponent = std::min(value[0] & 0x7F, binary ? 62 : 18);
       i.ticks_per_second = 1;
-      for (int e = 0; e < exponent; ++e) i.ticks_per_second *= (body_[at] & 0x80) ? 2 : 10;
+      for (int e = 0; e < exponent; ++e) i.ticks_per_second *= binary ? 2 : 10;
     }
-    at += (length + 3u) & ~3u;
-  }
+  });
   if (!serial_link(i.link_type))
     fail(
         fmt::format("link type {} does not carry serial bytes; modtap reads DLT_USER0..15 "
@@ -171,28 +182,23 @@ bool PcapngReader::next(decoder::Chunk& chunk) {
     rest_at_ = 0;
     return true;
   }
-  Block block;
-  while (read_block(block))
-    if (!describes(block) && packet(block, chunk)) return true;
+  uint32_t type = 0;
+  while (read_block(type))
+    if (!describes(type) && packet(type, chunk)) return true;
   return false;
 }
 
-bool PcapngReader::packet(const Block& block, decoder::Chunk& chunk) {
-  auto u32 = [&](size_t at) {
-    uint32_t v;
-    std::memcpy(&v, body_.data() + at, 4);
-    return swapped_ ? swap32(v) : v;
-  };
+bool PcapngReader::packet(uint32_t type, decoder::Chunk& chunk) {
   uint32_t interface = 0, caplen = 0;
   uint64_t stamp = 0;
   size_t data_at = 0;
-  if (block.type == enhanced_packet_block || block.type == obsolete_packet_block) {
+  if (type == enhanced_packet_block || type == obsolete_packet_block) {
     if (body_.size() < 20) fail("packet block too short");
-    interface = block.type == enhanced_packet_block ? u32(0) : (u32(0) & 0xFFFF);
+    interface = type == enhanced_packet_block ? u32(0) : (u32(0) & 0xFFFF);
     stamp = uint64_t{u32(4)} << 32 | u32(8);
     caplen = u32(12);
     data_at = 20;
-  } else if (block.type == simple_packet_block) {
+  } else if (type == simple_packet_block) {
     if (body_.size() < 4) fail("packet block too short");
     caplen = std::min<uint32_t>(u32(0), static_cast<uint32_t>(body_.size() - 4));
     data_at = 4;
@@ -206,18 +212,9 @@ bool PcapngReader::packet(const Block& block, decoder::Chunk& chunk) {
   const Interface& i = interfaces_[interface];
   std::span<const uint8_t> data(body_.data() + data_at, caplen);
   std::string comment;
-  for (size_t at = data_at + ((caplen + 3u) & ~3u); at + 4 <= body_.size();) {
-    uint16_t code, length;
-    std::memcpy(&code, body_.data() + at, 2);
-    std::memcpy(&length, body_.data() + at + 2, 2);
-    if (swapped_) code = static_cast<uint16_t>(code >> 8 | code << 8);
-    if (swapped_) length = static_cast<uint16_t>(length >> 8 | length << 8);
-    at += 4;
-    if (code == opt_endofopt || at + length > body_.size()) break;
-    if (code == opt_comment)
-      comment.assign(reinterpret_cast<const char*>(body_.data() + at), length);
-    at += (length + 3u) & ~3u;
-  }
+  options(data_at + ((caplen + 3u) & ~3u), [&](uint16_t code, std::span<const uint8_t> value) {
+    if (code == opt_comment) comment.assign(value.begin(), value.end());
+  });
   if (i.link_type == exported_pdu_dlt) data = after_exported_pdu_tags(data);
   bytes_.assign(data.begin(), data.end());
   if (bytes_.empty()) return false;

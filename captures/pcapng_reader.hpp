@@ -34,12 +34,14 @@ class PcapngReader final : public ChunkSource {
     uint16_t channel = 0;
     bool modtap = false;  // written by modtap: stamps mark a packet's first byte
   };
-  struct Block;
-
-  bool read_block(Block& block);
-  bool describes(const Block& block);
+  bool read_block(uint32_t& type);  // its body in body_
+  bool describes(uint32_t type);
   void interface_description();
-  bool packet(const Block& block, decoder::Chunk& chunk);
+  bool packet(uint32_t type, decoder::Chunk& chunk);
+  uint16_t u16(size_t at) const;  // of body_, in the section's byte order
+  uint32_t u32(size_t at) const;
+  template <typename Visit>
+  void options(size_t at, Visit visit) const;
   [[noreturn]] void fail(const std::string& what) const;
 
   std::string path_;

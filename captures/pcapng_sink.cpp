@@ -93,7 +93,7 @@ std::string noise_comment(const Noise& n) {
 }
 
 std::string interface_comment(ChannelRole role, ClockQuality clock) {
-  return fmt::format("{} role={} clock={}", interface_convention, to_string(role),
+  return fmt::format("{} role={} clock={}", pcapng::interface_convention, to_string(role),
                      to_string(clock));
 }
 

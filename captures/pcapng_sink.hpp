@@ -53,11 +53,8 @@ class PcapngSink final : public decoder::RecordSink {
 };
 
 // The comment modtap writes on a frame: "modtap key=value ...", parsed by modtap.lua.
-// What modtap says of each interface it writes: how its time stamps are meant, so that
-// modtap reads its own files back to the same records, and the channel's role (a split tap).
-inline constexpr std::string_view interface_convention =
-    "modtap: a packet is stamped at the start of its first byte; its comment's duration_ns "
-    "runs to the end of its last byte;";
+// What modtap says of each interface it writes: the time convention (pcapng_format.hpp),
+// the channel's role (a split tap) and the source's clock.
 std::string interface_comment(decoder::ChannelRole role, decoder::ClockQuality clock);
 
 std::string frame_comment(const decoder::Frame& frame);

@@ -73,15 +73,16 @@ void Matcher::set_pending(Pending* pending) {
 
 void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
   advance(frame.t_ns);
-  frame.role = decide_role(frame, channel_role);
+  const Copy copy = judge_copy(frame);
+  frame.role = decide_role(frame, channel_role, copy);
   if (frame.role == Role::request) {
     on_request(frame);
   } else if (frame.role == Role::response) {
-    on_response(frame);
+    on_response(frame, copy);
   }
 }
 
-Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role) const {
+Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role, Copy copy) const {
   if (channel_role == ChannelRole::master) return Role::request;
   if (channel_role == ChannelRole::slave) return Role::response;
   // The exception bit says response, even on a damaged frame or an unexpected slave.
@@ -90,9 +91,7 @@ Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role) const {
   if (frame.fit.response && !frame.fit.request) return Role::response;
   // Both or neither: an echo, or a frame too damaged to tell. What the bus waits for decides,
   // unless the frame is the pending request again, sent long after an answer was due.
-  if (pending_matches(frame))
-    return copies_pending(frame) && judge_copy(frame) == Copy::retry ? Role::request
-                                                                     : Role::response;
+  if (pending_matches(frame)) return copy == Copy::retry ? Role::request : Role::response;
   return frame.fit.request ? Role::request : Role::unknown;
 }
 
@@ -111,6 +110,7 @@ bool Matcher::copies_pending(const Frame& frame) const {
 Matcher::Copy Matcher::judge_copy(const Frame& frame) const {
   constexpr int64_t earliest_retry_ns = 50'000'000;
   constexpr int64_t slack_ns = 20'000'000;
+  if (!pending_ || !copies_pending(frame)) return Copy::none;
   if (!options_.timed) return Copy::ambiguous;
   const int64_t waited = frame.t_ns - pending_->end_ns;
   const int64_t learned =
@@ -157,22 +157,21 @@ void Matcher::on_request(Frame& frame) {
   set_pending(&p);
 }
 
-void Matcher::on_response(Frame& frame) {
+void Matcher::on_response(Frame& frame, Copy copy) {
   if (!pending_matches(frame)) {
     frame.findings |= finding_unsolicited;
     return;
   }
   frame.request = pending_->index;
   frame.request_pdu = {pending_->pdu.data(), pending_->size};
-  const bool copy = copies_pending(frame);
-  if (copy && judge_copy(frame) == Copy::ambiguous) frame.findings |= finding_ambiguous_echo;
+  if (copy == Copy::ambiguous) frame.findings |= finding_ambiguous_echo;
   // A clock that steps back, or stamps reads later than the bytes ended, can put a response
   // before its request's end: that latency is not measured rather than negative.
   if (options_.timed && frame.t_ns >= pending_->end_ns) {
     frame.latency_ns = frame.t_ns - pending_->end_ns;
     if (options_.exact_clock && *frame.latency_ns < options_.t35_ns)
       frame.findings |= finding_fast_turnaround;
-    if (!copy && frame.check_ok) learn_turnaround(pending_->slave, *frame.latency_ns);
+    if (copy == Copy::none && frame.check_ok) learn_turnaround(pending_->slave, *frame.latency_ns);
   }
   if (frame.check_ok)
     frame.findings |= check_response_fit({pending_->pdu.data(), pending_->size}, frame.pdu());

@@ -49,8 +49,9 @@ class Matcher {
     std::array<uint8_t, 256> pdu;  // left uninitialised: only `size` bytes are ever read
   };
 
-  // What an exact copy of the pending echo request is: its response or the master's retry.
-  enum class Copy : uint8_t { response, retry, ambiguous };
+  // What a frame that repeats the pending request byte for byte is: its (echo) response, the
+  // master's retry, or either; none when it is no such copy.
+  enum class Copy : uint8_t { none, response, retry, ambiguous };
   Copy judge_copy(const Frame& frame) const;
   bool copies_pending(const Frame& frame) const;
   void learn_turnaround(uint8_t slave, int64_t latency_ns) {
@@ -58,9 +59,9 @@ class Matcher {
     bus_turnaround_ns_ = std::max(bus_turnaround_ns_, latency_ns);
   }
 
-  Role decide_role(const Frame& frame, ChannelRole channel_role) const;
+  Role decide_role(const Frame& frame, ChannelRole channel_role, Copy copy) const;
   void on_request(Frame& frame);
-  void on_response(Frame& frame);
+  void on_response(Frame& frame, Copy copy);
   void expire(int64_t now_ns, TimeoutReason reason);
   bool pending_matches(const Frame& frame) const;
 

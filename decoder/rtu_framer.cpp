@@ -246,15 +246,21 @@ uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
   return at;
 }
 
-void RtuFramer::emit_frame(uint64_t at, const Match& match) {
+// The bytes [begin, end) as a frame with its place and time; the check is the caller's to judge.
+Frame RtuFramer::frame_of(uint64_t begin, uint64_t end, RoleFit fit) const {
   Frame frame;
   frame.channel = channel_;
   frame.mode = Mode::rtu;
-  frame.fit = match.fit;
-  frame.offset = at;
-  frame.raw = frame.adu = {at_ptr(at), match.length};
-  frame.t_ns = end_time(at) - char_ns_;
-  frame.end_ns = end_time(at + match.length - 1);
+  frame.fit = fit;
+  frame.offset = begin;
+  frame.raw = frame.adu = {at_ptr(begin), static_cast<size_t>(end - begin)};
+  frame.t_ns = end_time(begin) - char_ns_;
+  frame.end_ns = end_time(end - 1);
+  return frame;
+}
+
+void RtuFramer::emit_frame(uint64_t at, const Match& match) {
+  Frame frame = frame_of(at, at + match.length, match.fit);
   frame.check_ok = true;
   frame.expected_check = wire_crc(frame.adu);
   sink_.on_frame(frame);
@@ -285,18 +291,10 @@ std::optional<uint16_t> RtuFramer::awaited_length(uint64_t begin, uint64_t size)
 // A damaged response: reported as a frame with a bad check, so it stays in the slave's
 // picture. Cut short, it has no check to expect; run on, its end is where its structure says.
 void RtuFramer::emit_damaged(uint64_t begin, uint64_t end, Damage damage) {
-  const uint8_t* p = at_ptr(begin);
-  const auto size = static_cast<size_t>(end - begin);
-  Frame frame;
-  frame.channel = channel_;
-  frame.mode = Mode::rtu;
-  frame.fit = {false, true};
-  frame.offset = begin;
-  frame.raw = frame.adu = {p, size};
-  frame.t_ns = end_time(begin) - char_ns_;
-  frame.end_ns = end_time(end - 1);
+  Frame frame = frame_of(begin, end, {false, true});
   frame.damage = damage;
-  if (damage != Damage::cut) frame.expected_check = crc16({p, size - crc_size});
+  if (damage != Damage::cut)
+    frame.expected_check = crc16(frame.adu.first(frame.adu.size() - crc_size));
   frame.check_ok = false;
   frame.findings = finding_bad_check;
   sink_.on_frame(frame);
@@ -315,14 +313,7 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
     RoleFit fit{options_.role != ChannelRole::slave && fits_role(Role::request, begin, size),
                 options_.role != ChannelRole::master && fits_role(Role::response, begin, size)};
     if (fit.request || fit.response) {
-      Frame frame;
-      frame.channel = channel_;
-      frame.mode = Mode::rtu;
-      frame.fit = fit;
-      frame.offset = begin;
-      frame.raw = frame.adu = {p, static_cast<size_t>(size)};
-      frame.t_ns = end_time(begin) - char_ns_;
-      frame.end_ns = end_time(end - 1);
+      Frame frame = frame_of(begin, end, fit);
       frame.expected_check = crc16({p, static_cast<size_t>(size - crc_size)});
       frame.check_ok = frame.expected_check == wire_crc(frame.adu);
       frame.findings = frame.check_ok ? finding_none : finding_bad_check;

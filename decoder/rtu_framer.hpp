@@ -64,6 +64,7 @@ class RtuFramer {
   bool swallows_known_frame(uint64_t begin, uint64_t end) const;
   // First position >= from that starts a good frame; `decided` false if one is still open.
   uint64_t next_start(uint64_t from, bool final, bool& decided);
+  Frame frame_of(uint64_t begin, uint64_t end, RoleFit fit) const;
   void emit_frame(uint64_t at, const Match& match);
   void emit_unframed(uint64_t begin, uint64_t end);
   void emit_piece(uint64_t begin, uint64_t end);

@@ -218,11 +218,10 @@ std::unique_ptr<captures::RawRecorder> raw_recorder(
 
 // After a run whose traffic made little sense, or came faster than the baud allows, say so.
 void hint_settings(const decoder::SerialFormat& format, const decoder::LineHealth& health,
-                   const decoder::ChunkPace& pace, const captures::ChunkSource& source) {
+                   const decoder::ChunkPace& pace, bool logic_analyzer) {
   // A logic-analyzer capture that reads as nothing is usually a line inverted (RS-232 levels)
   // or probes swapped, which no baud rate mends.
-  if (source.clock() == decoder::ClockQuality::per_byte && health.looks_wrong() &&
-      health.good_frames == 0) {
+  if (logic_analyzer && health.looks_wrong() && health.good_frames == 0) {
     fmt::print(stderr,
                "modtap: hint: no frame had a good check; is the line inverted (try "
                "--sigrok-invert), are the channels right (--sigrok-channels tx=NAME,rx=NAME), "
@@ -288,7 +287,10 @@ int read_file(const Options& o) {
                "those steps are not measured\n",
                o.read_file, bus.clock_steps_back());
   if (broken) throw *broken;
-  hint_settings(open.serial, health, pace, *source);
+  const captures::Format format = open.format == captures::Format::automatic
+                                      ? captures::detect_format(o.read_file)
+                                      : open.format;
+  hint_settings(open.serial, health, pace, format == captures::Format::sigrok);
   return 0;
 }
 
