@@ -1,6 +1,7 @@
 #include "decoder/rtu_framer.hpp"
 
 #include <algorithm>
+#include <array>
 
 #include "decoder/checksum.hpp"
 #include "decoder/function_codes.hpp"
@@ -154,45 +155,110 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
         if (crc_ok(p, expected.echo_size)) return {Match::Kind::found, expected.echo_size, fit};
       }
       if (search <= 0 || p[0] > max_unicast_slave) return {};
-      // A bounded CRC search. A CRC match alone is weak evidence (a trailing 0x00 keeps a
-      // zero residue zero), so the end must also be confirmed by a gap or the next frame;
-      // only when nothing confirms that way may a turnaround glitch stand in between. A
-      // frame found this way never swallows a frame whose length rules and CRC agree.
-      const uint64_t limit = std::min<uint64_t>(avail, max_rtu_adu);
-      const size_t first = std::max<size_t>(body.bytes + crc_size, min_adu);
-      bool open = false;
-      size_t unconfirmed = 0;  // the first plausible end nothing confirmed
-      for (bool allow_glitch : {false, true}) {
-        uint16_t crc = crc16({p, first - crc_size});
-        bool previous_hit = false;
-        for (size_t n = first; n <= limit; ++n) {
-          const bool hit = crc == wire_crc({p, n});
-          // A hit right after a hit is the shorter one with a 0x00 appended: a glitch, unless
-          // a silence right after it says that 0x00 was the frame's last CRC byte.
-          const bool zero_appended = hit && previous_hit;
-          previous_hit = hit;
-          crc = crc16_step(crc, p[n - crc_size]);
-          if (!hit || (zero_appended && !gap_at(at + n) && !copy_follows(at, at + n))) {
-            open |= hit && at + n == end_;
-            continue;
-          }
-          if (swallows_known_frame(at, at + n)) continue;
-          if (confirmed_end(at, at + n, final, search - 1, allow_glitch))
-            return {Match::Kind::found, static_cast<uint16_t>(n), fit};
-          open |= at + n == end_;
-          if (!unconfirmed) unconfirmed = n;
-        }
-      }
-      // FC08 Return Query Data followed by junk: once nothing more can confirm it, its own
-      // header (slave, 08, sub-function 0000) and CRC have to do.
-      const bool exhausted = final || (avail >= max_rtu_adu && !open);
-      if (unconfirmed && exhausted && p[1] == 0x08)
-        return {Match::Kind::found, static_cast<uint16_t>(unconfirmed), fit};
-      if (!final && (avail < max_rtu_adu || open)) return need_more();
-      return {};
+      return search_end(at, std::max<size_t>(body.bytes + crc_size, min_adu), fit, final, search);
     }
   }
   return {};
+}
+
+// A bounded CRC search for the end of a frame of no fixed length, from `first` bytes on. A CRC
+// match alone is weak evidence (a trailing 0x00 keeps a zero residue zero), so the end must
+// also be confirmed by a gap or the next frame; only when nothing confirms that way may a
+// turnaround glitch stand in between. A frame found this way never swallows a frame whose
+// length rules and CRC agree.
+RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, bool final,
+                                       int search) const {
+  const uint64_t avail = end_ - at;
+  const uint8_t* p = at_ptr(at);
+  const uint64_t limit = std::min<uint64_t>(avail, max_rtu_adu);
+  const bool in_junk = at >= crc_index_.begin() && at < crc_index_.end();
+  if (!in_junk) {
+    const Match m = first_confirmed_end(at, first, limit, fit, final, search);
+    if (m.kind == Match::Kind::found) return m;
+  }
+  std::array<uint16_t, max_rtu_adu> hits;  // lengths with a good CRC, ascending
+  const size_t hit_count = good_lengths(at, first, limit, hits);
+  bool open = false;
+  size_t unconfirmed = 0;  // the first plausible end nothing confirmed
+  for (bool allow_glitch : {false, true}) {
+    for (size_t i = 0; i < hit_count; ++i) {
+      const uint16_t n = hits[i];
+      const bool zero_appended = i > 0 && hits[i - 1] == n - 1;
+      if (zero_appended && glitch_appended(at, at + n)) {
+        open |= at + n == end_;
+        continue;
+      }
+      // Whether it swallows a frame is the costly question: asked only where it decides.
+      const bool confirmed = confirmed_end(at, at + n, final, search - 1, allow_glitch);
+      const bool at_end = at + n == end_;
+      const bool may_stand_alone = !unconfirmed && p[1] == 0x08;
+      if (!confirmed && !at_end && !may_stand_alone) continue;
+      if (swallows_known_frame(at, at + n)) continue;
+      if (confirmed) return {Match::Kind::found, n, fit};
+      open |= at_end;
+      if (may_stand_alone) unconfirmed = n;
+    }
+  }
+  // FC08 Return Query Data followed by junk: once nothing more can confirm it, its own
+  // header (slave, 08, sub-function 0000) and CRC have to do.
+  const bool exhausted = final || (avail >= max_rtu_adu && !open);
+  if (unconfirmed && exhausted && p[1] == 0x08)
+    return {Match::Kind::found, static_cast<uint16_t>(unconfirmed), fit};
+  if (!final && (avail < max_rtu_adu || open)) return need_more();
+  return {};
+}
+
+// Both readings of a start often search the same span (an unknown function code reads as a
+// request and as a response alike), so the last answer is kept.
+size_t RtuFramer::good_lengths(uint64_t at, size_t first, size_t limit,
+                               std::array<uint16_t, max_rtu_adu>& lengths) const {
+  CrcHits& last = last_hits_;
+  if (last.at != at || last.first != first || last.limit != limit) {
+    last.at = at;
+    last.first = first;
+    last.limit = limit;
+    last.count = 0;
+    index_span(at, at + limit);
+    crc_index_.good_ends(at, at + first, at + limit, [&](uint64_t end) {
+      last.lengths[last.count++] = static_cast<uint16_t>(end - at);
+    });
+  }
+  std::copy_n(last.lengths.begin(), last.count, lengths.begin());
+  return last.count;
+}
+
+// A frame with no fixed length is found by running the CRC from its start, stopping at its end
+// as soon as something confirms it: few steps for a real frame. Where this finds nothing, the
+// bytes are junk, and the CRC index takes over for this start and the ones after it.
+RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_t limit,
+                                                RoleFit fit, bool final, int search) const {
+  const uint8_t* p = at_ptr(at);
+  uint16_t crc = crc16({p, first - crc_size});
+  bool previous_hit = false;
+  for (size_t n = first; n <= limit; ++n) {
+    const bool hit = crc == wire_crc({p, n});
+    const bool zero_appended = hit && previous_hit;
+    previous_hit = hit;
+    crc = crc16_step(crc, p[n - crc_size]);
+    if (!hit || (zero_appended && glitch_appended(at, at + n))) continue;
+    if (confirmed_end(at, at + n, final, search - 1, false) && !swallows_known_frame(at, at + n))
+      return {Match::Kind::found, static_cast<uint16_t>(n), fit};
+  }
+  return {};
+}
+
+// A CRC end right after a CRC end is the shorter frame with a 0x00 appended: a glitch, unless a
+// silence right after it says that 0x00 was the frame's last CRC byte.
+bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end) const {
+  return !gap_at(end) && !copy_follows(begin, end);
+}
+
+// The CRC index is kept only over what is searched: traffic whose lengths the function codes
+// tell never pays for it, and junk is indexed once, however many starts search it.
+void RtuFramer::index_span(uint64_t begin, uint64_t end) const {
+  if (begin < crc_index_.begin() || begin > crc_index_.end()) crc_index_.restart(begin);
+  const uint64_t from = crc_index_.end();
+  if (end > from) crc_index_.append({at_ptr(from), static_cast<size_t>(end - from)});
 }
 
 bool RtuFramer::fits_role(Role role, uint64_t at, uint16_t length) const {
@@ -353,9 +419,11 @@ void RtuFramer::consume(uint64_t to) {
   while (marks_.size() > 1 && marks_.front().end <= head_) marks_.pop_front();
   if (head_ == end_) {
     buf_.clear();
+    crc_index_.drop_before(head_);
     base_ = head_;
   } else if (head_ - base_ >= compact_after) {
     buf_.erase(buf_.begin(), buf_.begin() + static_cast<ptrdiff_t>(head_ - base_));
+    crc_index_.drop_before(head_);
     base_ = head_;
   }
 }

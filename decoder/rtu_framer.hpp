@@ -6,12 +6,15 @@
 // one Frame or Noise record, in order.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <optional>
 #include <vector>
 
+#include "decoder/checksum.hpp"
 #include "decoder/frame_sink.hpp"
+#include "decoder/function_codes.hpp"
 #include "decoder/records.hpp"
 #include "decoder/serial_format.hpp"
 
@@ -46,6 +49,13 @@ class RtuFramer {
     RoleFit fit;
   };
   static Match need_more() { return {Match::Kind::need_more, 0, {}}; }
+  struct CrcHits {
+    uint64_t at = UINT64_MAX;
+    size_t first = 0;
+    size_t limit = 0;
+    size_t count = 0;
+    std::array<uint16_t, max_rtu_adu> lengths;
+  };
   struct TimeMark {  // one per chunk: the bytes [first, end) ended at end_ns
     uint64_t first;
     uint64_t end;
@@ -56,6 +66,14 @@ class RtuFramer {
   // `search` is how many variable-length frames in a row may be found by CRC search.
   Match match_at(uint64_t at, bool final, int search) const;
   Match match_role(Role role, uint64_t at, bool final, int search) const;
+  // The lengths in [first, limit] that give the bytes from `at` a good CRC, ascending.
+  size_t good_lengths(uint64_t at, size_t first, size_t limit,
+                      std::array<uint16_t, max_rtu_adu>& lengths) const;
+  void index_span(uint64_t begin, uint64_t end) const;
+  Match search_end(uint64_t at, size_t first, RoleFit fit, bool final, int search) const;
+  Match first_confirmed_end(uint64_t at, size_t first, size_t limit, RoleFit fit, bool final,
+                            int search) const;
+  bool glitch_appended(uint64_t begin, uint64_t end) const;
   bool fits_role(Role role, uint64_t at, uint16_t length) const;
   bool confirmed_end(uint64_t begin, uint64_t end, bool final, int search, bool allow_glitch) const;
   bool blocked_by_gap(uint64_t at, bool final) const;
@@ -85,11 +103,13 @@ class RtuFramer {
   int64_t char_ns_;
   int64_t gap_threshold_ns_;
 
-  std::vector<uint8_t> buf_;  // bytes from stream offset base_ on
-  uint64_t base_ = 0;         // stream offset of buf_[0]
-  uint64_t head_ = 0;         // stream offset of the first unresolved byte
-  uint64_t end_ = 0;          // stream offset one past the last byte
-  uint64_t scanned_to_ = 0;   // positions below this are known not to start a frame
+  std::vector<uint8_t> buf_;    // bytes from stream offset base_ on
+  uint64_t base_ = 0;           // stream offset of buf_[0]
+  uint64_t head_ = 0;           // stream offset of the first unresolved byte
+  uint64_t end_ = 0;            // stream offset one past the last byte
+  uint64_t scanned_to_ = 0;     // positions below this are known not to start a frame
+  mutable CrcIndex crc_index_;  // over the searched part of buf_
+  mutable CrcHits last_hits_;
   std::deque<TimeMark> marks_;
   std::deque<uint64_t> gaps_;  // stream offsets preceded by a boundary-sized silence
   int64_t last_end_ns_ = 0;

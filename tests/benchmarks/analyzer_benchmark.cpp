@@ -1,4 +1,4 @@
-// Framing, checking and matching throughput on back-to-back simulated RTU traffic.
+// Framing, checking and matching throughput on back-to-back simulated RTU traffic and on junk.
 #include <benchmark/benchmark.h>
 
 #include "decoder/analyzer.hpp"
@@ -71,6 +71,32 @@ void BM_AnalyzeWithModel(benchmark::State& state, const char* model) {
 }
 BENCHMARK_CAPTURE(BM_AnalyzeWithModel, generic, "generic")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_AnalyzeWithModel, gd20, "gd20")->Unit(benchmark::kMillisecond);
+
+// Random bytes, as a capture read with the wrong settings or a noisy line gives them: every
+// byte starts a CRC search in RTU and nothing in ASCII, untimed, in 64 KiB chunks.
+void BM_AnalyzeRandomBytes(benchmark::State& state, decoder::ModeChoice mode) {
+  static const std::vector<uint8_t> bytes = [] {
+    std::vector<uint8_t> b(4 << 20);
+    uint32_t x = 1;
+    for (uint8_t& byte : b) byte = static_cast<uint8_t>((x = x * 1664525 + 1013904223) >> 24);
+    return b;
+  }();
+  for (auto _ : state) {
+    Counting sink;
+    decoder::AnalyzerOptions o;
+    o.mode = mode;
+    o.clock = decoder::ClockQuality::none;
+    decoder::Analyzer analyzer(o, {{"bench", decoder::ChannelRole::bus}}, sink);
+    for (size_t at = 0; at < bytes.size(); at += 65536)
+      analyzer.push({0, 0, {bytes.data() + at, std::min<size_t>(65536, bytes.size() - at)}});
+    analyzer.finish();
+  }
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * bytes.size()));
+}
+BENCHMARK_CAPTURE(BM_AnalyzeRandomBytes, rtu, decoder::ModeChoice::rtu)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_AnalyzeRandomBytes, ascii, decoder::ModeChoice::ascii)
+    ->Unit(benchmark::kMillisecond);
 
 void BM_Crc16(benchmark::State& state) {
   const auto& c = capture();
