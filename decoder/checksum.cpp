@@ -72,7 +72,7 @@ uint16_t crc16(std::span<const uint8_t> bytes, uint16_t crc) {
   return crc;
 }
 
-CrcIndex::CrcIndex() : newest_(1 << 16, none) {
+CrcIndex::CrcIndex() : newest_(chain_mask + 1, none) {
   restart(0);
 }
 
@@ -82,7 +82,7 @@ void CrcIndex::restart(uint64_t origin) {
   base_ = origin_ = origin;
   ends_.assign(1, 0);
   starts_.clear();
-  same_before_.assign(1, newest_[0]);
+  same_before_.assign(1, newest_[0]);  // the value 0 is in chain 0
   newest_[0] = origin;
   for (unsigned bit = 0; bit < 8; ++bit) unshifted_bits_[bit] = static_cast<uint16_t>(1 << bit);
   unshifted_init_ = 0xFFFF;
@@ -99,8 +99,8 @@ void CrcIndex::append(std::span<const uint8_t> bytes) {
     }
     unshifted_init_ = crc16_unshift(unshifted_init_);
     ends_.push_back(w);
-    same_before_.push_back(newest_[w]);
-    newest_[w] = offset++;
+    same_before_.push_back(newest_[w & chain_mask]);
+    newest_[w & chain_mask] = offset++;
   }
 }
 
@@ -116,11 +116,12 @@ void CrcIndex::drop_before(uint64_t offset) {
 
 bool CrcIndex::chained_ends(uint16_t key, uint64_t first, uint64_t last,
                             std::array<uint64_t, 256>& out, size_t& count) const {
-  uint64_t end = newest_[key];
+  uint64_t end = newest_[key & chain_mask];
   for (int walked = 0; end != none && end > last; end = same_before_[end - base_])
     if (++walked > max_chain_walk) return false;
   // `first` is at least base_, so an end forgotten by drop_before stops the walk here.
-  for (; end != none && end >= first; end = same_before_[end - base_]) out[count++] = end;
+  for (; end != none && end >= first; end = same_before_[end - base_])
+    if (ends_[end - base_] == key) out[count++] = end;
   return true;
 }
 

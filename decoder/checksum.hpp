@@ -49,6 +49,10 @@ class CrcIndex {
  private:
   static constexpr uint64_t none = UINT64_MAX;
   static constexpr int max_chain_walk = 32;
+  // The index reaches at most a search (256 bytes) beyond the start searched, so a few
+  // thousand chains keep each one short; a chain holds neighbouring values, told apart by
+  // comparing.
+  static constexpr uint16_t chain_mask = (1 << 12) - 1;
   // Ends in [first, last] whose value is `key`, newest first, into `out`; false when the chain
   // is too long to walk (a long run of one value), and the caller compares one by one.
   bool chained_ends(uint16_t key, uint64_t first, uint64_t last, std::array<uint64_t, 256>& out,
@@ -56,8 +60,8 @@ class CrcIndex {
 
   std::vector<uint16_t> ends_{0};  // W at the offsets base_ .. end, the end included
   std::vector<uint16_t> starts_;   // W_a ^ A^-a(0xFFFF) at the offsets base_ .. end - 1
-  // Hash chains over ends_: the newest end offset with each value, and for each end the one
-  // before it with the same value. Offsets below base_ (forgotten, or from before a restart
+  // Hash chains over ends_: the newest end offset in each chain, and for each end the one
+  // before it in its chain. Offsets below base_ (forgotten, or from before a restart
   // further on) end a walk; they are not unlinked.
   std::vector<uint64_t> newest_;
   std::vector<uint64_t> same_before_;
