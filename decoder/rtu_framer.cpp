@@ -110,19 +110,37 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const 
     // A silence inside a frame, with a good frame starting right after it, means this was a
     // frame that broke off, whatever its CRC says.
     if (m.kind == Match::Kind::found && !gaps_.empty() && first_gap_after(at) < at + m.length) {
-      const Match after_gap = match_at(first_gap_after(at), final, 0);
+      const uint64_t gap = first_gap_after(at);
+      const Match after_gap = match_at(gap, final, 0);
       if (after_gap.kind == Match::Kind::found) return {};
       if (after_gap.kind == Match::Kind::need_more && !final) return need_more();
+      // A frame ends before the silence, and a glitch after it kept the CRC good (a trailing
+      // 0x00 keeps a zero residue zero): the other reading, if any, is the frame.
+      if (gap - at >= min_adu && crc_ok(at_ptr(at), gap - at)) continue;
     }
+    const Role other = role == Role::request ? Role::response : Role::request;
+    const bool other_allowed = other == Role::request ? may_request : may_respond;
+    // A copy of the pending request with a glitch after it reads as a response of one more
+    // byte; on a bus of glitches, the copy is the likelier (a master's retry).
+    if (m.kind == Match::Kind::found && zero_glitches_common() && p[m.length - 1] == 0x00 &&
+        may_be_glitch(at + m.length - 1) && other_allowed && m.length - 1 >= min_adu &&
+        fits_role(other, at, m.length - 1) && crc_ok(p, m.length - 1))
+      continue;
+    // A reserved address is as often a turnaround's 0xFF: such a frame never swallows one whose
+    // length rules and CRC agree (a glitch, a response and the next glitch can read as one).
+    if (m.kind == Match::Kind::found && p[0] > max_unicast_slave &&
+        swallows_known_frame(at, at + m.length))
+      return {};
     if (m.kind == Match::Kind::found) {
       // The same bytes may read as the other role too (echo codes 05, 06, 08, ...).
-      const Role other = role == Role::request ? Role::response : Role::request;
-      const bool other_allowed = other == Role::request ? may_request : may_respond;
       if (other_allowed && fits_role(other, at, m.length)) m.fit = {true, true};
       return m;
     }
     if (m.kind == Match::Kind::need_more) {
-      // The likelier reading is still open: wait for it rather than take the other one early.
+      // The likelier reading is still open: wait for it rather than take the other one early,
+      // unless a silence with a good frame after it says it never completes (a master's retry
+      // read as the response its slave did not send).
+      if (blocked_by_gap(at, final)) continue;
       if (!final) return m;
       waiting = true;
     }
@@ -250,7 +268,23 @@ RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_
 // A CRC end right after a CRC end is the shorter frame with a 0x00 appended: a glitch, unless a
 // silence right after it says that 0x00 was the frame's last CRC byte.
 bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end) const {
-  return !gap_at(end) && !copy_follows(begin, end);
+  return !gap_at(end) &&
+         ((zero_glitches_common() && may_be_glitch(end - 1)) || !copy_follows(begin, end));
+}
+
+// A glitch comes as a driver turns on, after the line was quiet: where the clock times each
+// byte, a byte sent right behind the one before it is no glitch.
+bool RtuFramer::may_be_glitch(uint64_t offset) const {
+  if (options_.clock != ClockQuality::per_byte || offset == 0) return true;
+  return end_time(offset) - end_time(offset - 1) >= 2 * char_ns_;
+}
+
+// Where the bytes alone cannot tell a frame whose CRC ends in 0x00 (1 in 256) from the frame
+// one byte shorter and a 0x00 glitch, the bus's own glitches decide: the glitch reading needs
+// one glitch, or two around an echo, so it is the likelier once more than 1 in 16 frames
+// comes with a 0x00 glitch.
+bool RtuFramer::zero_glitches_common() const {
+  return good_frames_ >= 16 && zero_glitches_ * 16 > good_frames_;
 }
 
 // The CRC index is kept only over what is searched: traffic whose lengths the function codes
@@ -279,10 +313,12 @@ bool RtuFramer::confirmed_end(uint64_t begin, uint64_t end, bool final, int sear
          (gap_at(end + 1) || match_at(end + 1, final, search).kind == Match::Kind::found);
 }
 
-// An exact copy right behind is the echo of FC08 Return Query Data.
+// An exact copy right behind is the echo of FC08 Return Query Data; a silence inside it says
+// its bytes were not one frame (a glitch after an echo can complete a false copy).
 bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
   const uint64_t size = end - begin;
-  return end + size <= end_ && std::equal(at_ptr(begin), at_ptr(end), at_ptr(end));
+  return end + size <= end_ && std::equal(at_ptr(begin), at_ptr(end), at_ptr(end)) &&
+         first_gap_after(end) >= end + size;
 }
 
 bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end) const {
@@ -326,6 +362,7 @@ Frame RtuFramer::frame_of(uint64_t begin, uint64_t end, RoleFit fit) const {
 }
 
 void RtuFramer::emit_frame(uint64_t at, const Match& match) {
+  ++good_frames_;
   Frame frame = frame_of(at, at + match.length, match.fit);
   frame.check_ok = true;
   frame.expected_check = wire_crc(frame.adu);
@@ -350,6 +387,8 @@ std::optional<uint16_t> RtuFramer::awaited_length(uint64_t begin, uint64_t size)
       expected_.slave != p[0] || expected_.function != (p[1] & 0x7F))
     return std::nullopt;
   const BodyLength body = body_length(Role::response, {p, static_cast<size_t>(size)});
+  // Cut before its structure is complete: at least one byte longer than what came.
+  if (body.kind == BodyLength::Kind::need_more) return static_cast<uint16_t>(size + 1);
   if (body.kind != BodyLength::Kind::known) return std::nullopt;
   return static_cast<uint16_t>(body.bytes + crc_size);
 }
@@ -370,7 +409,22 @@ void RtuFramer::emit_damaged(uint64_t begin, uint64_t end, Damage damage) {
 void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
   const uint64_t size = end - begin;
   const uint8_t* p = at_ptr(begin);
-  if (const auto length = awaited_length(begin, size); length && *length != size) {
+  // The slave's driver turning on can put a glitch right before its damaged response.
+  if (size > 1 && (p[0] == 0x00 || p[0] == 0xFF) && awaited_length(begin + 1, size - 1)) {
+    emit_piece(begin, begin + 1);
+    return emit_piece(begin + 1, end);
+  }
+  const auto length = awaited_length(begin, size);
+  // A damaged response ending in 0x00 or 0xFF (2 in 256) right before the next frame, or one
+  // cut short with that frame's glitch after it: on a bus where glitches come with more than
+  // 1 in 128 frames, the glitch.
+  const uint8_t last = p[size - 1];
+  if (length && size <= *length && size > 3 && (last == 0x00 || last == 0xFF) &&
+      glitches_ * 128 > good_frames_ && end < end_ && !gap_at(end) && may_be_glitch(end - 1)) {
+    emit_piece(begin, end - 1);
+    return emit_piece(end - 1, end);
+  }
+  if (length && *length != size) {
     if (size < *length) return emit_damaged(begin, end, Damage::cut);
     emit_damaged(begin, begin + *length, Damage::collision);
     return emit_piece(begin + *length, end);
@@ -392,6 +446,8 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
   NoiseReason reason = NoiseReason::junk;
   if (size == 1 && (p[0] == 0x00 || p[0] == 0xFF)) {
     reason = NoiseReason::glitch;
+    zero_glitches_ += p[0] == 0x00;
+    ++glitches_;
   } else if (size >= 2 && is_public_function(p[1])) {
     reason = NoiseReason::truncated;
   }

@@ -74,6 +74,8 @@ class RtuFramer {
   Match first_confirmed_end(uint64_t at, size_t first, size_t limit, RoleFit fit, bool final,
                             int search) const;
   bool glitch_appended(uint64_t begin, uint64_t end) const;
+  bool zero_glitches_common() const;
+  bool may_be_glitch(uint64_t offset) const;
   bool fits_role(Role role, uint64_t at, uint16_t length) const;
   bool confirmed_end(uint64_t begin, uint64_t end, bool final, int search, bool allow_glitch) const;
   bool blocked_by_gap(uint64_t at, bool final) const;
@@ -113,6 +115,9 @@ class RtuFramer {
   std::deque<TimeMark> marks_;
   std::deque<uint64_t> gaps_;  // stream offsets preceded by a boundary-sized silence
   int64_t last_end_ns_ = 0;
+  uint64_t good_frames_ = 0;    // emitted with a good CRC
+  uint64_t zero_glitches_ = 0;  // lone 0x00 bytes between frames
+  uint64_t glitches_ = 0;       // lone 0x00 or 0xFF bytes between frames
   bool have_time_ = false;
 };
 

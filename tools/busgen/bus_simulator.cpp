@@ -4,6 +4,7 @@
 #include <random>
 
 #include "decoder/checksum.hpp"
+#include "decoder/function_codes.hpp"
 
 namespace modtap::busgen {
 
@@ -85,7 +86,12 @@ class Simulator {
     const bool broadcast = chance(o_.broadcast_rate);
     const uint8_t slave = broadcast ? 0 : static_cast<uint8_t>(pick(1, 247));
     Bytes request{slave}, response{slave};
-    build(slave, request, response, broadcast);
+    uint32_t request_findings = 0;
+    if (!broadcast && chance(o_.out_of_spec_rate)) {
+      request_findings = out_of_spec(request, response);
+    } else {
+      build(slave, request, response, broadcast);
+    }
 
     if (chance(o_.noise_rate)) {
       Bytes junk;
@@ -98,26 +104,102 @@ class Simulator {
       wire.resize(pick(1, static_cast<unsigned>(wire.size() - 1)));
       send(wire, idle_gap());
     }
-    const size_t req = send_frame(request, Role::request, idle_gap(), std::nullopt);
+    size_t req = send_request(request, request_findings, idle_gap());
     if (broadcast) return;
-    if (chance(o_.no_response_rate)) {
+    while (chance(o_.no_response_rate)) {
       capture_.timed_out.push_back(req);
-      return;
+      // Retries only once the bus has shown how fast slaves answer: before that, a copy of an
+      // echo request is ambiguous by design (docs/framing.md, "Retries and echoes").
+      if (answered_ < 20 || !chance(o_.retry_rate)) return;
+      req = send_request(request, request_findings | decoder::finding_retry,
+                         o_.retry_after_ns + pick(0, 50'000'000));
     }
     int64_t turnaround =
         chance(o_.fast_turnaround_rate) ? char_ns_ * pick(15, 30) / 10 : t35_ + pick(0, 3'000'000);
     if (o_.back_to_back) turnaround = 0;
-    if (chance(o_.glitch_rate)) {
-      send(Bytes{0x00}, turnaround);
-      turnaround = char_ns_ * pick(0, 20) / 10;
-    }
+    if (chance(o_.glitch_rate)) turnaround = glitch(turnaround);
+    ++answered_;
+    if (damageable(response) && chance(o_.cut_rate)) return send_cut(response, turnaround, req);
+    if (damageable(response) && chance(o_.collision_rate))
+      return send_collided(response, turnaround, req);
     send_frame(response, Role::response, turnaround, req);
   }
 
-  void exception(Bytes& rsp, uint8_t fc) {
+  size_t send_request(const Bytes& request, uint32_t findings, int64_t gap_ns) {
+    if (chance(o_.request_glitch_rate)) gap_ns = glitch(gap_ns);
+    const size_t req = send_frame(request, Role::request, gap_ns, std::nullopt);
+    capture_.frames[req].findings = findings;
+    return req;
+  }
+
+  // A driver turning on puts one 0x00 or 0xFF on the bus; the frame follows 0 to 2 characters
+  // later. Returns that gap.
+  int64_t glitch(int64_t gap_ns) {
+    send(Bytes{chance(0.5) ? uint8_t{0x00} : uint8_t{0xFF}}, gap_ns);
+    return char_ns_ * pick(0, 20) / 10;
+  }
+
+  // Damage is told from the response's own structure, so only responses whose header gives
+  // their length are damaged here (RTU; ASCII frames end at their CR LF).
+  bool damageable(const Bytes& response) const {
+    if (o_.mode != Mode::rtu) return false;
+    const auto length = decoder::body_length(Role::response, response);
+    return length.kind == decoder::BodyLength::Kind::known;
+  }
+
+  void send_cut(const Bytes& response, int64_t gap_ns, size_t req) {
+    Bytes wire;
+    encode_frame(o_.mode, response, wire);
+    wire.resize(pick(3, static_cast<unsigned>(wire.size() - 1)));
+    const uint64_t offset = send(wire, gap_ns);
+    capture_.frames.push_back({offset, static_cast<uint32_t>(wire.size()), Role::response, req,
+                               decoder::finding_bad_check, decoder::Damage::cut});
+  }
+
+  // Another device starts while the response's last bytes are on the wire: they arrive garbled
+  // and the other device's bytes follow at once.
+  void send_collided(const Bytes& response, int64_t gap_ns, size_t req) {
+    Bytes wire;
+    encode_frame(o_.mode, response, wire);
+    const size_t garbled = pick(1, 3);
+    for (size_t i = wire.size() - garbled; i < wire.size(); ++i)
+      wire[i] ^= static_cast<uint8_t>(pick(1, 255));
+    const uint64_t offset = send(wire, gap_ns);
+    capture_.frames.push_back({offset, static_cast<uint32_t>(wire.size()), Role::response, req,
+                               decoder::finding_bad_check, decoder::Damage::collision});
+    Bytes other;
+    random_bytes(other, pick(1, 6));
+    send(other, 0);
+  }
+
+  // A request over the standard's limits, as masters do send them, and the slave's exception
+  // 03. Returns what the analyzer must say of the request.
+  uint32_t out_of_spec(Bytes& req, Bytes& rsp) {
+    const unsigned kind = pick(0, 3);
+    const uint8_t fc = static_cast<uint8_t>(kind == 0   ? pick(3, 4)
+                                            : kind == 1 ? pick(1, 2)
+                                            : kind == 2 ? 0x10
+                                                        : 0x0F);
+    req.push_back(fc);
+    u16(req, pick(0, 1000));
+    uint32_t findings = decoder::finding_quantity_out_of_spec;
+    if (kind == 0) u16(req, chance(0.2) ? 0 : pick(126, 300));
+    if (kind == 1) u16(req, chance(0.2) ? 0 : pick(2001, 4000));
+    if (kind >= 2) {  // a byte count one more than the quantity needs
+      const unsigned qty = pick(1, 20);
+      const unsigned count = (kind == 2 ? qty * 2 : (qty + 7) / 8) + 1;
+      u16(req, qty);
+      req.push_back(static_cast<uint8_t>(count));
+      random_bytes(req, count);
+      findings = decoder::finding_byte_count_mismatch;
+    }
+    exception(rsp, fc, 0x03);
+    return findings;
+  }
+
+  void exception(Bytes& rsp, uint8_t fc, uint8_t code) {
     rsp.push_back(static_cast<uint8_t>(fc | 0x80));
-    static constexpr uint8_t codes[] = {0x01, 0x02, 0x03, 0x04, 0x06};
-    rsp.push_back(codes[pick(0, 4)]);
+    rsp.push_back(code);
   }
 
   void build(uint8_t slave, Bytes& req, Bytes& rsp, bool broadcast) {
@@ -133,7 +215,8 @@ class Simulator {
     fill(fc, req, rsp);
     if (fails) {
       rsp.resize(1);
-      exception(rsp, fc);
+      static constexpr uint8_t codes[] = {0x01, 0x02, 0x03, 0x04, 0x06};
+      exception(rsp, fc, codes[pick(0, 4)]);
     }
     (void)slave;
   }
@@ -289,6 +372,7 @@ class Simulator {
   int64_t char_ns_;
   int64_t t35_;
   BusCapture capture_;
+  size_t answered_ = 0;
 };
 
 }  // namespace
@@ -311,7 +395,26 @@ decoder::ClockQuality clock_of(Delivery delivery) {
   return decoder::ClockQuality::none;
 }
 
-std::vector<DeliveredChunk> deliver(const BusCapture& capture, Delivery delivery, uint64_t seed) {
+namespace {
+
+// Stamps each read as the adapter's clock would: late by up to the jitter, rounded up to the
+// resolution, never earlier than the read before.
+void apply_clock_error(std::vector<DeliveredChunk>& chunks, ClockError clock,
+                       std::mt19937_64& rng) {
+  int64_t previous = INT64_MIN;
+  for (auto& c : chunks) {
+    int64_t t = c.t_ns;
+    if (clock.jitter_ns > 0)
+      t += static_cast<int64_t>(rng() % static_cast<uint64_t>(clock.jitter_ns));
+    t = (t + clock.resolution_ns - 1) / clock.resolution_ns * clock.resolution_ns;
+    c.t_ns = previous = std::max(previous, t);
+  }
+}
+
+}  // namespace
+
+std::vector<DeliveredChunk> deliver(const BusCapture& capture, Delivery delivery, uint64_t seed,
+                                    ClockError clock) {
   std::vector<DeliveredChunk> chunks;
   const auto& ends = capture.end_ns;
   const uint64_t n = capture.bytes.size();
@@ -365,6 +468,7 @@ std::vector<DeliveredChunk> deliver(const BusCapture& capture, Delivery delivery
       break;
     }
   }
+  if (delivery != Delivery::untimed) apply_clock_error(chunks, clock, rng);
   return chunks;
 }
 

@@ -22,12 +22,19 @@ struct BusOptions {
   double no_response_rate = 0.03;  // the slave stays silent: the master moves on
   double broadcast_rate = 0.03;
   double fast_turnaround_rate = 0.2;   // the slave answers after less than t3.5
-  double glitch_rate = 0.0;            // a 0x00 on the bus as the slave's driver turns on
+  double glitch_rate = 0.0;            // a 0x00 or 0xFF as the slave's driver turns on
+  double request_glitch_rate = 0.0;    // the same as the master's driver turns on
   double noise_rate = 0.0;             // a burst of junk between transactions
   double truncation_rate = 0.0;        // the master's request breaks off, then is sent again
   double unknown_function_rate = 0.0;  // a vendor function code the length rules do not know
-  int64_t poll_gap_ns = 5'000'000;     // master's idle time between transactions (at least)
-  bool back_to_back = false;           // no idle time at all: the densest file for benchmarks
+  // What real masters and buses do beyond the clean picture:
+  double out_of_spec_rate = 0.0;  // a request over the standard's limits, answered by exception 03
+  double retry_rate = 0.0;        // an unanswered request is sent again after the master's time-out
+  int64_t retry_after_ns = 200'000'000;
+  double cut_rate = 0.0;        // the response breaks off (the slave resets, a wire comes loose)
+  double collision_rate = 0.0;  // another device talks over the response's last bytes
+  int64_t poll_gap_ns = 5'000'000;  // master's idle time between transactions (at least)
+  bool back_to_back = false;        // no idle time at all: the densest file for benchmarks
 };
 
 // A frame the master or a slave really sent, whole and with a good check.
@@ -36,6 +43,9 @@ struct TruthFrame {
   uint32_t size = 0;
   decoder::Role role = decoder::Role::request;
   std::optional<size_t> request;  // for a response: its request's position in `frames`
+  uint32_t findings = 0;          // what the analyzer must say of it (decoder::finding_*)
+  // A response damaged on the wire: its bytes as sent, its check bad, and how it broke.
+  decoder::Damage damage = decoder::Damage::none;
 };
 
 struct BusCapture {
@@ -65,7 +75,15 @@ struct DeliveredChunk {
   uint32_t size = 0;
 };
 
-std::vector<DeliveredChunk> deliver(const BusCapture& capture, Delivery delivery, uint64_t seed);
+// How wrong the adapter's clock is: each read is stamped late by up to `jitter_ns` (a USB
+// adapter, a busy host) and rounded up to `resolution_ns` (a coarse timer). Stamps never go back.
+struct ClockError {
+  int64_t jitter_ns = 0;
+  int64_t resolution_ns = 1;
+};
+
+std::vector<DeliveredChunk> deliver(const BusCapture& capture, Delivery delivery, uint64_t seed,
+                                    ClockError clock = {});
 decoder::ClockQuality clock_of(Delivery delivery);
 
 }  // namespace modtap::busgen
