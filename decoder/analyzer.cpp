@@ -125,7 +125,7 @@ void Analyzer::push(const Chunk& chunk) {
 // Pushed chunks, and those the mode probe kept and replays once the mode is known.
 void Analyzer::feed(const Chunk& chunk) {
   Channel& c = channel(chunk.channel);
-  if (options_.clock != ClockQuality::none) matcher_.advance(chunk.t_ns);
+  if (options_.clock != ClockQuality::none) matcher_.advance(settled_ns(chunk.t_ns));
   if (probe_) {
     if (probe_->push(chunk, c.info.role)) settle_mode();
     return;
@@ -142,7 +142,18 @@ void Analyzer::flush(int64_t now_ns) {
     if (auto* rtu = std::get_if<std::unique_ptr<RtuFramer>>(&c.framer)) (*rtu)->flush(now_ns);
     if (auto* ascii = std::get_if<std::unique_ptr<AsciiFramer>>(&c.framer)) (*ascii)->flush(now_ns);
   }
-  if (options_.clock != ClockQuality::none) matcher_.advance(now_ns);
+  if (options_.clock != ClockQuality::none) matcher_.advance(settled_ns(now_ns));
+}
+
+int64_t Analyzer::settled_ns(int64_t now_ns) const {
+  int64_t settled = now_ns;
+  for (const auto& c : channels_) {
+    if (auto* rtu = std::get_if<std::unique_ptr<RtuFramer>>(&c.framer))
+      settled = std::min(settled, (*rtu)->held_since_ns());
+    if (auto* ascii = std::get_if<std::unique_ptr<AsciiFramer>>(&c.framer))
+      settled = std::min(settled, (*ascii)->held_since_ns());
+  }
+  return settled;
 }
 
 void Analyzer::settle_mode() {

@@ -71,6 +71,9 @@ class Analyzer final : private FrameSink {
 
   Channel& channel(uint16_t id);
   void feed(const Chunk& chunk);
+  // The matcher's clock: never past a byte a framer still holds, so a response that framer
+  // has yet to emit is not preceded by its request's time-out.
+  int64_t settled_ns(int64_t now_ns) const;
   void start_framer(uint16_t id, Mode mode);
   void settle_mode();
   void on_frame(Frame& frame) override;

@@ -27,6 +27,8 @@ class AsciiFramer {
   void finish();
 
   int64_t last_byte_ns() const { return last_end_ns_; }
+  // When the record being built began (INT64_MAX if none).
+  int64_t held_since_ns() const { return pending_.empty() ? INT64_MAX : pending_start_ns_; }
 
   // ':' + 2 * 255 hex characters + CR LF (Modbus over Serial Line 2.5.2.1: 513 characters).
   static constexpr size_t max_frame_chars = 513;

@@ -66,6 +66,10 @@ void RtuFramer::flush(int64_t now_ns) {
     resolve(true);
 }
 
+int64_t RtuFramer::held_since_ns() const {
+  return head_ < end_ ? end_time(head_) - char_ns_ : INT64_MAX;
+}
+
 void RtuFramer::finish() {
   resolve(true);
 }
@@ -327,9 +331,15 @@ bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end) const {
   return false;
 }
 
+// A silence after `at` with a good frame right after it, or after the glitch of the driver
+// that sends it, bounds whatever starts at `at`.
 bool RtuFramer::blocked_by_gap(uint64_t at, bool final) const {
   const uint64_t gap = first_gap_after(at);
-  return gap < end_ && match_at(gap, final, 0).kind == Match::Kind::found;
+  if (gap >= end_) return false;
+  if (match_at(gap, final, 0).kind == Match::Kind::found) return true;
+  const uint8_t first = *at_ptr(gap);
+  return (first == 0x00 || first == 0xFF) && gap + 1 < end_ &&
+         match_at(gap + 1, final, 0).kind == Match::Kind::found;
 }
 
 uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {

@@ -41,6 +41,9 @@ class RtuFramer {
   void finish();
 
   int64_t last_byte_ns() const { return last_end_ns_; }
+  // When the first byte not yet in a record began (INT64_MAX if none): what comes out later
+  // may still be from then.
+  int64_t held_since_ns() const;
 
  private:
   struct Match {

@@ -313,7 +313,7 @@ INSTANTIATE_TEST_SUITE_P(
     RealMasters, BusScenario,
     ::testing::Values(
         Scenario{"per_byte", Delivery::per_byte, real_masters(21)},
-        Scenario{"per_byte_coarse", Delivery::per_byte, real_masters(32), 0, Via::direct,
+        Scenario{"per_byte_coarse", Delivery::per_byte, real_masters(22), 0, Via::direct,
                  sample_clock},
         Scenario{"bursts", Delivery::bursts, real_masters(23), 12},
         Scenario{"bursts_coarse", Delivery::bursts, real_masters(24), 12, Via::direct,

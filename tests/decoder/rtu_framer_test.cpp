@@ -202,6 +202,37 @@ TEST(RtuFramer, FindsAnUnknownFunctionCodeByCrcWhenTheNextFrameConfirmsIt) {
   EXPECT_EQ(frames[1].raw, read_request);
 }
 
+// Bytes of unknown length ahead of a response keep the framer waiting for their end; the
+// matcher's clock must not run past them, or the request times out before its response
+// comes out, however soon the slave answered.
+TEST(Analyzer, DoesNotTimeARequestOutWhileItsResponseIsStillHeld) {
+  AnalyzerOptions options;
+  options.mode = ModeChoice::rtu;
+  options.clock = ClockQuality::per_byte;
+  options.format = {9600, 8, Parity::none, 1};
+  Collector out;
+  Analyzer analyzer(options, {{"bus", ChannelRole::bus}}, out);
+  const int64_t char_ns = options.format.char_time_ns();
+  int64_t t = 0;
+  auto send = [&](const std::vector<uint8_t>& bytes, int64_t gap_ns) {
+    t += gap_ns;
+    for (uint8_t b : bytes) analyzer.push({0, t += char_ns, {&b, 1}});
+  };
+  send(with_crc(hex("01 03 00 00 00 01")), 0);
+  // A broadcast of vendor code 41H has no length rule: it may run on until a silence and a
+  // frame after it say where it ended.
+  send(hex("00 41"), 5'000'000);
+  send(with_crc(hex("01 03 02 00 2a")), 0);
+  send(with_crc(hex("02 03 00 00 00 01")), 2'000'000'000);
+  analyzer.finish();
+
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  for (const auto& timeout : out.timeouts()) EXPECT_NE(timeout.request, frames[0].index);
+}
+
 class GapCollector : public ::testing::Test {
  protected:
   // Pushes each byte with its own exact time: bytes of a frame back to back, then `gap_ns`.

@@ -435,6 +435,21 @@ def byte_streams(path):
     return run.returncode, run.stderr, streams
 
 
+def wait_until_open(process, path, timeout=20):
+    """Waits until `process` holds `path` open: a slow start (sanitizers, a busy machine)
+    must not turn into bytes written before anyone listened."""
+    deadline = time.time() + timeout
+    fds = f"/proc/{process.pid}/fd"
+    while time.time() < deadline and process.poll() is None:
+        try:
+            if any(os.readlink(os.path.join(fds, fd)) == path for fd in os.listdir(fds)):
+                return True
+        except OSError:
+            pass
+        time.sleep(0.01)
+    return False
+
+
 def signals_at_random_moments(runs=50):
     """SIGINT or SIGTERM at random moments while traffic flows: every run exits 0, its -w
     pcapng reads back whole, and holds every byte its --save-raw recording read."""
@@ -449,7 +464,8 @@ def signals_at_random_moments(runs=50):
         modtap = subprocess.Popen([MODTAP, "-i", t.path, "--baud", "115200", "-T", "none", "-w", out,
                                    "--save-raw", raw], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                   text=True)
-        time.sleep(0.3)
+        ok &= check("signals", wait_until_open(modtap, t.path), f"run {run}: the port never opened")
+        time.sleep(0.1)  # and set it up
         stop_at = time.time() + rng.uniform(0.01, 0.4)
         while time.time() < stop_at:
             frame = frames[rng.randrange(len(frames))]
