@@ -111,31 +111,19 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const 
     if ((role == Role::request && !may_request) || (role == Role::response && !may_respond))
       continue;
     Match m = match_role(role, at, final, search);
-    // A silence inside a frame, with a good frame starting right after it, means this was a
-    // frame that broke off, whatever its CRC says.
-    if (m.kind == Match::Kind::found && !gaps_.empty() && first_gap_after(at) < at + m.length) {
-      const uint64_t gap = first_gap_after(at);
-      const Match after_gap = match_at(gap, final, 0);
-      if (after_gap.kind == Match::Kind::found) return {};
-      if (after_gap.kind == Match::Kind::need_more && !final) return need_more();
-      // A frame ends before the silence, and a glitch after it kept the CRC good (a trailing
-      // 0x00 keeps a zero residue zero): the other reading, if any, is the frame.
-      if (gap - at >= min_adu && crc_ok(at_ptr(at), gap - at)) continue;
-    }
     const Role other = role == Role::request ? Role::response : Role::request;
     const bool other_allowed = other == Role::request ? may_request : may_respond;
-    // A copy of the pending request with a glitch after it reads as a response of one more
-    // byte; on a bus of glitches, the copy is the likelier (a master's retry).
-    if (m.kind == Match::Kind::found && zero_glitches_common() && p[m.length - 1] == 0x00 &&
-        may_be_glitch(at + m.length - 1) && other_allowed && m.length - 1 >= min_adu &&
-        fits_role(other, at, m.length - 1) && crc_ok(p, m.length - 1))
-      continue;
-    // A reserved address is as often a turnaround's 0xFF: such a frame never swallows one whose
-    // length rules and CRC agree (a glitch, a response and the next glitch can read as one).
-    if (m.kind == Match::Kind::found && p[0] > max_unicast_slave &&
-        swallows_known_frame(at, at + m.length))
-      return {};
     if (m.kind == Match::Kind::found) {
+      switch (judge_found(at, m.length, other_allowed ? &other : nullptr, final)) {
+        case Verdict::refuse:
+          return {};
+        case Verdict::wait:
+          return need_more();
+        case Verdict::other_reading:
+          continue;
+        case Verdict::keep:
+          break;
+      }
       // The same bytes may read as the other role too (echo codes 05, 06, 08, ...).
       if (other_allowed && fits_role(other, at, m.length)) m.fit = {true, true};
       return m;
@@ -150,6 +138,33 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const 
     }
   }
   return waiting ? need_more() : Match{};
+}
+
+// What the bus says against a reading of [at, at + length) whose length rules and CRC agree.
+// `other` is the other role, where it is allowed.
+RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, uint16_t length, const Role* other,
+                                          bool final) const {
+  const uint8_t* p = at_ptr(at);
+  const uint64_t gap = first_gap_after(at);
+  if (gap < at + length) {
+    // A silence inside a frame, with a good frame starting right after it, means this was a
+    // frame that broke off, whatever its CRC says.
+    const Match after_gap = match_at(gap, final, 0);
+    if (after_gap.kind == Match::Kind::found) return Verdict::refuse;
+    if (after_gap.kind == Match::Kind::need_more && !final) return Verdict::wait;
+    // A frame ends before the silence, and a glitch after it kept the CRC good (a trailing
+    // 0x00 keeps a zero residue zero): the other reading, if any, is the frame.
+    if (gap - at >= min_adu && crc_ok(p, gap - at)) return Verdict::other_reading;
+  }
+  // A copy of the pending request with a glitch after it reads as a response of one more
+  // byte; on a bus of glitches, the copy is the likelier (a master's retry).
+  if (other && zero_glitches_common() && p[length - 1] == 0x00 && may_be_glitch(at + length - 1) &&
+      length - 1 >= min_adu && fits_role(*other, at, length - 1) && crc_ok(p, length - 1))
+    return Verdict::other_reading;
+  // A reserved address is as often a turnaround's 0xFF: such a frame never swallows one whose
+  // length rules and CRC agree (a glitch, a response and the next glitch can read as one).
+  if (p[0] > max_unicast_slave && swallows_known_frame(at, at + length)) return Verdict::refuse;
+  return Verdict::keep;
 }
 
 RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int search) const {
