@@ -18,8 +18,8 @@ inline uint16_t wire_crc(std::span<const uint8_t> adu) {
   return static_cast<uint16_t>(adu[adu.size() - 2] | (adu[adu.size() - 1] << 8));
 }
 
-// Tells in constant time whether the bytes [begin, end) of a stream end in their own CRC, so
-// a framer can look for frame ends in junk without running the CRC from every offset.
+// Lists, in a step or two, where the bytes of a stream from a given start end in their own CRC,
+// so a framer can look for frame ends in junk without running the CRC from every offset.
 //
 // The register is linear: with A the step through a 0x00 byte, a byte b takes the state s to
 // A(s ^ b). Along any run of the register, A^-k(s) ^ W_k stays the same, where W_0 = 0 and
@@ -39,9 +39,6 @@ class CrcIndex {
   uint64_t begin() const { return base_; }
   uint64_t end() const { return base_ + starts_.size(); }
 
-  bool good(uint64_t begin, uint64_t end) const {
-    return ends_[end - base_] == starts_[begin - base_];
-  }
   // Calls found(end) for each end in [first, last], in order, that makes [begin, end) good.
   template <class Found>
   void good_ends(uint64_t begin, uint64_t first, uint64_t last, Found&& found) const;

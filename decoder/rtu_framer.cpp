@@ -25,6 +25,11 @@ bool plausible_start(uint8_t slave, uint8_t fc) {
   return (fc & 0x7F) != 0 && (slave <= max_unicast_slave || is_public_function(fc));
 }
 
+// What a driver turning on puts on the bus: one byte, the line's idle level or its opposite.
+bool is_glitch_byte(uint8_t byte) {
+  return byte == 0x00 || byte == 0xFF;
+}
+
 bool crc_ok(const uint8_t* p, size_t n) {
   return crc16({p, n - crc_size}) == wire_crc({p, n});
 }
@@ -260,6 +265,7 @@ size_t RtuFramer::good_lengths(uint64_t at, size_t first, size_t limit,
       last.lengths[last.count++] = static_cast<uint16_t>(end - at);
     });
   }
+  // Copied out: confirming one of them searches further on, which replaces the kept answer.
   std::copy_n(last.lengths.begin(), last.count, lengths.begin());
   return last.count;
 }
@@ -328,7 +334,7 @@ bool RtuFramer::confirmed_end(uint64_t begin, uint64_t end, bool final, int sear
   // A turnaround glitch between this frame and the next still confirms this end; without
   // this, the glitch's 0x00 would be taken into the frame (it keeps the CRC residue zero).
   const uint8_t next = *at_ptr(end);
-  return allow_glitch && (next == 0x00 || next == 0xFF) && end + 1 < end_ &&
+  return allow_glitch && is_glitch_byte(next) && end + 1 < end_ &&
          (gap_at(end + 1) || match_at(end + 1, final, search).kind == Match::Kind::found);
 }
 
@@ -353,7 +359,7 @@ bool RtuFramer::blocked_by_gap(uint64_t at, bool final) const {
   if (gap >= end_) return false;
   if (match_at(gap, final, 0).kind == Match::Kind::found) return true;
   const uint8_t first = *at_ptr(gap);
-  return (first == 0x00 || first == 0xFF) && gap + 1 < end_ &&
+  return is_glitch_byte(first) && gap + 1 < end_ &&
          match_at(gap + 1, final, 0).kind == Match::Kind::found;
 }
 
@@ -435,7 +441,7 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
   const uint64_t size = end - begin;
   const uint8_t* p = at_ptr(begin);
   // The slave's driver turning on can put a glitch right before its damaged response.
-  if (size > 1 && (p[0] == 0x00 || p[0] == 0xFF) && awaited_length(begin + 1, size - 1)) {
+  if (size > 1 && is_glitch_byte(p[0]) && awaited_length(begin + 1, size - 1)) {
     emit_piece(begin, begin + 1);
     return emit_piece(begin + 1, end);
   }
@@ -444,7 +450,7 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
   // cut short with that frame's glitch after it: on a bus where glitches come with more than
   // 1 in 128 frames, the glitch.
   const uint8_t last = p[size - 1];
-  if (length && size <= *length && size > 3 && (last == 0x00 || last == 0xFF) &&
+  if (length && size <= *length && size > 3 && is_glitch_byte(last) &&
       glitches_ * 128 > good_frames_ && end < end_ && !gap_at(end) && may_be_glitch(end - 1)) {
     emit_piece(begin, end - 1);
     return emit_piece(end - 1, end);
@@ -469,7 +475,7 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
     }
   }
   NoiseReason reason = NoiseReason::junk;
-  if (size == 1 && (p[0] == 0x00 || p[0] == 0xFF)) {
+  if (size == 1 && is_glitch_byte(p[0])) {
     reason = NoiseReason::glitch;
     zero_glitches_ += p[0] == 0x00;
     ++glitches_;

@@ -94,7 +94,6 @@ TEST(CrcIndex, TellsEveryGoodSpanAsTheCrcDoes) {
       std::vector<uint64_t> found;
       index.good_ends(begin, begin + 4, last, [&](uint64_t end) { found.push_back(end); });
       ASSERT_EQ(found, expected) << "from " << begin << " with " << fed << " bytes";
-      for (uint64_t end : expected) ASSERT_TRUE(index.good(begin, end));
       good_spans += expected.size();
     }
     dropped = fed > 600 ? fed - 600 : 0;
