@@ -151,9 +151,7 @@ class Simulator {
     Bytes wire;
     encode_frame(o_.mode, response, wire);
     wire.resize(pick(3, static_cast<unsigned>(wire.size() - 1)));
-    const uint64_t offset = send(wire, gap_ns);
-    capture_.frames.push_back({offset, static_cast<uint32_t>(wire.size()), Role::response, req,
-                               decoder::finding_bad_check, decoder::Damage::cut});
+    send_damaged(wire, gap_ns, req, decoder::Damage::cut);
   }
 
   // Another device starts while the response's last bytes are on the wire: they arrive garbled
@@ -164,12 +162,16 @@ class Simulator {
     const size_t garbled = pick(1, 3);
     for (size_t i = wire.size() - garbled; i < wire.size(); ++i)
       wire[i] ^= static_cast<uint8_t>(pick(1, 255));
-    const uint64_t offset = send(wire, gap_ns);
-    capture_.frames.push_back({offset, static_cast<uint32_t>(wire.size()), Role::response, req,
-                               decoder::finding_bad_check, decoder::Damage::collision});
+    send_damaged(wire, gap_ns, req, decoder::Damage::collision);
     Bytes other;
     random_bytes(other, pick(1, 6));
     send(other, 0);
+  }
+
+  void send_damaged(const Bytes& wire, int64_t gap_ns, size_t req, decoder::Damage damage) {
+    const uint64_t offset = send(wire, gap_ns);
+    capture_.frames.push_back({offset, static_cast<uint32_t>(wire.size()), Role::response, req,
+                               decoder::finding_bad_check, damage});
   }
 
   // A request over the standard's limits, as masters do send them, and the slave's exception
