@@ -10,11 +10,11 @@
 #include <string>
 #include <vector>
 
+#include "decoder/function_codes.hpp"
 #include "decoder/records.hpp"
 
 namespace modtap::decoder {
 
-enum class Table : uint8_t { coil, discrete, holding, input };
 // `code`: a 16-bit value the manual writes in hex (an identifying code, 0106H), shown so.
 enum class ValueType : uint8_t { u16, s16, u32, s32, f32, bcd, string, code, raw };
 enum class Access : uint8_t { read, write, read_write };

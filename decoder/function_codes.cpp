@@ -1,31 +1,69 @@
 #include "decoder/function_codes.hpp"
 
-#include <array>
+#include <algorithm>
 
 namespace modtap::decoder {
 namespace {
 
 using L = BodyLength;
+using F = FieldId;
+using Bytes = std::span<const uint8_t>;
 
-constexpr uint16_t be16(std::span<const uint8_t> p, size_t at) {
-  return static_cast<uint16_t>(p[at] << 8 | p[at + 1]);
-}
-
-// Quantities the standard allows per request (Modbus Application Protocol V1.1b3, 6.x).
 constexpr bool in_range(unsigned v, unsigned lo, unsigned hi) {
   return v >= lo && v <= hi;
 }
 
+// ---- Lengths: `p` starts at the slave address -------------------------------------------
+
+template <unsigned n>
+L fixed(Bytes) {
+  return L::known(n);
+}
+
+L searched(Bytes) {
+  return L::variable(2);
+}
+
 // A length carried in a byte count at `at`: body = at + 1 + count.
-L counted(std::span<const uint8_t> p, size_t at, unsigned lo = 0, unsigned hi = 252) {
+L counted(Bytes p, size_t at, unsigned lo = 0, unsigned hi = 252) {
   if (p.size() <= at) return L::need_more();
-  unsigned count = p[at];
+  const unsigned count = p[at];
   if (!in_range(count, lo, hi)) return L::invalid();
   return L::known(at + 1 + count);
 }
 
+template <size_t at, unsigned lo = 0, unsigned hi = 252>
+L counted_at(Bytes p) {
+  return counted(p, at, lo, hi);
+}
+
+// FC03/04: a byte count of whole registers.
+L register_count(Bytes p) {
+  const L l = counted(p, 2, 2, 250);
+  return (l.kind == L::Kind::known && p[2] % 2 != 0) ? L::invalid() : l;
+}
+
+// FC08: Return Query Data echoes data of any length; every other sub-function carries 2 bytes.
+L diagnostics_length(Bytes p) {
+  if (p.size() < 4) return L::need_more();
+  return be16(p, 2) == 0x0000 ? L::variable(4) : L::known(6);
+}
+
+L fifo_length(Bytes p) {
+  if (p.size() < 4) return L::need_more();
+  const unsigned count = be16(p, 2);
+  if (!in_range(count, 2, 64)) return L::invalid();
+  return L::known(4 + count);
+}
+
+// FC2B: Read Device Identification (MEI 0E) has a structure; other MEI types do not.
+L mei_request_length(Bytes p) {
+  if (p.size() < 3) return L::need_more();
+  return p[2] == 0x0E ? L::known(5) : L::variable(3);
+}
+
 // FC2B/0E response: a header of 8 bytes, then objects {id, length, value}.
-L device_identification_response(std::span<const uint8_t> p) {
+L mei_response_length(Bytes p) {
   if (p.size() < 3) return L::need_more();
   if (p[2] != 0x0E) return L::variable(3);
   if (p.size() < 8) return L::need_more();
@@ -38,190 +76,493 @@ L device_identification_response(std::span<const uint8_t> p) {
   return L::known(at);
 }
 
-// A request's length follows from its structure alone: a quantity or value outside the
-// standard's limits is still a frame (a master may ask for 126 registers and get exception 03),
-// reported by request_spec_findings.
-L request_length(std::span<const uint8_t> p) {
-  const uint8_t fc = p[1];
-  if (fc & 0x80) return L::invalid();  // the exception bit: only responses carry it
-  switch (fc) {
-    case 0x01:
-    case 0x02:
-    case 0x03:
-    case 0x04:
-    case 0x05:
-    case 0x06:
-      return L::known(6);
-    case 0x07:
-    case 0x0B:
-    case 0x0C:
-    case 0x11:
-      return L::known(2);
-    case 0x08:
-      if (p.size() < 4) return L::need_more();
-      return be16(p, 2) == 0x0000 ? L::variable(4) : L::known(6);
-    case 0x0F:
-    case 0x10:
-      return counted(p, 6, 1);
-    case 0x14:
-    case 0x15:
-      return counted(p, 2, 7, 245);
-    case 0x16:
-      return L::known(8);
-    case 0x17:
-      return counted(p, 10, 1);
-    case 0x18:
-      return L::known(4);
-    case 0x2B:
-      if (p.size() < 3) return L::need_more();
-      return p[2] == 0x0E ? L::known(5) : L::variable(3);
-    default:
-      return L::variable(2);
-  }
+// ---- Limits a request may break (Modbus Application Protocol V1.1b3, 6.x) -----------------
+
+uint32_t within_spec(Bytes) {
+  return finding_none;
 }
 
-L response_length(std::span<const uint8_t> p) {
-  const uint8_t fc = p[1];
-  if (fc & 0x80) return p[0] == 0 ? L::invalid() : L::known(3);
-  switch (fc) {
-    case 0x01:
-    case 0x02:
-      return counted(p, 2, 1, 250);
-    case 0x03:
-    case 0x04: {
-      L l = counted(p, 2, 2, 250);
-      return (l.kind == L::Kind::known && p[2] % 2 != 0) ? L::invalid() : l;
-    }
-    case 0x05:
-    case 0x06:
-    case 0x0B:
-    case 0x0F:
-    case 0x10:
-      return L::known(6);
-    case 0x07:
-      return L::known(3);
-    case 0x08:
-      if (p.size() < 4) return L::need_more();
-      return be16(p, 2) == 0x0000 ? L::variable(4) : L::known(6);
-    case 0x0C:
-    case 0x11:
-    case 0x14:
-    case 0x15:
-    case 0x17:
-      return counted(p, 2, 1, 252);
-    case 0x16:
-      return L::known(8);
-    case 0x18: {
-      if (p.size() < 4) return L::need_more();
-      unsigned count = be16(p, 2);
-      if (!in_range(count, 2, 64)) return L::invalid();
-      return L::known(4 + count);
-    }
-    case 0x2B:
-      return device_identification_response(p);
-    default:
-      return L::variable(2);
-  }
-}
-
-struct FunctionInfo {
-  uint8_t code;
-  const char* name;
-  bool broadcast;
-};
-
-constexpr std::array<FunctionInfo, 20> functions{{
-    {0x01, "Read Coils", false},
-    {0x02, "Read Discrete Inputs", false},
-    {0x03, "Read Holding Registers", false},
-    {0x04, "Read Input Registers", false},
-    {0x05, "Write Single Coil", true},
-    {0x06, "Write Single Register", true},
-    {0x07, "Read Exception Status", false},
-    {0x08, "Diagnostics", true},
-    {0x0B, "Get Comm Event Counter", false},
-    {0x0C, "Get Comm Event Log", false},
-    {0x0F, "Write Multiple Coils", true},
-    {0x10, "Write Multiple Registers", true},
-    {0x11, "Report Server ID", false},
-    {0x14, "Read File Record", false},
-    {0x15, "Write File Record", true},
-    {0x16, "Mask Write Register", true},
-    {0x17, "Read/Write Multiple Registers", false},
-    {0x18, "Read FIFO Queue", false},
-    {0x2B, "Encapsulated Interface Transport", false},
-    {0x00, nullptr, false},
-}};
-
-const FunctionInfo* find(uint8_t fc) {
-  for (const auto& f : functions)
-    if (f.name && f.code == fc) return &f;
-  return nullptr;
-}
-
-// The standard's quantity limits per request (Modbus Application Protocol V1.1b3, 6.x).
-struct QuantityRule {
-  uint8_t fc;
-  uint8_t quantity_at;  // in the PDU
-  uint16_t max;
-  uint8_t count_at;       // the byte count that must match, or 0
-  uint8_t bits_per_item;  // 1 for coils, 16 for registers
-};
-
-constexpr std::array<QuantityRule, 7> quantity_rules{{
-    {0x01, 3, 2000, 0, 1},
-    {0x02, 3, 2000, 0, 1},
-    {0x03, 3, 125, 0, 16},
-    {0x04, 3, 125, 0, 16},
-    {0x0F, 3, 1968, 5, 1},
-    {0x10, 3, 123, 5, 16},
-    {0x17, 7, 121, 9, 16},  // the write quantity; the read one is checked like FC03's
-}};
-
-uint32_t quantity_findings(const QuantityRule& rule, std::span<const uint8_t> pdu) {
-  if (pdu.size() < rule.quantity_at + 2u) return finding_none;
-  const unsigned quantity = be16(pdu, rule.quantity_at);
-  uint32_t found = in_range(quantity, 1, rule.max) ? finding_none : finding_quantity_out_of_spec;
-  if (rule.count_at && pdu.size() > rule.count_at &&
-      pdu[rule.count_at] != (quantity * rule.bits_per_item + 7) / 8)
+// A quantity at `quantity_at` of 1..max; with `count_at`, a byte count that must match it.
+template <size_t quantity_at, unsigned max, size_t count_at = 0, unsigned bits_per_item = 16>
+uint32_t quantity_limits(Bytes pdu) {
+  if (pdu.size() < quantity_at + 2) return finding_none;
+  const unsigned quantity = be16(pdu, quantity_at);
+  uint32_t found = in_range(quantity, 1, max) ? finding_none : finding_quantity_out_of_spec;
+  if (count_at && pdu.size() > count_at && pdu[count_at] != (quantity * bits_per_item + 7) / 8)
     found |= finding_byte_count_mismatch;
   return found;
 }
 
-}  // namespace
+uint32_t coil_value_limits(Bytes pdu) {
+  const uint16_t v = be16(pdu, 3);
+  return pdu.size() >= 5 && v != 0xFF00 && v != 0x0000 ? finding_value_out_of_spec : finding_none;
+}
 
-uint32_t request_spec_findings(std::span<const uint8_t> pdu) {
-  if (pdu.empty()) return finding_none;
-  uint32_t found = finding_none;
-  for (const QuantityRule& rule : quantity_rules)
-    if (rule.fc == pdu[0]) found |= quantity_findings(rule, pdu);
-  if (pdu[0] == 0x17 && pdu.size() >= 5 && !in_range(be16(pdu, 3), 1, 125))
-    found |= finding_quantity_out_of_spec;
-  if (pdu[0] == 0x05 && pdu.size() >= 5 && be16(pdu, 3) != 0xFF00 && be16(pdu, 3) != 0x0000)
-    found |= finding_value_out_of_spec;
+// FC17: the write quantity and its byte count, and the read quantity like FC03's.
+uint32_t read_write_limits(Bytes pdu) {
+  uint32_t found = quantity_limits<7, 121, 9>(pdu);
+  if (pdu.size() >= 5 && !in_range(be16(pdu, 3), 1, 125)) found |= finding_quantity_out_of_spec;
   return found;
 }
 
-BodyLength body_length(Role role, std::span<const uint8_t> prefix) {
-  if (prefix.size() < 2) return BodyLength::need_more();
-  return role == Role::request ? request_length(prefix) : response_length(prefix);
+// ---- Whether a response fits its request -------------------------------------------------
+
+Finding fits_anything(Bytes, Bytes) {
+  return finding_none;
 }
 
-bool is_public_function(uint8_t fc) {
-  return find(fc & 0x7F) != nullptr;
+Finding byte_count_is(Bytes rsp, unsigned expected) {
+  return rsp.size() >= 2 && rsp[1] == expected && rsp.size() == 2u + expected
+             ? finding_none
+             : finding_length_mismatch;
 }
 
-bool may_broadcast(uint8_t fc) {
-  const FunctionInfo* f = find(fc);
-  return f == nullptr || f->broadcast;
+Finding bit_count_fits(Bytes req, Bytes rsp) {
+  return byte_count_is(rsp, (be16(req, 3) + 7u) / 8u);
 }
 
-const char* function_name(uint8_t fc) {
-  const FunctionInfo* f = find(fc & 0x7F);
-  return f ? f->name : nullptr;
+Finding register_count_fits(Bytes req, Bytes rsp) {
+  return byte_count_is(rsp, be16(req, 3) * 2u);
 }
 
-const char* exception_name(uint8_t code) {
+Finding echoes_whole(Bytes req, Bytes rsp) {
+  return std::equal(req.begin(), req.end(), rsp.begin(), rsp.end()) ? finding_none
+                                                                    : finding_echo_mismatch;
+}
+
+template <size_t n>
+Finding echoes_first(Bytes req, Bytes rsp) {
+  return req.size() >= n && rsp.size() >= n && std::equal(req.begin(), req.begin() + n, rsp.begin())
+             ? finding_none
+             : finding_echo_mismatch;
+}
+
+// Return Query Data echoes everything; the counters return their value instead.
+Finding diagnostics_fit(Bytes req, Bytes rsp) {
+  return be16(req, 1) == 0 ? echoes_whole(req, rsp) : echoes_first<3>(req, rsp);
+}
+
+// ---- Fields ------------------------------------------------------------------------------
+
+void no_fields(PduReader&, FieldWriter&) {}
+
+void data_fields(PduReader& r, FieldWriter& out) {
+  if (r.left()) out.bytes(F::data, r.rest());
+}
+
+void unknown_response(PduReader& r, Bytes, FieldWriter& out) {
+  data_fields(r, out);
+}
+
+// The address a read response's values start at, from its request (FC01-04, 17).
+std::optional<uint16_t> read_start(Bytes req) {
+  if (req.size() < 5 || !(in_range(req[0], 0x01, 0x04) || req[0] == 0x17)) return std::nullopt;
+  return be16(req, 1);
+}
+
+void address_quantity(PduReader& r, FieldWriter& out) {
+  out.number(F::address, r.u16());
+  out.number(F::quantity, r.u16());
+}
+
+void bits_read(PduReader& r, Bytes req, FieldWriter& out) {
+  const uint8_t count = r.u8();
+  out.number(F::byte_count, count);
+  const size_t quantity = req.size() >= 5 ? be16(req, 3) : size_t{count} * 8;
+  if (const auto start = read_start(req)) out.number(F::address, *start);
+  out.bits(F::bit_values, r.take(count), quantity);
+}
+
+void registers_read(PduReader& r, Bytes req, FieldWriter& out) {
+  const uint8_t count = r.u8();
+  out.number(F::byte_count, count);
+  if (const auto start = read_start(req)) out.number(F::address, *start);
+  out.registers(F::register_values, r, count / 2);
+}
+
+void coil_write(PduReader& r, FieldWriter& out) {
+  out.number(F::address, r.u16());
+  const uint16_t v = r.u16();
+  out.number(F::coil_value, v);
+  out.name(F::state, v == 0xFF00 ? "on" : v == 0 ? "off" : "invalid");
+}
+
+void register_write(PduReader& r, FieldWriter& out) {
+  out.number(F::address, r.u16());
+  out.number(F::value, r.u16());
+}
+
+void diagnostics(PduReader& r, FieldWriter& out) {
+  const uint16_t sub = r.u16();
+  out.number(F::sub_function, sub);
+  if (const auto name = diagnostic_name(sub); !name.empty()) out.name(F::sub_function_name, name);
+  out.bytes(F::data, r.rest());
+}
+
+void exception_status(PduReader& r, Bytes, FieldWriter& out) {
+  out.number(F::status, r.u8());
+}
+
+void event_counter(PduReader& r, Bytes, FieldWriter& out) {
+  out.number(F::status, r.u16());
+  out.number(F::event_count, r.u16());
+}
+
+void event_log(PduReader& r, Bytes, FieldWriter& out) {
+  const uint8_t count = r.u8();
+  out.number(F::byte_count, count);
+  out.number(F::status, r.u16());
+  out.number(F::event_count, r.u16());
+  out.number(F::message_count, r.u16());
+  out.bytes(F::events, r.take(count >= 6 ? count - 6u : 0u));
+}
+
+void coils_write(PduReader& r, FieldWriter& out) {
+  out.number(F::address, r.u16());
+  const uint16_t quantity = r.u16();
+  out.number(F::quantity, quantity);
+  const uint8_t count = r.u8();
+  out.number(F::byte_count, count);
+  out.bits(F::bit_values, r.take(count), quantity);
+}
+
+void registers_write(PduReader& r, FieldWriter& out) {
+  out.number(F::address, r.u16());
+  const uint16_t quantity = r.u16();
+  out.number(F::quantity, quantity);
+  out.number(F::byte_count, r.u8());
+  out.registers(F::register_values, r, quantity);
+}
+
+void server_id(PduReader& r, Bytes, FieldWriter& out) {
+  const uint8_t count = r.u8();
+  out.number(F::byte_count, count);
+  out.bytes(F::data, r.take(count));
+}
+
+// FC14 and FC15 requests: sub-requests {reference type, file, record, length[, values]}.
+template <bool with_values>
+void file_records(PduReader& r, FieldWriter& out) {
+  const uint8_t count = r.u8();
+  out.number(F::byte_count, count);
+  out.begin_list(F::sub_requests);
+  PduReader sub(r.take(count));
+  while (sub.left() >= 7) {
+    out.begin_item();
+    out.number(F::reference_type, sub.u8());
+    out.number(F::file, sub.u16());
+    out.number(F::record, sub.u16());
+    const uint16_t length = sub.u16();
+    out.number(F::length, length);
+    if (with_values) out.registers(F::record_values, sub, length);
+  }
+  out.end_list();
+}
+
+void file_read(PduReader& r, Bytes, FieldWriter& out) {
+  const uint8_t count = r.u8();
+  out.number(F::byte_count, count);
+  out.begin_list(F::sub_responses);
+  PduReader sub(r.take(count));
+  while (sub.left() >= 2) {
+    const uint8_t length = sub.u8();
+    out.begin_item();
+    out.number(F::length, length);
+    out.number(F::reference_type, sub.u8());
+    PduReader data(sub.take(length > 0 ? length - 1u : 0u));
+    out.registers(F::record_values, data, data.left() / 2);
+  }
+  out.end_list();
+}
+
+void mask_write(PduReader& r, FieldWriter& out) {
+  out.number(F::address, r.u16());
+  out.number(F::and_mask, r.u16());
+  out.number(F::or_mask, r.u16());
+}
+
+void read_write_request(PduReader& r, FieldWriter& out) {
+  out.number(F::read_address, r.u16());
+  out.number(F::read_quantity, r.u16());
+  out.number(F::write_address, r.u16());
+  const uint16_t quantity = r.u16();
+  out.number(F::write_quantity, quantity);
+  out.number(F::byte_count, r.u8());
+  out.registers(F::register_values, r, quantity);
+}
+
+void fifo_request(PduReader& r, FieldWriter& out) {
+  out.number(F::fifo_address, r.u16());
+}
+
+void fifo_response(PduReader& r, Bytes, FieldWriter& out) {
+  out.number(F::byte_count, r.u16());
+  const uint16_t count = r.u16();
+  out.number(F::fifo_count, count);
+  out.registers(F::register_values, r, count);
+}
+
+std::string_view object_name(uint8_t id) {
+  static constexpr std::string_view basic[] = {
+      "VendorName",  "ProductCode", "MajorMinorRevision", "VendorUrl",
+      "ProductName", "ModelName",   "UserApplicationName"};
+  if (id < std::size(basic)) return basic[id];
+  return id < 0x80 ? "Reserved" : "Private";
+}
+
+// The MEI type; for Read Device Identification (0E) its code, then the header and objects.
+bool mei_header(PduReader& r, FieldWriter& out) {
+  const uint8_t mei = r.u8();
+  out.number(F::mei_type, mei);
+  if (mei != 0x0E) {
+    out.bytes(F::data, r.rest());
+    return false;
+  }
+  out.number(F::read_device_id_code, r.u8());
+  return true;
+}
+
+void mei_request(PduReader& r, FieldWriter& out) {
+  if (mei_header(r, out)) out.number(F::object_id, r.u8());
+}
+
+void mei_response(PduReader& r, Bytes, FieldWriter& out) {
+  if (!mei_header(r, out)) return;
+  out.number(F::conformity_level, r.u8());
+  out.number(F::more_follows, r.u8());
+  out.number(F::next_object_id, r.u8());
+  const uint8_t objects = r.u8();
+  out.number(F::number_of_objects, objects);
+  out.begin_list(F::objects);
+  for (unsigned i = 0; i < objects && r.left() >= 2; ++i) {
+    const uint8_t id = r.u8();
+    const auto value = r.take(r.u8());
+    out.begin_item();
+    out.number(F::object_number, id);
+    out.name(F::object_name, object_name(id));
+    out.bytes(F::object_value, value);
+  }
+  out.end_list();
+}
+
+// An echo's response reads as its request does.
+template <void (*request)(PduReader&, FieldWriter&)>
+void echo(PduReader& r, Bytes, FieldWriter& out) {
+  request(r, out);
+}
+
+// ---- Registers read and written ----------------------------------------------------------
+
+using A = RegisterAccess;
+
+A read_of(Table table, uint16_t start, uint16_t count) {
+  return {table, start, count, false, A::Data::none, {}};
+}
+
+RegisterAccesses no_access(Bytes) {
+  return {};
+}
+
+template <Table table>
+RegisterAccesses reads(Bytes pdu) {
+  if (pdu.size() < 5) return {};
+  return {{read_of(table, be16(pdu, 1), be16(pdu, 3))}, 1};
+}
+
+RegisterAccesses coil_write_access(Bytes pdu) {
+  if (pdu.size() < 5) return {};
+  return {{A{Table::coil, be16(pdu, 1), 1, true, A::Data::coil_state, pdu.subspan(3, 2)}}, 1};
+}
+
+RegisterAccesses register_write_access(Bytes pdu) {
+  if (pdu.size() < 5) return {};
+  return {{A{Table::holding, be16(pdu, 1), 1, true, A::Data::words, pdu.subspan(3, 2)}}, 1};
+}
+
+RegisterAccesses coils_write_access(Bytes pdu) {
+  if (pdu.size() < 5) return {};
+  return {{A{Table::coil, be16(pdu, 1), be16(pdu, 3), true, A::Data::bits, bytes_from(pdu, 6)}}, 1};
+}
+
+RegisterAccesses registers_write_access(Bytes pdu) {
+  if (pdu.size() < 5) return {};
+  return {{A{Table::holding, be16(pdu, 1), be16(pdu, 3), true, A::Data::words, bytes_from(pdu, 6)}},
+          1};
+}
+
+// The value a mask write leaves depends on the register's old one: only the address is known.
+RegisterAccesses mask_write_access(Bytes pdu) {
+  if (pdu.size() < 5) return {};
+  return {{A{Table::holding, be16(pdu, 1), 1, true, A::Data::none, {}}}, 1};
+}
+
+RegisterAccesses read_write_access(Bytes pdu) {
+  if (pdu.size() < 5) return {};
+  return {
+      {read_of(Table::holding, be16(pdu, 1), be16(pdu, 3)),
+       A{Table::holding, be16(pdu, 5), be16(pdu, 7), true, A::Data::words, bytes_from(pdu, 10)}},
+      2};
+}
+
+std::optional<A> no_values(Bytes, Bytes) {
+  return std::nullopt;
+}
+
+// The data after a response's byte count, as far as the count and the PDU both go.
+Bytes counted_data(Bytes pdu) {
+  return pdu.subspan(2, std::min<size_t>(pdu[1], pdu.size() - 2));
+}
+
+template <Table table>
+std::optional<A> bits_read_values(Bytes pdu, Bytes req) {
+  const auto start = read_start(req);
+  if (pdu.size() < 2 || !start) return std::nullopt;
+  return A{table, *start, be16(req, 3), false, A::Data::bits, counted_data(pdu)};
+}
+
+template <Table table>
+std::optional<A> registers_read_values(Bytes pdu, Bytes req) {
+  const auto start = read_start(req);
+  if (pdu.size() < 2 || !start) return std::nullopt;
+  const Bytes data = counted_data(pdu);
+  return A{table, *start, static_cast<uint16_t>(data.size() / 2), false, A::Data::words, data};
+}
+
+// An echo tells what was written.
+template <RegisterAccesses (*written)(Bytes)>
+std::optional<A> echoed_values(Bytes pdu, Bytes) {
+  const RegisterAccesses accesses = written(pdu);
+  if (accesses.size == 0) return std::nullopt;
+  return accesses.list[0];
+}
+
+// ---- The table ---------------------------------------------------------------------------
+
+using Row = FunctionCode;
+constexpr bool reads_only = false;
+constexpr bool broadcast = true;
+
+constexpr std::array public_codes{
+    Row{0x01, "Read Coils", reads_only, fixed<6>, counted_at<2, 1, 250>, quantity_limits<3, 2000>,
+        bit_count_fits, address_quantity, bits_read, reads<Table::coil>,
+        bits_read_values<Table::coil>},
+    Row{0x02, "Read Discrete Inputs", reads_only, fixed<6>, counted_at<2, 1, 250>,
+        quantity_limits<3, 2000>, bit_count_fits, address_quantity, bits_read,
+        reads<Table::discrete>, bits_read_values<Table::discrete>},
+    Row{0x03, "Read Holding Registers", reads_only, fixed<6>, register_count,
+        quantity_limits<3, 125>, register_count_fits, address_quantity, registers_read,
+        reads<Table::holding>, registers_read_values<Table::holding>},
+    Row{0x04, "Read Input Registers", reads_only, fixed<6>, register_count, quantity_limits<3, 125>,
+        register_count_fits, address_quantity, registers_read, reads<Table::input>,
+        registers_read_values<Table::input>},
+    Row{0x05, "Write Single Coil", broadcast, fixed<6>, fixed<6>, coil_value_limits, echoes_whole,
+        coil_write, echo<coil_write>, coil_write_access, echoed_values<coil_write_access>},
+    Row{0x06, "Write Single Register", broadcast, fixed<6>, fixed<6>, within_spec, echoes_whole,
+        register_write, echo<register_write>, register_write_access,
+        echoed_values<register_write_access>},
+    Row{0x07, "Read Exception Status", reads_only, fixed<2>, fixed<3>, within_spec, fits_anything,
+        no_fields, exception_status, no_access, no_values},
+    Row{0x08, "Diagnostics", broadcast, diagnostics_length, diagnostics_length, within_spec,
+        diagnostics_fit, diagnostics, echo<diagnostics>, no_access, no_values},
+    Row{0x0B, "Get Comm Event Counter", reads_only, fixed<2>, fixed<6>, within_spec, fits_anything,
+        no_fields, event_counter, no_access, no_values},
+    Row{0x0C, "Get Comm Event Log", reads_only, fixed<2>, counted_at<2, 1>, within_spec,
+        fits_anything, no_fields, event_log, no_access, no_values},
+    Row{0x0F, "Write Multiple Coils", broadcast, counted_at<6, 1>, fixed<6>,
+        quantity_limits<3, 1968, 5, 1>, echoes_first<5>, coils_write, echo<address_quantity>,
+        coils_write_access, no_values},
+    Row{0x10, "Write Multiple Registers", broadcast, counted_at<6, 1>, fixed<6>,
+        quantity_limits<3, 123, 5>, echoes_first<5>, registers_write, echo<address_quantity>,
+        registers_write_access, no_values},
+    Row{0x11, "Report Server ID", reads_only, fixed<2>, counted_at<2, 1>, within_spec,
+        fits_anything, no_fields, server_id, no_access, no_values},
+    Row{0x14, "Read File Record", reads_only, counted_at<2, 7, 245>, counted_at<2, 1>, within_spec,
+        fits_anything, file_records<false>, file_read, no_access, no_values},
+    Row{0x15, "Write File Record", broadcast, counted_at<2, 7, 245>, counted_at<2, 1>, within_spec,
+        fits_anything, file_records<true>, echo<file_records<true>>, no_access, no_values},
+    Row{0x16, "Mask Write Register", broadcast, fixed<8>, fixed<8>, within_spec, echoes_whole,
+        mask_write, echo<mask_write>, mask_write_access, no_values},
+    Row{0x17, "Read/Write Multiple Registers", reads_only, counted_at<10, 1>, counted_at<2, 1>,
+        read_write_limits, register_count_fits, read_write_request, registers_read,
+        read_write_access, registers_read_values<Table::holding>},
+    Row{0x18, "Read FIFO Queue", reads_only, fixed<4>, fifo_length, within_spec, fits_anything,
+        fifo_request, fifo_response, no_access, no_values},
+    Row{0x2B, "Encapsulated Interface Transport", reads_only, mei_request_length,
+        mei_response_length, within_spec, echoes_first<2>, mei_request, mei_response, no_access,
+        no_values},
+};
+
+// A code the standard does not define: its length only the CRC can tell.
+constexpr Row unknown_code{
+    0x00,          "",          broadcast,        searched,  searched, within_spec,
+    fits_anything, data_fields, unknown_response, no_access, no_values};
+
+// Row by code, so a lookup is one load.
+constexpr std::array<const Row*, 128> rows_by_code = [] {
+  std::array<const Row*, 128> rows{};
+  for (const Row& row : public_codes) rows[row.code] = &row;
+  return rows;
+}();
+
+}  // namespace
+
+const FunctionCode& function_code(uint8_t fc) {
+  const Row* row = rows_by_code[fc & 0x7F];
+  return row ? *row : unknown_code;
+}
+
+std::span<const FunctionCode> public_function_codes() {
+  return public_codes;
+}
+
+BodyLength body_length(Role role, std::span<const uint8_t> p) {
+  if (p.size() < 2) return BodyLength::need_more();
+  const uint8_t fc = p[1];
+  if (fc & 0x80) {  // the exception bit: only responses carry it, never to slave 0
+    return role == Role::response && p[0] != 0 ? L::known(3) : L::invalid();
+  }
+  const FunctionCode& row = function_code(fc);
+  return role == Role::request ? row.request_length(p) : row.response_length(p);
+}
+
+uint32_t request_spec_findings(std::span<const uint8_t> pdu) {
+  return pdu.empty() ? finding_none : function_code(pdu[0]).request_findings(pdu);
+}
+
+Finding check_response_fit(std::span<const uint8_t> req, std::span<const uint8_t> rsp) {
+  if (req.empty() || rsp.empty() || (rsp[0] & 0x80)) return finding_none;
+  return function_code(rsp[0]).response_fit(req, rsp);
+}
+
+void decode_pdu(Role role, std::span<const uint8_t> pdu, std::span<const uint8_t> request,
+                DecodedPdu& out) {
+  out.fields.clear();
+  out.truncated = false;
+  if (pdu.empty()) return;
+  PduReader r(pdu.subspan(1));
+  FieldWriter fields(out);
+  const uint8_t fc = pdu[0];
+  if (fc & 0x80) {
+    const uint8_t code = r.u8();
+    fields.number(F::exception_code, code);
+    if (const auto name = exception_name(code); !name.empty()) fields.name(F::exception_name, name);
+  } else if (role == Role::response) {
+    function_code(fc).response_fields(r, request, fields);
+  } else if (role == Role::request) {
+    function_code(fc).request_fields(r, fields);
+  } else {
+    data_fields(r, fields);
+  }
+  out.truncated = r.short_read();
+}
+
+DecodedPdu decode_pdu(Role role, std::span<const uint8_t> pdu, std::span<const uint8_t> request) {
+  DecodedPdu out;
+  decode_pdu(role, pdu, request, out);
+  return out;
+}
+
+std::string_view exception_name(uint8_t code) {
   switch (code) {
     case 0x01:
       return "Illegal Function";
@@ -244,11 +585,11 @@ const char* exception_name(uint8_t code) {
     case 0x0B:
       return "Gateway Target Device Failed to Respond";
     default:
-      return nullptr;
+      return {};
   }
 }
 
-const char* diagnostic_name(uint16_t sub) {
+std::string_view diagnostic_name(uint16_t sub) {
   switch (sub) {
     case 0x00:
       return "Return Query Data";
@@ -281,7 +622,7 @@ const char* diagnostic_name(uint16_t sub) {
     case 0x14:
       return "Clear Overrun Counter and Flag";
     default:
-      return nullptr;
+      return {};
   }
 }
 

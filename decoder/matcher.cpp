@@ -5,56 +5,6 @@
 #include "decoder/function_codes.hpp"
 
 namespace modtap::decoder {
-namespace {
-
-uint16_t be16(std::span<const uint8_t> p, size_t at) {
-  return p.size() < at + 2 ? 0 : static_cast<uint16_t>(p[at] << 8 | p[at + 1]);
-}
-
-}  // namespace
-
-Finding check_response_fit(std::span<const uint8_t> req, std::span<const uint8_t> rsp) {
-  if (req.empty() || rsp.empty() || (rsp[0] & 0x80)) return finding_none;
-  auto count_is = [&](unsigned expected) {
-    return rsp.size() >= 2 && rsp[1] == expected && rsp.size() == 2u + expected
-               ? finding_none
-               : finding_length_mismatch;
-  };
-  auto same_first = [&](size_t n) {
-    return req.size() >= n && rsp.size() >= n &&
-                   std::equal(req.begin(), req.begin() + n, rsp.begin())
-               ? finding_none
-               : finding_echo_mismatch;
-  };
-  switch (rsp[0]) {
-    case 0x01:
-    case 0x02:
-      return count_is((be16(req, 3) + 7u) / 8u);
-    case 0x03:
-    case 0x04:
-    case 0x17:
-      return count_is(be16(req, 3) * 2u);
-    case 0x08:
-      // Return Query Data echoes everything; the counters return their value instead.
-      return be16(req, 1) == 0 ? (std::equal(req.begin(), req.end(), rsp.begin(), rsp.end())
-                                      ? finding_none
-                                      : finding_echo_mismatch)
-                               : same_first(3);
-    case 0x05:
-    case 0x06:
-    case 0x16:
-      return std::equal(req.begin(), req.end(), rsp.begin(), rsp.end()) ? finding_none
-                                                                        : finding_echo_mismatch;
-    case 0x0F:
-    case 0x10:
-      return same_first(5);  // function, address, quantity
-    case 0x2B:
-      return same_first(2);  // function, MEI type
-    default:
-      return finding_none;
-  }
-}
-
 Matcher::Matcher(const MatcherOptions& options, TimeoutHandler on_timeout)
     : options_(options), on_timeout_(std::move(on_timeout)) {}
 

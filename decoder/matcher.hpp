@@ -81,9 +81,4 @@ class Matcher {
   void set_pending(Pending* pending);
 };
 
-// Whether a response's content fits its request: byte counts against quantities, echoes
-// against what was sent. Returns the finding to raise, or finding_none.
-Finding check_response_fit(std::span<const uint8_t> request_pdu,
-                           std::span<const uint8_t> response_pdu);
-
 }  // namespace modtap::decoder

@@ -2,7 +2,8 @@
 
 #include <fmt/format.h>
 
-#include "decoder/pdu_fields.hpp"
+#include "decoder/bytes.hpp"
+#include "decoder/function_codes.hpp"
 
 namespace modtap::decoder {
 
@@ -42,17 +43,13 @@ void ModelInterpreter::on_frame(const Frame& frame) {
 // A read response that covers a model's identification register with its value names the
 // device: from then on the slave is decoded with that model, unless the user chose one.
 void ModelInterpreter::identify(const Frame& frame) {
-  const auto pdu = frame.pdu();
-  uint16_t start = 0;
-  if (frame.role != Role::response || !frame.check_ok || pdu.size() < 2 ||
-      (pdu[0] != 0x03 && pdu[0] != 0x04) || !response_start_address(frame.request_pdu, start))
-    return;
-  const size_t words = std::min<size_t>(pdu[1], pdu.size() - 2) / 2;
+  if (frame.role != Role::response || !frame.check_ok || frame.is_exception()) return;
+  const auto read = function_code(frame.function()).response_values(frame.pdu(), frame.request_pdu);
+  if (!read || read->write || read->data != RegisterAccess::Data::words) return;
   for (const DeviceModel* model : known_) {
     const auto& id = model->identification;
-    if (!id || id->address < start || id->address >= start + words) continue;
-    const size_t at = 2 + 2 * (id->address - start);
-    if ((pdu[at] << 8 | pdu[at + 1]) != id->value) continue;
+    if (!id || id->address < read->start || id->address >= read->start + read->count) continue;
+    if (be16(read->values, 2 * (id->address - read->start)) != id->value) continue;
     const uint8_t slave = frame.slave();
     const DeviceModel* chosen = model_for(slave);
     if (chosen == model) return;

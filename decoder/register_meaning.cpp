@@ -1,68 +1,24 @@
 #include "decoder/register_meaning.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 
 #include <fmt/format.h>
 
-#include "decoder/pdu_fields.hpp"
+#include "decoder/bytes.hpp"
+#include "decoder/function_codes.hpp"
 
 namespace modtap::decoder {
 namespace {
 
-uint16_t be16(std::span<const uint8_t> bytes, size_t at) {
-  return bytes.size() < at + 2 ? 0 : static_cast<uint16_t>(bytes[at] << 8 | bytes[at + 1]);
-}
-
-std::vector<uint16_t> words_of(std::span<const uint8_t> bytes) {
-  std::vector<uint16_t> words(bytes.size() / 2);
-  for (size_t i = 0; i < words.size(); ++i) words[i] = be16(bytes, 2 * i);
-  return words;
-}
-
-// The registers a request reads or writes, and for a write the values it carries.
-struct RegisterAccess {
-  Table table = Table::holding;
-  uint16_t start = 0;
-  uint16_t count = 0;
-  bool write = false;
-  std::vector<uint16_t> values;
-};
-
-std::vector<RegisterAccess> accesses_of(std::span<const uint8_t> pdu) {
-  if (pdu.size() < 5) return {};
-  const uint16_t a = be16(pdu, 1);
-  const uint16_t b = be16(pdu, 3);
-  switch (pdu[0]) {
-    case 0x01:
-      return {{Table::coil, a, b, false, {}}};
-    case 0x02:
-      return {{Table::discrete, a, b, false, {}}};
-    case 0x03:
-      return {{Table::holding, a, b, false, {}}};
-    case 0x04:
-      return {{Table::input, a, b, false, {}}};
-    case 0x05:
-      return {{Table::coil, a, 1, true, {}}};
-    case 0x06:
-      return {{Table::holding, a, 1, true, {b}}};
-    case 0x0F:
-      return {{Table::coil, a, b, true, {}}};
-    case 0x10:
-      return {{Table::holding, a, b, true, words_of(pdu.subspan(std::min<size_t>(6, pdu.size())))}};
-    case 0x16:
-      return {{Table::holding, a, 1, true, {}}};
-    case 0x17: {
-      const uint16_t write_start = be16(pdu, 5);
-      const uint16_t write_count = be16(pdu, 7);
-      return {{Table::holding, a, b, false, {}},
-              {Table::holding, write_start, write_count, true,
-               words_of(pdu.subspan(std::min<size_t>(10, pdu.size())))}};
-    }
-    default:
-      return {};
-  }
+// The 16-bit words in `bytes`, big-endian, into `buffer` (an ADU holds at most 126 words).
+using WordBuffer = std::array<uint16_t, max_rtu_adu / 2>;
+std::span<const uint16_t> words_of(std::span<const uint8_t> bytes, WordBuffer& buffer) {
+  const size_t n = std::min(bytes.size() / 2, buffer.size());
+  for (size_t i = 0; i < n; ++i) buffer[i] = be16(bytes, 2 * i);
+  return {buffer.data(), n};
 }
 
 int decimals_of(double scale) {
@@ -334,18 +290,27 @@ void decode_bits(const DeviceModel& model, Table table, uint16_t start,
   }
 }
 
-// FC05 writes FF00H for on and 0000H for off, FC0F packed bits after its byte count.
-void decode_coil_write(const DeviceModel& model, std::span<const uint8_t> pdu,
-                       std::vector<RegisterValue>& out) {
-  if (pdu.size() < 5) return;
-  const uint16_t start = be16(pdu, 1);
-  if (pdu[0] == 0x05) {
-    const uint16_t state = be16(pdu, 3);
-    if (state != 0xFF00 && state != 0x0000) return;
-    const uint8_t bit = state == 0xFF00 ? 1 : 0;
-    decode_bits(model, Table::coil, start, {&bit, 1}, 1, out);
-  } else if (pdu[0] == 0x0F && pdu.size() > 6) {
-    decode_bits(model, Table::coil, start, pdu.subspan(6), be16(pdu, 3), out);
+// The values an access carries, in the model's terms: words, packed bits, or FC05's state.
+void decode_values(const DeviceModel& model, const RegisterAccess& access,
+                   std::vector<RegisterValue>& out, std::vector<RuleFinding>* found) {
+  switch (access.data) {
+    case RegisterAccess::Data::none:
+      return;
+    case RegisterAccess::Data::words: {
+      WordBuffer buffer;
+      decode_span(model, access.table, access.start, words_of(access.values, buffer), out, found);
+      return;
+    }
+    case RegisterAccess::Data::bits:
+      decode_bits(model, access.table, access.start, access.values, access.count, out);
+      return;
+    case RegisterAccess::Data::coil_state: {
+      const uint16_t state = be16(access.values, 0);
+      if (state != 0xFF00 && state != 0x0000) return;
+      const uint8_t bit = state == 0xFF00 ? 1 : 0;
+      decode_bits(model, access.table, access.start, {&bit, 1}, 1, out);
+      return;
+    }
   }
 }
 
@@ -355,52 +320,23 @@ void interpret_request(const DeviceModel& model, const Frame& frame, Meaning& me
         {RuleKind::too_many_retries, std::nullopt,
          fmt::format("retry {} of an unanswered request; {} masters retry at most {} times",
                      frame.retries, model.name, *model.retries)});
-  for (const RegisterAccess& access : accesses_of(frame.pdu())) {
+  const auto pdu = frame.pdu();
+  for (const RegisterAccess& access : function_code(frame.function()).request_accesses(pdu)) {
     check_limits(model, frame.mode, access, meaning.findings);
     check_registers(model, access, meaning.findings);
-    if (!access.values.empty())
-      decode_span(model, access.table, access.start, access.values, meaning.registers,
-                  &meaning.findings);
+    // Bits are the model's own to name; a value out of range is said of registers only.
+    const bool words = access.data == RegisterAccess::Data::words;
+    decode_values(model, access, meaning.registers, words ? &meaning.findings : nullptr);
   }
-  decode_coil_write(model, frame.pdu(), meaning.registers);
 }
 
 void interpret_response(const DeviceModel& model, const Frame& frame, Meaning& meaning) {
   const auto pdu = frame.pdu();
   if (pdu.empty()) return;
-  switch (pdu[0]) {
-    case 0x03:
-    case 0x04:
-    case 0x17: {
-      uint16_t start = 0;
-      if (pdu.size() < 2 || !response_start_address(frame.request_pdu, start)) return;
-      const auto words = words_of(pdu.subspan(2, std::min<size_t>(pdu[1], pdu.size() - 2)));
-      const Table table = pdu[0] == 0x04 ? Table::input : Table::holding;
-      decode_span(model, table, start, words, meaning.registers, &meaning.findings);
-      break;
-    }
-    case 0x06:
-      if (pdu.size() >= 5) {
-        const uint16_t value = be16(pdu, 3);
-        decode_span(model, Table::holding, be16(pdu, 1), {&value, 1}, meaning.registers, nullptr);
-      }
-      break;
-    case 0x01:
-    case 0x02: {
-      uint16_t start = 0;
-      if (pdu.size() < 2 || !response_start_address(frame.request_pdu, start)) return;
-      const size_t count = frame.request_pdu.size() >= 5 ? be16(frame.request_pdu, 3) : 0;
-      decode_bits(model, pdu[0] == 0x01 ? Table::coil : Table::discrete, start,
-                  pdu.subspan(2, std::min<size_t>(pdu[1], pdu.size() - 2)), count,
-                  meaning.registers);
-      break;
-    }
-    case 0x05:
-      decode_coil_write(model, pdu, meaning.registers);
-      break;
-    default:
-      break;
-  }
+  const auto values = function_code(pdu[0]).response_values(pdu, frame.request_pdu);
+  // A read's values are checked against the model; an echo's were checked in its request.
+  if (values)
+    decode_values(model, *values, meaning.registers, values->write ? nullptr : &meaning.findings);
 }
 
 }  // namespace

@@ -23,7 +23,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const auto pdu = in.rest();
 
   const DecodedPdu decoded = decode_pdu(role, pdu, role == Role::response ? request_pdu : pdu);
-  for (const Field& field : decoded.fields) FUZZ_EXPECT(!field.key.empty());
+  // Every field's values lie inside the PDU, and a list's items follow it.
+  for (size_t at = 0; at < decoded.fields.size(); ++at) {
+    const Field& field = decoded.fields[at];
+    FUZZ_EXPECT(field.bytes.empty() ||
+                (field.bytes.data() >= pdu.data() &&
+                 field.bytes.data() + field.bytes.size() <= pdu.data() + pdu.size()));
+    FUZZ_EXPECT(field.type() != FieldType::registers || field.bytes.size() == 2u * field.count);
+    FUZZ_EXPECT(field.type() != FieldType::bits || field.count <= 8 * field.bytes.size());
+    FUZZ_EXPECT(field.item == 0 || at > 0);
+  }
 
   // The same PDU in a frame: slave (from setup) + PDU + a check the model does not look at.
   std::vector<uint8_t> adu{static_cast<uint8_t>(setup >> 2)};

@@ -205,11 +205,10 @@ class Simulator {
   }
 
   void build(uint8_t slave, Bytes& req, Bytes& rsp, bool broadcast) {
-    static constexpr uint8_t unicast[] = {0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07,
-                                          0x08, 0x0B, 0x0C, 0x0F, 0x10, 0x11, 0x14,
-                                          0x15, 0x16, 0x17, 0x18, 0x2B};
+    const auto unicast = decoder::public_function_codes();
     static constexpr uint8_t writes[] = {0x05, 0x06, 0x0F, 0x10};
-    uint8_t fc = broadcast ? writes[pick(0, 3)] : unicast[pick(0, sizeof unicast - 1)];
+    uint8_t fc = broadcast ? writes[pick(0, 3)]
+                           : unicast[pick(0, static_cast<unsigned>(unicast.size() - 1))].code;
     if (!broadcast && chance(o_.unknown_function_rate)) fc = static_cast<uint8_t>(pick(0x41, 0x48));
     req.push_back(fc);
     const bool fails = chance(o_.exception_rate);

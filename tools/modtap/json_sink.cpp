@@ -23,7 +23,7 @@ void JsonSink::on_frame(const Frame& frame) {
   out_.print(",\"offset\":{},\"mode\":\"{}\",\"role\":\"{}\",\"slave\":{},\"fc\":{},\"function\":",
              frame.offset, to_string(frame.mode), to_string(frame.role), frame.slave(),
              frame.function() & 0x7F);
-  append_json_string(buf, function_label(frame.function()));
+  out_.print("\"{}\"", FunctionLabel{frame.function()});
   out_.print(",\"raw\":\"");
   append_hex(buf, frame.raw, false);
   out_.print("\",\"check\":\"{}\",\"check_value\":{}", frame.check_ok ? "ok" : "bad",
@@ -68,12 +68,12 @@ void JsonSink::on_frame(const Frame& frame) {
   }
   out_.print("]");
   if (frame.meaning) meaning(*frame.meaning);
-  const DecodedPdu decoded = decode_pdu(frame.role, frame.pdu(), frame.request_pdu);
-  for (const Field& f : decoded.fields) {
-    out_.print(",\"{}\":", f.key);
-    append_json_value(buf, f);
+  decode_pdu(frame.role, frame.pdu(), frame.request_pdu, decoded_);
+  for (size_t at = 0; at < decoded_.fields.size();) {
+    buf.push_back(',');
+    at = append_json_field(buf, decoded_, at);
   }
-  if (decoded.truncated) out_.print(",\"truncated\":true");
+  if (decoded_.truncated) out_.print(",\"truncated\":true");
   out_.print("}}\n");
   out_.end_record();
 }

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "decoder/analyzer.hpp"
+#include "decoder/pdu_fields.hpp"
 #include "decoder/register_meaning.hpp"
 #include "tools/modtap/output.hpp"
 
@@ -23,6 +24,7 @@ class JsonSink final : public decoder::RecordSink {
 
   Output& out_;
   const std::vector<decoder::ChannelInfo>& channels_;
+  decoder::DecodedPdu decoded_;  // the frame's fields, its capacity kept from frame to frame
 };
 
 }  // namespace modtap::tools

@@ -1,15 +1,110 @@
 #include "tools/modtap/render.hpp"
 
-#include <array>
 #include <cmath>
-
-#include <fmt/ranges.h>
 
 #include "decoder/function_codes.hpp"
 
 namespace modtap::tools {
 
+using decoder::DecodedPdu;
 using decoder::Field;
+using decoder::FieldType;
+
+namespace {
+
+void append_chars(fmt::memory_buffer& out, std::string_view text) {
+  out.append(text.data(), text.data() + text.size());
+}
+
+std::string_view as_chars(std::span<const uint8_t> bytes) {
+  return {reinterpret_cast<const char*>(bytes.data()), bytes.size()};
+}
+
+// Decimal without fmt's parsing: the hot path of every line.
+void append_int(fmt::memory_buffer& out, int64_t v) {
+  const fmt::format_int digits(v);
+  out.append(digits.data(), digits.data() + digits.size());
+}
+
+void append_json_scalar(fmt::memory_buffer& out, const Field& f) {
+  switch (f.type()) {
+    case FieldType::name:
+      append_json_string(out, f.text);
+      break;
+    case FieldType::string:
+      append_json_string(out, as_chars(f.bytes));
+      break;
+    case FieldType::bytes:
+      out.push_back('"');
+      append_hex(out, f.bytes, false);
+      out.push_back('"');
+      break;
+    case FieldType::registers:
+    case FieldType::bits:
+      out.push_back('[');
+      for (size_t i = 0; i < f.count; ++i) {
+        if (i) out.push_back(',');
+        append_int(out, f.type() == FieldType::bits ? f.bit(i) : f.word(i));
+      }
+      out.push_back(']');
+      break;
+    default:
+      append_int(out, f.number);
+  }
+}
+
+void append_json_key(fmt::memory_buffer& out, const Field& f) {
+  out.push_back('"');
+  append_chars(out, f.name());
+  append_chars(out, "\":");
+}
+
+void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_items) {
+  auto it = std::back_inserter(out);
+  switch (f.type()) {
+    case FieldType::hex:
+      fmt::format_to(it, "0x{:04x}", f.number);
+      break;
+    case FieldType::address:  // as the manuals write registers: 2502H
+      fmt::format_to(it, "{:04X}H", f.number);
+      break;
+    case FieldType::code:  // as vendors' tables write codes: 52H
+      fmt::format_to(it, "{:02X}H", f.number);
+      break;
+    case FieldType::name:
+      out.push_back('"');
+      append_chars(out, f.text);
+      out.push_back('"');
+      break;
+    case FieldType::string:
+      out.push_back('"');
+      append_chars(out, as_chars(f.bytes));
+      out.push_back('"');
+      break;
+    case FieldType::bytes:
+      append_hex(out, f.bytes, true);
+      break;
+    case FieldType::bits:
+      for (size_t i = 0; i < f.count && i < max_items; ++i) out.push_back(f.bit(i) ? '1' : '0');
+      if (f.count > max_items) fmt::format_to(it, "...({} bits)", f.count);
+      break;
+    case FieldType::registers: {
+      out.push_back('[');
+      const size_t shown = std::min<size_t>(f.count, max_items);
+      for (size_t i = 0; i < shown; ++i) {
+        if (i) out.push_back(' ');
+        append_int(out, f.word(i));
+      }
+      if (shown < f.count) fmt::format_to(it, " ...({} values)", f.count);
+      out.push_back(']');
+      break;
+    }
+    default:
+      append_int(out, f.number);
+  }
+}
+
+}  // namespace
 
 void append_hex(fmt::memory_buffer& out, std::span<const uint8_t> bytes, bool spaced) {
   static constexpr char digits[] = "0123456789abcdef";
@@ -36,97 +131,53 @@ void append_json_string(fmt::memory_buffer& out, std::string_view text) {
   out.push_back('"');
 }
 
-void append_json_value(fmt::memory_buffer& out, const Field& f) {
-  auto it = std::back_inserter(out);
-  switch (f.kind) {
-    case Field::Kind::number:
-    case Field::Kind::hex:
-      fmt::format_to(it, "{}", f.number);
-      break;
-    case Field::Kind::text:
-      append_json_string(out, f.text);
-      break;
-    case Field::Kind::numbers:
-    case Field::Kind::bits:
-      fmt::format_to(it, "[{}]", fmt::join(f.numbers, ","));
-      break;
-    case Field::Kind::bytes:
-      out.push_back('"');
-      append_hex(out, f.bytes, false);
-      out.push_back('"');
-      break;
-    case Field::Kind::items:
-      out.push_back('[');
-      for (size_t i = 0; i < f.items.size(); ++i) {
-        if (i) out.push_back(',');
-        out.push_back('{');
-        for (size_t j = 0; j < f.items[i].size(); ++j) {
-          if (j) out.push_back(',');
-          fmt::format_to(it, "\"{}\":", f.items[i][j].key);
-          append_json_value(out, f.items[i][j]);
-        }
-        out.push_back('}');
-      }
-      out.push_back(']');
-      break;
+size_t append_json_field(fmt::memory_buffer& out, const DecodedPdu& pdu, size_t at) {
+  const Field& f = pdu.fields[at];
+  append_json_key(out, f);
+  if (f.type() != FieldType::list) {
+    append_json_scalar(out, f);
+    return at + 1;
   }
-}
-
-void append_text_value(fmt::memory_buffer& out, const Field& f, size_t max_items) {
-  auto it = std::back_inserter(out);
-  switch (f.kind) {
-    case Field::Kind::number:
-      fmt::format_to(it, "{}", f.number);
-      break;
-    case Field::Kind::hex:
-      fmt::format_to(it, "0x{:04x}", f.number);
-      break;
-    case Field::Kind::text:
-      fmt::format_to(it, "\"{}\"", f.text);
-      break;
-    case Field::Kind::bits:
-      for (size_t i = 0; i < f.numbers.size() && i < max_items; ++i)
-        out.push_back(f.numbers[i] ? '1' : '0');
-      if (f.numbers.size() > max_items) fmt::format_to(it, "...({} bits)", f.numbers.size());
-      break;
-    case Field::Kind::numbers: {
-      const size_t shown = std::min(f.numbers.size(), max_items);
-      fmt::format_to(
-          it, "[{}",
-          fmt::join(f.numbers.begin(), f.numbers.begin() + static_cast<long>(shown), " "));
-      if (shown < f.numbers.size()) fmt::format_to(it, " ...({} values)", f.numbers.size());
-      out.push_back(']');
-      break;
-    }
-    case Field::Kind::bytes:
-      append_hex(out, f.bytes, true);
-      break;
-    case Field::Kind::items:
-      for (size_t i = 0; i < f.items.size(); ++i) {
-        out.push_back(i ? ' ' : '{');
-        for (size_t j = 0; j < f.items[i].size(); ++j) {
-          fmt::format_to(it, "{}{}=", j ? " " : "", f.items[i][j].key);
-          append_text_value(out, f.items[i][j], max_items);
-        }
-        out.push_back(';');
-      }
-      if (!f.items.empty()) out.push_back('}');
-      break;
+  const size_t end = pdu.next(at);
+  out.push_back('[');
+  for (size_t i = at + 1; i < end; ++i) {
+    const Field& field = pdu.fields[i];
+    const bool first_of_item = pdu.fields[i - 1].item != field.item;
+    if (first_of_item) append_chars(out, i == at + 1 ? "{" : "},{");
+    if (!first_of_item) out.push_back(',');
+    append_json_key(out, field);
+    append_json_scalar(out, field);
   }
+  append_chars(out, end > at + 1 ? "}]" : "]");
+  return end;
 }
 
-namespace {
-
-void append_number(fmt::memory_buffer& out, const decoder::RegisterValue& reg) {
-  fmt::format_to(std::back_inserter(out), "{:.{}f}", reg.value, reg.decimals);
+size_t append_text_value(fmt::memory_buffer& out, const DecodedPdu& pdu, size_t at,
+                         size_t max_items) {
+  const Field& f = pdu.fields[at];
+  if (f.type() != FieldType::list) {
+    append_text_scalar(out, f, max_items);
+    return at + 1;
+  }
+  // {key=value key=value; key=value;}
+  const size_t end = pdu.next(at);
+  for (size_t i = at + 1; i < end; ++i) {
+    const Field& field = pdu.fields[i];
+    const bool first_of_item = pdu.fields[i - 1].item != field.item;
+    if (first_of_item) append_chars(out, i == at + 1 ? "{" : "; ");
+    if (!first_of_item) out.push_back(' ');
+    append_chars(out, field.name());
+    out.push_back('=');
+    append_text_scalar(out, field, max_items);
+  }
+  if (end > at + 1) append_chars(out, ";}");
+  return end;
 }
-
-}  // namespace
 
 void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue& reg) {
   auto optional_string = [&](const std::string& text) {
     if (text.empty()) {
-      fmt::format_to(std::back_inserter(out), "null");
+      append_chars(out, "null");
     } else {
       append_json_string(out, text);
     }
@@ -135,20 +186,23 @@ void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue&
   optional_string(reg.name);
   fmt::format_to(std::back_inserter(out), ",\"raw\":{},\"value\":", reg.raw);
   if (std::isfinite(reg.value)) {
-    append_number(out, reg);
+    fmt::format_to(std::back_inserter(out), "{:.{}f}", reg.value, reg.decimals);
   } else {
-    fmt::format_to(std::back_inserter(out), "null");
+    append_chars(out, "null");
   }
-  fmt::format_to(std::back_inserter(out), ",\"unit\":");
+  append_chars(out, ",\"unit\":");
   optional_string(reg.unit);
-  fmt::format_to(std::back_inserter(out), ",\"text\":");
+  append_chars(out, ",\"text\":");
   optional_string(reg.text);
-  fmt::format_to(std::back_inserter(out), "}}");
-}
-
-std::string function_label(uint8_t fc) {
-  if (const char* name = decoder::function_name(fc)) return name;
-  return fmt::format("Function 0x{:02X}", fc & 0x7F);
+  out.push_back('}');
 }
 
 }  // namespace modtap::tools
+
+auto fmt::formatter<modtap::tools::FunctionLabel>::format(modtap::tools::FunctionLabel label,
+                                                          format_context& ctx) const
+    -> decltype(ctx.out()) {
+  const std::string_view name = modtap::decoder::function_name(label.fc);
+  if (!name.empty()) return formatter<string_view>::format(name, ctx);
+  return fmt::format_to(ctx.out(), "Function 0x{:02X}", label.fc & 0x7F);
+}

@@ -1,4 +1,5 @@
-// Pieces shared by the text and JSON sinks: hex, JSON strings, field values, finding names.
+// Pieces shared by the text and JSON sinks: hex, JSON strings, decoded fields as the field
+// registry says each type prints, and register values.
 #pragma once
 
 #include <cstdint>
@@ -15,13 +16,25 @@ namespace modtap::tools {
 
 void append_hex(fmt::memory_buffer& out, std::span<const uint8_t> bytes, bool spaced);
 void append_json_string(fmt::memory_buffer& out, std::string_view text);
-void append_json_value(fmt::memory_buffer& out, const decoder::Field& field);
-void append_text_value(fmt::memory_buffer& out, const decoder::Field& field, size_t max_items);
+
+// The field at `at` as JSON ("key":value; a list with its items), and as text (`key=` is the
+// caller's), with at most `max_items` values of an array. Both return the index of the next
+// field of the same level.
+size_t append_json_field(fmt::memory_buffer& out, const decoder::DecodedPdu& pdu, size_t at);
+size_t append_text_value(fmt::memory_buffer& out, const decoder::DecodedPdu& pdu, size_t at,
+                         size_t max_items);
 
 // The same as a JSON object: {"addr", "name", "raw", "value", "unit", "text"}.
 void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue& reg);
 
 // "Read Holding Registers", or "Function 0x41" for a code the standard does not name.
-std::string function_label(uint8_t fc);
+struct FunctionLabel {
+  uint8_t fc;
+};
 
 }  // namespace modtap::tools
+
+template <>
+struct fmt::formatter<modtap::tools::FunctionLabel> : formatter<string_view> {
+  auto format(modtap::tools::FunctionLabel label, format_context& ctx) const -> decltype(ctx.out());
+};

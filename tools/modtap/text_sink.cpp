@@ -24,18 +24,6 @@ const char* role_tag(Role role) {
   return "?";
 }
 
-// Register addresses and exception codes as the manuals write them (2502H, 52H), so a line can
-// be read beside the manual; JSON keeps them as numbers.
-void append_field(fmt::memory_buffer& buf, const Field& f, size_t max_items) {
-  if (f.kind == Field::Kind::number && f.key.ends_with("address")) {
-    fmt::format_to(std::back_inserter(buf), "{:04X}H", f.number);
-  } else if (f.kind == Field::Kind::number && f.key == "exception_code") {
-    fmt::format_to(std::back_inserter(buf), "{:02X}H", f.number);  // vendors' tables say 52H
-  } else {
-    append_text_value(buf, f, max_items);
-  }
-}
-
 // A check as the manuals print it, in wire order: CRC 0xCC7E is sent, and written, "7E CC".
 void append_check(fmt::memory_buffer& buf, uint16_t check, Mode mode) {
   if (mode == Mode::rtu) {
@@ -75,17 +63,22 @@ void TextSink::on_frame(const Frame& frame) {
   out_.print("{:6} {:11.6f}", frame.index, seconds(frame.t_ns));
   channel_column(frame.channel);
   out_.print(" {} slave {:<3} {}", role_tag(frame.role), frame.slave(),
-             function_label(frame.function()));
-  const DecodedPdu decoded = decode_pdu(frame.role, frame.pdu(), frame.request_pdu);
+             FunctionLabel{frame.function()});
+  decode_pdu(frame.role, frame.pdu(), frame.request_pdu, decoded_);
   auto& buf = out_.buffer();
   // Where the model gives exceptions the vendor's meanings, the standard's name would mislead
   // (GD20's 04H is "Operation failed", not "Server Device Failure"): the model's text stands.
   const bool vendor_exceptions = frame.meaning && frame.meaning->model->vendor_exceptions;
-  for (const Field& f : decoded.fields) {
-    if (f.kind == Field::Kind::items || f.key == "byte_count") continue;
-    if (vendor_exceptions && f.key == "exception_name") continue;
-    out_.print(" {}=", f.key);
-    append_field(buf, f, line_items);
+  for (size_t at = 0; at < decoded_.fields.size();) {
+    const Field& f = decoded_.fields[at];
+    const bool shown = f.type() != FieldType::list && f.id != FieldId::byte_count &&
+                       !(vendor_exceptions && f.id == FieldId::exception_name);
+    if (!shown) {
+      at = decoded_.next(at);
+      continue;
+    }
+    out_.print(" {}=", f.name());
+    at = append_text_value(buf, decoded_, at, line_items);
   }
   const char* check = frame.mode == Mode::rtu ? "crc" : "lrc";
   if (frame.check_ok) {
@@ -113,14 +106,13 @@ void TextSink::tree(const Frame& frame) {
   out_.print("    Raw: ");
   append_hex(buf, frame.raw, true);
   out_.print("\n    Role: {}\n    Slave: {}\n    Function: {} ({})\n", to_string(frame.role),
-             frame.slave(), frame.function(), function_label(frame.function()));
-  const DecodedPdu decoded = decode_pdu(frame.role, frame.pdu(), frame.request_pdu);
-  for (const Field& f : decoded.fields) {
-    out_.print("    {}: ", f.key);
-    append_field(buf, f, SIZE_MAX);
+             frame.slave(), frame.function(), FunctionLabel{frame.function()});
+  for (size_t at = 0; at < decoded_.fields.size();) {
+    out_.print("    {}: ", decoded_.fields[at].name());
+    at = append_text_value(buf, decoded_, at, SIZE_MAX);
     out_.print("\n");
   }
-  if (decoded.truncated) out_.print("    [PDU shorter than its fields]\n");
+  if (decoded_.truncated) out_.print("    [PDU shorter than its fields]\n");
   out_.print("    {}: ", frame.mode == Mode::rtu ? "CRC" : "LRC");
   append_check(buf, frame.wire_check(), frame.mode);
   out_.print(" ({})", frame.check_ok ? "ok" : "bad");
@@ -182,10 +174,10 @@ void TextSink::on_timeout(const Timeout& t) {
   const double waited_ms = static_cast<double>(t.waited_ns) / 1e6;
   if (t.timed_out()) {
     out_.print(" TIMEOUT request #{} slave {} {}: no response after {:.3f} ms ({})\n", t.request,
-               t.slave, function_label(t.function), waited_ms, to_string(t.reason));
+               t.slave, FunctionLabel{t.function}, waited_ms, to_string(t.reason));
   } else {
     out_.print(" UNANSWERED request #{} slave {} {}: the capture ends {:.3f} ms after it\n",
-               t.request, t.slave, function_label(t.function), waited_ms);
+               t.request, t.slave, FunctionLabel{t.function}, waited_ms);
   }
   out_.end_record();
 }

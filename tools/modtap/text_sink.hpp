@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "decoder/analyzer.hpp"
+#include "decoder/pdu_fields.hpp"
 #include "decoder/register_meaning.hpp"
 #include "tools/modtap/output.hpp"
 
@@ -29,6 +30,7 @@ class TextSink final : public decoder::RecordSink {
   const std::vector<decoder::ChannelInfo>& channels_;
   bool verbose_;
   std::optional<int64_t> first_ns_;
+  decoder::DecodedPdu decoded_;  // the frame's fields, its capacity kept from frame to frame
 };
 
 }  // namespace modtap::tools
