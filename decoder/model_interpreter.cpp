@@ -33,7 +33,7 @@ void ModelInterpreter::on_frame(const Frame& frame) {
   // A frame cut short or run into holds no values to trust.
   if (!model || frame.damage == Damage::cut || frame.damage == Damage::collision)
     return next_.on_frame(frame);
-  meaning_ = interpret(*model, frame);
+  interpret(*model, frame, meaning_);
   identify(frame);
   Frame annotated = frame;
   annotated.meaning = &meaning_;
@@ -59,7 +59,7 @@ void ModelInterpreter::identify(const Frame& frame) {
       text += fmt::format(", but is decoded as {}", chosen ? chosen->name : "nothing");
     } else {
       identified_[slave] = model;
-      meaning_ = interpret(*model, frame);
+      interpret(*model, frame, meaning_);
       text += "; decoded as such from here on";
     }
     meaning_.findings.push_back({RuleKind::identified, id->address, std::move(text)});

@@ -5,6 +5,7 @@
 #include <bit>
 #include <cmath>
 
+#include <fmt/compile.h>
 #include <fmt/format.h>
 
 #include "decoder/bytes.hpp"
@@ -99,30 +100,35 @@ void check_value(const RegisterDef& def, const RegisterValue& v, std::vector<Rul
 }
 
 void decode_span(const DeviceModel& model, Table table, uint16_t start,
-                 std::span<const uint16_t> words, std::vector<RegisterValue>& out,
+                 std::span<const uint16_t> words, Meaning& meaning,
                  std::vector<RuleFinding>* found) {
+  std::vector<RegisterValue>& out = meaning.registers;
   for (size_t i = 0; i < words.size(); ++i) {
     const auto address = static_cast<uint16_t>(start + i);
     const RegisterLookup lookup = find_register(model, table, address);
     const RegisterDef* def = lookup.def();
+    // A parameter the group rule made lives only as long as its lookup: its texts are kept.
+    auto model_text = [&](const std::string& text) {
+      return lookup.listed || text.empty() ? std::string_view(text) : meaning.keep(text);
+    };
     RegisterValue v;
     v.address = address;
     v.raw = words[i];
     v.value = words[i];
     if (!def || def->type == ValueType::raw) {
-      if (def) v.name = def->name, v.label = def->label;
-      out.push_back(std::move(v));
+      if (def) v.name = model_text(def->name), v.label = model_text(def->label);
+      out.push_back(v);
       continue;
     }
-    v.name = lookup.via_alias ? def->name + " (RAM)" : def->name;
-    v.label = def->label;
+    v.name = lookup.via_alias ? meaning.keep(def->name + " (RAM)") : model_text(def->name);
+    v.label = model_text(def->label);
     if (lookup.via_alias)  // say what the alias does: "RAM only, not stored in EEPROM"
-      v.label = v.label.empty() ? model.alias->label
-                                : fmt::format("{} ({})", v.label, model.alias->label);
-    v.unit = def->unit;
+      v.label = v.label.empty() ? std::string_view(model.alias->label)
+                                : meaning.keep(fmt::format("{} ({})", v.label, model.alias->label));
+    v.unit = model_text(def->unit);
     if (def->type == ValueType::string) {
       const size_t n = std::min<size_t>(def->words, words.size() - i);
-      v.text = string_text(words.subspan(i, n));
+      v.text = meaning.keep(string_text(words.subspan(i, n)));
       i += n - 1;
       out.push_back(std::move(v));
       continue;
@@ -138,7 +144,7 @@ void decode_span(const DeviceModel& model, Table table, uint16_t start,
       if (auto it = def->values->find(enum_key(*def, v.raw)); it != def->values->end())
         v.text = it->second;
     } else if (!def->bits.empty()) {
-      v.text = bits_text(*def, v.raw);
+      v.text = meaning.keep(bits_text(*def, v.raw));
     }
     check_value(*def, v, found);
     out.push_back(std::move(v));
@@ -291,8 +297,8 @@ void decode_bits(const DeviceModel& model, Table table, uint16_t start,
 }
 
 // The values an access carries, in the model's terms: words, packed bits, or FC05's state.
-void decode_values(const DeviceModel& model, const RegisterAccess& access,
-                   std::vector<RegisterValue>& out, std::vector<RuleFinding>* found) {
+void decode_values(const DeviceModel& model, const RegisterAccess& access, Meaning& out,
+                   std::vector<RuleFinding>* found) {
   switch (access.data) {
     case RegisterAccess::Data::none:
       return;
@@ -302,13 +308,13 @@ void decode_values(const DeviceModel& model, const RegisterAccess& access,
       return;
     }
     case RegisterAccess::Data::bits:
-      decode_bits(model, access.table, access.start, access.values, access.count, out);
+      decode_bits(model, access.table, access.start, access.values, access.count, out.registers);
       return;
     case RegisterAccess::Data::coil_state: {
       const uint16_t state = be16(access.values, 0);
       if (state != 0xFF00 && state != 0x0000) return;
       const uint8_t bit = state == 0xFF00 ? 1 : 0;
-      decode_bits(model, access.table, access.start, {&bit, 1}, 1, out);
+      decode_bits(model, access.table, access.start, {&bit, 1}, 1, out.registers);
       return;
     }
   }
@@ -326,7 +332,7 @@ void interpret_request(const DeviceModel& model, const Frame& frame, Meaning& me
     check_registers(model, access, meaning.findings);
     // Bits are the model's own to name; a value out of range is said of registers only.
     const bool words = access.data == RegisterAccess::Data::words;
-    decode_values(model, access, meaning.registers, words ? &meaning.findings : nullptr);
+    decode_values(model, access, meaning, words ? &meaning.findings : nullptr);
   }
 }
 
@@ -335,29 +341,45 @@ void interpret_response(const DeviceModel& model, const Frame& frame, Meaning& m
   if (pdu.empty()) return;
   const auto values = function_code(pdu[0]).response_values(pdu, frame.request_pdu);
   // A read's values are checked against the model; an echo's were checked in its request.
-  if (values)
-    decode_values(model, *values, meaning.registers, values->write ? nullptr : &meaning.findings);
+  if (values) decode_values(model, *values, meaning, values->write ? nullptr : &meaning.findings);
 }
 
 }  // namespace
 
 void decode_registers(const DeviceModel& model, Table table, uint16_t start,
-                      std::span<const uint16_t> words, std::vector<RegisterValue>& out) {
+                      std::span<const uint16_t> words, Meaning& out) {
   decode_span(model, table, start, words, out, nullptr);
 }
 
 Meaning interpret(const DeviceModel& model, const Frame& frame) {
   Meaning meaning;
+  interpret(model, frame, meaning);
+  return meaning;
+}
+
+void interpret(const DeviceModel& model, const Frame& frame, Meaning& meaning) {
+  meaning.clear();
   meaning.model = &model;
-  if (frame.adu.size() < 2 + frame.check_size()) return meaning;
+  if (frame.adu.size() < 2 + frame.check_size()) return;
   check_station(model, frame, meaning.findings);
   if (frame.is_exception()) {
     if (frame.role != Role::request) explain_exception(model, frame, meaning.findings);
-    return meaning;
+    return;
   }
   if (frame.role == Role::request) interpret_request(model, frame, meaning);
   if (frame.role == Role::response) interpret_response(model, frame, meaning);
-  return meaning;
+}
+
+void append_number(fmt::memory_buffer& out, double value, int decimals) {
+  // Most registers hold whole numbers: printed as integers they skip fmt's float path.
+  constexpr double exact_integers = 9007199254740992.0;  // 2^53
+  if (decimals == 0 && value == std::trunc(value) && std::fabs(value) < exact_integers &&
+      !std::signbit(value)) {
+    const fmt::format_int digits(static_cast<int64_t>(value));
+    out.append(digits.data(), digits.data() + digits.size());
+  } else {
+    fmt::format_to(fmt::appender(out), FMT_COMPILE("{:.{}f}"), value, decimals);
+  }
 }
 
 void append_value_text(fmt::memory_buffer& out, const RegisterValue& reg) {
@@ -375,7 +397,7 @@ void append_value_text(fmt::memory_buffer& out, const RegisterValue& reg) {
     return;
   }
   if (std::isfinite(reg.value)) {
-    fmt::format_to(put, "{:.{}f}", reg.value, reg.decimals);
+    append_number(out, reg.value, reg.decimals);
   } else {
     fmt::format_to(put, "{}", reg.value);
   }

@@ -3,8 +3,10 @@
 #pragma once
 
 #include <cstdint>
+#include <list>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <fmt/format.h>
@@ -14,16 +16,17 @@
 
 namespace modtap::decoder {
 
+// Its texts point into the model, or into the Meaning that holds it where they are composed.
 struct RegisterValue {
   uint16_t address = 0;
-  std::string name;   // empty for a register the model does not know
-  std::string label;  // the manual's words
-  uint32_t raw = 0;   // the register, or both words of a 32-bit value
-  double value = 0;   // raw, signed by type, scaled and offset
-  int decimals = 0;   // digits after the point that the scale implies
-  std::string unit;
-  std::string text;   // an enum's meaning, the set bits' names, or a string register's text
-  bool code = false;  // shown in hex as the manual writes it (0106H)
+  std::string_view name;   // empty for a register the model does not know
+  std::string_view label;  // the manual's words
+  uint32_t raw = 0;        // the register, or both words of a 32-bit value
+  double value = 0;        // raw, signed by type, scaled and offset
+  int decimals = 0;        // digits after the point that the scale implies
+  std::string_view unit;
+  std::string_view text;  // an enum's meaning, the set bits' names, or a string register's text
+  bool code = false;      // shown in hex as the manual writes it (0106H)
 };
 
 enum class RuleKind : uint8_t {
@@ -53,15 +56,39 @@ struct Meaning {
   const DeviceModel* model = nullptr;
   std::vector<RegisterValue> registers;
   std::vector<RuleFinding> findings;
+
+  Meaning() = default;
+  Meaning(Meaning&&) = default;  // moving keeps `composed` where the registers' texts point
+  Meaning& operator=(Meaning&&) = default;
+  Meaning(const Meaning&) = delete;
+  Meaning& operator=(const Meaning&) = delete;
+
+  // Keeps a text composed for this frame ("F01.05 (RAM)", "Run, Reverse") for as long as
+  // the Meaning, so a register can point at it.
+  std::string_view keep(std::string text) { return composed.emplace_back(std::move(text)); }
+  void clear() {
+    model = nullptr;
+    registers.clear();
+    findings.clear();
+    composed.clear();
+  }
+
+ private:
+  std::list<std::string> composed;  // rare: most texts are the model's own
 };
 
 Meaning interpret(const DeviceModel& model, const Frame& frame);
+// The same into `out`, whose storage is reused from frame to frame.
+void interpret(const DeviceModel& model, const Frame& frame, Meaning& out);
 
 // Appends to `out` the registers `words` hold from `start` on, in the model's terms.
 void decode_registers(const DeviceModel& model, Table table, uint16_t start,
-                      std::span<const uint16_t> words, std::vector<RegisterValue>& out);
+                      std::span<const uint16_t> words, Meaning& out);
 
 const char* to_string(RuleKind kind);
+
+// `value` with `decimals` digits after the point, as "{:.{}f}" prints it.
+void append_number(fmt::memory_buffer& out, double value, int decimals);
 
 // A register's value as people read it: "60.00 Hz", "Forward running (1)", "Run, Reverse (3)".
 void append_value_text(fmt::memory_buffer& out, const RegisterValue& reg);

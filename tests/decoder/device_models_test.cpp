@@ -670,8 +670,9 @@ TEST(ModelTypes, MultiWordStringBcdAndOffsetValuesDecode) {
                                        0x1234,                  // BCD 1234
                                        0x0258,                  // 600 * 0.1 - 40 = 20.0
                                        0xBEEF};
-  std::vector<RegisterValue> out;
-  decode_registers(model, Table::holding, 0, words, out);
+  Meaning meaning;
+  decode_registers(model, Table::holding, 0, words, meaning);
+  const std::vector<RegisterValue>& out = meaning.registers;
   ASSERT_EQ(out.size(), 8u);
   EXPECT_EQ(out[0].raw, 100000u);
   EXPECT_DOUBLE_EQ(out[0].value, 100000);
@@ -689,8 +690,9 @@ TEST(ModelTypes, AValueCutShortByTheFrameDecodesAsItsRawWord) {
   const DeviceModel model =
       parse_model("model: t\nregisters:\n  - {address: 0, name: energy, type: u32}\n", "t.yaml");
   const std::vector<uint16_t> words = {0x0001};
-  std::vector<RegisterValue> out;
-  decode_registers(model, Table::holding, 0, words, out);
+  Meaning meaning;
+  decode_registers(model, Table::holding, 0, words, meaning);
+  const std::vector<RegisterValue>& out = meaning.registers;
   ASSERT_EQ(out.size(), 1u);
   EXPECT_EQ(out[0].raw, 1u);
 }
@@ -737,8 +739,9 @@ TEST(ModelTypes, SignedRegistersMatchNegativeNamedValuesAndWideBitFieldsAreSafe)
       "    bits: [{bits: [0, 31], name: everything}]\n",
       "s.yaml");
   const std::vector<uint16_t> words = {0xFFFF, 0x1234, 0x5678};
-  std::vector<RegisterValue> out;
-  decode_registers(model, Table::holding, 0, words, out);
+  Meaning meaning;
+  decode_registers(model, Table::holding, 0, words, meaning);
+  const std::vector<RegisterValue>& out = meaning.registers;
   ASSERT_EQ(out.size(), 2u);
   EXPECT_EQ(out[0].text, "No fault");
   EXPECT_EQ(out[1].text, fmt::format("everything={}", 0x12345678u));

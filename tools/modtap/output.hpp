@@ -1,8 +1,10 @@
 // A buffered writer for sinks: records are appended with fmt::format_to and written out about
-// every 64 KiB, so there is no string and no system call per record. Writes are checked
+// every 64 KiB, so there is no string and no system call per record. What is printed for
+// every record uses FMT_COMPILE, so its format is not parsed again per record. Writes are checked
 // (captures::OutputFile): a failure throws WriteError.
 #pragma once
 
+#include <fmt/compile.h>
 #include <fmt/format.h>
 
 #include "captures/output_file.hpp"
@@ -25,7 +27,13 @@ class Output {
   fmt::memory_buffer& buffer() { return buffer_; }
   template <typename... Args>
   void print(fmt::format_string<Args...> format, Args&&... args) {
-    fmt::format_to(std::back_inserter(buffer_), format, std::forward<Args>(args)...);
+    fmt::format_to(fmt::appender(buffer_), format, std::forward<Args>(args)...);
+  }
+  // With FMT_COMPILE("..."): parsed at compile time, for the lines printed per record.
+  template <typename Compiled, typename... Args>
+  requires fmt::detail::is_compiled_string<Compiled>::value void print(const Compiled& format,
+                                                                       Args&&... args) {
+    fmt::format_to(fmt::appender(buffer_), format, std::forward<Args>(args)...);
   }
   // Called after each record: writes only when enough has gathered, or always when live.
   void end_record() {

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include <fmt/compile.h>
+
 #include "decoder/function_codes.hpp"
 
 namespace modtap::tools {
@@ -175,18 +177,22 @@ size_t append_text_value(fmt::memory_buffer& out, const DecodedPdu& pdu, size_t 
 }
 
 void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue& reg) {
-  auto optional_string = [&](const std::string& text) {
+  auto optional_string = [&](std::string_view text) {
     if (text.empty()) {
       append_chars(out, "null");
     } else {
       append_json_string(out, text);
     }
   };
-  fmt::format_to(std::back_inserter(out), "{{\"addr\":{},\"name\":", reg.address);
+  append_chars(out, "{\"addr\":");
+  append_int(out, reg.address);
+  append_chars(out, ",\"name\":");
   optional_string(reg.name);
-  fmt::format_to(std::back_inserter(out), ",\"raw\":{},\"value\":", reg.raw);
+  append_chars(out, ",\"raw\":");
+  append_int(out, reg.raw);
+  append_chars(out, ",\"value\":");
   if (std::isfinite(reg.value)) {
-    fmt::format_to(std::back_inserter(out), "{:.{}f}", reg.value, reg.decimals);
+    decoder::append_number(out, reg.value, reg.decimals);
   } else {
     append_chars(out, "null");
   }
@@ -205,4 +211,25 @@ auto fmt::formatter<modtap::tools::FunctionLabel>::format(modtap::tools::Functio
   const std::string_view name = modtap::decoder::function_name(label.fc);
   if (!name.empty()) return formatter<string_view>::format(name, ctx);
   return fmt::format_to(ctx.out(), "Function 0x{:02X}", label.fc & 0x7F);
+}
+
+auto fmt::formatter<modtap::tools::Fixed>::format(modtap::tools::Fixed number,
+                                                  format_context& ctx) const
+    -> decltype(ctx.out()) {
+  const bool negative = number.value < 0;
+  uint64_t units =
+      negative ? 0 - static_cast<uint64_t>(number.value) : static_cast<uint64_t>(number.value);
+  uint64_t dropped = 1;  // the digits below the last one shown
+  for (int i = number.decimals; i < number.exponent; ++i) dropped *= 10;
+  units = (units + dropped / 2) / dropped;
+  char text[48];
+  char* at = std::end(text);
+  for (int i = 0; i < number.decimals; ++i, units /= 10)
+    *--at = static_cast<char>('0' + units % 10);
+  if (number.decimals > 0) *--at = '.';
+  do *--at = static_cast<char>('0' + units % 10);
+  while ((units /= 10) != 0);
+  if (negative) *--at = '-';
+  return formatter<string_view>::format(string_view(at, static_cast<size_t>(std::end(text) - at)),
+                                        ctx);
 }

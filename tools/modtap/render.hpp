@@ -32,7 +32,21 @@ struct FunctionLabel {
   uint8_t fc;
 };
 
+// value x 10^-exponent shown with `decimals` digits after the point, from integers: exact
+// where the digits suffice (nanoseconds as microseconds with 3), else rounded half away from
+// zero. Fixed{ns, 9, 6} is seconds as text shows them. A width in the format pads on the left.
+struct Fixed {
+  int64_t value;
+  int exponent;
+  int decimals;
+};
+
 }  // namespace modtap::tools
+
+template <>
+struct fmt::formatter<modtap::tools::Fixed> : formatter<string_view> {
+  auto format(modtap::tools::Fixed number, format_context& ctx) const -> decltype(ctx.out());
+};
 
 template <>
 struct fmt::formatter<modtap::tools::FunctionLabel> : formatter<string_view> {

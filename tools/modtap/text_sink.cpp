@@ -49,20 +49,20 @@ void append_bad_check(fmt::memory_buffer& buf, const Frame& frame) {
 TextSink::TextSink(Output& out, const std::vector<ChannelInfo>& channels, bool verbose)
     : out_(out), channels_(channels), verbose_(verbose) {}
 
-double TextSink::seconds(int64_t t_ns) {
+Fixed TextSink::seconds(int64_t t_ns) {
   if (!first_ns_) first_ns_ = t_ns;
-  return static_cast<double>(t_ns - *first_ns_) / 1e9;
+  return {t_ns - *first_ns_, 9, 6};
 }
 
 void TextSink::channel_column(uint16_t channel) {
   if (channels_.size() > 1)
-    out_.print(" {:<10}", channel < channels_.size() ? channels_[channel].name : "?");
+    out_.print(FMT_COMPILE(" {:<10}"), channel < channels_.size() ? channels_[channel].name : "?");
 }
 
 void TextSink::on_frame(const Frame& frame) {
-  out_.print("{:6} {:11.6f}", frame.index, seconds(frame.t_ns));
+  out_.print(FMT_COMPILE("{:6} {:>11}"), frame.index, seconds(frame.t_ns));
   channel_column(frame.channel);
-  out_.print(" {} slave {:<3} {}", role_tag(frame.role), frame.slave(),
+  out_.print(FMT_COMPILE(" {} slave {:<3} {}"), role_tag(frame.role), frame.slave(),
              FunctionLabel{frame.function()});
   decode_pdu(frame.role, frame.pdu(), frame.request_pdu, decoded_);
   auto& buf = out_.buffer();
@@ -77,53 +77,54 @@ void TextSink::on_frame(const Frame& frame) {
       at = decoded_.next(at);
       continue;
     }
-    out_.print(" {}=", f.name());
+    out_.print(FMT_COMPILE(" {}="), f.name());
     at = append_text_value(buf, decoded_, at, line_items);
   }
   const char* check = frame.mode == Mode::rtu ? "crc" : "lrc";
   if (frame.check_ok) {
-    out_.print("  {} ok", check);
+    out_.print(FMT_COMPILE("  {} ok"), check);
   } else {
-    out_.print("  {} BAD (", check);
+    out_.print(FMT_COMPILE("  {} BAD ("), check);
     append_bad_check(buf, frame);
-    out_.print(")");
+    out_.print(FMT_COMPILE(")"));
   }
-  if (frame.request) out_.print("  req #{}", *frame.request);
-  if (frame.latency_ns) out_.print(" {:.3f} ms", static_cast<double>(*frame.latency_ns) / 1e6);
+  if (frame.request) out_.print(FMT_COMPILE("  req #{}"), *frame.request);
+  if (frame.latency_ns) out_.print(FMT_COMPILE(" {} ms"), Fixed{*frame.latency_ns, 6, 3});
   for (const auto& [bit, name] : finding_names())
-    if ((frame.findings & bit) && bit != finding_bad_check) out_.print(" [{}]", name);
+    if ((frame.findings & bit) && bit != finding_bad_check) out_.print(FMT_COMPILE(" [{}]"), name);
   if (frame.meaning) registers_line(*frame.meaning);
-  out_.print("\n");
+  out_.print(FMT_COMPILE("\n"));
   if (verbose_) tree(frame);
   out_.end_record();
 }
 
 void TextSink::tree(const Frame& frame) {
   auto& buf = out_.buffer();
-  out_.print("    Frame {}: {} bytes, {}, channel {}, offset {}\n", frame.index, frame.raw.size(),
-             to_string(frame.mode),
+  out_.print(FMT_COMPILE("    Frame {}: {} bytes, {}, channel {}, offset {}\n"), frame.index,
+             frame.raw.size(), to_string(frame.mode),
              frame.channel < channels_.size() ? channels_[frame.channel].name : "?", frame.offset);
-  out_.print("    Raw: ");
+  out_.print(FMT_COMPILE("    Raw: "));
   append_hex(buf, frame.raw, true);
-  out_.print("\n    Role: {}\n    Slave: {}\n    Function: {} ({})\n", to_string(frame.role),
-             frame.slave(), frame.function(), FunctionLabel{frame.function()});
+  out_.print(FMT_COMPILE("\n    Role: {}\n    Slave: {}\n    Function: {} ({})\n"),
+             to_string(frame.role), frame.slave(), frame.function(),
+             FunctionLabel{frame.function()});
   for (size_t at = 0; at < decoded_.fields.size();) {
-    out_.print("    {}: ", decoded_.fields[at].name());
+    out_.print(FMT_COMPILE("    {}: "), decoded_.fields[at].name());
     at = append_text_value(buf, decoded_, at, SIZE_MAX);
-    out_.print("\n");
+    out_.print(FMT_COMPILE("\n"));
   }
-  if (decoded_.truncated) out_.print("    [PDU shorter than its fields]\n");
-  out_.print("    {}: ", frame.mode == Mode::rtu ? "CRC" : "LRC");
+  if (decoded_.truncated) out_.print(FMT_COMPILE("    [PDU shorter than its fields]\n"));
+  out_.print(FMT_COMPILE("    {}: "), frame.mode == Mode::rtu ? "CRC" : "LRC");
   append_check(buf, frame.wire_check(), frame.mode);
-  out_.print(" ({})", frame.check_ok ? "ok" : "bad");
+  out_.print(FMT_COMPILE(" ({})"), frame.check_ok ? "ok" : "bad");
   if (!frame.check_ok) {
-    out_.print(", ");
+    out_.print(FMT_COMPILE(", "));
     append_bad_check(buf, frame);
   }
-  out_.print("\n");
-  if (frame.request) out_.print("    Request in frame: {}\n", *frame.request);
+  out_.print(FMT_COMPILE("\n"));
+  if (frame.request) out_.print(FMT_COMPILE("    Request in frame: {}\n"), *frame.request);
   if (frame.latency_ns)
-    out_.print("    Latency: {:.3f} ms\n", static_cast<double>(*frame.latency_ns) / 1e6);
+    out_.print(FMT_COMPILE("    Latency: {} ms\n"), Fixed{*frame.latency_ns, 6, 3});
   if (frame.meaning) registers_tree(*frame.meaning);
 }
 
@@ -135,49 +136,53 @@ void TextSink::registers_line(const Meaning& meaning) {
   for (const RegisterValue& reg : meaning.registers) {
     if (reg.name.empty()) continue;
     if (shown++ == line_items) {
-      out_.print(" ...");
+      out_.print(FMT_COMPILE(" ..."));
       break;
     }
-    out_.print("{}{}=", shown == 1 ? "  | " : " ", reg.name);
+    out_.print(FMT_COMPILE("{}{}="), shown == 1 ? "  | " : " ", reg.name);
     append_value_text(buf, reg);
   }
-  for (const RuleFinding& finding : meaning.findings) out_.print("  !! {}", finding.text);
+  for (const RuleFinding& finding : meaning.findings)
+    out_.print(FMT_COMPILE("  !! {}"), finding.text);
 }
 
 void TextSink::registers_tree(const Meaning& meaning) {
   auto& buf = out_.buffer();
-  if (!meaning.registers.empty()) out_.print("    Registers ({}):\n", meaning.model->name);
+  if (!meaning.registers.empty())
+    out_.print(FMT_COMPILE("    Registers ({}):\n"), meaning.model->name);
   for (const RegisterValue& reg : meaning.registers) {
-    out_.print("      {:04X}H {}", reg.address, reg.name.empty() ? "(unknown)" : reg.name);
-    if (!reg.label.empty()) out_.print(" \"{}\"", reg.label);
-    out_.print(" = 0x{:04X} -> ", reg.raw);
+    out_.print(FMT_COMPILE("      {:04X}H {}"), reg.address,
+               reg.name.empty() ? "(unknown)" : reg.name);
+    if (!reg.label.empty()) out_.print(FMT_COMPILE(" \"{}\""), reg.label);
+    out_.print(FMT_COMPILE(" = 0x{:04X} -> "), reg.raw);
     append_value_text(buf, reg);
-    out_.print("\n");
+    out_.print(FMT_COMPILE("\n"));
   }
   for (const RuleFinding& finding : meaning.findings)
-    out_.print("    Finding ({}): {}\n", to_string(finding.kind), finding.text);
+    out_.print(FMT_COMPILE("    Finding ({}): {}\n"), to_string(finding.kind), finding.text);
 }
 
 void TextSink::on_noise(const Noise& noise) {
-  out_.print("{:6} {:11.6f}", noise.index, seconds(noise.t_ns));
+  out_.print(FMT_COMPILE("{:6} {:>11}"), noise.index, seconds(noise.t_ns));
   channel_column(noise.channel);
-  out_.print(" noise {} bytes ({}): ", noise.raw.size(), to_string(noise.reason));
+  out_.print(FMT_COMPILE(" noise {} bytes ({}): "), noise.raw.size(), to_string(noise.reason));
   append_hex(out_.buffer(), noise.raw.first(std::min<size_t>(noise.raw.size(), 32)), true);
-  if (noise.raw.size() > 32) out_.print(" ...");
-  out_.print("\n");
+  if (noise.raw.size() > 32) out_.print(FMT_COMPILE(" ..."));
+  out_.print(FMT_COMPILE("\n"));
   out_.end_record();
 }
 
 void TextSink::on_timeout(const Timeout& t) {
-  out_.print("{:6} {:11.6f}", "-", seconds(t.t_ns));
+  out_.print(FMT_COMPILE("{:6} {:>11}"), "-", seconds(t.t_ns));
   channel_column(t.channel);
-  const double waited_ms = static_cast<double>(t.waited_ns) / 1e6;
+  const Fixed waited_ms{t.waited_ns, 6, 3};
   if (t.timed_out()) {
-    out_.print(" TIMEOUT request #{} slave {} {}: no response after {:.3f} ms ({})\n", t.request,
-               t.slave, FunctionLabel{t.function}, waited_ms, to_string(t.reason));
+    out_.print(FMT_COMPILE(" TIMEOUT request #{} slave {} {}: no response after {} ms ({})\n"),
+               t.request, t.slave, FunctionLabel{t.function}, waited_ms, to_string(t.reason));
   } else {
-    out_.print(" UNANSWERED request #{} slave {} {}: the capture ends {:.3f} ms after it\n",
-               t.request, t.slave, FunctionLabel{t.function}, waited_ms);
+    out_.print(
+        FMT_COMPILE(" UNANSWERED request #{} slave {} {}: the capture ends {} ms after it\n"),
+        t.request, t.slave, FunctionLabel{t.function}, waited_ms);
   }
   out_.end_record();
 }

@@ -8,6 +8,7 @@
 #include "decoder/pdu_fields.hpp"
 #include "decoder/register_meaning.hpp"
 #include "tools/modtap/output.hpp"
+#include "tools/modtap/render.hpp"
 
 namespace modtap::tools {
 
@@ -20,7 +21,7 @@ class TextSink final : public decoder::RecordSink {
   void on_timeout(const decoder::Timeout& timeout) override;
 
  private:
-  double seconds(int64_t t_ns);
+  Fixed seconds(int64_t t_ns);
   void channel_column(uint16_t channel);
   void tree(const decoder::Frame& frame);
   void registers_line(const decoder::Meaning& meaning);
