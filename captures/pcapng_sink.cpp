@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include <fmt/compile.h>
 #include <fmt/format.h>
 
 #include "captures/pcapng_format.hpp"
@@ -48,18 +49,16 @@ PacketDirection direction_of(Role role, ChannelRole channel) {
 
 // The device model's reading, one line each after the verdicts, for modtap.lua and for people:
 // "register 2502H frequency_command = 60.00 Hz" and "note read_only_write: ... is read-only".
-void append_meaning(std::string& comment, const Meaning& meaning) {
-  comment += fmt::format(" model={}", meaning.model->name);
-  fmt::memory_buffer line;
+void append_meaning(fmt::memory_buffer& out, const Meaning& meaning) {
+  fmt::format_to(fmt::appender(out), FMT_COMPILE(" model={}"), meaning.model->name);
   for (const RegisterValue& reg : meaning.registers) {
-    line.clear();
-    fmt::format_to(std::back_inserter(line), "\nregister {:04X}H {} = ", reg.address,
+    fmt::format_to(fmt::appender(out), FMT_COMPILE("\nregister {:04X}H {} = "), reg.address,
                    reg.name.empty() ? "-" : reg.name);
-    append_value_text(line, reg);
-    comment.append(line.data(), line.size());
+    append_value_text(out, reg);
   }
   for (const RuleFinding& finding : meaning.findings)
-    comment += fmt::format("\nnote {}: {}", to_string(finding.kind), finding.text);
+    fmt::format_to(fmt::appender(out), FMT_COMPILE("\nnote {}: {}"), to_string(finding.kind),
+                   finding.text);
 }
 
 }  // namespace
@@ -71,20 +70,29 @@ PcapngLink parse_link(const std::string& name) {
   throw std::invalid_argument("unknown link \"" + name + "\"");
 }
 
-std::string frame_comment(const Frame& f) {
-  std::string c = fmt::format("modtap index={} mode={} role={} check={} duration_ns={}", f.index,
-                              to_string(f.mode), to_string(f.role), f.check_ok ? "ok" : "bad",
-                              f.end_ns - f.t_ns);
+void append_frame_comment(fmt::memory_buffer& out, const Frame& f) {
+  auto it = fmt::appender(out);
+  fmt::format_to(it, FMT_COMPILE("modtap index={} mode={} role={} check={} duration_ns={}"),
+                 f.index, to_string(f.mode), to_string(f.role), f.check_ok ? "ok" : "bad",
+                 f.end_ns - f.t_ns);
   if (!f.check_ok && f.damage != Damage::cut)
-    c += fmt::format(" expected=0x{:0{}x}", f.expected_check, f.mode == Mode::rtu ? 4 : 2);
-  if (const char* damage = to_string(f.damage)) c += fmt::format(" damage={}", damage);
-  if (f.request) c += fmt::format(" request={}", *f.request);
-  if (f.latency_ns)
-    c += fmt::format(" latency_us={:.3f}", static_cast<double>(*f.latency_ns) / 1e3);
+    fmt::format_to(it, FMT_COMPILE(" expected=0x{:0{}x}"), f.expected_check,
+                   f.mode == Mode::rtu ? 4 : 2);
+  if (const char* damage = to_string(f.damage))
+    fmt::format_to(it, FMT_COMPILE(" damage={}"), damage);
+  if (f.request) fmt::format_to(it, FMT_COMPILE(" request={}"), *f.request);
+  if (f.latency_ns)  // microseconds with three decimals: the nanoseconds, exactly
+    fmt::format_to(it, FMT_COMPILE(" latency_us={}.{:03}"), *f.latency_ns / 1000,
+                   *f.latency_ns % 1000);
   for (const auto& [bit, name] : finding_names())
-    if (f.findings & bit) c += fmt::format(" finding={}", name);
-  if (f.meaning) append_meaning(c, *f.meaning);
-  return c;
+    if (f.findings & bit) fmt::format_to(it, FMT_COMPILE(" finding={}"), name);
+  if (f.meaning) append_meaning(out, *f.meaning);
+}
+
+std::string frame_comment(const Frame& f) {
+  fmt::memory_buffer out;
+  append_frame_comment(out, f);
+  return fmt::to_string(out);
 }
 
 std::string noise_comment(const Noise& n) {
@@ -143,23 +151,28 @@ void PcapngSink::on_frame(const Frame& frame) {
     writer_.write_packet(interface, frame.t_ns, frame.raw, direction, {});
     return;
   }
-  comment_ = frame_comment(frame);
+  comment_.clear();
+  append_frame_comment(comment_, frame);
   std::span<const uint8_t> data = frame.raw;
   if (options_.link == PcapngLink::exported_pdu) {
     // mbrtu reads RTU only; ASCII frames go as data with their verdicts in the comment.
     data = exported_pdu(frame.mode == Mode::rtu ? "mbrtu" : "data",
                         direction != PacketDirection::inbound, frame.raw);
   }
-  writer_.write_packet(interface, frame.t_ns, data, direction, comment_);
+  writer_.write_packet(interface, frame.t_ns, data, direction,
+                       std::string_view(comment_.data(), comment_.size()));
 }
 
 void PcapngSink::on_noise(const Noise& noise) {
   if (options_.link == PcapngLink::bare) return;
   const uint32_t interface = interface_for(noise.channel);
-  comment_ = noise_comment(noise);
+  comment_.clear();
+  const std::string comment = noise_comment(noise);
+  comment_.append(comment.data(), comment.data() + comment.size());
   std::span<const uint8_t> data = noise.raw;
   if (options_.link == PcapngLink::exported_pdu) data = exported_pdu("data", true, noise.raw);
-  writer_.write_packet(interface, noise.t_ns, data, PacketDirection::unknown, comment_);
+  writer_.write_packet(interface, noise.t_ns, data, PacketDirection::unknown,
+                       std::string_view(comment_.data(), comment_.size()));
 }
 
 }  // namespace modtap::captures

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "captures/pcapng_writer.hpp"
 #include "decoder/analyzer.hpp"
 
@@ -49,7 +51,7 @@ class PcapngSink final : public decoder::RecordSink {
   PcapngOptions options_;
   std::vector<int64_t> interface_of_channel_;  // -1 until its interface block is written
   std::vector<uint8_t> payload_;
-  std::string comment_;
+  fmt::memory_buffer comment_;  // the packet's comment, its storage kept from frame to frame
 };
 
 // The comment modtap writes on a frame: "modtap key=value ...", parsed by modtap.lua.
@@ -58,6 +60,7 @@ class PcapngSink final : public decoder::RecordSink {
 std::string interface_comment(decoder::ChannelRole role, decoder::ClockQuality clock);
 
 std::string frame_comment(const decoder::Frame& frame);
+void append_frame_comment(fmt::memory_buffer& out, const decoder::Frame& frame);
 std::string noise_comment(const decoder::Noise& noise);
 
 }  // namespace modtap::captures

@@ -12,6 +12,8 @@ using namespace pcapng;
 // Blocks are written in the machine's byte order; the byte-order magic tells readers which.
 class Body {
  public:
+  // Writes into `storage`, cleared first: a writer keeps one, so a packet allocates nothing.
+  explicit Body(std::vector<uint8_t>& storage) : bytes_(storage) { bytes_.clear(); }
   template <typename T>
   void put(T value) {
     const auto* p = reinterpret_cast<const uint8_t*>(&value);
@@ -39,7 +41,7 @@ class Body {
   void pad() {
     while (bytes_.size() % 4) bytes_.push_back(0);
   }
-  std::vector<uint8_t> bytes_;
+  std::vector<uint8_t>& bytes_;
 };
 
 }  // namespace
@@ -71,7 +73,7 @@ void PcapngWriter::write_block(uint32_t type, std::span<const uint8_t> body) {
 }
 
 void PcapngWriter::write_section_header() {
-  Body b;
+  Body b(body_);
   b.put(byte_order_magic);
   b.put(uint16_t{1});
   b.put(uint16_t{0});
@@ -83,7 +85,7 @@ void PcapngWriter::write_section_header() {
 
 uint32_t PcapngWriter::add_interface(int link_type, std::string_view name,
                                      std::string_view comment) {
-  Body b;
+  Body b(body_);
   b.put(static_cast<uint16_t>(link_type));
   b.put(uint16_t{0});
   b.put(uint32_t{0});  // no snap length
@@ -98,7 +100,7 @@ uint32_t PcapngWriter::add_interface(int link_type, std::string_view name,
 
 void PcapngWriter::write_packet(uint32_t interface, int64_t t_ns, std::span<const uint8_t> data,
                                 PacketDirection direction, std::string_view comment) {
-  Body b;
+  Body b(body_);
   const auto t = static_cast<uint64_t>(t_ns);
   b.put(interface);
   b.put(static_cast<uint32_t>(t >> 32));

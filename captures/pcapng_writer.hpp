@@ -39,7 +39,8 @@ class PcapngWriter {
   void write_block(uint32_t type, std::span<const uint8_t> body);
 
   OutputFile file_;
-  std::vector<uint8_t> block_;  // the block being written, kept to reuse its memory
+  std::vector<uint8_t> body_;   // the block's body being built, kept to reuse its memory
+  std::vector<uint8_t> block_;  // the block being written, likewise
   bool live_ = false;
   uint32_t interfaces_ = 0;
 };

@@ -1,11 +1,36 @@
-// Framing, checking and matching throughput on back-to-back simulated RTU traffic and on junk.
+// Framing, checking and matching throughput on back-to-back simulated RTU traffic and on junk;
+// the outputs (text, JSON, pcapng) on the same traffic, with the allocations they make.
 #include <benchmark/benchmark.h>
 
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "captures/pcapng_sink.hpp"
 #include "decoder/analyzer.hpp"
 #include "decoder/checksum.hpp"
 #include "decoder/model_interpreter.hpp"
 #include "tools/busgen/bus_simulator.hpp"
+#include "tools/modtap/json_sink.hpp"
 #include "tools/modtap/model_catalog.hpp"
+#include "tools/modtap/text_sink.hpp"
+
+// Every allocation of the process is counted, so a benchmark can say how many a frame costs.
+namespace {
+std::atomic<uint64_t> allocations{0};
+}  // namespace
+
+void* operator new(size_t size) {
+  allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, size_t) noexcept {
+  std::free(p);
+}
 
 namespace {
 
@@ -71,6 +96,50 @@ void BM_AnalyzeWithModel(benchmark::State& state, const char* model) {
 }
 BENCHMARK_CAPTURE(BM_AnalyzeWithModel, generic, "generic")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_AnalyzeWithModel, gd20, "gd20")->Unit(benchmark::kMillisecond);
+
+// What a user sees: the model stage and a sink, as `modtap -T text|json` and `-w` run them,
+// writing to /dev/null. "allocs/frame" counts every allocation made while the capture ran.
+enum class Sink { text, json, pcapng };
+
+void BM_Output(benchmark::State& state, Sink kind, const char* model) {
+  tools::ModelCatalog catalog;
+  catalog.load_builtin();
+  const std::vector<decoder::ChannelInfo> channels{{"bench", decoder::ChannelRole::bus}};
+  capture();  // simulated once, before anything is counted
+  uint64_t frames = 0;
+  uint64_t allocated = 0;
+  for (auto _ : state) {
+    captures::OutputFile file("/dev/null");
+    tools::Output out(file);
+    captures::PcapngWriter writer("/dev/null");
+    std::unique_ptr<decoder::RecordSink> sink;
+    if (kind == Sink::text) sink = std::make_unique<tools::TextSink>(out, channels, false);
+    if (kind == Sink::json) sink = std::make_unique<tools::JsonSink>(out, channels);
+    if (kind == Sink::pcapng)
+      sink = std::make_unique<captures::PcapngSink>(writer, channels, captures::PcapngOptions{});
+    Counting counted;
+    struct Both final : decoder::RecordSink {
+      decoder::RecordSink& a;
+      Counting& b;
+      Both(decoder::RecordSink& a, Counting& b) : a(a), b(b) {}
+      void on_frame(const decoder::Frame& f) override { a.on_frame(f), b.on_frame(f); }
+      void on_noise(const decoder::Noise& n) override { a.on_noise(n); }
+      void on_timeout(const decoder::Timeout& t) override { a.on_timeout(t); }
+    } both(*sink, counted);
+    decoder::ModelInterpreter interpreter(catalog.all(), catalog.choose({model}), both);
+    const uint64_t before = allocations.load();
+    analyze(interpreter);
+    allocated += allocations.load() - before;
+    frames += counted.frames;
+  }
+  state.counters["frames/s"] =
+      benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsRate);
+  state.counters["allocs/frame"] = static_cast<double>(allocated) / static_cast<double>(frames);
+}
+BENCHMARK_CAPTURE(BM_Output, text, Sink::text, "generic")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Output, text_gd20, Sink::text, "gd20")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Output, json, Sink::json, "generic")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Output, pcapng, Sink::pcapng, "generic")->Unit(benchmark::kMillisecond);
 
 // Random bytes, as a capture read with the wrong settings or a noisy line gives them: every
 // byte starts a CRC search in RTU and nothing in ASCII, untimed, in 64 KiB chunks.
