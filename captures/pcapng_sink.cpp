@@ -166,13 +166,9 @@ void PcapngSink::on_frame(const Frame& frame) {
 void PcapngSink::on_noise(const Noise& noise) {
   if (options_.link == PcapngLink::bare) return;
   const uint32_t interface = interface_for(noise.channel);
-  comment_.clear();
-  const std::string comment = noise_comment(noise);
-  comment_.append(comment.data(), comment.data() + comment.size());
   std::span<const uint8_t> data = noise.raw;
   if (options_.link == PcapngLink::exported_pdu) data = exported_pdu("data", true, noise.raw);
-  writer_.write_packet(interface, noise.t_ns, data, PacketDirection::unknown,
-                       std::string_view(comment_.data(), comment_.size()));
+  writer_.write_packet(interface, noise.t_ns, data, PacketDirection::unknown, noise_comment(noise));
 }
 
 }  // namespace modtap::captures

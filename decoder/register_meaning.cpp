@@ -130,7 +130,7 @@ void decode_span(const DeviceModel& model, Table table, uint16_t start,
       const size_t n = std::min<size_t>(def->words, words.size() - i);
       v.text = meaning.keep(string_text(words.subspan(i, n)));
       i += n - 1;
-      out.push_back(std::move(v));
+      out.push_back(v);
       continue;
     }
     if (def->words == 2 && i + 1 < words.size()) {
@@ -147,7 +147,7 @@ void decode_span(const DeviceModel& model, Table table, uint16_t start,
       v.text = meaning.keep(bits_text(*def, v.raw));
     }
     check_value(*def, v, found);
-    out.push_back(std::move(v));
+    out.push_back(v);
   }
 }
 
@@ -292,7 +292,7 @@ void decode_bits(const DeviceModel& model, Table table, uint16_t start,
     v.value = v.raw;
     if (def->values)
       if (auto it = def->values->find(v.raw); it != def->values->end()) v.text = it->second;
-    out.push_back(std::move(v));
+    out.push_back(v);
   }
 }
 
@@ -330,9 +330,7 @@ void interpret_request(const DeviceModel& model, const Frame& frame, Meaning& me
   for (const RegisterAccess& access : function_code(frame.function()).request_accesses(pdu)) {
     check_limits(model, frame.mode, access, meaning.findings);
     check_registers(model, access, meaning.findings);
-    // Bits are the model's own to name; a value out of range is said of registers only.
-    const bool words = access.data == RegisterAccess::Data::words;
-    decode_values(model, access, meaning, words ? &meaning.findings : nullptr);
+    decode_values(model, access, meaning, &meaning.findings);
   }
 }
 
@@ -383,7 +381,7 @@ void append_number(fmt::memory_buffer& out, double value, int decimals) {
 }
 
 void append_value_text(fmt::memory_buffer& out, const RegisterValue& reg) {
-  auto put = std::back_inserter(out);
+  auto put = fmt::appender(out);
   if (reg.code) {
     if (reg.text.empty()) {
       fmt::format_to(put, "{:04X}H", reg.raw);

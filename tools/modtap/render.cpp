@@ -62,7 +62,7 @@ void append_json_key(fmt::memory_buffer& out, const Field& f) {
 }
 
 void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_items) {
-  auto it = std::back_inserter(out);
+  auto it = fmt::appender(out);
   switch (f.type()) {
     case FieldType::hex:
       fmt::format_to(it, "0x{:04x}", f.number);
@@ -125,7 +125,7 @@ void append_json_string(fmt::memory_buffer& out, std::string_view text) {
       out.push_back(static_cast<char>(c));
     } else if (c < 0x20 || c >= 0x7F) {
       // Device strings are bytes, not UTF-8: escape anything outside printable ASCII.
-      fmt::format_to(std::back_inserter(out), "\\u{:04x}", c);
+      fmt::format_to(fmt::appender(out), "\\u{:04x}", c);
     } else {
       out.push_back(static_cast<char>(c));
     }

@@ -27,21 +27,21 @@ const char* role_tag(Role role) {
 // A check as the manuals print it, in wire order: CRC 0xCC7E is sent, and written, "7E CC".
 void append_check(fmt::memory_buffer& buf, uint16_t check, Mode mode) {
   if (mode == Mode::rtu) {
-    fmt::format_to(std::back_inserter(buf), "{:02X} {:02X}", check & 0xFF, check >> 8);
+    fmt::format_to(fmt::appender(buf), "{:02X} {:02X}", check & 0xFF, check >> 8);
   } else {
-    fmt::format_to(std::back_inserter(buf), "{:02X}", check);
+    fmt::format_to(fmt::appender(buf), "{:02X}", check);
   }
 }
 
 // What a bad check says: the check it should have been, and how the frame was damaged.
 void append_bad_check(fmt::memory_buffer& buf, const Frame& frame) {
   if (frame.damage == Damage::cut) {
-    fmt::format_to(std::back_inserter(buf), "cut");
+    fmt::format_to(fmt::appender(buf), "cut");
     return;
   }
-  fmt::format_to(std::back_inserter(buf), "expected ");
+  fmt::format_to(fmt::appender(buf), "expected ");
   append_check(buf, frame.expected_check, frame.mode);
-  if (frame.damage == Damage::collision) fmt::format_to(std::back_inserter(buf), ", collision");
+  if (frame.damage == Damage::collision) fmt::format_to(fmt::appender(buf), ", collision");
 }
 
 }  // namespace

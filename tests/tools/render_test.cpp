@@ -1,0 +1,38 @@
+#include "tools/modtap/render.hpp"
+
+#include <gtest/gtest.h>
+
+namespace modtap::tools {
+namespace {
+
+std::string number(double value, int decimals) {
+  fmt::memory_buffer out;
+  decoder::append_number(out, value, decimals);
+  return fmt::to_string(out);
+}
+
+// Times print from their nanoseconds: the decimal value is exact, and a half rounds up.
+TEST(Fixed, PrintsNanosecondsInALargerUnitFromTheIntegers) {
+  EXPECT_EQ(fmt::format("{}", Fixed{14'108'056'500, 9, 6}), "14.108057");  // a half: up
+  EXPECT_EQ(fmt::format("{}", Fixed{14'108'056'499, 9, 6}), "14.108056");
+  EXPECT_EQ(fmt::format("{}", Fixed{2'291'664, 3, 3}), "2291.664");  // us with 3: exact
+  EXPECT_EQ(fmt::format("{}", Fixed{999'500, 6, 3}), "1.000");       // a carry into the units
+  EXPECT_EQ(fmt::format("{}", Fixed{0, 9, 6}), "0.000000");
+  EXPECT_EQ(fmt::format("{}", Fixed{-1'500, 9, 6}), "-0.000002");  // a clock stepped back
+  EXPECT_EQ(fmt::format("{:>11}", Fixed{2'291'664, 9, 6}), "   0.002292");
+}
+
+// Whole values skip fmt's float path and must print as "{:.{}f}" does.
+TEST(AppendNumber, PrintsAsFixedPointFormattingDoes) {
+  for (const auto& [value, decimals] : std::initializer_list<std::pair<double, int>>{
+           {51812, 0}, {-5, 0}, {-0.0, 0}, {60, 2}, {12.345, 1}, {1e20, 0}, {0, 0}})
+    EXPECT_EQ(number(value, decimals), fmt::format("{:.{}f}", value, decimals)) << value;
+}
+
+TEST(FunctionLabel, NamesPublicCodesAndNumbersOthers) {
+  EXPECT_EQ(fmt::format("{}", FunctionLabel{0x83}), "Read Holding Registers");
+  EXPECT_EQ(fmt::format("{}", FunctionLabel{0x41}), "Function 0x41");
+}
+
+}  // namespace
+}  // namespace modtap::tools
