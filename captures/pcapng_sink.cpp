@@ -84,8 +84,9 @@ void append_frame_comment(fmt::memory_buffer& out, const Frame& f) {
   if (f.latency_ns)  // microseconds with three decimals: the nanoseconds, exactly
     fmt::format_to(it, FMT_COMPILE(" latency_us={}.{:03}"), *f.latency_ns / 1000,
                    *f.latency_ns % 1000);
-  for (const auto& [bit, name] : finding_names())
-    if (f.findings & bit) fmt::format_to(it, FMT_COMPILE(" finding={}"), name);
+  for_each_frame_finding(f.findings, [&](size_t slot) {
+    fmt::format_to(it, FMT_COMPILE(" finding={}"), frame_findings()[slot].name);
+  });
   if (f.meaning) append_meaning(out, *f.meaning);
 }
 

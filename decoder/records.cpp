@@ -9,24 +9,6 @@ uint16_t Frame::wire_check() const {
   return mode == Mode::rtu ? wire_crc(adu) : adu.back();
 }
 
-std::span<const FindingName> finding_names() {
-  static constexpr FindingName names[] = {
-      {finding_bad_check, "bad-check"},
-      {finding_broadcast, "broadcast"},
-      {finding_illegal_broadcast, "illegal-broadcast"},
-      {finding_unsolicited, "unsolicited"},
-      {finding_length_mismatch, "length-mismatch"},
-      {finding_echo_mismatch, "echo-mismatch"},
-      {finding_fast_turnaround, "fast-turnaround"},
-      {finding_retry, "retry"},
-      {finding_quantity_out_of_spec, "quantity-out-of-spec"},
-      {finding_byte_count_mismatch, "byte-count-mismatch"},
-      {finding_value_out_of_spec, "value-out-of-spec"},
-      {finding_ambiguous_echo, "ambiguous-echo"},
-  };
-  return names;
-}
-
 const char* to_string(NoiseReason reason) {
   switch (reason) {
     case NoiseReason::junk:

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "decoder/findings.hpp"
+
 namespace modtap::decoder {
 
 // How well a source knows when each byte arrived.
@@ -40,30 +42,6 @@ struct RoleFit {
   bool request = false;
   bool response = false;
 };
-
-// Facts about a record that sinks render; a bit set, so records stay plain values.
-enum Finding : uint32_t {
-  finding_none = 0,
-  finding_broadcast = 1u << 0,             // slave 0: no response expected
-  finding_unsolicited = 1u << 1,           // a response with no pending request
-  finding_length_mismatch = 1u << 2,       // response content does not fit its request
-  finding_echo_mismatch = 1u << 3,         // an echo response differs from its request
-  finding_bad_check = 1u << 4,             // CRC or LRC wrong
-  finding_fast_turnaround = 1u << 5,       // the slave answered before t3.5 of silence
-  finding_illegal_broadcast = 1u << 6,     // a read sent to slave 0
-  finding_retry = 1u << 7,                 // the request that just went unanswered, sent again
-  finding_quantity_out_of_spec = 1u << 8,  // a quantity of 0 or over the standard's limit
-  finding_byte_count_mismatch = 1u << 9,   // a byte count that disagrees with its quantity
-  finding_value_out_of_spec = 1u << 10,    // FC05 with a value other than FF00H or 0000H
-  finding_ambiguous_echo = 1u << 11,       // an echo taken for the response that may be a retry
-};
-
-// Each finding bit's name, as text, JSON and pcapng comments spell it, in the order shown.
-struct FindingName {
-  Finding bit;
-  const char* name;
-};
-std::span<const FindingName> finding_names();
 
 // What happened to a frame whose check failed, where its structure tells.
 enum class Damage : uint8_t {

@@ -403,38 +403,4 @@ void append_value_text(fmt::memory_buffer& out, const RegisterValue& reg) {
   if (!reg.text.empty()) fmt::format_to(put, " ({})", reg.text);
 }
 
-const char* to_string(RuleKind kind) {
-  switch (kind) {
-    case RuleKind::reserved_write:
-      return "reserved-write";
-    case RuleKind::read_only_write:
-      return "read-only-write";
-    case RuleKind::write_only_read:
-      return "write-only-read";
-    case RuleKind::closed_group:
-      return "closed-group";
-    case RuleKind::too_many_words:
-      return "too-many-words";
-    case RuleKind::crosses_group:
-      return "crosses-group";
-    case RuleKind::out_of_range:
-      return "out-of-range";
-    case RuleKind::not_in_enum:
-      return "not-in-enum";
-    case RuleKind::station_out_of_range:
-      return "station-out-of-range";
-    case RuleKind::reserved_address:
-      return "reserved-address";
-    case RuleKind::too_many_retries:
-      return "too-many-retries";
-    case RuleKind::unmapped_register:
-      return "unmapped-register";
-    case RuleKind::exception:
-      return "exception";
-    case RuleKind::identified:
-      return "identified";
-  }
-  return "?";
-}
-
 }  // namespace modtap::decoder

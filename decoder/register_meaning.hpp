@@ -29,23 +29,6 @@ struct RegisterValue {
   bool code = false;      // shown in hex as the manual writes it (0106H)
 };
 
-enum class RuleKind : uint8_t {
-  reserved_write,   // a write to a reserved ("do not write") register
-  read_only_write,  // a write to a register the device only reports
-  write_only_read,  // a read of a write-only register or alias
-  closed_group,     // an access to a parameter group the device keeps to itself
-  too_many_words,   // more registers in one request than the model allows in this mode
-  crosses_group,    // a multi-register access that spans two parameter groups
-  out_of_range,     // a value outside the register's min/max
-  not_in_enum,      // a value the register's named values do not include
-  station_out_of_range,
-  unmapped_register,  // an address in none of the model's tables
-  too_many_retries,   // a request sent again more often than the model's masters do
-  reserved_address,   // 248-255, which Modbus reserves, to a slave whose model does not allow it
-  exception,          // an exception response, explained with the model's meaning
-  identified,
-};
-
 struct RuleFinding {
   RuleKind kind = RuleKind::exception;
   std::optional<uint16_t> address;
@@ -84,8 +67,6 @@ void interpret(const DeviceModel& model, const Frame& frame, Meaning& out);
 // Appends to `out` the registers `words` hold from `start` on, in the model's terms.
 void decode_registers(const DeviceModel& model, Table table, uint16_t start,
                       std::span<const uint16_t> words, Meaning& out);
-
-const char* to_string(RuleKind kind);
 
 // `value` with `decimals` digits after the point, as "{:.{}f}" prints it.
 void append_number(fmt::memory_buffer& out, double value, int decimals);

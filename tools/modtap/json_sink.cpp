@@ -57,11 +57,10 @@ void JsonSink::on_frame(const Frame& frame) {
   }
   out_.print(FMT_COMPILE(",\"findings\":["));
   bool first = true;
-  for (const auto& [bit, name] : finding_names()) {
-    if (!(frame.findings & bit)) continue;
-    out_.print(FMT_COMPILE("{}\"{}\""), first ? "" : ",", name);
+  for_each_frame_finding(frame.findings, [&](size_t slot) {
+    out_.print(FMT_COMPILE("{}\"{}\""), first ? "" : ",", frame_findings()[slot].name);
     first = false;
-  }
+  });
   if (frame.meaning) {
     for (const RuleFinding& finding : frame.meaning->findings) {
       out_.print(FMT_COMPILE("{}\"{}\""), first ? "" : ",", to_string(finding.kind));

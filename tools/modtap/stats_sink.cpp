@@ -28,7 +28,7 @@ void StatsSink::on_frame(const Frame& frame) {
   if (frame.slave() != 0 && frame.check_ok) count_slave(frame);
   if (frame.meaning)
     for (const RuleFinding& finding : frame.meaning->findings)
-      ++s.model_findings[to_string(finding.kind)];
+      ++s.model_findings[std::string(to_string(finding.kind))];
 }
 
 // Only frames with a good check: a corrupted address byte would invent slaves.

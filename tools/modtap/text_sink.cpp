@@ -90,8 +90,10 @@ void TextSink::on_frame(const Frame& frame) {
   }
   if (frame.request) out_.print(FMT_COMPILE("  req #{}"), *frame.request);
   if (frame.latency_ns) out_.print(FMT_COMPILE(" {} ms"), Fixed{*frame.latency_ns, 6, 3});
-  for (const auto& [bit, name] : finding_names())
-    if ((frame.findings & bit) && bit != finding_bad_check) out_.print(FMT_COMPILE(" [{}]"), name);
+  // A bad check is said in the check column already.
+  for_each_frame_finding(frame.findings & ~finding_bad_check, [&](size_t slot) {
+    out_.print(FMT_COMPILE(" [{}]"), frame_findings()[slot].name);
+  });
   if (frame.meaning) registers_line(*frame.meaning);
   out_.print(FMT_COMPILE("\n"));
   if (verbose_) tree(frame);

@@ -1,0 +1,73 @@
+#include "decoder/findings.hpp"
+
+namespace modtap::decoder {
+
+namespace {
+
+constexpr FindingInfo registry[] = {
+    // The frame's own, in Finding bit order.
+    {"bad-check", Severity::error, "the CRC or LRC is wrong"},
+    {"broadcast", Severity::note, "sent to slave 0: every slave acts, none answers"},
+    {"illegal-broadcast", Severity::warning, "a read sent to slave 0, which no slave may answer"},
+    {"unsolicited", Severity::warning, "a response with no request waiting for it"},
+    {"length-mismatch", Severity::error, "a response whose content does not fit its request"},
+    {"echo-mismatch", Severity::error, "an echo response that differs from its request"},
+    {"fast-turnaround", Severity::warning, "the slave answered before 3.5 characters of silence"},
+    {"retry", Severity::warning, "the request that just went unanswered, sent again"},
+    {"quantity-out-of-spec", Severity::warning,
+     "a quantity of 0 or over the standard's limit (2000 coils, 125 registers read, 123 written)"},
+    {"byte-count-mismatch", Severity::warning, "a byte count that disagrees with its quantity"},
+    {"value-out-of-spec", Severity::warning, "FC05 with a value other than FF00H or 0000H"},
+    {"ambiguous-echo", Severity::note,
+     "an echo taken for the response that could have been the master's retry"},
+    // The device model's, in RuleKind order.
+    {"reserved-write", Severity::warning, "a write to a register the manual says not to write"},
+    {"read-only-write", Severity::warning, "a write to a register the device only reports"},
+    {"write-only-read", Severity::warning, "a read of a write-only register"},
+    {"closed-group", Severity::warning, "an access to a parameter group the device keeps closed"},
+    {"too-many-words", Severity::warning, "more registers in one request than the model allows"},
+    {"crosses-group", Severity::warning, "one access that spans two parameter groups"},
+    {"out-of-range", Severity::warning, "a value outside the register's range"},
+    {"not-in-enum", Severity::warning, "a value none of the register's named values has"},
+    {"station-out-of-range", Severity::warning, "a slave address the device cannot be set to"},
+    {"unmapped-register", Severity::warning, "an address in none of the model's tables"},
+    {"too-many-retries", Severity::warning,
+     "a request sent again more often than the model's masters do"},
+    {"reserved-address", Severity::warning,
+     "a slave address from 248 to 255, which Modbus reserves"},
+    {"exception", Severity::note, "an exception response, with the model's meaning of its code"},
+    {"identified", Severity::note, "the device's identification, as the model reads it"},
+};
+static_assert(std::size(registry) == frame_finding_count + rule_kind_count);
+
+}  // namespace
+
+std::span<const FindingInfo> finding_registry() {
+  return registry;
+}
+
+std::span<const FindingInfo> frame_findings() {
+  return finding_registry().first(frame_finding_count);
+}
+
+const FindingInfo& finding_info(RuleKind kind) {
+  return registry[finding_slot(kind)];
+}
+
+std::string_view to_string(RuleKind kind) {
+  return finding_info(kind).name;
+}
+
+const char* to_string(Severity severity) {
+  switch (severity) {
+    case Severity::note:
+      return "note";
+    case Severity::warning:
+      return "warning";
+    case Severity::error:
+      return "error";
+  }
+  return "?";
+}
+
+}  // namespace modtap::decoder
