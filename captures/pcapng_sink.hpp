@@ -8,7 +8,7 @@
 #include <fmt/format.h>
 
 #include "captures/pcapng_writer.hpp"
-#include "decoder/analyzer.hpp"
+#include "decoder/record_sink.hpp"
 
 namespace modtap::captures {
 

@@ -12,6 +12,7 @@
 #include "decoder/ascii_framer.hpp"
 #include "decoder/frame_sink.hpp"
 #include "decoder/matcher.hpp"
+#include "decoder/record_sink.hpp"
 #include "decoder/records.hpp"
 #include "decoder/rtu_framer.hpp"
 #include "decoder/serial_format.hpp"
@@ -35,14 +36,6 @@ struct AnalyzerOptions {
   std::map<uint8_t, int64_t> slave_timeout_ns;  // slaves whose model sets their own time-out
   int64_t ascii_char_timeout_ns = 1'000'000'000;
   int64_t chunk_jitter_ns = 20'000'000;
-};
-
-class RecordSink {
- public:
-  virtual ~RecordSink() = default;
-  virtual void on_frame(const Frame& frame) = 0;
-  virtual void on_noise(const Noise& noise) = 0;
-  virtual void on_timeout(const Timeout& timeout) = 0;
 };
 
 class Analyzer final : private FrameSink {

@@ -5,7 +5,7 @@
 #include <map>
 #include <vector>
 
-#include "decoder/analyzer.hpp"
+#include "decoder/record_sink.hpp"
 #include "decoder/register_meaning.hpp"
 
 namespace modtap::decoder {

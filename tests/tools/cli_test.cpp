@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -78,11 +79,17 @@ TEST(Cli, TextShowsOneLinePerFrameWithPairs) {
 TEST(Cli, StatsSummariseTheCapture) {
   const Outcome r = run(brainchild + " -T stats");
   ASSERT_EQ(r.status, 0);
-  ASSERT_FALSE(r.lines.empty());
-  EXPECT_EQ(r.lines[0], "frames          30");
+  ASSERT_GE(r.lines.size(), 3u);
+  EXPECT_EQ(r.lines[0], "capture         0.267 s, 19200 8E1, clock per-byte");
+  EXPECT_EQ(r.lines[1], "frames          30 (112.5 a second), bus load 50.5%");
+  EXPECT_THAT(r.lines, ::testing::Contains("latency         p50 / p95 / p99 / max "
+                                           "2.081 / 2.116 / 2.116 / 2.116 ms over 15 responses"));
   EXPECT_EQ(r.lines[r.lines.size() - 2],
-            "slave  requests  responses  exceptions  timeouts  latency mean/max ms");
-  EXPECT_EQ(r.lines.back(), "    1        15         15           0         0  2.086 / 2.116");
+            "slave  requests  responses  timeouts    rate  exceptions  bad  retries"
+            "  latency ms p50 / p95 / p99 / max  poll ms median / p95");
+  EXPECT_EQ(r.lines.back(),
+            "    1        15         15         0    0.0%           0    0        0"
+            "  2.081 / 2.116 / 2.116 / 2.116  14.025 / 66.585");
 }
 
 TEST(Cli, StatsCountTheModelsFindingsByKind) {
@@ -94,9 +101,27 @@ TEST(Cli, StatsCountTheModelsFindingsByKind) {
   ASSERT_EQ(r.status, 0);
   ASSERT_GE(r.lines.size(), 4u);
   const std::vector<std::string> tail(r.lines.end() - 4, r.lines.end());
-  EXPECT_EQ(tail,
-            (std::vector<std::string>{"model findings", "  exception             1",
-                                      "  read-only-write       1", "  reserved-write        1"}));
+  EXPECT_EQ(tail, (std::vector<std::string>{"findings                 count  first records",
+                                            "  reserved-write             1  #3",
+                                            "  read-only-write            1  #1",
+                                            "  exception                  1  #2"}));
+}
+
+// --stats writes the statistics as JSON beside any output; a pipe reader would get text.
+TEST(Cli, StatsFileIsJsonBesideTheTextOutput) {
+  const auto path = (std::filesystem::temp_directory_path() / "modtap-cli-stats.json").string();
+  std::filesystem::remove(path);
+  const Outcome r = run(brainchild + " --stats " + path);
+  ASSERT_EQ(r.status, 0);
+  EXPECT_EQ(r.lines.size(), 30u);  // the frames, as without --stats
+  std::ifstream file(path);
+  std::stringstream json;
+  json << file.rdbuf();
+  EXPECT_EQ(
+      json.str().rfind("{\"complete\":true,\"clock\":\"per-byte\",\"serial\":\"19200 8E1\"", 0), 0u)
+      << json.str();
+  EXPECT_NE(json.str().find("\"frames\":30,\"requests\":15,\"responses\":15"), std::string::npos);
+  EXPECT_NE(json.str().find("\"slaves\":[{\"slave\":1,\"requests\":15,"), std::string::npos);
 }
 
 TEST(Cli, AMissingFileIsAClearErrorAndAnExitStatus) {

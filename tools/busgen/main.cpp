@@ -52,7 +52,21 @@ int main(int argc, char** argv) {
                  "sniffer (frames, some split, some merged)")
       ->check(CLI::IsMember({"frames", "bytes", "bursts", "sniffer"}));
   app.add_option("-o,--output", out, "Output file (- for stdout, raw only)");
+  bool faults = false, ascii = false;
+  app.add_flag("--faults", faults,
+               "What real buses add: glitches, line noise, requests broken off and sent again, "
+               "retries, responses cut or collided with, out-of-spec requests, vendor codes");
+  app.add_flag("--ascii", ascii, "Modbus ASCII instead of RTU (7E1)");
   CLI11_PARSE(app, argc, argv);
+  if (faults) {
+    o.glitch_rate = o.request_glitch_rate = 0.01;
+    o.noise_rate = o.truncation_rate = o.retry_rate = o.cut_rate = o.collision_rate = 0.01;
+    o.out_of_spec_rate = o.unknown_function_rate = 0.01;
+  }
+  if (ascii) {
+    o.mode = decoder::Mode::ascii;
+    o.format.data_bits = 7;
+  }
   const std::map<std::string, busgen::Delivery> deliveries{
       {"frames", busgen::Delivery::whole_frames},
       {"bytes", busgen::Delivery::per_byte},

@@ -3,7 +3,7 @@
 
 #include <vector>
 
-#include "decoder/analyzer.hpp"
+#include "decoder/record_sink.hpp"
 #include "decoder/pdu_fields.hpp"
 #include "decoder/register_meaning.hpp"
 #include "tools/modtap/output.hpp"

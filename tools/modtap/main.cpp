@@ -18,13 +18,14 @@
 #include "captures/pcapng_sink.hpp"
 #include "captures/raw_recorder.hpp"
 #include "decoder/analyzer.hpp"
+#include "decoder/bus_statistics.hpp"
 #include "decoder/format_probe.hpp"
 #include "tools/live/live_capture.hpp"
 #include "tools/modtap/auto_format.hpp"
 #include "tools/modtap/json_sink.hpp"
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/output.hpp"
-#include "tools/modtap/stats_sink.hpp"
+#include "tools/modtap/statistics_output.hpp"
 #include "tools/modtap/text_sink.hpp"
 
 namespace {
@@ -56,24 +57,7 @@ struct Options {
   std::string models_dir;
   double probe_s = 2.0;
   std::string save_raw;
-};
-
-// Hands every record to each of several sinks (the terminal and a pcapng file, say).
-class FanOut final : public decoder::RecordSink {
- public:
-  void add(decoder::RecordSink& sink) { sinks_.push_back(&sink); }
-  void on_frame(const decoder::Frame& f) override {
-    for (auto* s : sinks_) s->on_frame(f);
-  }
-  void on_noise(const decoder::Noise& n) override {
-    for (auto* s : sinks_) s->on_noise(n);
-  }
-  void on_timeout(const decoder::Timeout& t) override {
-    for (auto* s : sinks_) s->on_timeout(t);
-  }
-
- private:
-  std::vector<decoder::RecordSink*> sinks_;
+  std::string stats_file;
 };
 
 std::optional<uint32_t> fixed_baud(const Options& o) {
@@ -90,8 +74,7 @@ std::unique_ptr<decoder::RecordSink> make_sink(const Options& o, tools::Output& 
                                                const std::vector<decoder::ChannelInfo>& channels) {
   if (o.output == "json") return std::make_unique<tools::JsonSink>(out, channels);
   if (o.output == "text") return std::make_unique<tools::TextSink>(out, channels, o.verbose);
-  if (o.output == "stats") return std::make_unique<tools::StatsSink>();
-  return std::make_unique<tools::NullSink>();
+  return std::make_unique<decoder::NullSink>();  // stats: the statistics print at the end
 }
 
 decoder::SerialFormat serial_format(const Options& o) {
@@ -117,18 +100,26 @@ tools::ModelCatalog load_models(const Options& o) {
   return catalog;
 }
 
-// The sinks a run writes to: the terminal's, and a pcapng file with -w; in front of them, the
-// stage that reads frames through the device models.
+bool wants_statistics(const Options& o) {
+  return o.output == "stats" || !o.stats_file.empty();
+}
+
+// The sinks a run writes to: the terminal's, the statistics, and a pcapng file with -w; in
+// front of them, the stage that reads frames through the device models.
 class Sinks {
  public:
   Sinks(const Options& o, tools::Output& out, const std::vector<decoder::ChannelInfo>& channels,
-        decoder::ClockQuality clock)
+        const decoder::SerialFormat& format, decoder::ClockQuality clock)
       : terminal_(make_sink(o, out, channels)) {
     fan_out_.add(*terminal_);
+    if (wants_statistics(o)) {
+      statistics_ = std::make_unique<decoder::BusStatistics>(format, clock);
+      fan_out_.add(*statistics_);
+    }
     // Only text, JSON, pcapng comments and statistics with --model show what the models say;
     // the other outputs skip the work, and the YAML is not read unless models are asked for.
     const bool interpret = o.output == "text" || o.output == "json" ||
-                           (o.output == "stats" && !o.models.empty()) ||
+                           (wants_statistics(o) && !o.models.empty()) ||
                            (!o.write_file.empty() && o.link != "bare");
     if (interpret || !o.models.empty() || !o.models_dir.empty()) {
       catalog_ = load_models(o);
@@ -150,7 +141,7 @@ class Sinks {
   decoder::RecordSink& all() {
     return interpreter_ ? static_cast<decoder::RecordSink&>(*interpreter_) : fan_out_;
   }
-  decoder::RecordSink& terminal() { return *terminal_; }
+  const decoder::BusStatistics* statistics() const { return statistics_.get(); }
   // The slaves whose model sets a response time-out, unless --timeout was given.
   const std::map<uint8_t, int64_t>& model_timeouts() const { return model_timeouts_; }
   // The end of a run: the pcapng file is complete, or its failure is reported.
@@ -159,8 +150,9 @@ class Sinks {
   }
 
  private:
-  FanOut fan_out_;
+  decoder::FanOut fan_out_;
   std::unique_ptr<decoder::RecordSink> terminal_;
+  std::unique_ptr<decoder::BusStatistics> statistics_;
   tools::ModelCatalog catalog_;
   std::unique_ptr<decoder::ModelInterpreter> interpreter_;
   std::map<uint8_t, int64_t> model_timeouts_;
@@ -177,8 +169,8 @@ bool same_file(const std::string& a, const std::string& b) {
 
 // Outputs that would destroy the input or each other, or mix two formats on one stream.
 std::optional<std::string> refuse_outputs(const Options& o) {
-  const std::vector<std::pair<const char*, std::string>> files{{"-w", o.write_file},
-                                                               {"--save-raw", o.save_raw}};
+  const std::vector<std::pair<const char*, std::string>> files{
+      {"-w", o.write_file}, {"--save-raw", o.save_raw}, {"--stats", o.stats_file}};
   for (size_t i = 0; i < files.size(); ++i) {
     const auto& [option, path] = files[i];
     if (path.empty() || path == "-") continue;
@@ -189,11 +181,13 @@ std::optional<std::string> refuse_outputs(const Options& o) {
         return fmt::format("{} and {} both name {}", option, files[j].first, path);
   }
   const bool terminal_output = o.output == "text" || o.output == "json" || o.output == "stats";
-  if (terminal_output && (o.write_file == "-" || o.save_raw == "-"))
-    return fmt::format("{} - and -T {} would both write to standard output",
-                       o.write_file == "-" ? "-w" : "--save-raw", o.output);
-  if (o.write_file == "-" && o.save_raw == "-")
-    return std::string("-w - and --save-raw - would both write to standard output");
+  std::vector<std::string> on_standard_output;
+  for (const auto& [option, path] : files)
+    if (path == "-") on_standard_output.push_back(std::string(option) + " -");
+  if (terminal_output) on_standard_output.push_back("-T " + o.output);
+  if (on_standard_output.size() > 1)
+    return fmt::format("{} and {} would both write to standard output", on_standard_output[0],
+                       on_standard_output[1]);
   return std::nullopt;
 }
 
@@ -204,9 +198,18 @@ int list_models(const Options& o) {
   return 0;
 }
 
-void print_summary(const Options& o, tools::Output& out, Sinks& sinks) {
-  if (o.output != "stats") return;
-  print_stats(out, static_cast<tools::StatsSink&>(sinks.terminal()).stats());
+// The end of a run: -T stats prints the statistics, --stats writes them (`complete` false when
+// the input broke off: they cover what was read).
+void summarise(const Options& o, tools::Output& out, const Sinks& sinks, bool complete) {
+  const decoder::BusStatistics* statistics = sinks.statistics();
+  if (!statistics) return;
+  if (o.output == "stats") tools::print_statistics(out, *statistics);
+  if (o.stats_file.empty()) return;
+  fmt::memory_buffer json;
+  tools::append_statistics_json(json, *statistics, complete);
+  captures::OutputFile file(o.stats_file);
+  file.write(std::string_view(json.data(), json.size()));
+  file.close();
 }
 
 std::unique_ptr<captures::RawRecorder> raw_recorder(
@@ -255,7 +258,7 @@ int read_file(const Options& o) {
 
   captures::OutputFile standard_output(stdout, "standard output");
   tools::Output out(standard_output);
-  Sinks sinks(o, out, source->channels(), source->clock());
+  Sinks sinks(o, out, source->channels(), open.serial, source->clock());
   decoder::LineHealth health(&sinks.all());
   decoder::AnalyzerOptions options = analyzer_options(o, source->clock());
   options.format = open.serial;
@@ -277,7 +280,7 @@ int read_file(const Options& o) {
     broken = e;
   }
   bus.finish();
-  print_summary(o, out, sinks);
+  summarise(o, out, sinks, !broken);
   out.flush();
   sinks.close();
   if (raw) raw->close();
@@ -305,23 +308,23 @@ int listen(const Options& o) {
   captures::OutputFile standard_output(stdout, "standard output");
   tools::Output out(standard_output);
   out.set_line_buffered(true);
-  Sinks sinks(o, out, channels, decoder::ClockQuality::per_chunk);
   live::LiveOptions options;
   options.analyzer = analyzer_options(o, decoder::ClockQuality::per_chunk);
-  options.analyzer.slave_timeout_ns = sinks.model_timeouts();
   if (o.baud == "auto" || o.parity == "auto") {
     auto probed = live::probe_ports(ports, options, fixed_baud(o), fixed_parity(o),
                                     static_cast<int64_t>(o.probe_s * 1e9), stop);
     options.analyzer.format = probed.format;
     options.replay = std::move(probed.read);  // the winning setting's bytes are analysed too
   }
+  Sinks sinks(o, out, channels, options.analyzer.format, decoder::ClockQuality::per_chunk);
+  options.analyzer.slave_timeout_ns = sinks.model_timeouts();
   auto raw = raw_recorder(o, channels, options.analyzer.format);
   if (raw) options.on_read = [&](const decoder::Chunk& chunk) { raw->write(chunk); };
   options.reconnect = o.reconnect;
   // A status line on the terminal, unless frame lines are printed on that same terminal.
   options.status_line = isatty(STDERR_FILENO) && (o.output != "text" || !isatty(STDOUT_FILENO));
   const int status = live::run_live(ports, options, sinks.all(), stop);
-  print_summary(o, out, sinks);
+  summarise(o, out, sinks, true);  // Ctrl-C is how a live run ends
   out.flush();
   sinks.close();
   if (raw) raw->close();
@@ -351,6 +354,9 @@ int main(int argc, char** argv) {
   app.add_option("--save-raw", o.save_raw,
                  "Keep every read as it came, with its time, to read again with other settings: "
                  "FILE.pcapng, or a timed hex log for any other name");
+  app.add_option("--stats", o.stats_file,
+                 "Write the statistics as one JSON object at the end of the run (also after "
+                 "Ctrl-C, and marked incomplete when the input breaks off)");
   app.add_option("--link", o.link, "pcapng link: user (DLT_USER + modtap.lua), exported-pdu, bare")
       ->check(CLI::IsMember({"user", "exported-pdu", "bare"}));
   app.add_option("--dlt", o.dlt, "DLT_USER link type for --link user or bare")

@@ -4,7 +4,7 @@
 #include <optional>
 #include <vector>
 
-#include "decoder/analyzer.hpp"
+#include "decoder/record_sink.hpp"
 #include "decoder/pdu_fields.hpp"
 #include "decoder/register_meaning.hpp"
 #include "tools/modtap/output.hpp"

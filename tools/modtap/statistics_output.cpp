@@ -1,0 +1,265 @@
+#include "tools/modtap/statistics_output.hpp"
+
+#include <algorithm>
+#include <ctime>
+
+#include <fmt/chrono.h>
+
+#include "decoder/format_probe.hpp"
+#include "tools/modtap/render.hpp"
+
+namespace modtap::tools {
+
+using namespace decoder;
+
+namespace {
+
+constexpr const char* noise_reasons[] = {"junk", "truncated", "glitch", "overlong", "bad-hex"};
+constexpr const char* damages[] = {nullptr, "corrupted", "cut", "collision"};
+
+double share(uint64_t part, uint64_t whole) {
+  return whole ? static_cast<double>(part) / static_cast<double>(whole) : 0.0;
+}
+
+Fixed milliseconds(uint64_t ns) {
+  return {static_cast<int64_t>(ns), 6, 3};
+}
+Fixed microseconds(uint64_t ns) {
+  return {static_cast<int64_t>(ns), 3, 3};
+}
+
+// "2023-11-14 22:13:20 UTC" for times that are dates; a raw file's nominal times start at 0.
+void print_span(Output& out, const BusStatistics& s) {
+  if (!s.first_t_ns) return;
+  out.print("{:<16}{:.3f} s", "capture", s.duration_s());
+  constexpr int64_t year_2000_ns = 946'684'800'000'000'000;
+  if (*s.first_t_ns >= year_2000_ns) {
+    const std::time_t first = static_cast<std::time_t>(*s.first_t_ns / 1'000'000'000);
+    out.print(" from {:%Y-%m-%d %H:%M:%S} UTC", fmt::gmtime(first));
+  }
+  out.print(", {}, clock {}\n", describe(s.format()), to_string(s.clock()));
+}
+
+void print_latency(Output& out, const Histogram& h) {
+  out.print("{} / {} / {} / {}", milliseconds(h.percentile(50)), milliseconds(h.percentile(95)),
+            milliseconds(h.percentile(99)), milliseconds(h.max()));
+}
+
+void print_breakdown(Output& out, const char* const* names, std::span<const uint64_t> counts) {
+  const char* separator = " (";
+  for (size_t i = 0; i < counts.size(); ++i) {
+    if (!counts[i] || !names[i]) continue;
+    out.print("{}{} {}", separator, names[i], counts[i]);
+    separator = ", ";
+  }
+  if (separator[0] == ',') out.print(")");
+}
+
+void print_slaves(Output& out, const BusStatistics& s) {
+  const auto& all = s.addresses();
+  if (std::any_of(all.begin(), all.end(), [](const auto& a) { return a.second->good; }))
+    out.print(
+        "\nslave  requests  responses  timeouts    rate  exceptions  bad  retries"
+        "  latency ms p50 / p95 / p99 / max  poll ms median / p95\n");
+  for (const auto& [address, slave] : s.addresses()) {
+    if (!slave->good) continue;
+    const ExchangeCounts& c = slave->counts;
+    out.print("{:5}  {:8}  {:9}  {:8}  {:5.1f}%  {:10}  {:3}  {:7}  ", address, c.requests,
+              c.responses, c.timeouts, 100 * share(c.timeouts, c.requests), c.exceptions,
+              c.bad_checks, c.retries);
+    if (slave->latency_ns.count()) {
+      print_latency(out, slave->latency_ns);
+    } else {
+      out.print("-");
+    }
+    if (slave->poll_interval_ns.count())
+      out.print("  {} / {}", milliseconds(slave->poll_interval_ns.percentile(50)),
+                milliseconds(slave->poll_interval_ns.percentile(95)));
+    out.print("\n");
+  }
+  if (const size_t stray = s.stray_addresses())
+    out.print("{} {} only in frames with a bad check ({} bad checks): not counted as slaves\n",
+              stray, stray == 1 ? "address" : "addresses", s.stray_bad_checks());
+}
+
+void print_findings(Output& out, const BusStatistics& s) {
+  bool any = false;
+  for (size_t slot = 0; slot < s.findings.size(); ++slot) {
+    const FindingCount& f = s.findings[slot];
+    if (!f.count) continue;
+    if (!any) out.print("\nfindings                 count  first records\n");
+    any = true;
+    out.print("  {:<21}  {:5} ", finding_registry()[slot].name, f.count);
+    for (size_t i = 0; i < std::min<uint64_t>(f.count, FindingCount::kept); ++i)
+      out.print(" #{}", f.first[i]);
+    out.print("\n");
+  }
+}
+
+}  // namespace
+
+void print_statistics(Output& out, const BusStatistics& s) {
+  print_span(out, s);
+  out.print("{:<16}{}", "frames", s.frames);
+  if (s.duration_s() > 0)
+    out.print(" ({:.1f} a second)", static_cast<double>(s.frames) / s.duration_s());
+  if (auto load = s.bus_load()) out.print(", bus load {:.1f}%", 100 * *load);
+  out.print("\n  {:<14}{} (broadcasts {}, retries {})\n", "requests", s.requests, s.broadcasts,
+            s.retries);
+  out.print("  {:<14}{} (exceptions {}, unsolicited {})\n", "responses", s.responses, s.exceptions,
+            s.unsolicited);
+  out.print("  {:<14}{}\n", "unknown role", s.unknown_roles);
+  out.print("  {:<14}{}", "bad checks", s.bad_checks);
+  print_breakdown(out, damages, s.damaged);
+  out.print("\n{:<16}{}\n", "timeouts", s.timeouts);
+  if (s.unanswered) out.print("unanswered at end of capture  {}\n", s.unanswered);
+  out.print("{:<16}{} records, {} bytes", "noise", s.noise_records, s.noise_bytes);
+  print_breakdown(out, noise_reasons, s.noise_by_reason);
+  const uint64_t bytes = s.frame_bytes + s.noise_bytes;
+  out.print("\n{:<16}{} ({:.3f}% in frames)\n", "bytes", bytes, 100 * share(s.frame_bytes, bytes));
+  if (s.latency_ns.count()) {
+    out.print("{:<16}p50 / p95 / p99 / max ", "latency");
+    print_latency(out, s.latency_ns);
+    out.print(" ms over {} responses\n", s.latency_ns.count());
+  }
+  print_slaves(out, s);
+  print_findings(out, s);
+  out.flush();
+}
+
+namespace {
+
+void append_counts(fmt::memory_buffer& out, const ExchangeCounts& c) {
+  fmt::format_to(fmt::appender(out),
+                 "\"requests\":{},\"responses\":{},\"timeouts\":{},\"exceptions\":{},"
+                 "\"bad_checks\":{},\"retries\":{}",
+                 c.requests, c.responses, c.timeouts, c.exceptions, c.bad_checks, c.retries);
+}
+
+void append_latency(fmt::memory_buffer& out, const Histogram& h) {
+  if (!h.count()) {
+    fmt::format_to(fmt::appender(out), "null");
+    return;
+  }
+  fmt::format_to(
+      fmt::appender(out), "{{\"min\":{},\"p50\":{},\"p95\":{},\"p99\":{},\"max\":{},\"count\":{}}}",
+      microseconds(h.min()), microseconds(h.percentile(50)), microseconds(h.percentile(95)),
+      microseconds(h.percentile(99)), microseconds(h.max()), h.count());
+}
+
+void append_breakdown(fmt::memory_buffer& out, const char* key, const char* const* names,
+                      std::span<const uint64_t> counts) {
+  fmt::format_to(fmt::appender(out), ",\"{}\":{{", key);
+  bool first = true;
+  for (size_t i = 0; i < counts.size(); ++i) {
+    if (!names[i]) continue;
+    fmt::format_to(fmt::appender(out), "{}\"{}\":{}", first ? "" : ",", names[i], counts[i]);
+    first = false;
+  }
+  out.push_back('}');
+}
+
+void append_slave(fmt::memory_buffer& out, uint8_t address, const SlaveStatistics& slave) {
+  auto put = fmt::appender(out);
+  fmt::format_to(put, "{{\"slave\":{},", address);
+  append_counts(out, slave.counts);
+  fmt::format_to(put, ",\"timeout_rate\":{},\"exceptions_by_code\":{{",
+                 share(slave.counts.timeouts, slave.counts.requests));
+  bool first = true;
+  for (const auto& [code, count] : slave.exceptions_by_code) {
+    fmt::format_to(put, "{}\"{}\":{}", first ? "" : ",", code, count);
+    first = false;
+  }
+  fmt::format_to(put, "}},\"latency_us\":");
+  append_latency(out, slave.latency_ns);
+  fmt::format_to(put, ",\"poll_interval_ms\":");
+  if (slave.poll_interval_ns.count()) {
+    fmt::format_to(put, "{{\"median\":{},\"p95\":{},\"count\":{}}}",
+                   milliseconds(slave.poll_interval_ns.percentile(50)),
+                   milliseconds(slave.poll_interval_ns.percentile(95)),
+                   slave.poll_interval_ns.count());
+  } else {
+    fmt::format_to(put, "null");
+  }
+  fmt::format_to(put, ",\"by_fc\":{{");
+  first = true;
+  for (const auto& [fc, counts] : slave.by_function) {
+    fmt::format_to(put, "{}\"{}\":{{", first ? "" : ",", fc);
+    append_counts(out, counts);
+    out.push_back('}');
+    first = false;
+  }
+  fmt::format_to(put, "}},\"last_frame_ns\":{}}}", slave.last_frame_ns);
+}
+
+void append_diagnostics(fmt::memory_buffer& out, const BusStatistics& s) {
+  auto put = fmt::appender(out);
+  fmt::format_to(put, ",\"diagnostics\":{{");
+  bool first = true;
+  for (size_t slot = 0; slot < s.findings.size(); ++slot) {
+    const FindingCount& f = s.findings[slot];
+    if (!f.count) continue;
+    const FindingInfo& info = finding_registry()[slot];
+    fmt::format_to(put, "{}\"{}\":{{\"count\":{},\"severity\":\"{}\",\"first\":[", first ? "" : ",",
+                   info.name, f.count, to_string(info.severity));
+    for (size_t i = 0; i < std::min<uint64_t>(f.count, FindingCount::kept); ++i)
+      fmt::format_to(put, "{}{}", i ? "," : "", f.first[i]);
+    fmt::format_to(put, "]}}");
+    first = false;
+  }
+  out.push_back('}');
+}
+
+// A JSON number, or null where there is none (no time, no clock).
+void append_optional(fmt::memory_buffer& out, const char* key, std::optional<double> value) {
+  if (value) {
+    fmt::format_to(fmt::appender(out), ",\"{}\":{}", key, *value);
+  } else {
+    fmt::format_to(fmt::appender(out), ",\"{}\":null", key);
+  }
+}
+
+}  // namespace
+
+void append_statistics_json(fmt::memory_buffer& out, const BusStatistics& s, bool complete) {
+  auto put = fmt::appender(out);
+  fmt::format_to(put, "{{\"complete\":{},\"clock\":\"{}\",\"serial\":\"{}\"", complete,
+                 to_string(s.clock()), describe(s.format()));
+  if (s.first_t_ns) {
+    fmt::format_to(put, ",\"first_t_ns\":{},\"last_t_ns\":{}", *s.first_t_ns, *s.last_t_ns);
+  } else {
+    fmt::format_to(put, ",\"first_t_ns\":null,\"last_t_ns\":null");
+  }
+  const double duration = s.duration_s();
+  fmt::format_to(put,
+                 ",\"duration_s\":{},\"frames\":{},\"requests\":{},\"responses\":{},"
+                 "\"unknown_roles\":{},\"bytes\":{},\"frame_bytes\":{},\"noise_bytes\":{},"
+                 "\"noise_records\":{},\"bad_checks\":{},\"timeouts\":{},\"unanswered\":{},"
+                 "\"exceptions\":{},\"broadcasts\":{},\"retries\":{},\"unsolicited\":{}",
+                 duration, s.frames, s.requests, s.responses, s.unknown_roles,
+                 s.frame_bytes + s.noise_bytes, s.frame_bytes, s.noise_bytes, s.noise_records,
+                 s.bad_checks, s.timeouts, s.unanswered, s.exceptions, s.broadcasts, s.retries,
+                 s.unsolicited);
+  append_breakdown(out, "noise", noise_reasons, s.noise_by_reason);
+  append_breakdown(out, "damaged", damages, s.damaged);
+  append_optional(out, "bus_load", s.bus_load());
+  append_optional(
+      out, "frames_per_s",
+      duration > 0 ? std::optional(static_cast<double>(s.frames) / duration) : std::nullopt);
+  fmt::format_to(put, ",\"latency_us\":");
+  append_latency(out, s.latency_ns);
+  fmt::format_to(put, ",\"slaves\":[");
+  bool first = true;
+  for (const auto& [address, slave] : s.addresses()) {
+    if (!slave->good) continue;
+    if (!first) out.push_back(',');
+    append_slave(out, address, *slave);
+    first = false;
+  }
+  fmt::format_to(put, "],\"stray_addresses\":{},\"stray_bad_checks\":{}", s.stray_addresses(),
+                 s.stray_bad_checks());
+  append_diagnostics(out, s);
+  fmt::format_to(put, "}}\n");
+}
+
+}  // namespace modtap::tools

@@ -1,0 +1,18 @@
+// The statistics as a technician reads them (-T stats) and as a program does (--stats FILE,
+// one JSON object; docs/output.md lists its keys).
+#pragma once
+
+#include <fmt/format.h>
+
+#include "decoder/bus_statistics.hpp"
+#include "tools/modtap/output.hpp"
+
+namespace modtap::tools {
+
+void print_statistics(Output& out, const decoder::BusStatistics& stats);
+
+// `complete` is false when the input ended in an error: the numbers cover what was read.
+void append_statistics_json(fmt::memory_buffer& out, const decoder::BusStatistics& stats,
+                            bool complete);
+
+}  // namespace modtap::tools
