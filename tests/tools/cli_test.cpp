@@ -124,6 +124,30 @@ TEST(Cli, StatsFileIsJsonBesideTheTextOutput) {
   EXPECT_NE(json.str().find("\"slaves\":[{\"slave\":1,\"requests\":15,"), std::string::npos);
 }
 
+// tshark's habits: -c stops after N frames (statistics included), -q keeps only the summary,
+// -t chooses the time column, --version says which modtap this is.
+TEST(Cli, TsharkHabitsCountQuietTimeAndVersion) {
+  const Outcome three = run(brainchild + " -c 3");
+  EXPECT_EQ(three.lines.size(), 3u);
+  const Outcome counted = run(brainchild + " -c 4 -q -T stats");
+  ASSERT_GE(counted.lines.size(), 2u);
+  EXPECT_EQ(counted.lines[1].rfind("frames          4 ", 0), 0u) << counted.lines[1];
+  EXPECT_TRUE(run(brainchild + " -q").lines.empty());
+
+  const Outcome pcap = run_shell("TZ=UTC " + std::string(MODTAP_BINARY) + " -r " + MODTAP_SAMPLES +
+                                 "/drives-manual-examples.log -c 2 -t ad");
+  ASSERT_EQ(pcap.lines.size(), 2u);
+  EXPECT_EQ(pcap.lines[0].substr(0, 35), "     1 2026-11-22 09:00:00.000000 r") << pcap.lines[0];
+  const Outcome delta = run(brainchild + " -c 2 -t d");
+  ASSERT_EQ(delta.lines.size(), 2u);
+  EXPECT_EQ(delta.lines[0].substr(0, 18), "     1    0.000000");
+
+  const Outcome version = run("--version");
+  EXPECT_EQ(version.status, 0);
+  ASSERT_EQ(version.lines.size(), 1u);
+  EXPECT_EQ(version.lines[0].rfind("modtap ", 0), 0u);
+}
+
 TEST(Cli, AMissingFileIsAClearErrorAndAnExitStatus) {
   const Outcome r = run("-r /nonexistent/capture.pcap");
   EXPECT_NE(r.status, 0);

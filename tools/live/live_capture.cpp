@@ -142,6 +142,10 @@ const std::atomic<bool>& stop_on_signals() {
   return stop_requested;
 }
 
+void request_stop() {
+  stop_requested = true;
+}
+
 int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options,
              decoder::RecordSink& sink, const std::atomic<bool>& stop) {
   std::vector<std::unique_ptr<SerialPort>> ports;

@@ -57,5 +57,7 @@ ProbeResult probe_ports(const std::vector<PortSpec>& ports, const LiveOptions& o
 
 // Installs SIGINT and SIGTERM handlers that set the returned flag.
 const std::atomic<bool>& stop_on_signals();
+// Sets that flag from within the program (-c N reached).
+void request_stop();
 
 }  // namespace modtap::live

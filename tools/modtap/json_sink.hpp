@@ -3,8 +3,8 @@
 
 #include <vector>
 
-#include "decoder/record_sink.hpp"
 #include "decoder/pdu_fields.hpp"
+#include "decoder/record_sink.hpp"
 #include "decoder/register_meaning.hpp"
 #include "tools/modtap/output.hpp"
 

@@ -5,6 +5,7 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -58,6 +59,9 @@ struct Options {
   double probe_s = 2.0;
   std::string save_raw;
   std::string stats_file;
+  std::string time_format = "r";
+  uint64_t max_frames = 0;  // 0: no limit
+  bool quiet = false;
 };
 
 std::optional<uint32_t> fixed_baud(const Options& o) {
@@ -73,7 +77,9 @@ std::optional<decoder::Parity> fixed_parity(const Options& o) {
 std::unique_ptr<decoder::RecordSink> make_sink(const Options& o, tools::Output& out,
                                                const std::vector<decoder::ChannelInfo>& channels) {
   if (o.output == "json") return std::make_unique<tools::JsonSink>(out, channels);
-  if (o.output == "text") return std::make_unique<tools::TextSink>(out, channels, o.verbose);
+  if (o.output == "text")
+    return std::make_unique<tools::TextSink>(out, channels, o.verbose,
+                                             tools::time_format_named(o.time_format));
   return std::make_unique<decoder::NullSink>();  // stats: the statistics print at the end
 }
 
@@ -138,9 +144,18 @@ class Sinks {
     pcapng_sink_ = std::make_unique<captures::PcapngSink>(*pcapng_, channels, options);
     fan_out_.add(*pcapng_sink_);
   }
+  // Where records enter: the frame limit, the model stage, then every sink.
   decoder::RecordSink& all() {
+    if (limit_) return *limit_;
     return interpreter_ ? static_cast<decoder::RecordSink&>(*interpreter_) : fan_out_;
   }
+  // -c N: stop after N frames; `on_reached` stops a live run.
+  void limit_frames(uint64_t max_frames, std::function<void()> on_reached = {}) {
+    if (max_frames == 0) return;
+    decoder::RecordSink& next = all();
+    limit_ = std::make_unique<decoder::FrameLimit>(max_frames, next, std::move(on_reached));
+  }
+  bool limit_reached() const { return limit_ && limit_->reached(); }
   const decoder::BusStatistics* statistics() const { return statistics_.get(); }
   // The slaves whose model sets a response time-out, unless --timeout was given.
   const std::map<uint8_t, int64_t>& model_timeouts() const { return model_timeouts_; }
@@ -158,6 +173,7 @@ class Sinks {
   std::map<uint8_t, int64_t> model_timeouts_;
   std::unique_ptr<captures::PcapngWriter> pcapng_;
   std::unique_ptr<captures::PcapngSink> pcapng_sink_;
+  std::unique_ptr<decoder::FrameLimit> limit_;
 };
 
 bool same_file(const std::string& a, const std::string& b) {
@@ -259,6 +275,7 @@ int read_file(const Options& o) {
   captures::OutputFile standard_output(stdout, "standard output");
   tools::Output out(standard_output);
   Sinks sinks(o, out, source->channels(), open.serial, source->clock());
+  sinks.limit_frames(o.max_frames);
   decoder::LineHealth health(&sinks.all());
   decoder::AnalyzerOptions options = analyzer_options(o, source->clock());
   options.format = open.serial;
@@ -271,7 +288,7 @@ int read_file(const Options& o) {
   // break, in every output, and then the error.
   std::optional<captures::CaptureError> broken;
   try {
-    while (source->next(chunk)) {
+    while (!sinks.limit_reached() && source->next(chunk)) {
       if (source->clock() == decoder::ClockQuality::per_chunk) pace.add(chunk);
       if (raw) raw->write(chunk);
       bus.push(chunk);
@@ -317,6 +334,7 @@ int listen(const Options& o) {
     options.replay = std::move(probed.read);  // the winning setting's bytes are analysed too
   }
   Sinks sinks(o, out, channels, options.analyzer.format, decoder::ClockQuality::per_chunk);
+  sinks.limit_frames(o.max_frames, live::request_stop);
   options.analyzer.slave_timeout_ns = sinks.model_timeouts();
   auto raw = raw_recorder(o, channels, options.analyzer.format);
   if (raw) options.on_read = [&](const decoder::Chunk& chunk) { raw->write(chunk); };
@@ -362,6 +380,14 @@ int main(int argc, char** argv) {
   app.add_option("--dlt", o.dlt, "DLT_USER link type for --link user or bare")
       ->check(CLI::Range(147, 162));
   app.add_flag("-V,--verbose", o.verbose, "Print each frame's field tree");
+  app.add_option("-t", o.time_format,
+                 "Text time column: r (since the first record), a (local time of day), ad "
+                 "(local date and time), d (since the record before)")
+      ->check(CLI::IsMember({"r", "a", "ad", "d"}));
+  app.add_option("-c", o.max_frames, "Stop after this many frames")->check(CLI::PositiveNumber);
+  app.add_flag("-q,--quiet", o.quiet,
+               "No line per frame: only what the run adds up to (-T stats, --stats)");
+  app.set_version_flag("--version", std::string("modtap ") + MODTAP_VERSION);
   app.add_option("--baud", o.baud, "Baud rate, or auto to tell it from the traffic")
       ->check(CLI::IsMember({"auto"}) | CLI::Range(50u, 4'000'000u));
   app.add_option("--probe-time", o.probe_s,
@@ -395,6 +421,7 @@ int main(int argc, char** argv) {
   signal(SIGPIPE, SIG_IGN);
   o.timeout_given = timeout->count() > 0;  // a closed pipe is a failed write (EPIPE), handled below
   if (!o.write_file.empty() && output->count() == 0) o.output = "none";  // as tshark -w
+  if (o.quiet && o.output != "stats") o.output = "none";
   try {
     if (check->parsed()) return tools::check_model_file(check_file);
     if (models->parsed()) return list_models(o);

@@ -1,5 +1,9 @@
 #include "tools/modtap/text_sink.hpp"
 
+#include <ctime>
+
+#include <fmt/chrono.h>
+
 #include "decoder/pdu_fields.hpp"
 #include "decoder/register_meaning.hpp"
 #include "tools/modtap/render.hpp"
@@ -46,12 +50,52 @@ void append_bad_check(fmt::memory_buffer& buf, const Frame& frame) {
 
 }  // namespace
 
-TextSink::TextSink(Output& out, const std::vector<ChannelInfo>& channels, bool verbose)
-    : out_(out), channels_(channels), verbose_(verbose) {}
+TimeFormat time_format_named(std::string_view name) {
+  if (name == "a") return TimeFormat::absolute;
+  if (name == "ad") return TimeFormat::absolute_date;
+  if (name == "d") return TimeFormat::delta;
+  return TimeFormat::relative;
+}
 
-Fixed TextSink::seconds(int64_t t_ns) {
-  if (!first_ns_) first_ns_ = t_ns;
-  return {t_ns - *first_ns_, 9, 6};
+TextSink::TextSink(Output& out, const std::vector<ChannelInfo>& channels, bool verbose,
+                   TimeFormat time_format)
+    : out_(out), channels_(channels), verbose_(verbose), time_format_(time_format) {}
+
+void TextSink::time_column(int64_t t_ns) {
+  switch (time_format_) {
+    case TimeFormat::relative:
+      if (!first_ns_) first_ns_ = t_ns;
+      out_.print(FMT_COMPILE(" {:>11}"), Fixed{t_ns - *first_ns_, 9, 6});
+      return;
+    case TimeFormat::delta:
+      out_.print(FMT_COMPILE(" {:>11}"), Fixed{previous_ns_ ? t_ns - *previous_ns_ : 0, 9, 6});
+      previous_ns_ = t_ns;
+      return;
+    case TimeFormat::absolute:
+    case TimeFormat::absolute_date:
+      absolute_time(t_ns);
+      return;
+  }
+}
+
+// The date and time are formatted once a second; the microseconds per record.
+void TextSink::absolute_time(int64_t t_ns) {
+  const int64_t us = t_ns >= 0 ? (t_ns + 500) / 1000 : -((-t_ns + 500) / 1000);
+  const int64_t second = us >= 0 ? us / 1'000'000 : (us + 1) / 1'000'000 - 1;
+  if (second != shown_second_) {
+    shown_second_ = second;
+    shown_.clear();
+    std::tm local{};
+    const std::time_t when = static_cast<std::time_t>(second);
+    localtime_r(&when, &local);
+    if (time_format_ == TimeFormat::absolute_date) {
+      fmt::format_to(fmt::appender(shown_), "{:%Y-%m-%d %H:%M:%S}", local);
+    } else {
+      fmt::format_to(fmt::appender(shown_), "{:%H:%M:%S}", local);
+    }
+  }
+  out_.print(FMT_COMPILE(" {}.{:06}"), std::string_view(shown_.data(), shown_.size()),
+             us - second * 1'000'000);
 }
 
 void TextSink::channel_column(uint16_t channel) {
@@ -60,7 +104,8 @@ void TextSink::channel_column(uint16_t channel) {
 }
 
 void TextSink::on_frame(const Frame& frame) {
-  out_.print(FMT_COMPILE("{:6} {:>11}"), frame.index, seconds(frame.t_ns));
+  out_.print(FMT_COMPILE("{:6}"), frame.index);
+  time_column(frame.t_ns);
   channel_column(frame.channel);
   out_.print(FMT_COMPILE(" {} slave {:<3} {}"), role_tag(frame.role), frame.slave(),
              FunctionLabel{frame.function()});
@@ -165,7 +210,8 @@ void TextSink::registers_tree(const Meaning& meaning) {
 }
 
 void TextSink::on_noise(const Noise& noise) {
-  out_.print(FMT_COMPILE("{:6} {:>11}"), noise.index, seconds(noise.t_ns));
+  out_.print(FMT_COMPILE("{:6}"), noise.index);
+  time_column(noise.t_ns);
   channel_column(noise.channel);
   out_.print(FMT_COMPILE(" noise {} bytes ({}): "), noise.raw.size(), to_string(noise.reason));
   append_hex(out_.buffer(), noise.raw.first(std::min<size_t>(noise.raw.size(), 32)), true);
@@ -175,7 +221,8 @@ void TextSink::on_noise(const Noise& noise) {
 }
 
 void TextSink::on_timeout(const Timeout& t) {
-  out_.print(FMT_COMPILE("{:6} {:>11}"), "-", seconds(t.t_ns));
+  out_.print(FMT_COMPILE("{:6}"), "-");
+  time_column(t.t_ns);
   channel_column(t.channel);
   const Fixed waited_ms{t.waited_ns, 6, 3};
   if (t.timed_out()) {

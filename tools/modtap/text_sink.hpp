@@ -2,26 +2,34 @@
 #pragma once
 
 #include <optional>
+#include <string_view>
 #include <vector>
 
-#include "decoder/record_sink.hpp"
 #include "decoder/pdu_fields.hpp"
+#include "decoder/record_sink.hpp"
 #include "decoder/register_meaning.hpp"
 #include "tools/modtap/output.hpp"
 #include "tools/modtap/render.hpp"
 
 namespace modtap::tools {
 
+// How the time column reads, as tshark's -t: since the first record (r), the time of day (a),
+// date and time (ad), since the record before (d). Absolute times are local, as tshark's.
+enum class TimeFormat : uint8_t { relative, absolute, absolute_date, delta };
+TimeFormat time_format_named(std::string_view name);  // "r", "a", "ad", "d"
+
 class TextSink final : public decoder::RecordSink {
  public:
-  TextSink(Output& out, const std::vector<decoder::ChannelInfo>& channels, bool verbose);
+  TextSink(Output& out, const std::vector<decoder::ChannelInfo>& channels, bool verbose,
+           TimeFormat time_format = TimeFormat::relative);
 
   void on_frame(const decoder::Frame& frame) override;
   void on_noise(const decoder::Noise& noise) override;
   void on_timeout(const decoder::Timeout& timeout) override;
 
  private:
-  Fixed seconds(int64_t t_ns);
+  void time_column(int64_t t_ns);
+  void absolute_time(int64_t t_ns);
   void channel_column(uint16_t channel);
   void tree(const decoder::Frame& frame);
   void registers_line(const decoder::Meaning& meaning);
@@ -30,7 +38,11 @@ class TextSink final : public decoder::RecordSink {
   Output& out_;
   const std::vector<decoder::ChannelInfo>& channels_;
   bool verbose_;
-  std::optional<int64_t> first_ns_;
+  TimeFormat time_format_;
+  std::optional<int64_t> first_ns_;     // relative times count from here
+  std::optional<int64_t> previous_ns_;  // delta times from here
+  int64_t shown_second_ = -1;           // the second whose date and time `shown_` holds
+  fmt::memory_buffer shown_;
   decoder::DecodedPdu decoded_;  // the frame's fields, its capacity kept from frame to frame
 };
 
