@@ -1,5 +1,7 @@
 #include "decoder/device_model.hpp"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 namespace modtap::decoder {
@@ -43,6 +45,21 @@ RegisterLookup find_register(const DeviceModel& model, Table table, uint16_t add
   if (model.groups && model.groups->table == table)
     found.made = group_parameter(*model.groups, address, found.closed_group);
   return found;
+}
+
+bool names_register(const DeviceModel& model, std::string_view name) {
+  for (const auto& [key, def] : model.registers)
+    if (def.name == name) return true;
+  if (!model.groups || !name.starts_with(model.groups->prefix)) return false;
+  // PREFIX GG.nn, as make_parameter formats it: two or more digits, a point, two digits.
+  const std::string_view number = name.substr(model.groups->prefix.size());
+  const size_t point = number.find('.');
+  auto digits = [](std::string_view s) {
+    return !s.empty() &&
+           std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
+  };
+  return point != std::string_view::npos && point >= 2 && digits(number.substr(0, point)) &&
+         number.size() - point - 1 == 2 && digits(number.substr(point + 1));
 }
 
 }  // namespace modtap::decoder

@@ -8,6 +8,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "decoder/function_codes.hpp"
@@ -113,5 +114,8 @@ struct RegisterLookup {
 };
 
 RegisterLookup find_register(const DeviceModel& model, Table table, uint16_t address);
+
+// Whether the model calls a register so: a listed one, or a parameter its group rule names.
+bool names_register(const DeviceModel& model, std::string_view name);
 
 }  // namespace modtap::decoder

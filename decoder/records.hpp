@@ -34,7 +34,8 @@ struct Chunk {
 };
 
 enum class Mode : uint8_t { rtu, ascii };
-struct Meaning;  // register_meaning.hpp
+struct Meaning;     // register_meaning.hpp
+struct DecodedPdu;  // pdu_fields.hpp
 enum class Role : uint8_t { request, response, unknown };
 
 // Which roles the frame's structure allows; the matcher picks between them when both do.
@@ -72,6 +73,7 @@ struct Frame {
   std::optional<int64_t> latency_ns;     // end of request to start of response
   std::span<const uint8_t> request_pdu;  // the matched request's PDU, during the callback
   const Meaning* meaning = nullptr;      // the device model's reading, when one is applied
+  const DecodedPdu* decoded = nullptr;   // its fields, when a stage before the sinks decoded them
 
   uint8_t slave() const { return adu.empty() ? 0 : adu[0]; }
   uint8_t function() const { return adu.size() < 2 ? 0 : adu[1]; }

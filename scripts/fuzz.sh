@@ -12,7 +12,7 @@ seconds=${1:-30}
 runs=${2:--1}
 shift $(( $# > 2 ? 2 : $# ))
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(rtu ascii pdu hexlog pcap sigrok model_yaml)
+[ ${#targets[@]} -gt 0 ] || targets=(rtu ascii pdu hexlog pcap sigrok model_yaml filter)
 
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -DMODTAP_FUZZ=ON -DMODTAP_TESTS=OFF \
   -DMODTAP_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null

@@ -69,12 +69,12 @@ void JsonSink::on_frame(const Frame& frame) {
   }
   out_.print(FMT_COMPILE("]"));
   if (frame.meaning) meaning(*frame.meaning);
-  decode_pdu(frame.role, frame.pdu(), frame.request_pdu, decoded_);
-  for (size_t at = 0; at < decoded_.fields.size();) {
+  const DecodedPdu& pdu = fields_of(frame, decoded_);
+  for (size_t at = 0; at < pdu.fields.size();) {
     buf.push_back(',');
-    at = append_json_field(buf, decoded_, at);
+    at = append_json_field(buf, pdu, at);
   }
-  if (decoded_.truncated) out_.print(FMT_COMPILE(",\"truncated\":true"));
+  if (pdu.truncated) out_.print(FMT_COMPILE(",\"truncated\":true"));
   out_.print(FMT_COMPILE("}}\n"));
   out_.end_record();
 }

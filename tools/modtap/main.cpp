@@ -2,6 +2,7 @@
 // sink together; the work happens in decoder/ and captures/.
 #include <unistd.h>
 
+#include <algorithm>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -20,6 +21,7 @@
 #include "captures/raw_recorder.hpp"
 #include "decoder/analyzer.hpp"
 #include "decoder/bus_statistics.hpp"
+#include "decoder/display_filter.hpp"
 #include "decoder/format_probe.hpp"
 #include "tools/live/live_capture.hpp"
 #include "tools/modtap/auto_format.hpp"
@@ -62,6 +64,7 @@ struct Options {
   std::string time_format = "r";
   uint64_t max_frames = 0;  // 0: no limit
   bool quiet = false;
+  std::string display_filter;
 };
 
 std::optional<uint32_t> fixed_baud(const Options& o) {
@@ -124,16 +127,18 @@ class Sinks {
     }
     // Only text, JSON, pcapng comments and statistics with --model show what the models say;
     // the other outputs skip the work, and the YAML is not read unless models are asked for.
+    // A filter may name registers, so it reads frames through the models too.
     const bool interpret = o.output == "text" || o.output == "json" ||
                            (wants_statistics(o) && !o.models.empty()) ||
-                           (!o.write_file.empty() && o.link != "bare");
+                           (!o.write_file.empty() && o.link != "bare") || !o.display_filter.empty();
     if (interpret || !o.models.empty() || !o.models_dir.empty()) {
       catalog_ = load_models(o);
       auto choice = catalog_.choose(o.models);
       if (!o.timeout_given) model_timeouts_ = decoder::model_timeouts(choice);
+      if (!o.display_filter.empty()) filter(o.display_filter, channels);
+      decoder::RecordSink& after = filter_ ? static_cast<decoder::RecordSink&>(*filter_) : fan_out_;
       if (interpret)
-        interpreter_ =
-            std::make_unique<decoder::ModelInterpreter>(catalog_.all(), choice, fan_out_);
+        interpreter_ = std::make_unique<decoder::ModelInterpreter>(catalog_.all(), choice, after);
     }
     if (o.write_file.empty()) return;
     captures::PcapngOptions options;
@@ -144,10 +149,12 @@ class Sinks {
     pcapng_sink_ = std::make_unique<captures::PcapngSink>(*pcapng_, channels, options);
     fan_out_.add(*pcapng_sink_);
   }
-  // Where records enter: the frame limit, the model stage, then every sink.
+  // Where records enter: the frame limit, the model stage, the filter, then every sink.
   decoder::RecordSink& all() {
     if (limit_) return *limit_;
-    return interpreter_ ? static_cast<decoder::RecordSink&>(*interpreter_) : fan_out_;
+    if (interpreter_) return *interpreter_;
+    if (filter_) return *filter_;
+    return fan_out_;
   }
   // -c N: stop after N frames; `on_reached` stops a live run.
   void limit_frames(uint64_t max_frames, std::function<void()> on_reached = {}) {
@@ -165,10 +172,24 @@ class Sinks {
   }
 
  private:
+  // -Y: every output (text, JSON, statistics, pcapng) sees only the records it matches.
+  void filter(const std::string& text, const std::vector<decoder::ChannelInfo>& channels) {
+    const auto models = catalog_.all();
+    decoder::DisplayFilter filter(text, [models](std::string_view name) {
+      return std::any_of(models.begin(), models.end(),
+                         [&](const decoder::DeviceModel* m) { return names_register(*m, name); });
+    });
+    std::vector<std::string> names;
+    for (const auto& channel : channels) names.push_back(channel.name);
+    filter.set_channel_names(std::move(names));
+    filter_ = std::make_unique<decoder::FilterStage>(std::move(filter), fan_out_);
+  }
+
   decoder::FanOut fan_out_;
   std::unique_ptr<decoder::RecordSink> terminal_;
   std::unique_ptr<decoder::BusStatistics> statistics_;
   tools::ModelCatalog catalog_;
+  std::unique_ptr<decoder::FilterStage> filter_;
   std::unique_ptr<decoder::ModelInterpreter> interpreter_;
   std::map<uint8_t, int64_t> model_timeouts_;
   std::unique_ptr<captures::PcapngWriter> pcapng_;
@@ -384,6 +405,9 @@ int main(int argc, char** argv) {
                  "Text time column: r (since the first record), a (local time of day), ad "
                  "(local date and time), d (since the record before)")
       ->check(CLI::IsMember({"r", "a", "ad", "d"}));
+  app.add_option("-Y,--display-filter", o.display_filter,
+                 "Only records that match, in every output: 'slave == 3 && fc == 6', "
+                 "'latency_us > 50000', 'finding', 'register.name == \"fault\"' (docs/output.md)");
   app.add_option("-c", o.max_frames, "Stop after this many frames")->check(CLI::PositiveNumber);
   app.add_flag("-q,--quiet", o.quiet,
                "No line per frame: only what the run adds up to (-T stats, --stats)");
@@ -438,6 +462,9 @@ int main(int argc, char** argv) {
       return 2;
     }
     return o.interfaces.empty() ? read_file(o) : listen(o);
+  } catch (const decoder::FilterError& e) {
+    fmt::print(stderr, "modtap: -Y: {}\n", e.what());
+    return 2;
   } catch (const captures::WriteError& e) {
     // The reader went away (`| head`): no message, but not success either, as with tshark.
     if (e.broken_pipe()) return 2;

@@ -109,21 +109,21 @@ void TextSink::on_frame(const Frame& frame) {
   channel_column(frame.channel);
   out_.print(FMT_COMPILE(" {} slave {:<3} {}"), role_tag(frame.role), frame.slave(),
              FunctionLabel{frame.function()});
-  decode_pdu(frame.role, frame.pdu(), frame.request_pdu, decoded_);
+  const DecodedPdu& pdu = fields_of(frame, decoded_);
   auto& buf = out_.buffer();
   // Where the model gives exceptions the vendor's meanings, the standard's name would mislead
   // (GD20's 04H is "Operation failed", not "Server Device Failure"): the model's text stands.
   const bool vendor_exceptions = frame.meaning && frame.meaning->model->vendor_exceptions;
-  for (size_t at = 0; at < decoded_.fields.size();) {
-    const Field& f = decoded_.fields[at];
+  for (size_t at = 0; at < pdu.fields.size();) {
+    const Field& f = pdu.fields[at];
     const bool shown = f.type() != FieldType::list && f.id != FieldId::byte_count &&
                        !(vendor_exceptions && f.id == FieldId::exception_name);
     if (!shown) {
-      at = decoded_.next(at);
+      at = pdu.next(at);
       continue;
     }
     out_.print(FMT_COMPILE(" {}="), f.name());
-    at = append_text_value(buf, decoded_, at, line_items);
+    at = append_text_value(buf, pdu, at, line_items);
   }
   const char* check = frame.mode == Mode::rtu ? "crc" : "lrc";
   if (frame.check_ok) {
@@ -141,11 +141,11 @@ void TextSink::on_frame(const Frame& frame) {
   });
   if (frame.meaning) registers_line(*frame.meaning);
   out_.print(FMT_COMPILE("\n"));
-  if (verbose_) tree(frame);
+  if (verbose_) tree(frame, pdu);
   out_.end_record();
 }
 
-void TextSink::tree(const Frame& frame) {
+void TextSink::tree(const Frame& frame, const DecodedPdu& pdu) {
   auto& buf = out_.buffer();
   out_.print(FMT_COMPILE("    Frame {}: {} bytes, {}, channel {}, offset {}\n"), frame.index,
              frame.raw.size(), to_string(frame.mode),
@@ -155,12 +155,12 @@ void TextSink::tree(const Frame& frame) {
   out_.print(FMT_COMPILE("\n    Role: {}\n    Slave: {}\n    Function: {} ({})\n"),
              to_string(frame.role), frame.slave(), frame.function(),
              FunctionLabel{frame.function()});
-  for (size_t at = 0; at < decoded_.fields.size();) {
-    out_.print(FMT_COMPILE("    {}: "), decoded_.fields[at].name());
-    at = append_text_value(buf, decoded_, at, SIZE_MAX);
+  for (size_t at = 0; at < pdu.fields.size();) {
+    out_.print(FMT_COMPILE("    {}: "), pdu.fields[at].name());
+    at = append_text_value(buf, pdu, at, SIZE_MAX);
     out_.print(FMT_COMPILE("\n"));
   }
-  if (decoded_.truncated) out_.print(FMT_COMPILE("    [PDU shorter than its fields]\n"));
+  if (pdu.truncated) out_.print(FMT_COMPILE("    [PDU shorter than its fields]\n"));
   out_.print(FMT_COMPILE("    {}: "), frame.mode == Mode::rtu ? "CRC" : "LRC");
   append_check(buf, frame.wire_check(), frame.mode);
   out_.print(FMT_COMPILE(" ({})"), frame.check_ok ? "ok" : "bad");

@@ -31,7 +31,7 @@ class TextSink final : public decoder::RecordSink {
   void time_column(int64_t t_ns);
   void absolute_time(int64_t t_ns);
   void channel_column(uint16_t channel);
-  void tree(const decoder::Frame& frame);
+  void tree(const decoder::Frame& frame, const decoder::DecodedPdu& pdu);
   void registers_line(const decoder::Meaning& meaning);
   void registers_tree(const decoder::Meaning& meaning);
 
