@@ -239,6 +239,7 @@ class Parser {
 
   void parse() {
     nodes_.emplace_back();  // the root, filled once the whole text is read
+    depth_.push_back(0);
     if (token_.kind == Token::Kind::end) throw FilterError(token_.column, "an empty filter");
     const size_t root = either();
     if (token_.kind != Token::Kind::end)
@@ -249,8 +250,21 @@ class Parser {
  private:
   void advance() { token_ = lexer_.next(); }
 
+  // Evaluation recurses as deep as the tree: a filter deeper than a person writes is refused
+  // before it can exhaust the stack.
+  static constexpr size_t max_depth = 256;
+
   size_t add(FilterNode node) {
+    size_t depth = 1;
+    if (node.kind == FilterNode::Kind::negation) depth += depth_[node.left];
+    if (node.kind == FilterNode::Kind::any_of || node.kind == FilterNode::Kind::all_of)
+      depth += std::max(depth_[node.left], depth_[node.right]);
+    if (depth > max_depth)
+      throw FilterError(token_.column,
+                        fmt::format("the filter nests deeper than {} levels", max_depth));
     nodes_.push_back(std::move(node));
+    depth_.resize(nodes_.size());
+    depth_.back() = depth;
     return nodes_.size() - 1;
   }
 
@@ -273,6 +287,16 @@ class Parser {
   }
 
   size_t unary() {
+    // Parentheses and negations recurse before any node is made: count them here.
+    if (++nesting_ > max_depth)
+      throw FilterError(token_.column,
+                        fmt::format("the filter nests deeper than {} levels", max_depth));
+    const size_t made = unary_inner();
+    --nesting_;
+    return made;
+  }
+
+  size_t unary_inner() {
     if (token_.kind == Token::Kind::negate) {
       advance();
       return add({FilterNode::Kind::negation, unary(), 0, {}, Op::eq, {}});
@@ -363,6 +387,8 @@ class Parser {
   Lexer lexer_;
   const std::function<bool(std::string_view)>& is_register_name_;
   std::vector<FilterNode>& nodes_;
+  std::vector<size_t> depth_;  // of each node's subtree
+  size_t nesting_ = 0;
   Token token_;
 };
 

@@ -142,6 +142,16 @@ TEST(DisplayFilter, SyntaxErrorsNameTheirColumn) {
   EXPECT_EQ(error_column("frequency_command_monitor > 1"), 0u);
 }
 
+// Nesting deeper than a person writes is refused before it can exhaust the stack; a long
+// list of alternatives is fine.
+TEST(DisplayFilter, RefusesNestingDeeperThanAPersonWrites) {
+  EXPECT_EQ(error_column(std::string(3000, '(') + "slave"), 257u);
+  EXPECT_EQ(error_column(std::string(3000, '!') + "slave"), 257u);
+  std::string alternatives = "slave == 0";
+  for (int i = 1; i < 200; ++i) alternatives += " || slave == " + std::to_string(i);
+  EXPECT_TRUE(matches(alternatives));
+}
+
 // Random texts from the filter's own alphabet: each parses or says where it went wrong.
 TEST(DisplayFilter, RandomTextsParseOrFailCleanly) {
   static const char* const pieces[] = {
