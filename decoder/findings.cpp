@@ -20,6 +20,15 @@ constexpr FindingInfo registry[] = {
     {"value-out-of-spec", Severity::warning, "FC05 with a value other than FF00H or 0000H"},
     {"ambiguous-echo", Severity::note,
      "an echo taken for the response that could have been the master's retry"},
+    {"short-gap", Severity::warning,
+     "a request that began less than 3.5 characters after the frame before it"},
+    {"late-response", Severity::warning,
+     "the response to a request that had already timed out: the slave is slower than the master "
+     "waits"},
+    {"exception-storm", Severity::warning,
+     "the same exception from the same slave, five or more answers in a row"},
+    {"answers-again", Severity::warning,
+     "a slave's first answer after three or more time-outs in a row: it was gone, and is back"},
     // The device model's, in RuleKind order.
     {"reserved-write", Severity::warning, "a write to a register the manual says not to write"},
     {"read-only-write", Severity::warning, "a write to a register the device only reports"},

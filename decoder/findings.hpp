@@ -25,8 +25,13 @@ enum Finding : uint32_t {
   finding_byte_count_mismatch = 1u << 9,   // a byte count that disagrees with its quantity
   finding_value_out_of_spec = 1u << 10,    // FC05 with a value other than FF00H or 0000H
   finding_ambiguous_echo = 1u << 11,       // an echo taken for the response that may be a retry
+  // What the bus's history shows (decoder/bus_diagnostics):
+  finding_short_gap = 1u << 12,        // a request less than t3.5 after the frame before it
+  finding_late_response = 1u << 13,    // the response to a request that already timed out
+  finding_exception_storm = 1u << 14,  // the same exception from a slave, again and again
+  finding_answers_again = 1u << 15,    // a slave's first answer after time-outs in a row
 };
-inline constexpr size_t frame_finding_count = 12;
+inline constexpr size_t frame_finding_count = 16;
 
 // What a device model's rules say of a frame; entry frame_finding_count + kind of the registry.
 enum class RuleKind : uint8_t {

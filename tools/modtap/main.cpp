@@ -20,6 +20,7 @@
 #include "captures/pcapng_sink.hpp"
 #include "captures/raw_recorder.hpp"
 #include "decoder/analyzer.hpp"
+#include "decoder/bus_diagnostics.hpp"
 #include "decoder/bus_statistics.hpp"
 #include "decoder/display_filter.hpp"
 #include "decoder/format_probe.hpp"
@@ -140,6 +141,7 @@ class Sinks {
       if (interpret)
         interpreter_ = std::make_unique<decoder::ModelInterpreter>(catalog_.all(), choice, after);
     }
+    diagnostics_ = std::make_unique<decoder::BusDiagnostics>(format, clock, after_diagnostics());
     if (o.write_file.empty()) return;
     captures::PcapngOptions options;
     options.link = captures::parse_link(o.link);
@@ -149,13 +151,13 @@ class Sinks {
     pcapng_sink_ = std::make_unique<captures::PcapngSink>(*pcapng_, channels, options);
     fan_out_.add(*pcapng_sink_);
   }
-  // Where records enter: the frame limit, the model stage, the filter, then every sink.
+  // Where records enter: the frame limit, the bus's history, the model stage, the filter,
+  // then every sink.
   decoder::RecordSink& all() {
     if (limit_) return *limit_;
-    if (interpreter_) return *interpreter_;
-    if (filter_) return *filter_;
-    return fan_out_;
+    return *diagnostics_;
   }
+  const decoder::BusDiagnostics& diagnostics() const { return *diagnostics_; }
   // -c N: stop after N frames; `on_reached` stops a live run.
   void limit_frames(uint64_t max_frames, std::function<void()> on_reached = {}) {
     if (max_frames == 0) return;
@@ -172,6 +174,12 @@ class Sinks {
   }
 
  private:
+  decoder::RecordSink& after_diagnostics() {
+    if (interpreter_) return *interpreter_;
+    if (filter_) return *filter_;
+    return fan_out_;
+  }
+
   // -Y: every output (text, JSON, statistics, pcapng) sees only the records it matches.
   void filter(const std::string& text, const std::vector<decoder::ChannelInfo>& channels) {
     const auto models = catalog_.all();
@@ -190,6 +198,7 @@ class Sinks {
   std::unique_ptr<decoder::BusStatistics> statistics_;
   tools::ModelCatalog catalog_;
   std::unique_ptr<decoder::FilterStage> filter_;
+  std::unique_ptr<decoder::BusDiagnostics> diagnostics_;
   std::unique_ptr<decoder::ModelInterpreter> interpreter_;
   std::map<uint8_t, int64_t> model_timeouts_;
   std::unique_ptr<captures::PcapngWriter> pcapng_;
@@ -240,10 +249,10 @@ int list_models(const Options& o) {
 void summarise(const Options& o, tools::Output& out, const Sinks& sinks, bool complete) {
   const decoder::BusStatistics* statistics = sinks.statistics();
   if (!statistics) return;
-  if (o.output == "stats") tools::print_statistics(out, *statistics);
+  if (o.output == "stats") tools::print_statistics(out, *statistics, sinks.diagnostics());
   if (o.stats_file.empty()) return;
   fmt::memory_buffer json;
-  tools::append_statistics_json(json, *statistics, complete);
+  tools::append_statistics_json(json, *statistics, sinks.diagnostics(), complete);
   captures::OutputFile file(o.stats_file);
   file.write(std::string_view(json.data(), json.size()));
   file.close();

@@ -96,9 +96,26 @@ void print_findings(Output& out, const BusStatistics& s) {
   }
 }
 
+// "slave 7 silent from 12.345 s (request #10), 5 time-outs, back at 15.678 s"
+void print_outages(Output& out, const BusStatistics& s, const BusDiagnostics& d) {
+  if (d.outage_count() == 0) return;
+  out.print("\nslaves that stopped answering ({} or more time-outs in a row): {}\n",
+            BusDiagnostics::outage_timeouts, d.outage_count());
+  const int64_t start = s.first_t_ns.value_or(0);
+  for (const Outage& outage : d.outages()) {
+    out.print("  slave {:<3} silent from {} s (request #{}), {} time-outs, ", outage.slave,
+              Fixed{outage.silent_from_ns - start, 9, 3}, outage.first_request, outage.timeouts);
+    if (outage.back_ns) {
+      out.print("back at {} s\n", Fixed{*outage.back_ns - start, 9, 3});
+    } else {
+      out.print("not back by the end\n");
+    }
+  }
+}
+
 }  // namespace
 
-void print_statistics(Output& out, const BusStatistics& s) {
+void print_statistics(Output& out, const BusStatistics& s, const BusDiagnostics& d) {
   print_span(out, s);
   out.print("{:<16}{}", "frames", s.frames);
   if (s.duration_s() > 0)
@@ -123,6 +140,7 @@ void print_statistics(Output& out, const BusStatistics& s) {
     out.print(" ms over {} responses\n", s.latency_ns.count());
   }
   print_slaves(out, s);
+  print_outages(out, s, d);
   print_findings(out, s);
   out.flush();
 }
@@ -219,9 +237,29 @@ void append_optional(fmt::memory_buffer& out, const char* key, std::optional<dou
   }
 }
 
+void append_outages(fmt::memory_buffer& out, const BusDiagnostics& d) {
+  auto put = fmt::appender(out);
+  fmt::format_to(put, ",\"outage_count\":{},\"outages\":[", d.outage_count());
+  bool first = true;
+  for (const Outage& o : d.outages()) {
+    fmt::format_to(put,
+                   "{}{{\"slave\":{},\"first_request\":{},\"silent_from_ns\":{},\"timeouts\":{},"
+                   "\"back_ns\":",
+                   first ? "" : ",", o.slave, o.first_request, o.silent_from_ns, o.timeouts);
+    if (o.back_ns) {
+      fmt::format_to(put, "{}}}", *o.back_ns);
+    } else {
+      fmt::format_to(put, "null}}");
+    }
+    first = false;
+  }
+  out.push_back(']');
+}
+
 }  // namespace
 
-void append_statistics_json(fmt::memory_buffer& out, const BusStatistics& s, bool complete) {
+void append_statistics_json(fmt::memory_buffer& out, const BusStatistics& s,
+                            const BusDiagnostics& d, bool complete) {
   auto put = fmt::appender(out);
   fmt::format_to(put, "{{\"complete\":{},\"clock\":\"{}\",\"serial\":\"{}\"", complete,
                  to_string(s.clock()), describe(s.format()));
@@ -258,6 +296,7 @@ void append_statistics_json(fmt::memory_buffer& out, const BusStatistics& s, boo
   }
   fmt::format_to(put, "],\"stray_addresses\":{},\"stray_bad_checks\":{}", s.stray_addresses(),
                  s.stray_bad_checks());
+  append_outages(out, d);
   append_diagnostics(out, s);
   fmt::format_to(put, "}}\n");
 }

@@ -4,15 +4,18 @@
 
 #include <fmt/format.h>
 
+#include "decoder/bus_diagnostics.hpp"
 #include "decoder/bus_statistics.hpp"
 #include "tools/modtap/output.hpp"
 
 namespace modtap::tools {
 
-void print_statistics(Output& out, const decoder::BusStatistics& stats);
+// The outages (slaves that went silent) come from the diagnostics stage.
+void print_statistics(Output& out, const decoder::BusStatistics& stats,
+                      const decoder::BusDiagnostics& diagnostics);
 
 // `complete` is false when the input ended in an error: the numbers cover what was read.
 void append_statistics_json(fmt::memory_buffer& out, const decoder::BusStatistics& stats,
-                            bool complete);
+                            const decoder::BusDiagnostics& diagnostics, bool complete);
 
 }  // namespace modtap::tools

@@ -1,0 +1,84 @@
+#include "decoder/bus_diagnostics.hpp"
+
+namespace modtap::decoder {
+
+BusDiagnostics::BusDiagnostics(SerialFormat format, ClockQuality clock, RecordSink& next)
+    : t35_ns_(format.t35_ns()), sees_gaps_(clock == ClockQuality::per_byte), next_(next) {}
+
+void BusDiagnostics::on_frame(const Frame& frame) {
+  const uint32_t found = diagnose(frame);
+  if (found == 0) {
+    next_.on_frame(frame);
+    return;
+  }
+  Frame diagnosed = frame;
+  diagnosed.findings |= found;
+  next_.on_frame(diagnosed);
+}
+
+uint32_t BusDiagnostics::diagnose(const Frame& frame) {
+  uint32_t found = 0;
+  if (frame.channel >= last_end_ns_.size()) last_end_ns_.resize(frame.channel + 1);
+  auto& last_end = last_end_ns_[frame.channel];
+  // A response's early start is the matcher's fast-turnaround; a request's is the master's.
+  if (sees_gaps_ && frame.role == Role::request && last_end && frame.t_ns >= *last_end &&
+      frame.t_ns - *last_end < t35_ns_)
+    found |= finding_short_gap;
+  last_end = frame.end_ns;
+  if (!frame.check_ok || frame.adu.empty()) return found;
+  SlaveHistory& slave = slaves_[frame.slave()];
+  if (frame.role == Role::request) {
+    slave.timed_out_function.reset();  // the master asked again: a response now is for that
+    return found;
+  }
+  if (frame.role == Role::response) found |= answered(frame, slave);
+  return found;
+}
+
+uint32_t BusDiagnostics::answered(const Frame& frame, SlaveHistory& slave) {
+  uint32_t found = 0;
+  const uint8_t function = frame.function() & 0x7F;
+  if ((frame.findings & finding_unsolicited) && slave.timed_out_function == function)
+    found |= finding_late_response;
+  slave.timed_out_function.reset();
+  if (slave.timeouts_in_a_row >= outage_timeouts) {
+    found |= finding_answers_again;
+    if (slave.open_outage) outages_[*slave.open_outage].back_ns = frame.t_ns;
+  }
+  slave.timeouts_in_a_row = 0;
+  slave.open_outage.reset();
+  if (frame.is_exception() && frame.adu.size() > 2) {
+    const bool same = slave.exceptions_in_a_row > 0 && slave.exception == frame.adu[2] &&
+                      slave.exception_function == function;
+    slave.exceptions_in_a_row = same ? slave.exceptions_in_a_row + 1 : 1;
+    slave.exception = frame.adu[2];
+    slave.exception_function = function;
+    if (slave.exceptions_in_a_row >= storm_exceptions) found |= finding_exception_storm;
+  } else {
+    slave.exceptions_in_a_row = 0;
+  }
+  return found;
+}
+
+void BusDiagnostics::on_timeout(const Timeout& timeout) {
+  if (timeout.timed_out()) {
+    SlaveHistory& slave = slaves_[timeout.slave];
+    slave.timed_out_function = timeout.function & 0x7F;
+    if (slave.timeouts_in_a_row++ == 0) {
+      slave.first_unanswered = timeout.request;
+      slave.silent_from_ns = timeout.t_ns - timeout.waited_ns;
+    }
+    if (slave.timeouts_in_a_row == outage_timeouts) {
+      ++outage_count_;
+      if (outages_.size() < kept_outages) {
+        slave.open_outage = outages_.size();
+        outages_.push_back(
+            {timeout.slave, slave.first_unanswered, slave.silent_from_ns, std::nullopt, 0});
+      }
+    }
+    if (slave.open_outage) outages_[*slave.open_outage].timeouts = slave.timeouts_in_a_row;
+  }
+  next_.on_timeout(timeout);
+}
+
+}  // namespace modtap::decoder

@@ -1,0 +1,148 @@
+#include "decoder/bus_diagnostics.hpp"
+
+#include <gtest/gtest.h>
+
+#include "decoder/analyzer.hpp"
+#include "decoder/checksum.hpp"
+#include "tests/support/collector.hpp"
+#include "tools/busgen/bus_simulator.hpp"
+
+namespace modtap::decoder {
+namespace {
+
+using testing::Collector;
+
+// Records handed straight to the stage, as the analyzer would hand them.
+class History {
+ public:
+  History() : stage_(SerialFormat{}, ClockQuality::per_byte, out) {}
+
+  // A good frame from `hex` (slave, PDU; the CRC is added) at `t_ms`.
+  uint32_t frame(Role role, const std::string& hex, int64_t t_ms, uint32_t findings = 0) {
+    auto& adu = adus_.emplace_back(testing::hex(hex));
+    const uint16_t crc = crc16(adu);
+    adu.push_back(crc & 0xFF);
+    adu.push_back(crc >> 8);
+    Frame f;
+    f.index = ++index_;
+    f.role = role;
+    f.raw = f.adu = adu;
+    f.check_ok = true;
+    f.findings = findings;
+    f.t_ns = t_ms * 1'000'000;
+    f.end_ns = f.t_ns + 4'000'000;
+    stage_.on_frame(f);
+    return out.records.back().findings;
+  }
+  void timeout(uint8_t slave, uint8_t function, uint64_t request, int64_t t_ms) {
+    Timeout t;
+    t.slave = slave;
+    t.function = function;
+    t.request = request;
+    t.t_ns = t_ms * 1'000'000;
+    t.waited_ns = 1'000'000'000;
+    t.reason = TimeoutReason::silence;
+    stage_.on_timeout(t);
+  }
+  const BusDiagnostics& stage() const { return stage_; }
+  Collector out;
+
+ private:
+  BusDiagnostics stage_;
+  std::vector<std::vector<uint8_t>> adus_{};
+  uint64_t index_ = 0;
+};
+
+TEST(BusDiagnostics, ASlaveThatGoesSilentAndComesBackIsAnOutageWithBothTimes) {
+  History bus;
+  int64_t t = 0;
+  for (int i = 0; i < 4; ++i) {
+    bus.frame(Role::request, "07 03 00 00 00 01", t);
+    bus.timeout(7, 3, i + 1, t + 1004);
+    t += 1100;
+  }
+  bus.frame(Role::request, "07 03 00 00 00 01", t);
+  EXPECT_EQ(bus.frame(Role::response, "07 03 02 00 2A", t + 20) & finding_answers_again,
+            finding_answers_again);
+  ASSERT_EQ(bus.stage().outages().size(), 1u);
+  const Outage& outage = bus.stage().outages()[0];
+  EXPECT_EQ(outage.slave, 7);
+  EXPECT_EQ(outage.first_request, 1u);
+  EXPECT_EQ(outage.silent_from_ns, 4'000'000);  // the end of the first unanswered request
+  EXPECT_EQ(outage.timeouts, 4u);
+  EXPECT_EQ(outage.back_ns, (t + 20) * 1'000'000);
+  // Two time-outs in a row are no outage, and the next answer says nothing.
+  bus.timeout(7, 3, 9, t + 2000);
+  bus.timeout(7, 3, 10, t + 3000);
+  EXPECT_EQ(bus.frame(Role::response, "07 03 02 00 2A", t + 3100) & finding_answers_again, 0u);
+  EXPECT_EQ(bus.stage().outage_count(), 1u);
+}
+
+TEST(BusDiagnostics, TheFifthSameExceptionInARowIsAStorm) {
+  History bus;
+  uint32_t found = 0;
+  for (int i = 0; i < 6; ++i) {
+    bus.frame(Role::request, "05 06 00 10 00 01", i * 100);
+    found = bus.frame(Role::response, "05 86 02", i * 100 + 10);
+    EXPECT_EQ((found & finding_exception_storm) != 0, i >= 4) << i;
+  }
+  // Another code, or an answer that is no exception, starts the count again.
+  bus.frame(Role::response, "05 86 03", 700);
+  EXPECT_EQ(bus.out.records.back().findings & finding_exception_storm, 0u);
+  // Another slave's exceptions are its own.
+  for (int i = 0; i < 4; ++i) bus.frame(Role::response, "06 86 03", 800 + i);
+  EXPECT_EQ(bus.out.records.back().findings & finding_exception_storm, 0u);
+}
+
+TEST(BusDiagnostics, AnAnswerAfterItsRequestTimedOutIsLate) {
+  History bus;
+  bus.frame(Role::request, "09 04 00 00 00 02", 0);
+  bus.timeout(9, 4, 1, 1004);
+  EXPECT_EQ(bus.frame(Role::response, "09 04 04 00 01 00 02", 1200, finding_unsolicited) &
+                finding_late_response,
+            finding_late_response);
+  // Once the master asked that slave again, an unsolicited answer is not this one's.
+  bus.frame(Role::request, "09 04 00 00 00 02", 2000);
+  bus.timeout(9, 4, 3, 3004);
+  bus.frame(Role::request, "09 04 00 00 00 02", 3100);
+  EXPECT_EQ(bus.frame(Role::response, "09 04 04 00 01 00 02", 3300, finding_unsolicited) &
+                finding_late_response,
+            0u);
+}
+
+// The simulator's bus through the analyzer and the stage, timed per byte: frames sent back to
+// back crowd each other; a master that waits 5 ms between transactions does not.
+Collector simulated(bool back_to_back) {
+  busgen::BusOptions options;
+  options.transactions = 2000;
+  options.back_to_back = back_to_back;
+  const busgen::BusCapture capture = busgen::simulate(options);
+  Collector out;
+  BusDiagnostics stage(options.format, ClockQuality::per_byte, out);
+  AnalyzerOptions analyzer_options;
+  analyzer_options.mode = ModeChoice::rtu;
+  analyzer_options.clock = ClockQuality::per_byte;
+  Analyzer analyzer(analyzer_options, {{"bus", ChannelRole::bus}}, stage);
+  for (size_t i = 0; i < capture.bytes.size(); ++i)
+    analyzer.push({0, capture.end_ns[i], {&capture.bytes[i], 1}});
+  analyzer.finish();
+  return out;
+}
+
+size_t count(const Collector& out, uint32_t finding) {
+  size_t n = 0;
+  for (const auto& r : out.records) n += (r.findings & finding) != 0;
+  return n;
+}
+
+TEST(BusDiagnostics, CleanTrafficShowsNoneAndCrowdedTrafficShowsShortGaps) {
+  const Collector clean = simulated(false);
+  for (uint32_t finding :
+       {finding_short_gap, finding_late_response, finding_exception_storm, finding_answers_again})
+    EXPECT_EQ(count(clean, finding), 0u) << finding;
+  const Collector crowded = simulated(true);
+  EXPECT_GT(count(crowded, finding_short_gap), 1000u);
+}
+
+}  // namespace
+}  // namespace modtap::decoder
