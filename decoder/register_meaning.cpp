@@ -339,7 +339,9 @@ void interpret_response(const DeviceModel& model, const Frame& frame, Meaning& m
   if (pdu.empty()) return;
   const auto values = function_code(pdu[0]).response_values(pdu, frame.request_pdu);
   // A read's values are checked against the model; an echo's were checked in its request.
-  if (values) decode_values(model, *values, meaning, values->write ? nullptr : &meaning.findings);
+  if (!values) return;
+  meaning.echoed = values->write;
+  decode_values(model, *values, meaning, values->write ? nullptr : &meaning.findings);
 }
 
 }  // namespace

@@ -39,6 +39,7 @@ struct Meaning {
   const DeviceModel* model = nullptr;
   std::vector<RegisterValue> registers;
   std::vector<RuleFinding> findings;
+  bool echoed = false;  // the registers repeat what the request wrote (a write's echo response)
 
   Meaning() = default;
   Meaning(Meaning&&) = default;  // moving keeps `composed` where the registers' texts point
@@ -53,6 +54,7 @@ struct Meaning {
     model = nullptr;
     registers.clear();
     findings.clear();
+    echoed = false;
     composed.clear();
   }
 

@@ -148,6 +148,23 @@ TEST(Cli, TsharkHabitsCountQuietTimeAndVersion) {
   EXPECT_EQ(version.lines[0].rfind("modtap ", 0), 0u);
 }
 
+// --follow: the values of chosen registers over time, by name or address, as the master wrote
+// and read them; the echo of a write adds no second row.
+TEST(Cli, FollowWritesRegisterValuesOverTimeAsCsv) {
+  const std::string drives = std::string("-r ") + MODTAP_SAMPLES +
+                             "/drives-manual-examples.log --model 1=nta5000 --model 2=n3";
+  const Outcome r = run(drives + " --follow output_frequency,2502H");
+  ASSERT_EQ(r.status, 0);
+  EXPECT_EQ(r.lines, (std::vector<std::string>{"t,slave,address,name,value,unit,raw",
+                                               "0.000000,1,2502H,frequency_command,60.00,Hz,6000",
+                                               "0.053166,1,2502H,frequency_command,60.00,Hz,6000",
+                                               "0.117780,1,2524H,output_frequency,60.00,Hz,6000"}));
+  const Outcome all = run(drives + " -T csv");
+  EXPECT_GT(all.lines.size(), r.lines.size());
+  EXPECT_EQ(run(drives + " --follow ,x").lines,
+            std::vector<std::string>{"modtap: --follow: an empty name in \",x\""});
+}
+
 TEST(Cli, AMissingFileIsAClearErrorAndAnExitStatus) {
   const Outcome r = run("-r /nonexistent/capture.pcap");
   EXPECT_NE(r.status, 0);

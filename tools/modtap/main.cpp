@@ -26,6 +26,7 @@
 #include "decoder/format_probe.hpp"
 #include "tools/live/live_capture.hpp"
 #include "tools/modtap/auto_format.hpp"
+#include "tools/modtap/csv_sink.hpp"
 #include "tools/modtap/json_sink.hpp"
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/output.hpp"
@@ -66,6 +67,7 @@ struct Options {
   uint64_t max_frames = 0;  // 0: no limit
   bool quiet = false;
   std::string display_filter;
+  std::string follow;
 };
 
 std::optional<uint32_t> fixed_baud(const Options& o) {
@@ -81,6 +83,9 @@ std::optional<decoder::Parity> fixed_parity(const Options& o) {
 std::unique_ptr<decoder::RecordSink> make_sink(const Options& o, tools::Output& out,
                                                const std::vector<decoder::ChannelInfo>& channels) {
   if (o.output == "json") return std::make_unique<tools::JsonSink>(out, channels);
+  if (o.output == "csv")
+    return std::make_unique<tools::CsvSink>(out, tools::parse_follow_or_all(o.follow),
+                                            tools::time_format_named(o.time_format));
   if (o.output == "text")
     return std::make_unique<tools::TextSink>(out, channels, o.verbose,
                                              tools::time_format_named(o.time_format));
@@ -129,7 +134,7 @@ class Sinks {
     // Only text, JSON, pcapng comments and statistics with --model show what the models say;
     // the other outputs skip the work, and the YAML is not read unless models are asked for.
     // A filter may name registers, so it reads frames through the models too.
-    const bool interpret = o.output == "text" || o.output == "json" ||
+    const bool interpret = o.output == "text" || o.output == "json" || o.output == "csv" ||
                            (wants_statistics(o) && !o.models.empty()) ||
                            (!o.write_file.empty() && o.link != "bare") || !o.display_filter.empty();
     if (interpret || !o.models.empty() || !o.models_dir.empty()) {
@@ -226,7 +231,8 @@ std::optional<std::string> refuse_outputs(const Options& o) {
       if (!files[j].second.empty() && same_file(path, files[j].second))
         return fmt::format("{} and {} both name {}", option, files[j].first, path);
   }
-  const bool terminal_output = o.output == "text" || o.output == "json" || o.output == "stats";
+  const bool terminal_output =
+      o.output == "text" || o.output == "json" || o.output == "stats" || o.output == "csv";
   std::vector<std::string> on_standard_output;
   for (const auto& [option, path] : files)
     if (path == "-") on_standard_output.push_back(std::string(option) + " -");
@@ -395,9 +401,12 @@ int main(int argc, char** argv) {
   app.add_option("--mode", o.mode, "Transmission mode")
       ->check(CLI::IsMember({"auto", "rtu", "ascii"}));
   auto* output = app.add_option("-T,--output", o.output,
-                                "Output: text, json (JSON Lines), stats, none (default: text, "
-                                "or none with -w)")
-                     ->check(CLI::IsMember({"text", "json", "stats", "none"}));
+                                "Output: text, json (JSON Lines), stats, csv (register values "
+                                "over time), none (default: text, or none with -w)")
+                     ->check(CLI::IsMember({"text", "json", "stats", "csv", "none"}));
+  app.add_option("--follow", o.follow,
+                 "With -T csv (implied): the registers to follow, by name or address: "
+                 "frequency_command,2503H");
   app.add_option("-w,--write", o.write_file, "Write every frame and noise record as pcapng");
   app.add_option("--save-raw", o.save_raw,
                  "Keep every read as it came, with its time, to read again with other settings: "
@@ -454,6 +463,7 @@ int main(int argc, char** argv) {
   signal(SIGPIPE, SIG_IGN);
   o.timeout_given = timeout->count() > 0;  // a closed pipe is a failed write (EPIPE), handled below
   if (!o.write_file.empty() && output->count() == 0) o.output = "none";  // as tshark -w
+  if (!o.follow.empty() && output->count() == 0) o.output = "csv";
   if (o.quiet && o.output != "stats") o.output = "none";
   try {
     if (check->parsed()) return tools::check_model_file(check_file);

@@ -1,0 +1,101 @@
+#include "tools/modtap/csv_sink.hpp"
+
+#include <charconv>
+#include <stdexcept>
+
+#include "tools/modtap/render.hpp"
+
+namespace modtap::tools {
+
+using namespace decoder;
+
+namespace {
+
+// 2502H as the manuals write it, 0x2502, or decimal.
+std::optional<uint16_t> address_named(std::string_view item) {
+  int base = 10;
+  if (item.size() > 1 && (item.back() == 'H' || item.back() == 'h')) {
+    item.remove_suffix(1);
+    base = 16;
+  } else if (item.starts_with("0x") || item.starts_with("0X")) {
+    item.remove_prefix(2);
+    base = 16;
+  }
+  unsigned value = 0;
+  const auto [end, error] = std::from_chars(item.data(), item.data() + item.size(), value, base);
+  if (error != std::errc() || end != item.data() + item.size() || value > 0xFFFF)
+    return std::nullopt;
+  return static_cast<uint16_t>(value);
+}
+
+// A CSV field: quoted when it holds a comma, a quote or a line break (RFC 4180).
+void append_field(fmt::memory_buffer& out, std::string_view text) {
+  if (text.find_first_of(",\"\r\n") == std::string_view::npos) {
+    out.append(text);
+    return;
+  }
+  out.push_back('"');
+  for (char c : text) {
+    if (c == '"') out.push_back('"');
+    out.push_back(c);
+  }
+  out.push_back('"');
+}
+
+}  // namespace
+
+std::vector<FollowedRegister> parse_follow(const std::string& list) {
+  std::vector<FollowedRegister> follow;
+  size_t at = 0;
+  while (at <= list.size()) {
+    const size_t comma = std::min(list.find(',', at), list.size());
+    const std::string item = list.substr(at, comma - at);
+    if (item.empty()) throw std::invalid_argument("--follow: an empty name in \"" + list + "\"");
+    follow.push_back({item, address_named(item)});
+    at = comma + 1;
+  }
+  return follow;
+}
+
+CsvSink::CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat time_format)
+    : out_(out), follow_(std::move(follow)), time_format_(time_format) {
+  out_.print("t,slave,address,name,value,unit,raw\n");
+}
+
+bool CsvSink::followed(const RegisterValue& reg) const {
+  if (follow_.empty()) return true;
+  for (const FollowedRegister& f : follow_)
+    if (f.name == reg.name || f.address == reg.address) return true;
+  return false;
+}
+
+// Seconds since the first row, or with -t a or ad since the Unix epoch: numbers a spreadsheet
+// or a plotting tool takes as they are.
+void CsvSink::time(int64_t t_ns) {
+  if (time_format_ == TimeFormat::absolute || time_format_ == TimeFormat::absolute_date) {
+    out_.print(FMT_COMPILE("{}"), Fixed{t_ns, 9, 6});
+    return;
+  }
+  if (!first_ns_) first_ns_ = t_ns;
+  out_.print(FMT_COMPILE("{}"), Fixed{t_ns - *first_ns_, 9, 6});
+}
+
+void CsvSink::on_frame(const Frame& frame) {
+  const Meaning* meaning = frame.meaning;
+  if (!meaning || meaning->echoed || !frame.check_ok) return;
+  auto& buf = out_.buffer();
+  for (const RegisterValue& reg : meaning->registers) {
+    if (!followed(reg)) continue;
+    time(frame.t_ns);
+    out_.print(FMT_COMPILE(",{},{:04X}H,"), frame.slave(), reg.address);
+    append_field(buf, reg.name);
+    buf.push_back(',');
+    append_number(buf, reg.value, reg.decimals);
+    buf.push_back(',');
+    append_field(buf, reg.unit);
+    out_.print(FMT_COMPILE(",{}\n"), reg.raw);
+  }
+  out_.end_record();
+}
+
+}  // namespace modtap::tools

@@ -1,0 +1,49 @@
+// -T csv: register values over time, as the master reads and writes them, one row per value:
+// what ModbusScope plots, from a bus modtap only listens to. --follow picks registers by name or
+// address; without it every register read or written is a row. A write's echo response adds no
+// row (its values are the request's).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "decoder/record_sink.hpp"
+#include "decoder/register_meaning.hpp"
+#include "tools/modtap/output.hpp"
+#include "tools/modtap/text_sink.hpp"
+
+namespace modtap::tools {
+
+// One --follow item: a register's name (frequency_command, P00.04) or address (2502H, 0x2502,
+// 9474).
+struct FollowedRegister {
+  std::string name;
+  std::optional<uint16_t> address;
+};
+// "frequency_command,2503H"; throws std::invalid_argument for an empty item.
+std::vector<FollowedRegister> parse_follow(const std::string& list);
+// The same, where an empty list follows every register.
+inline std::vector<FollowedRegister> parse_follow_or_all(const std::string& list) {
+  return list.empty() ? std::vector<FollowedRegister>{} : parse_follow(list);
+}
+
+class CsvSink final : public decoder::RecordSink {
+ public:
+  CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat time_format);
+
+  void on_frame(const decoder::Frame& frame) override;
+  void on_noise(const decoder::Noise&) override {}
+  void on_timeout(const decoder::Timeout&) override {}
+
+ private:
+  bool followed(const decoder::RegisterValue& reg) const;
+  void time(int64_t t_ns);
+
+  Output& out_;
+  std::vector<FollowedRegister> follow_;
+  TimeFormat time_format_;
+  std::optional<int64_t> first_ns_;
+};
+
+}  // namespace modtap::tools
