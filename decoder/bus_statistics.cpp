@@ -56,6 +56,7 @@ void BusStatistics::on_frame(const Frame& frame) {
   if (frame.check_ok && frame.latency_ns && *frame.latency_ns >= 0)
     latency_ns.add(static_cast<uint64_t>(*frame.latency_ns));
   if (frame.adu.empty() || frame.slave() == 0) return;
+  keep_values(frame);
   SlaveStatistics& s = slave(frame.slave());
   s.good = s.good || frame.check_ok;
   count_exchange(frame, s);
@@ -75,6 +76,31 @@ void BusStatistics::count_exchange(const Frame& frame, SlaveStatistics& s) {
   if (last && frame.t_ns >= *last)
     s.poll_interval_ns.add(static_cast<uint64_t>(frame.t_ns - *last));
   last = frame.t_ns;
+}
+
+// What a read's response or a write's request carried; an echo repeats its request.
+void BusStatistics::keep_values(const Frame& frame) {
+  const Meaning* meaning = frame.meaning;
+  if (!meaning || meaning->echoed || !frame.check_ok) return;
+  for (const RegisterValue& reg : meaning->registers) {
+    const RegisterKey key{frame.slave(), reg.table, reg.address};
+    auto it = registers.find(key);
+    if (it == registers.end()) {
+      if (registers.size() >= kept_registers) {
+        ++register_values_not_kept;
+        continue;
+      }
+      it = registers.emplace(key, LastValue{}).first;
+    }
+    LastValue& last = it->second;
+    last.name = reg.name;
+    last.value = reg.value;
+    last.decimals = reg.decimals;
+    last.unit = reg.unit;
+    last.text = reg.text;
+    last.raw = reg.raw;
+    last.t_ns = frame.t_ns;
+  }
 }
 
 void BusStatistics::on_noise(const Noise& noise) {

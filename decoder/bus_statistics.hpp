@@ -9,8 +9,10 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <string>
 
 #include "decoder/findings.hpp"
+#include "decoder/function_codes.hpp"
 #include "decoder/histogram.hpp"
 #include "decoder/record_sink.hpp"
 #include "decoder/serial_format.hpp"
@@ -35,6 +37,24 @@ struct SlaveStatistics {
   Histogram poll_interval_ns;                     // start of one request to the next's
   int64_t last_frame_ns = 0;
   bool good = false;  // a frame with a good check came from or went to this address
+};
+
+// The last value the bus carried for one register: the bus's state, as a data logger shows it.
+// Texts are copied: a frame's own composed texts do not outlive it.
+struct LastValue {
+  std::string name;
+  double value = 0;
+  int decimals = 0;
+  std::string unit;
+  std::string text;
+  uint32_t raw = 0;
+  int64_t t_ns = 0;
+};
+struct RegisterKey {
+  uint8_t slave;
+  Table table;
+  uint16_t address;
+  auto operator<=>(const RegisterKey&) const = default;
 };
 
 // A finding's count and the indexes of the first records that show it.
@@ -63,6 +83,11 @@ class BusStatistics final : public RecordSink {
   std::optional<int64_t> first_t_ns, last_t_ns;
   Histogram latency_ns;
   std::array<FindingCount, frame_finding_count + rule_kind_count> findings;
+  // The last value of each register read or written, up to kept_registers of them; values of
+  // registers beyond those are counted, not kept (random traffic touches every address).
+  static constexpr size_t kept_registers = 20000;
+  std::map<RegisterKey, LastValue> registers;
+  uint64_t register_values_not_kept = 0;
 
   // Every address a frame named, slave 0 (broadcast) aside. Only those `good` are slaves: a
   // corrupted address byte does not make one. Bad checks on the others are counted apart.
@@ -84,6 +109,7 @@ class BusStatistics final : public RecordSink {
   void see_time(int64_t start_ns, int64_t end_ns);
   void count_finding(size_t slot, uint64_t index);
   void count_exchange(const Frame& frame, SlaveStatistics& slave);
+  void keep_values(const Frame& frame);
 
   SerialFormat format_;
   ClockQuality clock_;

@@ -36,6 +36,7 @@ struct BodyLength {
 
 // The four tables of the Modbus data model.
 enum class Table : uint8_t { coil, discrete, holding, input };
+const char* to_string(Table table);  // "coil", "discrete", "holding", "input"
 
 // Registers or bits a PDU reads or writes, and where the values it carries are.
 struct RegisterAccess {

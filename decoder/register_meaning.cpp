@@ -112,6 +112,7 @@ void decode_span(const DeviceModel& model, Table table, uint16_t start,
       return lookup.listed || text.empty() ? std::string_view(text) : meaning.keep(text);
     };
     RegisterValue v;
+    v.table = table;
     v.address = address;
     v.raw = words[i];
     v.value = words[i];
@@ -285,6 +286,7 @@ void decode_bits(const DeviceModel& model, Table table, uint16_t start,
     const RegisterDef* def = lookup.listed;
     if (!def) continue;
     RegisterValue v;
+    v.table = table;
     v.address = address;
     v.name = def->name;
     v.label = def->label;

@@ -18,6 +18,7 @@ namespace modtap::decoder {
 
 // Its texts point into the model, or into the Meaning that holds it where they are composed.
 struct RegisterValue {
+  Table table = Table::holding;
   uint16_t address = 0;
   std::string_view name;   // empty for a register the model does not know
   std::string_view label;  // the manual's words

@@ -30,7 +30,7 @@ struct Sample {
     model.name = "nta5000";
     meaning.model = &model;
     meaning.registers.push_back(
-        {0x2523, "frequency_command_monitor", "", 6000, 60.0, 2, "Hz", "", false});
+        {Table::holding, 0x2523, "frequency_command_monitor", "", 6000, 60.0, 2, "Hz", "", false});
     frame.meaning = &meaning;
   }
 };

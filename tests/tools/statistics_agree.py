@@ -29,7 +29,7 @@ failures = []
 
 def check(what, got, want):
     if got != want:
-        failures.append(f"{what}: statistics say {got!r}, records say {want!r}")
+        failures.append(f"{what}: statistics say {got!r:.300}, records say {want!r:.300}")
 
 
 def nearest_rank(values, p):
@@ -131,6 +131,24 @@ def expected_slaves(records):
     return slaves, len(stray), stray_bad
 
 
+def check_registers(name, stats, records):
+    """The last value of each register: what reads' responses and writes' requests carried."""
+    echo_codes = {5, 6, 15, 16}
+    last = {}
+    for r in records:
+        if r["type"] != "frame" or r["check"] != "ok" or r["slave"] == 0:
+            continue
+        if r["role"] == "response" and r["fc"] in echo_codes:
+            continue
+        for g in r.get("registers", []):
+            last[(r["slave"], g["addr"], g["name"])] = (g["raw"], r["t_ns"])
+    got = {(g["slave"], g["addr"], g["name"]): (g["raw"], g["t_ns"]) for g in stats["registers"]}
+    if stats["register_values_not_kept"] == 0:
+        check(f"{name} registers", got, last)
+    else:  # those kept are right; the rest were counted
+        check(f"{name} kept registers", {k: v for k, v in got.items() if last.get(k) != v}, {})
+
+
 def compare(name, stats, records):
     e = expected(records)
     for key in ("frames", "requests", "responses", "unknown_roles", "bad_checks", "exceptions",
@@ -146,6 +164,7 @@ def compare(name, stats, records):
     latencies = [f["latency_us"] for f in records if f["type"] == "frame" and f["check"] == "ok"
                  and f["latency_us"] is not None]
     check_percentiles(f"{name} latency_us", stats["latency_us"], latencies, 1000)
+    check_registers(name, stats, records)
     slaves, stray, stray_bad = expected_slaves(records)
     check(f"{name} slaves", [s["slave"] for s in stats["slaves"]], list(slaves))
     check(f"{name} stray_addresses", stats["stray_addresses"], stray)

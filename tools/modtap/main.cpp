@@ -135,7 +135,7 @@ class Sinks {
     // the other outputs skip the work, and the YAML is not read unless models are asked for.
     // A filter may name registers, so it reads frames through the models too.
     const bool interpret = o.output == "text" || o.output == "json" || o.output == "csv" ||
-                           (wants_statistics(o) && !o.models.empty()) ||
+                           wants_statistics(o) ||  // the registers' last values
                            (!o.write_file.empty() && o.link != "bare") || !o.display_filter.empty();
     if (interpret || !o.models.empty() || !o.models_dir.empty()) {
       catalog_ = load_models(o);

@@ -177,6 +177,12 @@ size_t append_text_value(fmt::memory_buffer& out, const DecodedPdu& pdu, size_t 
 }
 
 void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue& reg) {
+  out.push_back('{');
+  append_register_keys(out, reg);
+  out.push_back('}');
+}
+
+void append_register_keys(fmt::memory_buffer& out, const decoder::RegisterValue& reg) {
   auto optional_string = [&](std::string_view text) {
     if (text.empty()) {
       append_chars(out, "null");
@@ -184,7 +190,7 @@ void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue&
       append_json_string(out, text);
     }
   };
-  append_chars(out, "{\"addr\":");
+  append_chars(out, "\"addr\":");
   append_int(out, reg.address);
   append_chars(out, ",\"name\":");
   optional_string(reg.name);
@@ -200,7 +206,6 @@ void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue&
   optional_string(reg.unit);
   append_chars(out, ",\"text\":");
   optional_string(reg.text);
-  out.push_back('}');
 }
 
 }  // namespace modtap::tools

@@ -26,6 +26,8 @@ size_t append_text_value(fmt::memory_buffer& out, const decoder::DecodedPdu& pdu
 
 // The same as a JSON object: {"addr", "name", "raw", "value", "unit", "text"}.
 void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue& reg);
+// The same keys without the braces, for an object that adds its own.
+void append_register_keys(fmt::memory_buffer& out, const decoder::RegisterValue& reg);
 
 // "Read Holding Registers", or "Function 0x41" for a code the standard does not name.
 struct FunctionLabel {

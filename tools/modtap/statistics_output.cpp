@@ -6,6 +6,7 @@
 #include <fmt/chrono.h>
 
 #include "decoder/format_probe.hpp"
+#include "decoder/register_meaning.hpp"
 #include "tools/modtap/render.hpp"
 
 namespace modtap::tools {
@@ -113,6 +114,28 @@ void print_outages(Output& out, const BusStatistics& s, const BusDiagnostics& d)
   }
 }
 
+// The named registers' last values: the state of the drives as the master last saw it.
+void print_registers(Output& out, const BusStatistics& s) {
+  constexpr size_t shown = 100;
+  size_t named = 0;
+  for (const auto& [key, last] : s.registers) {
+    if (last.name.empty()) continue;
+    if (named++ == shown) break;
+    if (named == 1) out.print("\nlast values (named registers; every one in --stats)\n");
+    fmt::memory_buffer value;
+    append_number(value, last.value, last.decimals);
+    const std::string_view number(value.data(), value.size());
+    out.print("  slave {:<3} {:04X}H {:<28} ", key.slave, key.address, last.name);
+    // As text shows a register: "60.00 Hz", "Forward running (1)".
+    if (last.text.empty()) {
+      out.print("{}{}{}\n", number, last.unit.empty() ? "" : " ", last.unit);
+    } else {
+      out.print("{} ({})\n", last.text, number);
+    }
+  }
+  if (named > shown) out.print("  ... more in --stats\n");
+}
+
 }  // namespace
 
 void print_statistics(Output& out, const BusStatistics& s, const BusDiagnostics& d) {
@@ -141,6 +164,7 @@ void print_statistics(Output& out, const BusStatistics& s, const BusDiagnostics&
   }
   print_slaves(out, s);
   print_outages(out, s, d);
+  print_registers(out, s);
   print_findings(out, s);
   out.flush();
 }
@@ -237,6 +261,29 @@ void append_optional(fmt::memory_buffer& out, const char* key, std::optional<dou
   }
 }
 
+// As a frame's JSON gives a register, with its slave, table and when it was last seen.
+void append_registers(fmt::memory_buffer& out, const BusStatistics& s) {
+  auto put = fmt::appender(out);
+  fmt::format_to(put, ",\"registers\":[");
+  bool first = true;
+  for (const auto& [key, last] : s.registers) {
+    fmt::format_to(put, "{}{{\"slave\":{},\"table\":\"{}\",\"t_ns\":{},", first ? "" : ",",
+                   key.slave, to_string(key.table), last.t_ns);
+    RegisterValue reg;
+    reg.address = key.address;
+    reg.name = last.name;
+    reg.raw = last.raw;
+    reg.value = last.value;
+    reg.decimals = last.decimals;
+    reg.unit = last.unit;
+    reg.text = last.text;
+    append_register_keys(out, reg);
+    out.push_back('}');
+    first = false;
+  }
+  fmt::format_to(put, "],\"register_values_not_kept\":{}", s.register_values_not_kept);
+}
+
 void append_outages(fmt::memory_buffer& out, const BusDiagnostics& d) {
   auto put = fmt::appender(out);
   fmt::format_to(put, ",\"outage_count\":{},\"outages\":[", d.outage_count());
@@ -297,6 +344,7 @@ void append_statistics_json(fmt::memory_buffer& out, const BusStatistics& s,
   fmt::format_to(put, "],\"stray_addresses\":{},\"stray_bad_checks\":{}", s.stray_addresses(),
                  s.stray_bad_checks());
   append_outages(out, d);
+  append_registers(out, s);
   append_diagnostics(out, s);
   fmt::format_to(put, "}}\n");
 }
