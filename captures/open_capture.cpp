@@ -62,15 +62,19 @@ Format detect_format(const std::string& path) {
   if (!file) throw CaptureError(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
   std::array<uint8_t, 64> head{};
   const size_t n = std::fread(head.data(), 1, head.size(), file.get());
+  return detect_format({head.data(), n}, path);
+}
+
+Format detect_format(std::span<const uint8_t> head, const std::string& path) {
   auto magic = [&](std::initializer_list<uint8_t> bytes) {
-    return n >= bytes.size() && std::equal(bytes.begin(), bytes.end(), head.begin());
+    return head.size() >= bytes.size() && std::equal(bytes.begin(), bytes.end(), head.begin());
   };
   if (magic({0xD4, 0xC3, 0xB2, 0xA1}) || magic({0xA1, 0xB2, 0xC3, 0xD4}) ||
       magic({0x4D, 0x3C, 0xB2, 0xA1}) || magic({0xA1, 0xB2, 0x3C, 0x4D}) ||
       magic({0x0A, 0x0D, 0x0D, 0x0A}))
     return Format::pcap;
   if (magic({'P', 'K', 0x03, 0x04})) return Format::sigrok;  // a .sr file is a zip
-  const std::string text(head.begin(), head.begin() + static_cast<long>(n));
+  const std::string text(head.begin(), head.end());
   if (HexlogReader::is_header(text.substr(0, text.find_first_of("\r\n")))) return Format::hexlog;
   const Format guess = by_extension(path);
   if (guess != Format::automatic) return guess;

@@ -1,7 +1,9 @@
 // Picks the reader for a capture file: by its content first, then by its name.
 #pragma once
 
+#include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 
 #include "captures/chunk_source.hpp"
@@ -19,6 +21,8 @@ const char* to_string(Format format);
 // What the file's first bytes (or, failing that, its extension) say it is. Throws
 // CaptureError when neither tells.
 Format detect_format(const std::string& path);
+// The same from a file's first 64 bytes (or fewer, when it is shorter), for a stream.
+Format detect_format(std::span<const uint8_t> head, const std::string& path);
 
 struct OpenOptions {
   Format format = Format::automatic;

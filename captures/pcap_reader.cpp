@@ -29,22 +29,17 @@ PcapReader::~PcapReader() {
   if (handle_) pcap_close(handle_);
 }
 
-uint64_t PcapReader::file_offset() const {
-  FILE* f = pcap_file(handle_);
-  const long at = f ? std::ftell(f) : -1;
-  return at < 0 ? 0 : static_cast<uint64_t>(at);
-}
-
 bool PcapReader::next(decoder::Chunk& chunk) {
   pcap_pkthdr* header = nullptr;
   const u_char* data = nullptr;
-  const uint64_t before = file_offset();
+  const uint64_t before = offset_;
   const int rc = pcap_next_ex(handle_, &header, &data);
   if (rc == PCAP_ERROR_BREAK) return false;
   if (rc != 1)
     throw CaptureError(fmt::format("{}: offset {}, after packet {}: {}", path_, before, packets_,
                                    pcap_geterr(handle_)));
   ++packets_;
+  offset_ += record_header_size + header->caplen;
   const int64_t t_ns = static_cast<int64_t>(header->ts.tv_sec) * 1'000'000'000 + header->ts.tv_usec;
   chunk = {0, t_ns, {data, header->caplen}};
   return true;

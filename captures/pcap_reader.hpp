@@ -21,7 +21,9 @@ class PcapReader final : public ChunkSource {
   const std::vector<decoder::ChannelInfo>& channels() const override { return channels_; }
 
  private:
-  uint64_t file_offset() const;
+  // Where the next record starts, counted rather than asked of the file: a pipe cannot say.
+  static constexpr uint64_t file_header_size = 24, record_header_size = 16;
+  uint64_t offset_ = file_header_size;
 
   std::string path_;
   pcap* handle_ = nullptr;

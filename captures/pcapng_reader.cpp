@@ -49,7 +49,7 @@ PcapngReader::PcapngReader(const std::string& path, int64_t char_time_ns)
     if (describes(type)) continue;
     if (type == enhanced_packet_block || type == simple_packet_block ||
         type == obsolete_packet_block) {
-      std::fseek(file_.get(), static_cast<long>(offset_), SEEK_SET);  // read it again in next()
+      held_type_ = type;  // next() takes it first: a pipe cannot be read again
       break;
     }
   }
@@ -61,33 +61,36 @@ void PcapngReader::fail(const std::string& what) const {
 }
 
 // One block: its type, and its body (without the type and the two lengths) in body_.
+// The file is read straight through, never sought: a pipe reads as a file does.
 bool PcapngReader::read_block(uint32_t& type) {
-  offset_ = static_cast<uint64_t>(std::ftell(file_.get()));
+  offset_ = position_;
   uint32_t head[2];
-  const size_t got = std::fread(head, 1, sizeof head, file_.get());
+  const size_t got = read(head, sizeof head);
   if (got == 0) return false;
   if (got < sizeof head) fail("truncated pcapng block header");
   type = head[0];
+  uint32_t magic = 0;
   if (type == section_header_block) {
     // The byte order is the section's own: read it from the magic after the length.
-    uint32_t magic = 0;
-    if (std::fread(&magic, 1, 4, file_.get()) != 4) fail("truncated section header");
+    if (read(&magic, 4) != 4) fail("truncated section header");
     if (magic != byte_order_magic && magic != swap32(byte_order_magic))
       fail("not a pcapng section header");
     swapped_ = magic != byte_order_magic;
     have_section_ = true;
-    std::fseek(file_.get(), -4, SEEK_CUR);
   } else {
     if (!have_section_) fail("no section header before the first block");
     if (swapped_) type = swap32(type);
   }
   const uint32_t length = swapped_ ? swap32(head[1]) : head[1];
-  if (length < 12 || length % 4 != 0 || length > max_block)
+  if (length < 12 || length % 4 != 0 || length > max_block ||
+      (type == section_header_block && length < 16))
     fail(fmt::format("block length {} is not a pcapng block's", length));
   body_.resize(length - 12);
+  const size_t magic_size = type == section_header_block ? 4 : 0;  // read already
+  std::memcpy(body_.data(), &magic, magic_size);
   uint32_t trailer = 0;
-  if (std::fread(body_.data(), 1, body_.size(), file_.get()) != body_.size() ||
-      std::fread(&trailer, 1, 4, file_.get()) != 4)
+  if (read(body_.data() + magic_size, body_.size() - magic_size) != body_.size() - magic_size ||
+      read(&trailer, 4) != 4)
     fail(fmt::format("truncated pcapng block of {} bytes", length));
   if ((swapped_ ? swap32(trailer) : trailer) != length)
     fail("block lengths at its start and end differ");
@@ -183,9 +186,20 @@ bool PcapngReader::next(decoder::Chunk& chunk) {
     return true;
   }
   uint32_t type = 0;
+  if (held_type_) {  // the first packet block, read while looking for the interfaces
+    type = *held_type_;
+    held_type_.reset();
+    if (packet(type, chunk)) return true;
+  }
   while (read_block(type))
     if (!describes(type) && packet(type, chunk)) return true;
   return false;
+}
+
+size_t PcapngReader::read(void* into, size_t size) {
+  const size_t got = std::fread(into, 1, size, file_.get());
+  position_ += got;
+  return got;
 }
 
 bool PcapngReader::packet(uint32_t type, decoder::Chunk& chunk) {

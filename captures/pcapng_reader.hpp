@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,7 +35,8 @@ class PcapngReader final : public ChunkSource {
     uint16_t channel = 0;
     bool modtap = false;  // written by modtap: stamps mark a packet's first byte
   };
-  bool read_block(uint32_t& type);  // its body in body_
+  bool read_block(uint32_t& type);       // its body in body_
+  size_t read(void* into, size_t size);  // counts what it read in position_
   bool describes(uint32_t type);
   void interface_description();
   bool packet(uint32_t type, decoder::Chunk& chunk);
@@ -47,8 +49,10 @@ class PcapngReader final : public ChunkSource {
   std::string path_;
   int64_t char_time_ns_;
   std::unique_ptr<FILE, int (*)(FILE*)> file_;
-  uint64_t offset_ = 0;   // of the block being read
-  bool swapped_ = false;  // the section's byte order is not this machine's
+  uint64_t offset_ = 0;                // of the block being read
+  uint64_t position_ = 0;              // bytes read so far
+  std::optional<uint32_t> held_type_;  // a packet block read ahead, in body_
+  bool swapped_ = false;               // the section's byte order is not this machine's
   bool have_section_ = false;
   std::vector<uint8_t> body_;  // the current block's body, reused
   std::vector<Interface> interfaces_;

@@ -167,6 +167,37 @@ TEST(Cli, FollowWritesRegisterValuesOverTimeAsCsv) {
             std::vector<std::string>{"modtap: --follow: an empty name in \",x\""});
 }
 
+// A capture from standard input or a pipe reads as the same file does, its format told from
+// its first bytes; a capture named without -r too. What a pipe cannot do is said plainly.
+TEST(Cli, ReadsStandardInputAndPipesAsTheSameFile) {
+  const std::string modtap = MODTAP_BINARY;
+  const std::string log = std::string(MODTAP_SAMPLES) + "/drives-manual-examples.log";
+  const auto pcapng = (std::filesystem::temp_directory_path() / "modtap-cli-piped.pcapng").string();
+  ASSERT_EQ(run("-r " + log + " -w " + pcapng).status, 0);
+  for (const std::string& file : {log, pcapng}) {
+    const Outcome direct = run("-r " + file + " -T json");
+    ASSERT_GT(direct.lines.size(), 10u);
+    const Outcome piped = run_shell("cat " + file + " | " + modtap + " -r - -T json 2>&1");
+    EXPECT_EQ(piped.status, 0) << file;
+    ASSERT_EQ(piped.lines.size(), direct.lines.size()) << file;
+    for (size_t i = 0; i < direct.lines.size(); ++i) {
+      // The same records; only the channel's name says where they came from.
+      std::string line = piped.lines[i];
+      const std::string from = "\"channel\":\"standard input\"";
+      if (const size_t at = line.find(from); at != std::string::npos)
+        line.replace(at, from.size(), "\"channel\":\"" + file + "\"");
+      EXPECT_EQ(line, direct.lines[i]) << file << " record " << i;
+    }
+    EXPECT_EQ(run(file + " -T json").lines, direct.lines) << "named without -r: " << file;
+  }
+  EXPECT_EQ(run_shell(modtap + " -r - < /dev/null 2>&1").lines,
+            std::vector<std::string>{"modtap: standard input: the input is empty"});
+  const Outcome twice = run_shell("cat " + log + " | " + modtap + " -r - --baud auto 2>&1");
+  EXPECT_EQ(twice.status >> 8, 2);
+  ASSERT_FALSE(twice.lines.empty());
+  EXPECT_NE(twice.lines[0].find("a pipe can be read only once"), std::string::npos);
+}
+
 TEST(Cli, AMissingFileIsAClearErrorAndAnExitStatus) {
   const Outcome r = run("-r /nonexistent/capture.pcap");
   EXPECT_NE(r.status, 0);

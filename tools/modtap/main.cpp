@@ -18,6 +18,7 @@
 
 #include "captures/open_capture.hpp"
 #include "captures/pcapng_sink.hpp"
+#include "captures/piped_input.hpp"
 #include "captures/raw_recorder.hpp"
 #include "decoder/analyzer.hpp"
 #include "decoder/bus_diagnostics.hpp"
@@ -303,10 +304,18 @@ int read_file(const Options& o) {
   if (!o.sigrok_channels.empty())
     open.sigrok.lines = captures::parse_sigrok_channels(o.sigrok_channels);
   open.sigrok.invert = o.sigrok_invert;
-  if (o.baud == "auto" || o.parity == "auto")
+  const bool piped = captures::is_piped(o.read_file);
+  if (o.baud == "auto" || o.parity == "auto") {
+    if (piped)
+      throw std::runtime_error(fmt::format(
+          "{}: --baud auto and --parity auto read a capture once per setting; a pipe can be "
+          "read only once: give a file",
+          o.read_file == "-" ? "standard input" : o.read_file));
     open.serial = tools::choose_file_format(o.read_file, open, analyzer_options(o, {}),
                                             fixed_baud(o), fixed_parity(o));
-  auto source = captures::open_capture(o.read_file, open);
+  }
+  auto source = piped ? captures::open_piped_capture(o.read_file, open)
+                      : captures::open_capture(o.read_file, open);
 
   captures::OutputFile standard_output(stdout, "standard output");
   tools::Output out(standard_output);
@@ -343,9 +352,10 @@ int read_file(const Options& o) {
                "those steps are not measured\n",
                o.read_file, bus.clock_steps_back());
   if (broken) throw *broken;
-  const captures::Format format = open.format == captures::Format::automatic
-                                      ? captures::detect_format(o.read_file)
-                                      : open.format;
+  // A pipe is not read again: it holds no logic-analyzer capture anyway.
+  const captures::Format format = open.format != captures::Format::automatic ? open.format
+                                  : piped                                    ? captures::Format::raw
+                                          : captures::detect_format(o.read_file);
   hint_settings(open.serial, health, pace, format == captures::Format::sigrok);
   return 0;
 }
@@ -390,7 +400,10 @@ int listen(const Options& o) {
 int main(int argc, char** argv) {
   CLI::App app{"modtap: a passive analyzer for Modbus RTU and ASCII on serial lines"};
   Options o;
-  auto* read = app.add_option("-r,--read", o.read_file, "Capture file to read");
+  auto* read = app.add_option("-r,--read", o.read_file,
+                              "Capture file to read; - for standard input or a pipe");
+  std::string named_capture;
+  app.add_option("capture", named_capture, "The capture file, as with -r")->excludes(read);
   auto* listen_on = app.add_option("-i,--interface", o.interfaces,
                                    "Serial port to listen on (read-only): PATH, or master=PATH and "
                                    "slave=PATH for a tap that splits the directions");
@@ -461,6 +474,7 @@ int main(int argc, char** argv) {
   check->add_option("FILE", check_file, "Model file (YAML)")->required();
   CLI11_PARSE(app, argc, argv);
   signal(SIGPIPE, SIG_IGN);
+  if (!named_capture.empty()) o.read_file = named_capture;
   o.timeout_given = timeout->count() > 0;  // a closed pipe is a failed write (EPIPE), handled below
   if (!o.write_file.empty() && output->count() == 0) o.output = "none";  // as tshark -w
   if (!o.follow.empty() && output->count() == 0) o.output = "csv";
