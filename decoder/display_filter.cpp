@@ -9,6 +9,7 @@
 
 #include "decoder/findings.hpp"
 #include "decoder/function_codes.hpp"
+#include "decoder/number_text.hpp"
 #include "decoder/register_meaning.hpp"
 
 namespace modtap::decoder {
@@ -111,17 +112,6 @@ bool is_name_char(char c) {
   return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-';
 }
 
-// 2502H, as the manuals write registers and codes: hex digits and a final H.
-std::optional<double> manual_hex(std::string_view word) {
-  if (word.size() < 2 || (word.back() != 'H' && word.back() != 'h')) return std::nullopt;
-  uint64_t value = 0;
-  const auto digits = word.substr(0, word.size() - 1);
-  const auto [end, error] =
-      std::from_chars(digits.data(), digits.data() + digits.size(), value, 16);
-  if (error != std::errc() || end != digits.data() + digits.size()) return std::nullopt;
-  return static_cast<double>(value);
-}
-
 class Lexer {
  public:
   explicit Lexer(std::string_view text) : text_(text) {}
@@ -183,23 +173,13 @@ class Lexer {
     const std::string_view word = text_.substr(start, at_ - start);
     t.kind = Token::Kind::number;
     t.text = std::string(word);
-    if (auto hex = manual_hex(word)) {
-      t.number = *hex;
+    if (auto whole = parse_written_number(word)) {
+      t.number = static_cast<double>(*whole);
       return t;
     }
-    uint64_t value = 0;
-    if (word.starts_with("0x") || word.starts_with("0X")) {
-      const auto [end, error] =
-          std::from_chars(word.data() + 2, word.data() + word.size(), value, 16);
-      if (error == std::errc() && end == word.data() + word.size() && word.size() > 2) {
-        t.number = static_cast<double>(value);
-        return t;
-      }
-    } else {
-      const auto [end, error] = std::from_chars(word.data(), word.data() + word.size(), t.number);
-      if (error == std::errc() && end == word.data() + word.size() && std::isfinite(t.number))
-        return t;
-    }
+    const auto [end, error] = std::from_chars(word.data(), word.data() + word.size(), t.number);
+    if (error == std::errc() && end == word.data() + word.size() && std::isfinite(t.number))
+      return t;
     throw FilterError(t.column, fmt::format("\"{}\" is not a number", word));
   }
 
@@ -338,7 +318,8 @@ class Parser {
       case Token::Kind::string:
         return {false, 0, token_.text};
       case Token::Kind::name:  // a bare word: role == request; or a manual's hex, FFFFH
-        if (auto hex = manual_hex(token_.text)) return {true, *hex, {}};
+        if (auto hex = parse_written_number(token_.text))
+          return {true, static_cast<double>(*hex), {}};
         return {false, 0, token_.text};
       default:
         throw FilterError(token_.column, fmt::format("expected a value after {}", op.text));

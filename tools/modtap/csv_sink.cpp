@@ -1,8 +1,8 @@
 #include "tools/modtap/csv_sink.hpp"
 
-#include <charconv>
 #include <stdexcept>
 
+#include "decoder/number_text.hpp"
 #include "tools/modtap/render.hpp"
 
 namespace modtap::tools {
@@ -11,21 +11,11 @@ using namespace decoder;
 
 namespace {
 
-// 2502H as the manuals write it, 0x2502, or decimal.
+// 2502H as the manuals write it, 0x2502, or decimal; else a name.
 std::optional<uint16_t> address_named(std::string_view item) {
-  int base = 10;
-  if (item.size() > 1 && (item.back() == 'H' || item.back() == 'h')) {
-    item.remove_suffix(1);
-    base = 16;
-  } else if (item.starts_with("0x") || item.starts_with("0X")) {
-    item.remove_prefix(2);
-    base = 16;
-  }
-  unsigned value = 0;
-  const auto [end, error] = std::from_chars(item.data(), item.data() + item.size(), value, base);
-  if (error != std::errc() || end != item.data() + item.size() || value > 0xFFFF)
-    return std::nullopt;
-  return static_cast<uint16_t>(value);
+  const auto number = parse_written_number(item);
+  if (!number || *number > 0xFFFF) return std::nullopt;
+  return static_cast<uint16_t>(*number);
 }
 
 // A CSV field: quoted when it holds a comma, a quote or a line break (RFC 4180).
