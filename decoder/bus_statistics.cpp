@@ -92,15 +92,31 @@ void BusStatistics::keep_values(const Frame& frame) {
       }
       it = registers.emplace(key, LastValue{}).first;
     }
-    LastValue& last = it->second;
-    last.name = reg.name;
-    last.value = reg.value;
-    last.decimals = reg.decimals;
-    last.unit = reg.unit;
-    last.text = reg.text;
-    last.raw = reg.raw;
-    last.t_ns = frame.t_ns;
+    it->second.keep(reg, frame.t_ns);
   }
+}
+
+void LastValue::keep(const RegisterValue& reg, int64_t when) {
+  name = reg.name;
+  unit = reg.unit;
+  text = reg.text;
+  value = reg.value;
+  decimals = reg.decimals;
+  raw = reg.raw;
+  t_ns = when;
+}
+
+RegisterValue LastValue::as_register(Table table, uint16_t address) const {
+  RegisterValue reg;
+  reg.table = table;
+  reg.address = address;
+  reg.name = name;
+  reg.unit = unit;
+  reg.text = text;
+  reg.value = value;
+  reg.decimals = decimals;
+  reg.raw = raw;
+  return reg;
 }
 
 void BusStatistics::on_noise(const Noise& noise) {

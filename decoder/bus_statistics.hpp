@@ -15,6 +15,7 @@
 #include "decoder/function_codes.hpp"
 #include "decoder/histogram.hpp"
 #include "decoder/record_sink.hpp"
+#include "decoder/register_meaning.hpp"
 #include "decoder/serial_format.hpp"
 
 namespace modtap::decoder {
@@ -42,13 +43,15 @@ struct SlaveStatistics {
 // The last value the bus carried for one register: the bus's state, as a data logger shows it.
 // Texts are copied: a frame's own composed texts do not outlive it.
 struct LastValue {
-  std::string name;
+  std::string name, unit, text;
   double value = 0;
   int decimals = 0;
-  std::string unit;
-  std::string text;
   uint32_t raw = 0;
   int64_t t_ns = 0;
+
+  void keep(const RegisterValue& reg, int64_t when);
+  // As the register it was, its texts pointing here.
+  RegisterValue as_register(Table table, uint16_t address) const;
 };
 struct RegisterKey {
   uint8_t slave;

@@ -102,6 +102,10 @@ TEST(Cli, StatsCountTheModelsFindingsByKind) {
   const Outcome r = run("-r " + capture + " --format raw --mode rtu --model nta5000 -T stats");
   ASSERT_EQ(r.status, 0);
   ASSERT_GE(r.lines.size(), 4u);
+  // The registers' last values, as text shows a register.
+  EXPECT_THAT(r.lines,
+              ::testing::Contains("  slave 1   2520H status                       Run, Forward, "
+                                  "Unready (1)"));
   const std::vector<std::string> tail(r.lines.end() - 4, r.lines.end());
   EXPECT_EQ(tail, (std::vector<std::string>{"findings                 count  first records",
                                             "  reserved-write             1  #3",

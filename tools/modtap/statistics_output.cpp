@@ -131,16 +131,9 @@ void print_registers(Output& out, const BusStatistics& s) {
     if (last.name.empty()) continue;
     if (named++ == shown) break;
     if (named == 1) out.print("\nlast values (named registers; every one in --stats)\n");
-    fmt::memory_buffer value;
-    append_number(value, last.value, last.decimals);
-    const std::string_view number(value.data(), value.size());
     out.print("  slave {:<3} {:04X}H {:<28} ", key.slave, key.address, last.name);
-    // As text shows a register: "60.00 Hz", "Forward running (1)".
-    if (last.text.empty()) {
-      out.print("{}{}{}\n", number, last.unit.empty() ? "" : " ", last.unit);
-    } else {
-      out.print("{} ({})\n", last.text, number);
-    }
+    append_value_text(out.buffer(), last.as_register(key.table, key.address));  // as text does
+    out.print("\n");
   }
   if (named > shown) out.print("  ... more in --stats\n");
 }
@@ -279,15 +272,7 @@ void append_registers(fmt::memory_buffer& out, const BusStatistics& s) {
   for (const auto& [key, last] : s.registers) {
     fmt::format_to(put, "{}{{\"slave\":{},\"table\":\"{}\",\"t_ns\":{},", first ? "" : ",",
                    key.slave, to_string(key.table), last.t_ns);
-    RegisterValue reg;
-    reg.address = key.address;
-    reg.name = last.name;
-    reg.raw = last.raw;
-    reg.value = last.value;
-    reg.decimals = last.decimals;
-    reg.unit = last.unit;
-    reg.text = last.text;
-    append_register_keys(out, reg);
+    append_register_keys(out, last.as_register(key.table, key.address));
     out.push_back('}');
     first = false;
   }
