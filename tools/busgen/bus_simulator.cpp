@@ -1,6 +1,7 @@
 #include "tools/busgen/bus_simulator.hpp"
 
 #include <algorithm>
+#include <array>
 #include <random>
 
 #include "decoder/checksum.hpp"
@@ -40,7 +41,7 @@ class Simulator {
       : o_(o), rng_(o.seed), char_ns_(o.format.char_time_ns()), t35_(o.format.t35_ns()) {}
 
   BusCapture run() {
-    for (size_t i = 0; i < o_.transactions; ++i) transaction();
+    for (size_t i = 0; i < o_.transactions; ++i) transaction(i);
     return std::move(capture_);
   }
 
@@ -82,13 +83,20 @@ class Simulator {
     return std::max(o_.poll_gap_ns, t35_) + pick(0, 2'000'000);
   }
 
-  void transaction() {
+  uint8_t slave_for(size_t transaction) {
+    if (o_.polled_slaves == 0) return static_cast<uint8_t>(pick(1, 247));
+    return static_cast<uint8_t>(transaction % o_.polled_slaves + 1);
+  }
+
+  void transaction(size_t index) {
     const bool broadcast = chance(o_.broadcast_rate);
-    const uint8_t slave = broadcast ? 0 : static_cast<uint8_t>(pick(1, 247));
+    const uint8_t slave = broadcast ? 0 : slave_for(index);
     Bytes request{slave}, response{slave};
     uint32_t request_findings = 0;
     if (!broadcast && chance(o_.out_of_spec_rate)) {
       request_findings = out_of_spec(request, response);
+    } else if (o_.polled_slaves && !broadcast && !chance(0.2)) {
+      scan_read(slave, request, response);
     } else {
       build(slave, request, response, broadcast);
     }
@@ -202,6 +210,23 @@ class Simulator {
   void exception(Bytes& rsp, uint8_t fc, uint8_t code) {
     rsp.push_back(static_cast<uint8_t>(fc | 0x80));
     rsp.push_back(code);
+  }
+
+  // A scan list's read: the first registers of the slave, values that drift as a drive's
+  // frequency and current do, so that a register followed over time draws a line.
+  void scan_read(uint8_t slave, Bytes& req, Bytes& rsp) {
+    auto& values = drifting_[slave];
+    req.push_back(0x03);
+    u16(req, 0x0000);
+    u16(req, values.size());
+    if (chance(o_.exception_rate)) return exception(rsp, 0x03, chance(0.5) ? 0x02 : 0x04);
+    rsp.push_back(0x03);
+    rsp.push_back(static_cast<uint8_t>(values.size() * 2));
+    for (uint16_t& value : values) {
+      value = static_cast<uint16_t>(
+          std::clamp<int>(value + static_cast<int>(pick(0, 20)) - 10, 0, 1000));
+      u16(rsp, value);
+    }
   }
 
   void build(uint8_t slave, Bytes& req, Bytes& rsp, bool broadcast) {
@@ -373,6 +398,13 @@ class Simulator {
   int64_t char_ns_;
   int64_t t35_;
   BusCapture capture_;
+  std::array<std::array<uint16_t, 4>, 248> drifting_ = initial_values();
+
+  static std::array<std::array<uint16_t, 4>, 248> initial_values() {
+    std::array<std::array<uint16_t, 4>, 248> values;
+    for (auto& slave : values) slave = {500, 250, 100, 750};
+    return values;
+  }
   size_t answered_ = 0;
 };
 

@@ -35,6 +35,9 @@ struct BusOptions {
   double collision_rate = 0.0;  // another device talks over the response's last bytes
   int64_t poll_gap_ns = 5'000'000;  // master's idle time between transactions (at least)
   bool back_to_back = false;        // no idle time at all: the densest file for benchmarks
+  // 0: each request goes to a slave picked at random from 1-247 (every address exercised);
+  // N: the master polls slaves 1 to N in turn, as a PLC's scan list does.
+  unsigned polled_slaves = 0;
 };
 
 // A frame the master or a slave really sent, whole and with a good check.

@@ -51,6 +51,10 @@ int main(int argc, char** argv) {
                  "For pcap and hexlog: frames (one frame a packet), bytes, bursts (16 ms), "
                  "sniffer (frames, some split, some merged)")
       ->check(CLI::IsMember({"frames", "bytes", "bursts", "sniffer"}));
+  app.add_option("--slaves", o.polled_slaves,
+                 "Poll slaves 1 to N in turn, as a PLC's scan list does (default: each request to "
+                 "a slave picked at random from 1-247)")
+      ->check(CLI::Range(1, 247));
   app.add_option("-o,--output", out, "Output file (- for stdout, raw only)");
   bool faults = false, ascii = false;
   app.add_flag("--faults", faults,
