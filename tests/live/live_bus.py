@@ -96,9 +96,10 @@ def run_case(name, baud, parity, data_bits, mode, start_slave, run_master, setti
     # Every case keeps its raw reads, alternately as pcapng and as a timed hex log.
     raw_path = os.path.join(WORK, f"case{run_case.count}.{'pcapng' if run_case.count % 2 else 'log'}")
     run_case.count += 1
-    stats_path = raw_path + ".stats.json"
+    stats_path, report_path = raw_path + ".stats.json", raw_path + ".report.html"
     modtap = subprocess.Popen([MODTAP, "-i", t.path, "--data-bits", str(data_bits), "--mode", mode,
-                               "-T", "json", "--save-raw", raw_path, "--stats", stats_path] + settings,
+                               "-T", "json", "--save-raw", raw_path, "--stats", stats_path,
+                               "--report", report_path] + settings,
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     slave = start_slave(s.path)
     time.sleep(0.5)
@@ -128,6 +129,10 @@ def run_case(name, baud, parity, data_bits, mode, start_slave, run_master, setti
     ok &= check(name, stats["complete"] and stats["frames"] == len(frames)
                 and stats["requests"] == len(requests) and stats["responses"] == len(responses),
                 f"--stats after SIGTERM: {stats['frames']} frames, {len(frames)} in the JSON")
+    with open(report_path) as f:
+        report = f.read()
+    ok &= check(name, f'data-stat="frames">{len(frames)}<' in report,
+                "--report after SIGTERM does not show the frames --stats counts")
     ok &= check(name, all(f["check"] == "ok" for f in frames), "a bad check on a clean line")
     ok &= check(name, not [r for r in records if r["type"] == "noise"], "noise on a clean line")
     for role in ("request", "response"):

@@ -596,6 +596,10 @@ TEST(Cli, RefusesOutputsThatWouldOverwriteTheInputOrEachOther) {
       {"--save-raw " + capture,
        "modtap: --save-raw " + capture + " would overwrite the capture being read"},
       {"-w " + other + " --save-raw " + other, "modtap: -w and --save-raw both name " + other},
+      {"--report " + capture,
+       "modtap: --report " + capture + " would overwrite the capture being read"},
+      {"--stats " + other + " --report " + other,
+       "modtap: --stats and --report both name " + other},
       {"-w - -T text", "modtap: -w - and -T text would both write to standard output"},
       {"-w - -T json", "modtap: -w - and -T json would both write to standard output"},
   };

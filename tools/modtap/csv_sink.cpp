@@ -52,9 +52,9 @@ CsvSink::CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat t
   out_.print("t,slave,address,name,value,unit,raw\n");
 }
 
-bool CsvSink::followed(const RegisterValue& reg) const {
-  if (follow_.empty()) return true;
-  for (const FollowedRegister& f : follow_)
+bool follows(const std::vector<FollowedRegister>& follow, const RegisterValue& reg) {
+  if (follow.empty()) return true;
+  for (const FollowedRegister& f : follow)
     if (f.name == reg.name || f.address == reg.address) return true;
   return false;
 }
@@ -75,7 +75,7 @@ void CsvSink::on_frame(const Frame& frame) {
   if (!meaning || meaning->echoed || !frame.check_ok) return;
   auto& buf = out_.buffer();
   for (const RegisterValue& reg : meaning->registers) {
-    if (!followed(reg)) continue;
+    if (!follows(follow_, reg)) continue;
     time(frame.t_ns);
     out_.print(FMT_COMPILE(",{},{:04X}H,"), frame.slave(), reg.address);
     append_field(buf, reg.name);

@@ -28,6 +28,9 @@ inline std::vector<FollowedRegister> parse_follow_or_all(const std::string& list
   return list.empty() ? std::vector<FollowedRegister>{} : parse_follow(list);
 }
 
+// Whether `reg` is one of `follow` (by name or address); an empty list follows every register.
+bool follows(const std::vector<FollowedRegister>& follow, const decoder::RegisterValue& reg);
+
 class CsvSink final : public decoder::RecordSink {
  public:
   CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat time_format);
@@ -37,7 +40,6 @@ class CsvSink final : public decoder::RecordSink {
   void on_timeout(const decoder::Timeout&) override {}
 
  private:
-  bool followed(const decoder::RegisterValue& reg) const;
   void time(int64_t t_ns);
 
   Output& out_;

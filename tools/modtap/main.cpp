@@ -23,6 +23,7 @@
 #include "decoder/analyzer.hpp"
 #include "decoder/bus_diagnostics.hpp"
 #include "decoder/bus_statistics.hpp"
+#include "decoder/bus_timeline.hpp"
 #include "decoder/display_filter.hpp"
 #include "decoder/format_probe.hpp"
 #include "tools/live/live_capture.hpp"
@@ -31,6 +32,7 @@
 #include "tools/modtap/json_sink.hpp"
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/output.hpp"
+#include "tools/modtap/report.hpp"
 #include "tools/modtap/statistics_output.hpp"
 #include "tools/modtap/text_sink.hpp"
 
@@ -64,6 +66,7 @@ struct Options {
   double probe_s = 2.0;
   std::string save_raw;
   std::string stats_file;
+  std::string report_file;
   std::string time_format = "r";
   uint64_t max_frames = 0;  // 0: no limit
   bool quiet = false;
@@ -117,7 +120,15 @@ tools::ModelCatalog load_models(const Options& o) {
 }
 
 bool wants_statistics(const Options& o) {
-  return o.output == "stats" || !o.stats_file.empty();
+  return o.output == "stats" || !o.stats_file.empty() || !o.report_file.empty();
+}
+
+// The report's registers over time: those --follow names, none without it.
+std::function<bool(const decoder::RegisterValue&)> report_follow(const Options& o) {
+  if (o.follow.empty()) return {};
+  return [follow = tools::parse_follow(o.follow)](const decoder::RegisterValue& reg) {
+    return tools::follows(follow, reg);
+  };
 }
 
 // The sinks a run writes to: the terminal's, the statistics, and a pcapng file with -w; in
@@ -131,6 +142,10 @@ class Sinks {
     if (wants_statistics(o)) {
       statistics_ = std::make_unique<decoder::BusStatistics>(format, clock);
       fan_out_.add(*statistics_);
+    }
+    if (!o.report_file.empty()) {
+      timeline_ = std::make_unique<decoder::BusTimeline>(report_follow(o));
+      fan_out_.add(*timeline_);
     }
     // Only text, JSON, pcapng comments and statistics with --model show what the models say;
     // the other outputs skip the work, and the YAML is not read unless models are asked for.
@@ -172,6 +187,7 @@ class Sinks {
   }
   bool limit_reached() const { return limit_ && limit_->reached(); }
   const decoder::BusStatistics* statistics() const { return statistics_.get(); }
+  const decoder::BusTimeline* timeline() const { return timeline_.get(); }
   // The slaves whose model sets a response time-out, unless --timeout was given.
   const std::map<uint8_t, int64_t>& model_timeouts() const { return model_timeouts_; }
   // The end of a run: the pcapng file is complete, or its failure is reported.
@@ -202,6 +218,7 @@ class Sinks {
   decoder::FanOut fan_out_;
   std::unique_ptr<decoder::RecordSink> terminal_;
   std::unique_ptr<decoder::BusStatistics> statistics_;
+  std::unique_ptr<decoder::BusTimeline> timeline_;
   tools::ModelCatalog catalog_;
   std::unique_ptr<decoder::FilterStage> filter_;
   std::unique_ptr<decoder::BusDiagnostics> diagnostics_;
@@ -221,8 +238,10 @@ bool same_file(const std::string& a, const std::string& b) {
 
 // Outputs that would destroy the input or each other, or mix two formats on one stream.
 std::optional<std::string> refuse_outputs(const Options& o) {
-  const std::vector<std::pair<const char*, std::string>> files{
-      {"-w", o.write_file}, {"--save-raw", o.save_raw}, {"--stats", o.stats_file}};
+  const std::vector<std::pair<const char*, std::string>> files{{"-w", o.write_file},
+                                                               {"--save-raw", o.save_raw},
+                                                               {"--stats", o.stats_file},
+                                                               {"--report", o.report_file}};
   for (size_t i = 0; i < files.size(); ++i) {
     const auto& [option, path] = files[i];
     if (path.empty() || path == "-") continue;
@@ -251,18 +270,33 @@ int list_models(const Options& o) {
   return 0;
 }
 
-// The end of a run: -T stats prints the statistics, --stats writes them (`complete` false when
-// the input broke off: they cover what was read).
+void write_whole(const std::string& path, const fmt::memory_buffer& content) {
+  captures::OutputFile file(path);
+  file.write(std::string_view(content.data(), content.size()));
+  file.close();
+}
+
+// The end of a run: -T stats prints the statistics, --stats and --report write them
+// (`complete` false when the input broke off: they cover what was read).
 void summarise(const Options& o, tools::Output& out, const Sinks& sinks, bool complete) {
   const decoder::BusStatistics* statistics = sinks.statistics();
   if (!statistics) return;
   if (o.output == "stats") tools::print_statistics(out, *statistics, sinks.diagnostics());
-  if (o.stats_file.empty()) return;
-  fmt::memory_buffer json;
-  tools::append_statistics_json(json, *statistics, sinks.diagnostics(), complete);
-  captures::OutputFile file(o.stats_file);
-  file.write(std::string_view(json.data(), json.size()));
-  file.close();
+  if (!o.stats_file.empty()) {
+    fmt::memory_buffer json;
+    tools::append_statistics_json(json, *statistics, sinks.diagnostics(), complete);
+    write_whole(o.stats_file, json);
+  }
+  if (!o.report_file.empty()) {
+    fmt::memory_buffer html;
+    const std::string capture = o.read_file.empty()
+                                    ? fmt::format("{}", fmt::join(o.interfaces, " "))
+                                : o.read_file == "-" ? "standard input"
+                                                     : o.read_file;
+    tools::append_report(html, *statistics, sinks.diagnostics(), *sinks.timeline(),
+                         {capture, MODTAP_VERSION, complete});
+    write_whole(o.report_file, html);
+  }
 }
 
 std::unique_ptr<captures::RawRecorder> raw_recorder(
@@ -427,6 +461,9 @@ int main(int argc, char** argv) {
   app.add_option("--stats", o.stats_file,
                  "Write the statistics as one JSON object at the end of the run (also after "
                  "Ctrl-C, and marked incomplete when the input breaks off)");
+  app.add_option("--report", o.report_file,
+                 "Write a report a customer can read (one HTML file with charts; with --follow, "
+                 "those registers over time) at the end of the run, as --stats");
   app.add_option("--link", o.link, "pcapng link: user (DLT_USER + modtap.lua), exported-pdu, bare")
       ->check(CLI::IsMember({"user", "exported-pdu", "bare"}));
   app.add_option("--dlt", o.dlt, "DLT_USER link type for --link user or bare")
@@ -477,7 +514,8 @@ int main(int argc, char** argv) {
   if (!named_capture.empty()) o.read_file = named_capture;
   o.timeout_given = timeout->count() > 0;  // a closed pipe is a failed write (EPIPE), handled below
   if (!o.write_file.empty() && output->count() == 0) o.output = "none";  // as tshark -w
-  if (!o.follow.empty() && output->count() == 0) o.output = "csv";
+  // --follow alone asks for the values over time: as CSV, or in the report.
+  if (!o.follow.empty() && output->count() == 0) o.output = o.report_file.empty() ? "csv" : "text";
   if (o.quiet && o.output != "stats") o.output = "none";
   try {
     if (check->parsed()) return tools::check_model_file(check_file);

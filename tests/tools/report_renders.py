@@ -1,0 +1,189 @@
+"""The report (--report) as a customer's browser shows it: rendered by headless Chromium, every
+number it shows (each marked with its --stats key) equals --stats, every chart has marks in its
+colours on the screenshot, nothing is fetched from outside the file; a filtered run reports only
+what the filter kept, and a capture that breaks off says so.
+
+usage: report_renders.py MODTAP BUSGEN WORKDIR
+"""
+import html.parser
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+from PIL import Image
+
+MODTAP, BUSGEN, WORK = sys.argv[1:4]
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+# The colours the page's style gives each chart's marks (tools/modtap/report.cpp).
+CHART_COLOURS = {
+    "traffic bars": (0x9D, 0xB7, 0xD5),
+    "latency histogram bars": (0x2F, 0x6F, 0xB0),
+    "time-out bars": (0xE8, 0xA3, 0x3D),
+    "exception bars": (0x8E, 0x5B, 0xB5),
+    "followed register line": (0x1B, 0x7F, 0x5F),
+}
+
+failures = []
+
+
+def run(args, **kwargs):
+    return subprocess.run(args, capture_output=True, text=True, timeout=120, **kwargs)
+
+
+def chromium(*args):
+    # As root Chromium needs --no-sandbox; a throwaway profile keeps runs apart.
+    return run([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+                f"--user-data-dir={WORK}/chromium-profile", *args])
+
+
+class StatCells(html.parser.HTMLParser):
+    """Every element with a data-stat attribute: its key, scale and the text it shows."""
+
+    def __init__(self):
+        super().__init__()
+        self.cells, self.open = [], []
+
+    def handle_starttag(self, tag, attrs):
+        attrs = dict(attrs)
+        if "data-stat" in attrs:
+            self.open.append([attrs["data-stat"], float(attrs.get("data-scale", "1")), ""])
+
+    def handle_data(self, data):
+        if self.open:
+            self.open[-1][2] += data
+
+    def handle_endtag(self, tag):
+        if self.open and tag in ("td", "div", "span"):
+            self.cells.append(tuple(self.open.pop()))
+
+
+def stat_value(stats, key):
+    """'slaves.3.latency_us.p50' from the --stats object (slaves is a list keyed by 'slave')."""
+    value = stats
+    parts = key.split(".")
+    while parts:
+        part = parts.pop(0)
+        if isinstance(value, list):
+            value = next(s for s in value if str(s["slave"]) == part)
+        elif part in value:
+            value = value[part]
+        else:  # a finding's name may hold a dot: never, but keep the rest together
+            value = value[".".join([part] + parts)]
+            break
+    return value
+
+
+def check_numbers(name, dom, stats, required):
+    parser = StatCells()
+    parser.feed(dom)
+    seen = set()
+    for key, scale, text in parser.cells:
+        match = re.match(r"\s*(-?[0-9]+(?:\.([0-9]+))?)", text)
+        if not match:
+            failures.append(f"{name}: {key} shows {text!r}, not a number")
+            continue
+        shown = float(match.group(1)) * scale
+        decimals = len(match.group(2) or "")
+        allowed = 0.5 * 10 ** -decimals * scale + 1e-9
+        want = stat_value(stats, key)
+        if abs(shown - want) > allowed:
+            failures.append(f"{name}: {key} shows {text.strip()!r}, --stats has {want}")
+        seen.add(key)
+    for key in required:
+        if key not in seen:
+            failures.append(f"{name}: the report does not show {key}")
+    return seen
+
+
+def check_self_contained(name, page):
+    for outside in ("<script", "src=", "href=", "url(", "@import", "http://", "https://"):
+        if outside in page:
+            failures.append(f"{name}: the page refers outside itself ({outside})")
+
+
+def check_charts(name, screenshot, wanted):
+    image = Image.open(screenshot).convert("RGB")
+    counts = dict.fromkeys(wanted, 0)
+    colours = {CHART_COLOURS[w]: w for w in wanted}
+    for count, colour in image.getcolors(maxcolors=1 << 24):
+        if colour in colours:
+            counts[colours[colour]] += count
+    for what, count in counts.items():
+        if count < 200:
+            failures.append(f"{name}: the screenshot shows {count} pixels of the {what}")
+
+
+def report(name, capture, busgen_args, modtap_args, expect_exit=0):
+    capture = os.path.join(WORK, capture)
+    page, stats_file = os.path.join(WORK, f"{name}.html"), os.path.join(WORK, f"{name}.json")
+    if busgen_args:
+        subprocess.run([BUSGEN, *busgen_args, "--format", "pcap", "--delivery", "sniffer",
+                        "-o", capture], check=True, capture_output=True)
+    result = run([MODTAP, "-r", capture, "-q", "--report", page, "--stats", stats_file,
+                  *modtap_args])
+    if result.returncode != expect_exit:
+        failures.append(f"{name}: modtap exited {result.returncode}: {result.stderr}")
+    with open(stats_file) as f:
+        stats = json.load(f)
+    with open(page) as f:
+        text = f.read()
+    check_self_contained(name, text)
+    dom = chromium("--dump-dom", f"file://{page}").stdout
+    if "Modbus bus report" not in dom:
+        failures.append(f"{name}: Chromium did not render the page")
+    return stats, text, dom, page
+
+
+def main():
+    os.makedirs(WORK, exist_ok=True)
+
+    # A scan list of four slaves with the faults of real buses, two registers followed.
+    stats, _, dom, page = report("polled", "polled.pcap", ["-n", "4000", "--slaves", "4", "--faults"],
+                                 ["--follow", "0000H,0001H"])
+    slaves = [s["slave"] for s in stats["slaves"]]
+    if slaves != [1, 2, 3, 4]:
+        failures.append(f"polled: slaves {slaves}")
+    required = ["frames", "requests", "responses", "timeouts", "exceptions", "bad_checks",
+                "noise_bytes", "bus_load", "duration_s"]
+    for s in slaves:
+        required += [f"slaves.{s}.{k}" for k in
+                     ("requests", "responses", "timeouts", "timeout_rate", "exceptions",
+                      "bad_checks", "latency_us.p50", "latency_us.p99", "latency_us.max",
+                      "poll_interval_ms.median")]
+    required += [f"diagnostics.{name}.count" for name in stats["diagnostics"]]
+    check_numbers("polled", dom, stats, required)
+    shot = os.path.join(WORK, "polled.png")
+    chromium("--window-size=1000,7000", f"--screenshot={shot}", f"file://{page}")
+    check_charts("polled", shot, list(CHART_COLOURS))
+    followed = re.findall(r"<figcaption>slave (\d+) (0000H|0001H)", dom)
+    if len(followed) != 8:
+        failures.append(f"polled: {len(followed)} followed register charts, not 8: {followed}")
+
+    # A filter: the report holds what it kept, as --stats does.
+    stats, _, dom, _ = report("filtered", "polled.pcap", None, ["--follow", "0000H", "-Y", "slave == 2"])
+    if [s["slave"] for s in stats["slaves"]] != [2]:
+        failures.append(f"filtered: slaves {[s['slave'] for s in stats['slaves']]}")
+    check_numbers("filtered", dom, stats, ["frames", "slaves.2.requests"])
+    if "data-stat=\"slaves.1." in dom:
+        failures.append("filtered: slave 1 is in a report filtered to slave 2")
+
+    # A capture that breaks off: the numbers cover what was read, and the page says so.
+    with open(os.path.join(WORK, "polled.pcap"), "rb") as f:
+        head = f.read()[:30000]
+    with open(os.path.join(WORK, "cut.pcap"), "wb") as f:
+        f.write(head)
+    stats, _, dom, _ = report("cut", "cut.pcap", None, [], expect_exit=2)
+    if stats["complete"] or "broke off" not in dom:
+        failures.append("cut: the report does not say the capture broke off")
+    check_numbers("cut", dom, stats, ["frames"])
+
+    for failure in failures:
+        print(failure)
+    print(f"{len(failures)} failures")
+    return 1 if failures else 0
+
+
+sys.exit(main())
