@@ -113,7 +113,7 @@ void BM_Output(benchmark::State& state, Sink kind, const char* model) {
     tools::Output out(file);
     captures::PcapngWriter writer("/dev/null");
     std::unique_ptr<decoder::RecordSink> sink;
-    if (kind == Sink::text) sink = std::make_unique<tools::TextSink>(out, channels, false);
+    if (kind == Sink::text) sink = std::make_unique<tools::TextSink>(out, channels);
     if (kind == Sink::json) sink = std::make_unique<tools::JsonSink>(out, channels);
     if (kind == Sink::pcapng)
       sink = std::make_unique<captures::PcapngSink>(writer, channels, captures::PcapngOptions{});

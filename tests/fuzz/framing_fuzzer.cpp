@@ -117,7 +117,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     captures::OutputFile json_file(json_stream, "json"), text_file(null_stream, "text");
     tools::Output json_out(json_file), text_out(text_file);
     tools::JsonSink json(json_out, channels);
-    tools::TextSink text(text_out, channels, /*verbose=*/setup & 8);
+    tools::TextSink text(text_out, channels, {.verbose = (setup & 8) != 0});
     fuzz::PropertySink properties({&json, &text});
     // Every frame read through one of the drives' models too, as --model does.
     const auto models = fuzz::catalog().all();

@@ -171,6 +171,38 @@ TEST(Cli, FollowWritesRegisterValuesOverTimeAsCsv) {
             std::vector<std::string>{"modtap: --follow: an empty name in \",x\""});
 }
 
+// --register-base: registers numbered as mbpoll (1-based) or Modicon (40001) number them, in
+// text lines, -V trees, CSV and --follow alike; JSON keeps the wire's address.
+TEST(Cli, RegisterBaseNumbersRegistersAsThePlcManualDoes) {
+  const std::string drives =
+      std::string("-r ") + MODTAP_SAMPLES + "/drives-manual-examples.log --model 1=nta5000 -c 3";
+  const std::vector<std::pair<std::string, std::string>> bases{
+      {"hex", "2502H"}, {"0", "9474"}, {"1", "9475"}, {"4xxxx", "49475"}};
+  for (const auto& [base, written] : bases) {
+    const Outcome text = run(drives + " --register-base " + base);
+    ASSERT_EQ(text.lines.size(), 3u) << base;
+    EXPECT_NE(text.lines[2].find("Write Single Register address=" + written + " value=6000"),
+              std::string::npos)
+        << text.lines[2];
+    const Outcome tree = run(drives + " -V --register-base " + base);
+    EXPECT_TRUE(std::any_of(tree.lines.begin(), tree.lines.end(), [&](const std::string& line) {
+      return line ==
+             "      " + written + " frequency_command \"Frequency command\" = 0x1770 -> 60.00 Hz";
+    })) << base;
+    const Outcome csv = run(drives + " --register-base " + base + " --follow " + written);
+    ASSERT_EQ(csv.lines.size(), 2u) << base;
+    EXPECT_EQ(csv.lines[1], "0.000000,1," + written + ",frequency_command,60.00,Hz,6000");
+  }
+  EXPECT_NE(run(drives + " --register-base 4xxxx -T json").lines[2].find("\"address\":9474"),
+            std::string::npos);
+  // Modicon's first digit is the table: coils are 0xxxx.
+  const auto coil_write = (std::filesystem::temp_directory_path() / "modtap-coil.raw").string();
+  std::ofstream(coil_write, std::ios::binary) << std::string("\x01\x05\x00\x07\xff\x00\x3d\xfb", 8);
+  const std::string coils =
+      run("-r " + coil_write + " --format raw --register-base 4xxxx").lines.at(0);
+  EXPECT_NE(coils.find("address=00008"), std::string::npos) << coils;
+}
+
 // A capture from standard input or a pipe reads as the same file does, its format told from
 // its first bytes; a capture named without -r too. What a pipe cannot do is said plainly.
 TEST(Cli, ReadsStandardInputAndPipesAsTheSameFile) {

@@ -11,13 +11,6 @@ using namespace decoder;
 
 namespace {
 
-// 2502H as the manuals write it, 0x2502, or decimal; else a name.
-std::optional<uint16_t> address_named(std::string_view item) {
-  const auto number = parse_written_number(item);
-  if (!number || *number > 0xFFFF) return std::nullopt;
-  return static_cast<uint16_t>(*number);
-}
-
 // A CSV field: quoted when it holds a comma, a quote or a line break (RFC 4180).
 void append_field(fmt::memory_buffer& out, std::string_view text) {
   if (text.find_first_of(",\"\r\n") == std::string_view::npos) {
@@ -34,28 +27,31 @@ void append_field(fmt::memory_buffer& out, std::string_view text) {
 
 }  // namespace
 
-std::vector<FollowedRegister> parse_follow(const std::string& list) {
+std::vector<FollowedRegister> parse_follow(const std::string& list, RegisterBase base) {
   std::vector<FollowedRegister> follow;
   size_t at = 0;
   while (at <= list.size()) {
     const size_t comma = std::min(list.find(',', at), list.size());
     const std::string item = list.substr(at, comma - at);
     if (item.empty()) throw std::invalid_argument("--follow: an empty name in \"" + list + "\"");
-    follow.push_back({item, address_named(item)});
+    follow.push_back({item, parse_register_number(item, base)});
     at = comma + 1;
   }
   return follow;
 }
 
-CsvSink::CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat time_format)
-    : out_(out), follow_(std::move(follow)), time_format_(time_format) {
+CsvSink::CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat time_format,
+                 RegisterBase base)
+    : out_(out), follow_(std::move(follow)), time_format_(time_format), base_(base) {
   out_.print("t,slave,address,name,value,unit,raw\n");
 }
 
 bool follows(const std::vector<FollowedRegister>& follow, const RegisterValue& reg) {
   if (follow.empty()) return true;
   for (const FollowedRegister& f : follow)
-    if (f.name == reg.name || f.address == reg.address) return true;
+    if (f.name == reg.name || (f.number && f.number->address == reg.address &&
+                               f.number->table.value_or(reg.table) == reg.table))
+      return true;
   return false;
 }
 
@@ -77,7 +73,8 @@ void CsvSink::on_frame(const Frame& frame) {
   for (const RegisterValue& reg : meaning->registers) {
     if (!follows(follow_, reg)) continue;
     time(frame.t_ns);
-    out_.print(FMT_COMPILE(",{},{:04X}H,"), frame.slave(), reg.address);
+    out_.print(FMT_COMPILE(",{},{},"), frame.slave(),
+               RegisterNumber{reg.table, reg.address, base_});
     append_field(buf, reg.name);
     buf.push_back(',');
     append_number(buf, reg.value, reg.decimals);

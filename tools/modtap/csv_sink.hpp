@@ -10,22 +10,25 @@
 
 #include "decoder/record_sink.hpp"
 #include "decoder/register_meaning.hpp"
+#include "decoder/register_numbering.hpp"
 #include "tools/modtap/output.hpp"
 #include "tools/modtap/text_sink.hpp"
 
 namespace modtap::tools {
 
-// One --follow item: a register's name (frequency_command, P00.04) or address (2502H, 0x2502,
-// 9474).
+// One --follow item: a register's name (frequency_command, P00.04) or number (2502H, 0x2502,
+// or a decimal number in the --register-base convention: 9474, 9475, 49475).
 struct FollowedRegister {
   std::string name;
-  std::optional<uint16_t> address;
+  std::optional<decoder::NamedRegister> number;
 };
 // "frequency_command,2503H"; throws std::invalid_argument for an empty item.
-std::vector<FollowedRegister> parse_follow(const std::string& list);
+std::vector<FollowedRegister> parse_follow(const std::string& list,
+                                           decoder::RegisterBase base = decoder::RegisterBase::hex);
 // The same, where an empty list follows every register.
-inline std::vector<FollowedRegister> parse_follow_or_all(const std::string& list) {
-  return list.empty() ? std::vector<FollowedRegister>{} : parse_follow(list);
+inline std::vector<FollowedRegister> parse_follow_or_all(const std::string& list,
+                                                         decoder::RegisterBase base) {
+  return list.empty() ? std::vector<FollowedRegister>{} : parse_follow(list, base);
 }
 
 // Whether `reg` is one of `follow` (by name or address); an empty list follows every register.
@@ -33,7 +36,8 @@ bool follows(const std::vector<FollowedRegister>& follow, const decoder::Registe
 
 class CsvSink final : public decoder::RecordSink {
  public:
-  CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat time_format);
+  CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat time_format,
+          decoder::RegisterBase base = decoder::RegisterBase::hex);
 
   void on_frame(const decoder::Frame& frame) override;
   void on_noise(const decoder::Noise&) override {}
@@ -45,6 +49,7 @@ class CsvSink final : public decoder::RecordSink {
   Output& out_;
   std::vector<FollowedRegister> follow_;
   TimeFormat time_format_;
+  decoder::RegisterBase base_;
   std::optional<int64_t> first_ns_;
 };
 

@@ -72,6 +72,7 @@ struct Options {
   bool quiet = false;
   std::string display_filter;
   std::string follow;
+  std::string register_base = "hex";
 };
 
 std::optional<uint32_t> fixed_baud(const Options& o) {
@@ -88,11 +89,14 @@ std::unique_ptr<decoder::RecordSink> make_sink(const Options& o, tools::Output& 
                                                const std::vector<decoder::ChannelInfo>& channels) {
   if (o.output == "json") return std::make_unique<tools::JsonSink>(out, channels);
   if (o.output == "csv")
-    return std::make_unique<tools::CsvSink>(out, tools::parse_follow_or_all(o.follow),
-                                            tools::time_format_named(o.time_format));
+    return std::make_unique<tools::CsvSink>(
+        out, tools::parse_follow_or_all(o.follow, decoder::register_base_named(o.register_base)),
+        tools::time_format_named(o.time_format), decoder::register_base_named(o.register_base));
   if (o.output == "text")
-    return std::make_unique<tools::TextSink>(out, channels, o.verbose,
-                                             tools::time_format_named(o.time_format));
+    return std::make_unique<tools::TextSink>(
+        out, channels,
+        tools::TextOptions{o.verbose, tools::time_format_named(o.time_format),
+                           decoder::register_base_named(o.register_base)});
   return std::make_unique<decoder::NullSink>();  // stats: the statistics print at the end
 }
 
@@ -126,7 +130,8 @@ bool wants_statistics(const Options& o) {
 // The report's registers over time: those --follow names, none without it.
 std::function<bool(const decoder::RegisterValue&)> report_follow(const Options& o) {
   if (o.follow.empty()) return {};
-  return [follow = tools::parse_follow(o.follow)](const decoder::RegisterValue& reg) {
+  const auto base = decoder::register_base_named(o.register_base);
+  return [follow = tools::parse_follow(o.follow, base)](const decoder::RegisterValue& reg) {
     return tools::follows(follow, reg);
   };
 }
@@ -281,7 +286,8 @@ void write_whole(const std::string& path, const fmt::memory_buffer& content) {
 void summarise(const Options& o, tools::Output& out, const Sinks& sinks, bool complete) {
   const decoder::BusStatistics* statistics = sinks.statistics();
   if (!statistics) return;
-  if (o.output == "stats") tools::print_statistics(out, *statistics, sinks.diagnostics());
+  const auto base = decoder::register_base_named(o.register_base);
+  if (o.output == "stats") tools::print_statistics(out, *statistics, sinks.diagnostics(), base);
   if (!o.stats_file.empty()) {
     fmt::memory_buffer json;
     tools::append_statistics_json(json, *statistics, sinks.diagnostics(), complete);
@@ -294,7 +300,7 @@ void summarise(const Options& o, tools::Output& out, const Sinks& sinks, bool co
                                 : o.read_file == "-" ? "standard input"
                                                      : o.read_file;
     tools::append_report(html, *statistics, sinks.diagnostics(), *sinks.timeline(),
-                         {capture, MODTAP_VERSION, complete});
+                         {capture, MODTAP_VERSION, complete, base});
     write_whole(o.report_file, html);
   }
 }
@@ -464,6 +470,12 @@ int main(int argc, char** argv) {
   app.add_option("--report", o.report_file,
                  "Write a report a customer can read (one HTML file with charts; with --follow, "
                  "those registers over time) at the end of the run, as --stats");
+  app.add_option(
+         "--register-base", o.register_base,
+         "How text, CSV, statistics and the report number registers: hex (2502H, as the "
+         "drives' manuals), 0 (0-based decimal, as on the wire), 1 (1-based, as mbpoll), "
+         "4xxxx (Modicon: 40001 is holding register 0); --follow reads numbers the same way")
+      ->check(CLI::IsMember({"hex", "0", "1", "4xxxx"}));
   app.add_option("--link", o.link, "pcapng link: user (DLT_USER + modtap.lua), exported-pdu, bare")
       ->check(CLI::IsMember({"user", "exported-pdu", "bare"}));
   app.add_option("--dlt", o.dlt, "DLT_USER link type for --link user or bare")

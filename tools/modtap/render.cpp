@@ -61,14 +61,17 @@ void append_json_key(fmt::memory_buffer& out, const Field& f) {
   append_chars(out, "\":");
 }
 
-void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_items) {
+void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_items,
+                        AddressNumbering numbering) {
   auto it = fmt::appender(out);
   switch (f.type()) {
     case FieldType::hex:
       fmt::format_to(it, "0x{:04x}", f.number);
       break;
-    case FieldType::address:  // as the manuals write registers: 2502H
-      fmt::format_to(it, "{:04X}H", f.number);
+    case FieldType::address:  // as the manuals write registers (2502H), or --register-base
+      fmt::format_to(it, "{}",
+                     decoder::RegisterNumber{numbering.table, static_cast<uint16_t>(f.number),
+                                             numbering.base});
       break;
     case FieldType::code:  // as vendors' tables write codes: 52H
       fmt::format_to(it, "{:02X}H", f.number);
@@ -154,11 +157,22 @@ size_t append_json_field(fmt::memory_buffer& out, const DecodedPdu& pdu, size_t 
   return end;
 }
 
+decoder::Table addressed_table(const decoder::Frame& frame) {
+  // A response's fields are placed by its request; an echo or a lone frame reads as its own.
+  using decoder::Table;
+  const bool placed_by_request =
+      frame.role == decoder::Role::response && !frame.request_pdu.empty();
+  const auto pdu = placed_by_request ? frame.request_pdu : frame.pdu();
+  if (pdu.empty()) return Table::holding;
+  const auto accesses = decoder::function_code(pdu[0] & 0x7F).request_accesses(pdu);
+  return accesses.size ? accesses.list[0].table : Table::holding;
+}
+
 size_t append_text_value(fmt::memory_buffer& out, const DecodedPdu& pdu, size_t at,
-                         size_t max_items) {
+                         size_t max_items, AddressNumbering numbering) {
   const Field& f = pdu.fields[at];
   if (f.type() != FieldType::list) {
-    append_text_scalar(out, f, max_items);
+    append_text_scalar(out, f, max_items, numbering);
     return at + 1;
   }
   // {key=value key=value; key=value;}
@@ -170,7 +184,7 @@ size_t append_text_value(fmt::memory_buffer& out, const DecodedPdu& pdu, size_t 
     if (!first_of_item) out.push_back(' ');
     append_chars(out, field.name());
     out.push_back('=');
-    append_text_scalar(out, field, max_items);
+    append_text_scalar(out, field, max_items, numbering);
   }
   if (end > at + 1) append_chars(out, ";}");
   return end;

@@ -11,18 +11,28 @@
 #include "decoder/pdu_fields.hpp"
 #include "decoder/records.hpp"
 #include "decoder/register_meaning.hpp"
+#include "decoder/register_numbering.hpp"
 
 namespace modtap::tools {
 
 void append_hex(fmt::memory_buffer& out, std::span<const uint8_t> bytes, bool spaced);
 void append_json_string(fmt::memory_buffer& out, std::string_view text);
 
+// How text writes a frame's address fields: the convention, and the table the frame's function
+// code addresses (Modicon's numbers say it).
+struct AddressNumbering {
+  decoder::RegisterBase base = decoder::RegisterBase::hex;
+  decoder::Table table = decoder::Table::holding;
+};
+// The table a frame's address fields name, from its function code's register accesses.
+decoder::Table addressed_table(const decoder::Frame& frame);
+
 // The field at `at` as JSON ("key":value; a list with its items), and as text (`key=` is the
 // caller's), with at most `max_items` values of an array. Both return the index of the next
 // field of the same level.
 size_t append_json_field(fmt::memory_buffer& out, const decoder::DecodedPdu& pdu, size_t at);
 size_t append_text_value(fmt::memory_buffer& out, const decoder::DecodedPdu& pdu, size_t at,
-                         size_t max_items);
+                         size_t max_items, AddressNumbering numbering = {});
 
 // The same as a JSON object: {"addr", "name", "raw", "value", "unit", "text"}.
 void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue& reg);

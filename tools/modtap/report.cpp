@@ -421,7 +421,8 @@ void append_outages(fmt::memory_buffer& out, const BusStatistics& s, const BusDi
 }
 
 void append_followed_chart(fmt::memory_buffer& out, const BusTimeline& timeline, TimeUnit unit,
-                           const RegisterKey& key, const FollowedSeries& series) {
+                           const RegisterKey& key, const FollowedSeries& series,
+                           RegisterBase base) {
   const double width = static_cast<double>(timeline.bin_ns()) / 1e9 / unit.seconds;
   std::vector<std::pair<double, double>> low, high, last;
   double lowest = INFINITY, highest = -INFINITY;
@@ -442,7 +443,8 @@ void append_followed_chart(fmt::memory_buffer& out, const BusTimeline& timeline,
   frame.y_min = frame.y_ticks.front();
   frame.y_max = frame.y_ticks.back();
   frame.y_label = series.unit.empty() ? "value" : series.unit;
-  const std::string title = fmt::format("slave {} {:04X}H {}", key.slave, key.address, series.name);
+  const std::string title = fmt::format("slave {} {} {}", key.slave,
+                                        RegisterNumber{key.table, key.address, base}, series.name);
   out.append(std::string_view("<figure><figcaption>"));
   append_html(out, title);
   if (!series.unit.empty()) {
@@ -458,7 +460,7 @@ void append_followed_chart(fmt::memory_buffer& out, const BusTimeline& timeline,
   out.append(std::string_view("</figure>\n"));
 }
 
-void append_followed(fmt::memory_buffer& out, const BusTimeline& timeline) {
+void append_followed(fmt::memory_buffer& out, const BusTimeline& timeline, RegisterBase base) {
   if (timeline.followed().empty()) return;
   const TimeUnit unit = time_unit(static_cast<double>(timeline.traffic().size()) *
                                   static_cast<double>(timeline.bin_ns()) / 1e9);
@@ -466,7 +468,7 @@ void append_followed(fmt::memory_buffer& out, const BusTimeline& timeline) {
       "<h2>Followed registers</h2>\n<p class=\"meta\">The line is the last value in each stretch "
       "of time; the band spans its lowest and highest.</p>\n"));
   for (const auto& [key, series] : timeline.followed())
-    append_followed_chart(out, timeline, unit, key, series);
+    append_followed_chart(out, timeline, unit, key, series, base);
   if (timeline.followed_not_kept())
     fmt::format_to(fmt::appender(out),
                    "<p class=\"meta\">Only the first {} followed registers are drawn.</p>\n",
@@ -474,7 +476,7 @@ void append_followed(fmt::memory_buffer& out, const BusTimeline& timeline) {
 }
 
 // The named registers' last values: the drives' state as the master last saw it.
-void append_registers(fmt::memory_buffer& out, const BusStatistics& s) {
+void append_registers(fmt::memory_buffer& out, const BusStatistics& s, RegisterBase base) {
   constexpr size_t shown = 200;
   size_t named = 0;
   fmt::memory_buffer value;
@@ -485,8 +487,8 @@ void append_registers(fmt::memory_buffer& out, const BusStatistics& s) {
       out.append(
           std::string_view("<h2>Last values</h2>\n<table><tr><th>slave</th><th>address</th><th "
                            "class=\"text\">register</th><th class=\"text\">value</th></tr>\n"));
-    fmt::format_to(fmt::appender(out), "<tr><td>{}</td><td>{:04X}H</td><td class=\"text\">",
-                   key.slave, key.address);
+    fmt::format_to(fmt::appender(out), "<tr><td>{}</td><td>{}</td><td class=\"text\">", key.slave,
+                   RegisterNumber{key.table, key.address, base});
     append_html(out, last.name);
     out.append(std::string_view("</td><td class=\"text\">"));
     value.clear();
@@ -512,8 +514,8 @@ void append_report(fmt::memory_buffer& out, const BusStatistics& stats,
   append_timeline(out, timeline, stats.clock());
   append_latency(out, stats);
   append_outages(out, stats, diagnostics);
-  append_followed(out, timeline);
-  append_registers(out, stats);
+  append_followed(out, timeline, info.register_base);
+  append_registers(out, stats, info.register_base);
   out.append(std::string_view("<footer>modtap "));
   append_html(out, info.version);
   out.append(std::string_view(

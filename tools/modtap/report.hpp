@@ -12,6 +12,7 @@
 #include "decoder/bus_diagnostics.hpp"
 #include "decoder/bus_statistics.hpp"
 #include "decoder/bus_timeline.hpp"
+#include "decoder/register_numbering.hpp"
 
 namespace modtap::tools {
 
@@ -19,6 +20,7 @@ struct ReportInfo {
   std::string capture;   // the file read or the ports listened to
   std::string version;   // modtap's
   bool complete = true;  // false: the input broke off; the numbers cover what was read
+  decoder::RegisterBase register_base = decoder::RegisterBase::hex;
 };
 
 void append_report(fmt::memory_buffer& out, const decoder::BusStatistics& stats,

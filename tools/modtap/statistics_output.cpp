@@ -124,14 +124,15 @@ void print_outages(Output& out, const BusStatistics& s, const BusDiagnostics& d)
 }
 
 // The named registers' last values: the state of the drives as the master last saw it.
-void print_registers(Output& out, const BusStatistics& s) {
+void print_registers(Output& out, const BusStatistics& s, RegisterBase base) {
   constexpr size_t shown = 100;
   size_t named = 0;
   for (const auto& [key, last] : s.registers) {
     if (last.name.empty()) continue;
     if (named++ == shown) break;
     if (named == 1) out.print("\nlast values (named registers; every one in --stats)\n");
-    out.print("  slave {:<3} {:04X}H {:<28} ", key.slave, key.address, last.name);
+    out.print("  slave {:<3} {:>6} {:<28} ", key.slave,
+              RegisterNumber{key.table, key.address, base}, last.name);
     append_value_text(out.buffer(), last.as_register(key.table, key.address));  // as text does
     out.print("\n");
   }
@@ -140,7 +141,8 @@ void print_registers(Output& out, const BusStatistics& s) {
 
 }  // namespace
 
-void print_statistics(Output& out, const BusStatistics& s, const BusDiagnostics& d) {
+void print_statistics(Output& out, const BusStatistics& s, const BusDiagnostics& d,
+                      RegisterBase base) {
   print_span(out, s);
   out.print("{:<16}{}", "frames", s.frames);
   if (s.duration_s() > 0)
@@ -167,7 +169,7 @@ void print_statistics(Output& out, const BusStatistics& s, const BusDiagnostics&
   }
   print_slaves(out, s);
   print_outages(out, s, d);
-  print_registers(out, s);
+  print_registers(out, s, base);
   print_findings(out, s);
   out.flush();
 }

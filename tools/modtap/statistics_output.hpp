@@ -6,13 +6,15 @@
 
 #include "decoder/bus_diagnostics.hpp"
 #include "decoder/bus_statistics.hpp"
+#include "decoder/register_numbering.hpp"
 #include "tools/modtap/output.hpp"
 
 namespace modtap::tools {
 
 // The outages (slaves that went silent) come from the diagnostics stage.
 void print_statistics(Output& out, const decoder::BusStatistics& stats,
-                      const decoder::BusDiagnostics& diagnostics);
+                      const decoder::BusDiagnostics& diagnostics,
+                      decoder::RegisterBase base = decoder::RegisterBase::hex);
 
 // `complete` is false when the input ended in an error: the numbers cover what was read.
 void append_statistics_json(fmt::memory_buffer& out, const decoder::BusStatistics& stats,

@@ -57,12 +57,11 @@ TimeFormat time_format_named(std::string_view name) {
   return TimeFormat::relative;
 }
 
-TextSink::TextSink(Output& out, const std::vector<ChannelInfo>& channels, bool verbose,
-                   TimeFormat time_format)
-    : out_(out), channels_(channels), verbose_(verbose), time_format_(time_format) {}
+TextSink::TextSink(Output& out, const std::vector<ChannelInfo>& channels, TextOptions options)
+    : out_(out), channels_(channels), options_(options) {}
 
 void TextSink::time_column(int64_t t_ns) {
-  switch (time_format_) {
+  switch (options_.time) {
     case TimeFormat::relative:
       if (!first_ns_) first_ns_ = t_ns;
       out_.print(FMT_COMPILE(" {:>11}"), Fixed{t_ns - *first_ns_, 9, 6});
@@ -88,7 +87,7 @@ void TextSink::absolute_time(int64_t t_ns) {
     std::tm local{};
     const std::time_t when = static_cast<std::time_t>(second);
     localtime_r(&when, &local);
-    if (time_format_ == TimeFormat::absolute_date) {
+    if (options_.time == TimeFormat::absolute_date) {
       fmt::format_to(fmt::appender(shown_), "{:%Y-%m-%d %H:%M:%S}", local);
     } else {
       fmt::format_to(fmt::appender(shown_), "{:%H:%M:%S}", local);
@@ -111,6 +110,7 @@ void TextSink::on_frame(const Frame& frame) {
              FunctionLabel{frame.function()});
   const DecodedPdu& pdu = fields_of(frame, decoded_);
   auto& buf = out_.buffer();
+  const AddressNumbering numbering = numbering_of(frame);
   // Where the model gives exceptions the vendor's meanings, the standard's name would mislead
   // (GD20's 04H is "Operation failed", not "Server Device Failure"): the model's text stands.
   const bool vendor_exceptions = frame.meaning && frame.meaning->model->vendor_exceptions;
@@ -123,7 +123,7 @@ void TextSink::on_frame(const Frame& frame) {
       continue;
     }
     out_.print(FMT_COMPILE(" {}="), f.name());
-    at = append_text_value(buf, pdu, at, line_items);
+    at = append_text_value(buf, pdu, at, line_items, numbering);
   }
   const char* check = frame.mode == Mode::rtu ? "crc" : "lrc";
   if (frame.check_ok) {
@@ -141,11 +141,17 @@ void TextSink::on_frame(const Frame& frame) {
   });
   if (frame.meaning) registers_line(*frame.meaning);
   out_.print(FMT_COMPILE("\n"));
-  if (verbose_) tree(frame, pdu);
+  if (options_.verbose) tree(frame, pdu, numbering);
   out_.end_record();
 }
 
-void TextSink::tree(const Frame& frame, const DecodedPdu& pdu) {
+// Only Modicon's numbers need the table, which takes a look at the function code's accesses.
+AddressNumbering TextSink::numbering_of(const Frame& frame) const {
+  if (options_.register_base != RegisterBase::modicon) return {options_.register_base};
+  return {options_.register_base, addressed_table(frame)};
+}
+
+void TextSink::tree(const Frame& frame, const DecodedPdu& pdu, AddressNumbering numbering) {
   auto& buf = out_.buffer();
   out_.print(FMT_COMPILE("    Frame {}: {} bytes, {}, channel {}, offset {}\n"), frame.index,
              frame.raw.size(), to_string(frame.mode),
@@ -157,7 +163,7 @@ void TextSink::tree(const Frame& frame, const DecodedPdu& pdu) {
              FunctionLabel{frame.function()});
   for (size_t at = 0; at < pdu.fields.size();) {
     out_.print(FMT_COMPILE("    {}: "), pdu.fields[at].name());
-    at = append_text_value(buf, pdu, at, SIZE_MAX);
+    at = append_text_value(buf, pdu, at, SIZE_MAX, numbering);
     out_.print(FMT_COMPILE("\n"));
   }
   if (pdu.truncated) out_.print(FMT_COMPILE("    [PDU shorter than its fields]\n"));
@@ -198,7 +204,8 @@ void TextSink::registers_tree(const Meaning& meaning) {
   if (!meaning.registers.empty())
     out_.print(FMT_COMPILE("    Registers ({}):\n"), meaning.model->name);
   for (const RegisterValue& reg : meaning.registers) {
-    out_.print(FMT_COMPILE("      {:04X}H {}"), reg.address,
+    out_.print(FMT_COMPILE("      {} {}"),
+               RegisterNumber{reg.table, reg.address, options_.register_base},
                reg.name.empty() ? "(unknown)" : reg.name);
     if (!reg.label.empty()) out_.print(FMT_COMPILE(" \"{}\""), reg.label);
     out_.print(FMT_COMPILE(" = 0x{:04X} -> "), reg.raw);

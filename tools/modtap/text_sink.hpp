@@ -8,6 +8,7 @@
 #include "decoder/pdu_fields.hpp"
 #include "decoder/record_sink.hpp"
 #include "decoder/register_meaning.hpp"
+#include "decoder/register_numbering.hpp"
 #include "tools/modtap/output.hpp"
 #include "tools/modtap/render.hpp"
 
@@ -18,10 +19,16 @@ namespace modtap::tools {
 enum class TimeFormat : uint8_t { relative, absolute, absolute_date, delta };
 TimeFormat time_format_named(std::string_view name);  // "r", "a", "ad", "d"
 
+struct TextOptions {
+  bool verbose = false;  // -V: each frame's field tree
+  TimeFormat time = TimeFormat::relative;
+  decoder::RegisterBase register_base = decoder::RegisterBase::hex;
+};
+
 class TextSink final : public decoder::RecordSink {
  public:
-  TextSink(Output& out, const std::vector<decoder::ChannelInfo>& channels, bool verbose,
-           TimeFormat time_format = TimeFormat::relative);
+  TextSink(Output& out, const std::vector<decoder::ChannelInfo>& channels,
+           TextOptions options = {});
 
   void on_frame(const decoder::Frame& frame) override;
   void on_noise(const decoder::Noise& noise) override;
@@ -31,14 +38,15 @@ class TextSink final : public decoder::RecordSink {
   void time_column(int64_t t_ns);
   void absolute_time(int64_t t_ns);
   void channel_column(uint16_t channel);
-  void tree(const decoder::Frame& frame, const decoder::DecodedPdu& pdu);
+  AddressNumbering numbering_of(const decoder::Frame& frame) const;
+  void tree(const decoder::Frame& frame, const decoder::DecodedPdu& pdu,
+            AddressNumbering numbering);
   void registers_line(const decoder::Meaning& meaning);
   void registers_tree(const decoder::Meaning& meaning);
 
   Output& out_;
   const std::vector<decoder::ChannelInfo>& channels_;
-  bool verbose_;
-  TimeFormat time_format_;
+  TextOptions options_;
   std::optional<int64_t> first_ns_;     // relative times count from here
   std::optional<int64_t> previous_ns_;  // delta times from here
   int64_t shown_second_ = -1;           // the second whose date and time `shown_` holds
