@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -28,6 +29,9 @@ class ChunkSource {
   // Characters whose parity bit was wrong so far, where the source sees parity bits at all
   // (a logic analyzer does; a serial port or a file of bytes does not).
   virtual uint64_t parity_errors() const { return 0; }
+  // How many bytes of its file the reader has taken so far, where that tells how far it is
+  // (a progress bar's numerator); nothing where the file is not read straight through.
+  virtual std::optional<uint64_t> file_position() const { return std::nullopt; }
 };
 
 }  // namespace modtap::captures

@@ -19,6 +19,7 @@ class HexlogReader final : public ChunkSource {
   decoder::ClockQuality clock() const override { return decoder::ClockQuality::per_chunk; }
   bool absolute_time() const override { return true; }
   const std::vector<decoder::ChannelInfo>& channels() const override { return channels_; }
+  std::optional<uint64_t> file_position() const override { return lines_.bytes_read(); }
 
   // Whether a line is a jpnevulator time stamp line (used to recognise the format).
   static bool is_header(const std::string& line);

@@ -20,6 +20,7 @@ bool LineReader::next(std::string& line) {
   bool any = false;
   while ((c = std::fgetc(file_.get())) != EOF) {
     any = true;
+    ++bytes_read_;
     if (c == '\n') break;
     if (line.size() >= max_line)
       throw CaptureError(

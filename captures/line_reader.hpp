@@ -14,6 +14,7 @@ class LineReader {
   // False at the end of the file. Throws CaptureError when a line is longer than max_line.
   bool next(std::string& line);
   uint64_t line_number() const { return line_number_; }
+  uint64_t bytes_read() const { return bytes_read_; }
   const std::string& path() const { return path_; }
 
   static constexpr size_t max_line = 1 << 16;
@@ -22,6 +23,7 @@ class LineReader {
   std::string path_;
   std::unique_ptr<FILE, int (*)(FILE*)> file_;
   uint64_t line_number_ = 0;
+  uint64_t bytes_read_ = 0;
 };
 
 }  // namespace modtap::captures

@@ -19,6 +19,7 @@ class PcapReader final : public ChunkSource {
   decoder::ClockQuality clock() const override { return decoder::ClockQuality::per_chunk; }
   bool absolute_time() const override { return true; }
   const std::vector<decoder::ChannelInfo>& channels() const override { return channels_; }
+  std::optional<uint64_t> file_position() const override { return offset_; }
 
  private:
   // Where the next record starts, counted rather than asked of the file: a pipe cannot say.

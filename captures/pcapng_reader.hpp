@@ -24,6 +24,7 @@ class PcapngReader final : public ChunkSource {
   decoder::ClockQuality clock() const override { return clock_; }
   bool absolute_time() const override { return true; }
   const std::vector<decoder::ChannelInfo>& channels() const override { return channels_; }
+  std::optional<uint64_t> file_position() const override { return position_; }
 
   // The largest block read; beyond it a length is taken to lie, not allocated.
   static constexpr uint32_t max_block = 16 << 20;

@@ -17,6 +17,7 @@ class RawReader final : public ChunkSource {
   decoder::ClockQuality clock() const override { return decoder::ClockQuality::none; }
   bool absolute_time() const override { return false; }
   const std::vector<decoder::ChannelInfo>& channels() const override { return channels_; }
+  std::optional<uint64_t> file_position() const override { return offset_; }
 
  private:
   std::string path_;

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tools/modtap/progress.hpp"
+
 namespace modtap::tools {
 namespace {
 
@@ -32,6 +34,21 @@ TEST(AppendNumber, PrintsAsFixedPointFormattingDoes) {
 TEST(FunctionLabel, NamesPublicCodesAndNumbersOthers) {
   EXPECT_EQ(fmt::format("{}", FunctionLabel{0x83}), "Read Holding Registers");
   EXPECT_EQ(fmt::format("{}", FunctionLabel{0x41}), "Function 0x41");
+}
+
+}  // namespace
+}  // namespace modtap::tools
+
+namespace modtap::tools {
+namespace {
+
+TEST(ProgressBar, SaysHowFarHowFastAndHowLongIsLeft) {
+  EXPECT_EQ(ProgressBar::line(0, 1'200'000'000, 0, 10), "[----------]   0% of 1.20 GB");
+  EXPECT_EQ(ProgressBar::line(300'000'000, 1'200'000'000, 10, 10),
+            "[##--------]  25% of 1.20 GB, 30.0 MB/s, 30 s left");
+  EXPECT_EQ(ProgressBar::line(600'000'000, 1'200'000'000, 600, 10),
+            "[#####-----]  50% of 1.20 GB, 1.0 MB/s, 10 min left");
+  EXPECT_EQ(ProgressBar::line(5000, 5000, 1, 10), "[##########] 100% of 5.0 kB, 5.0 kB/s");
 }
 
 }  // namespace

@@ -32,6 +32,7 @@
 #include "tools/modtap/json_sink.hpp"
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/output.hpp"
+#include "tools/modtap/progress.hpp"
 #include "tools/modtap/report.hpp"
 #include "tools/modtap/statistics_output.hpp"
 #include "tools/modtap/text_sink.hpp"
@@ -305,6 +306,23 @@ void summarise(const Options& o, tools::Output& out, const Sinks& sinks, bool co
   }
 }
 
+// Whether the terminal is free for a status or progress line: standard error is one, and
+// frame lines are not printed on that same terminal.
+bool terminal_free_for_status(const Options& o) {
+  const bool lines_on_stdout = o.output == "text" || o.output == "json" || o.output == "csv";
+  return isatty(STDERR_FILENO) && (!lines_on_stdout || !isatty(STDOUT_FILENO));
+}
+
+// A bar for a file read straight through, on a terminal that has room for it.
+std::unique_ptr<tools::ProgressBar> progress_bar(const Options& o,
+                                                 const captures::ChunkSource& source, bool piped) {
+  if (piped || !source.file_position() || !terminal_free_for_status(o)) return nullptr;
+  std::error_code error;
+  const auto size = std::filesystem::file_size(o.read_file, error);
+  if (error) return nullptr;
+  return std::make_unique<tools::ProgressBar>(stderr, size);
+}
+
 std::unique_ptr<captures::RawRecorder> raw_recorder(
     const Options& o, const std::vector<decoder::ChannelInfo>& channels,
     const decoder::SerialFormat& format) {
@@ -372,8 +390,10 @@ int read_file(const Options& o) {
   // A capture that breaks off (a truncated file) still gives everything read before the
   // break, in every output, and then the error.
   std::optional<captures::CaptureError> broken;
+  auto progress = progress_bar(o, *source, piped);
   try {
     while (!sinks.limit_reached() && source->next(chunk)) {
+      if (progress) progress->update(*source->file_position());
       if (source->clock() == decoder::ClockQuality::per_chunk) pace.add(chunk);
       if (raw) raw->write(chunk);
       bus.push(chunk);
@@ -381,6 +401,7 @@ int read_file(const Options& o) {
   } catch (const captures::CaptureError& e) {
     broken = e;
   }
+  progress.reset();  // wiped before anything else reaches the terminal
   bus.finish();
   summarise(o, out, sinks, !broken);
   out.flush();
@@ -426,7 +447,7 @@ int listen(const Options& o) {
   if (raw) options.on_read = [&](const decoder::Chunk& chunk) { raw->write(chunk); };
   options.reconnect = o.reconnect;
   // A status line on the terminal, unless frame lines are printed on that same terminal.
-  options.status_line = isatty(STDERR_FILENO) && (o.output != "text" || !isatty(STDOUT_FILENO));
+  options.status_line = terminal_free_for_status(o);
   const int status = live::run_live(ports, options, sinks.all(), stop);
   summarise(o, out, sinks, true);  // Ctrl-C is how a live run ends
   out.flush();
