@@ -1,9 +1,16 @@
 #include "decoder/bus_diagnostics.hpp"
 
+#include <algorithm>
+#include <cstdlib>
+#include <utility>
+
 namespace modtap::decoder {
 
 BusDiagnostics::BusDiagnostics(SerialFormat format, ClockQuality clock, RecordSink& next)
-    : t35_ns_(format.t35_ns()), sees_gaps_(clock == ClockQuality::per_byte), next_(next) {}
+    : t35_ns_(format.t35_ns()), sees_gaps_(clock == ClockQuality::per_byte), next_(next) {
+  if (clock == ClockQuality::per_byte) jitter_floor_ns_ = 0;
+  if (clock == ClockQuality::per_chunk) jitter_floor_ns_ = chunk_clock_jitter_ns;
+}
 
 void BusDiagnostics::on_frame(const Frame& frame) {
   const uint32_t found = diagnose(frame);
@@ -29,7 +36,7 @@ uint32_t BusDiagnostics::diagnose(const Frame& frame) {
   SlaveHistory& slave = slaves_[frame.slave()];
   if (frame.role == Role::request) {
     slave.timed_out_function.reset();  // the master asked again: a response now is for that
-    return found;
+    return found | polled(frame, slave);
   }
   if (frame.role == Role::response) found |= answered(frame, slave);
   return found;
@@ -57,6 +64,29 @@ uint32_t BusDiagnostics::answered(const Frame& frame, SlaveHistory& slave) {
   } else {
     slave.exceptions_in_a_row = 0;
   }
+  return found;
+}
+
+// A master polls each slave in a cycle; a request far off the slave's usual interval shows the
+// cycle stalled (a slow answer elsewhere, retries, a busy master) or hurried. A retry is the
+// master's time-out at work, already a finding: it neither counts nor resets the cycle.
+uint32_t BusDiagnostics::polled(const Frame& frame, SlaveHistory& slave) {
+  if (!jitter_floor_ns_ || frame.slave() == 0 || (frame.findings & finding_retry)) return 0;
+  const std::optional<int64_t> last = std::exchange(slave.last_poll_ns, frame.t_ns);
+  if (!last || frame.t_ns < *last) return 0;
+  const int64_t interval = frame.t_ns - *last;
+  uint32_t found = 0;
+  const size_t known = std::min(slave.intervals_seen, poll_history);
+  if (known >= poll_history_known) {
+    std::array<int64_t, poll_history> sorted = slave.intervals;
+    const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(known / 2);
+    std::nth_element(sorted.begin(), middle, sorted.begin() + static_cast<std::ptrdiff_t>(known));
+    const int64_t median = *middle;
+    if (std::abs(interval - median) * 2 >= median &&
+        std::abs(interval - median) > *jitter_floor_ns_)
+      found = finding_poll_jitter;
+  }
+  slave.intervals[slave.intervals_seen++ % poll_history] = interval;
   return found;
 }
 

@@ -29,6 +29,12 @@ class BusDiagnostics final : public RecordSink {
   static constexpr uint64_t outage_timeouts = 3;   // time-outs in a row that make an outage
   static constexpr uint64_t storm_exceptions = 5;  // the same exception in a row that is a storm
   static constexpr size_t kept_outages = 1000;     // a week of a flapping slave stays bounded
+  // A slave's usual poll interval is the median of its last `poll_history` intervals, known
+  // once `poll_history_known` are seen; a request off it by half or more is poll-jitter.
+  static constexpr size_t poll_history = 16, poll_history_known = 8;
+  // A clock per read may be late by an adapter's latency (FTDI: 16 ms): below this, a per-chunk
+  // clock cannot tell jitter from its own.
+  static constexpr int64_t chunk_clock_jitter_ns = 20'000'000;
 
   BusDiagnostics(SerialFormat format, ClockQuality clock, RecordSink& next);
 
@@ -50,13 +56,18 @@ class BusDiagnostics final : public RecordSink {
     uint8_t exception = 0;  // the exception of its answers in a row, and how many
     uint8_t exception_function = 0;
     uint64_t exceptions_in_a_row = 0;
+    std::optional<int64_t> last_poll_ns;  // the start of its last request (not a retry)
+    std::array<int64_t, poll_history> intervals{};
+    size_t intervals_seen = 0;
   };
 
   uint32_t diagnose(const Frame& frame);
   uint32_t answered(const Frame& frame, SlaveHistory& slave);
+  uint32_t polled(const Frame& frame, SlaveHistory& slave);
 
   int64_t t35_ns_;
   bool sees_gaps_;  // only a per-byte clock times the silence between frames truly
+  std::optional<int64_t> jitter_floor_ns_;  // none: the source has no clock to time polls by
   RecordSink& next_;
   std::array<SlaveHistory, 256> slaves_{};
   std::vector<std::optional<int64_t>> last_end_ns_;  // per channel

@@ -29,6 +29,9 @@ constexpr FindingInfo registry[] = {
      "the same exception from the same slave, five or more answers in a row"},
     {"answers-again", Severity::warning,
      "a slave's first answer after three or more time-outs in a row: it was gone, and is back"},
+    {"poll-jitter", Severity::note,
+     "a request to a slave far (by half or more) from its usual poll interval: the master's "
+     "cycle stalled or hurried"},
     // The device model's, in RuleKind order.
     {"reserved-write", Severity::warning, "a write to a register the manual says not to write"},
     {"read-only-write", Severity::warning, "a write to a register the device only reports"},

@@ -30,8 +30,9 @@ enum Finding : uint32_t {
   finding_late_response = 1u << 13,    // the response to a request that already timed out
   finding_exception_storm = 1u << 14,  // the same exception from a slave, again and again
   finding_answers_again = 1u << 15,    // a slave's first answer after time-outs in a row
+  finding_poll_jitter = 1u << 16,      // a request far from the slave's usual poll interval
 };
-inline constexpr size_t frame_finding_count = 16;
+inline constexpr size_t frame_finding_count = 17;
 
 // What a device model's rules say of a frame; entry frame_finding_count + kind of the registry.
 enum class RuleKind : uint8_t {

@@ -15,7 +15,8 @@ using testing::Collector;
 // Records handed straight to the stage, as the analyzer would hand them.
 class History {
  public:
-  History() : stage_(SerialFormat{}, ClockQuality::per_byte, out) {}
+  explicit History(ClockQuality clock = ClockQuality::per_byte)
+      : stage_(SerialFormat{}, clock, out) {}
 
   // A good frame from `hex` (slave, PDU; the CRC is added) at `t_ms`.
   uint32_t frame(Role role, const std::string& hex, int64_t t_ms, uint32_t findings = 0) {
@@ -110,12 +111,52 @@ TEST(BusDiagnostics, AnAnswerAfterItsRequestTimedOutIsLate) {
             0u);
 }
 
+TEST(BusDiagnostics, APollFarFromTheSlavesUsualIntervalIsPollJitter) {
+  for (ClockQuality clock : {ClockQuality::per_byte, ClockQuality::per_chunk}) {
+    History bus(clock);
+    int64_t t = 0;
+    // A cycle of 100 ms, give or take 10: the usual interval, learnt over eight polls.
+    for (int i = 0; i < 12; ++i, t += 100 + (i % 3 - 1) * 10)
+      EXPECT_EQ(bus.frame(Role::request, "05 03 00 00 00 04", t) & finding_poll_jitter, 0u) << i;
+    t += 60;  // the cycle stalled: 160 ms
+    EXPECT_EQ(bus.frame(Role::request, "05 03 00 00 00 04", t) & finding_poll_jitter,
+              finding_poll_jitter);
+    t += 40;  // and hurried to catch up
+    EXPECT_EQ(bus.frame(Role::request, "05 03 00 00 00 04", t) & finding_poll_jitter,
+              finding_poll_jitter);
+    t += 100;
+    EXPECT_EQ(bus.frame(Role::request, "05 03 00 00 00 04", t) & finding_poll_jitter, 0u);
+    // A retry is the master's time-out at work: neither jitter nor a new start of the cycle.
+    EXPECT_EQ(
+        bus.frame(Role::request, "05 03 00 00 00 04", t + 30, finding_retry) & finding_poll_jitter,
+        0u);
+    EXPECT_EQ(bus.frame(Role::request, "05 03 00 00 00 04", t + 100) & finding_poll_jitter, 0u);
+  }
+}
+
+TEST(BusDiagnostics, PollJitterNeedsAClockThatCanSeeIt) {
+  // A raw file's times are nominal: no jitter at all.
+  History untimed(ClockQuality::none);
+  for (int i = 0; i < 20; ++i)
+    EXPECT_EQ(untimed.frame(Role::request, "05 03 00 00 00 04", i * (i % 2 ? 10 : 300)) &
+                  finding_poll_jitter,
+              0u);
+  // A clock per read is late by up to an adapter's latency: 12 ms off a 20 ms cycle may be it.
+  History per_read(ClockQuality::per_chunk);
+  int64_t t = 0;
+  for (int i = 0; i < 12; ++i, t += 20) per_read.frame(Role::request, "05 03 00 00 00 04", t);
+  EXPECT_EQ(per_read.frame(Role::request, "05 03 00 00 00 04", t + 12) & finding_poll_jitter, 0u);
+}
+
 // The simulator's bus through the analyzer and the stage, timed per byte: frames sent back to
-// back crowd each other; a master that waits 5 ms between transactions does not.
-Collector simulated(bool back_to_back) {
+// back crowd each other; a master that waits 5 ms between transactions does not. With a scan
+// list of `polled_slaves`, the master polls them in turn.
+Collector simulated(bool back_to_back, unsigned polled_slaves = 0, bool faults = false) {
   busgen::BusOptions options;
   options.transactions = 2000;
   options.back_to_back = back_to_back;
+  options.polled_slaves = polled_slaves;
+  if (faults) options.noise_rate = options.truncation_rate = options.retry_rate = 0.02;
   const busgen::BusCapture capture = busgen::simulate(options);
   Collector out;
   BusDiagnostics stage(options.format, ClockQuality::per_byte, out);
@@ -142,6 +183,17 @@ TEST(BusDiagnostics, CleanTrafficShowsNoneAndCrowdedTrafficShowsShortGaps) {
     EXPECT_EQ(count(clean, finding), 0u) << finding;
   const Collector crowded = simulated(true);
   EXPECT_GT(count(crowded, finding_short_gap), 1000u);
+}
+
+TEST(BusDiagnostics, AScanListPollsWithoutJitterUntilFaultsStallIt) {
+  const Collector steady = simulated(false, 4);
+  EXPECT_EQ(count(steady, finding_poll_jitter), 0u);
+  for (uint32_t finding :
+       {finding_short_gap, finding_late_response, finding_exception_storm, finding_answers_again})
+    EXPECT_EQ(count(steady, finding), 0u) << finding;
+  // Junk, broken-off requests sent again and retries after the master's time-out stretch the
+  // cycle.
+  EXPECT_GT(count(simulated(false, 4, true), finding_poll_jitter), 5u);
 }
 
 }  // namespace

@@ -41,7 +41,7 @@ class Simulator {
       : o_(o), rng_(o.seed), char_ns_(o.format.char_time_ns()), t35_(o.format.t35_ns()) {}
 
   BusCapture run() {
-    for (size_t i = 0; i < o_.transactions; ++i) transaction(i);
+    for (size_t i = 0; i < o_.transactions; ++i) transaction();
     return std::move(capture_);
   }
 
@@ -83,20 +83,22 @@ class Simulator {
     return std::max(o_.poll_gap_ns, t35_) + pick(0, 2'000'000);
   }
 
-  uint8_t slave_for(size_t transaction) {
+  // The next slave of the scan list (a broadcast goes between two polls, taking no one's turn),
+  // or any slave.
+  uint8_t next_slave() {
     if (o_.polled_slaves == 0) return static_cast<uint8_t>(pick(1, 247));
-    return static_cast<uint8_t>(transaction % o_.polled_slaves + 1);
+    return static_cast<uint8_t>(polls_++ % o_.polled_slaves + 1);
   }
 
-  void transaction(size_t index) {
+  void transaction() {
     const bool broadcast = chance(o_.broadcast_rate);
-    const uint8_t slave = broadcast ? 0 : slave_for(index);
+    const uint8_t slave = broadcast ? 0 : next_slave();
     Bytes request{slave}, response{slave};
     uint32_t request_findings = 0;
     if (!broadcast && chance(o_.out_of_spec_rate)) {
       request_findings = out_of_spec(request, response);
-    } else if (o_.polled_slaves && !broadcast && !chance(0.2)) {
-      scan_read(slave, request, response);
+    } else if (o_.polled_slaves) {
+      scan_step(slave, request, response);
     } else {
       build(slave, request, response, broadcast);
     }
@@ -212,9 +214,16 @@ class Simulator {
     rsp.push_back(code);
   }
 
-  // A scan list's read: the first registers of the slave, values that drift as a drive's
-  // frequency and current do, so that a register followed over time draws a line.
-  void scan_read(uint8_t slave, Bytes& req, Bytes& rsp) {
+  // A scan list's step: a read of the slave's first registers, whose values drift as a drive's
+  // frequency and current do (so a register followed over time draws a line), or between polls
+  // a setpoint broadcast to all.
+  void scan_step(uint8_t slave, Bytes& req, Bytes& rsp) {
+    if (slave == 0) {
+      req.push_back(0x06);
+      u16(req, 0x0010);
+      u16(req, pick(0, 1000));
+      return;
+    }
     auto& values = drifting_[slave];
     req.push_back(0x03);
     u16(req, 0x0000);
@@ -398,6 +407,7 @@ class Simulator {
   int64_t char_ns_;
   int64_t t35_;
   BusCapture capture_;
+  uint64_t polls_ = 0;
   std::array<std::array<uint16_t, 4>, 248> drifting_ = initial_values();
 
   static std::array<std::array<uint16_t, 4>, 248> initial_values() {

@@ -36,7 +36,7 @@ struct BusOptions {
   int64_t poll_gap_ns = 5'000'000;  // master's idle time between transactions (at least)
   bool back_to_back = false;        // no idle time at all: the densest file for benchmarks
   // 0: each request goes to a slave picked at random from 1-247 (every address exercised);
-  // N: the master polls slaves 1 to N in turn, as a PLC's scan list does.
+  // N: the master polls slaves 1 to N in turn with the same read, as a PLC's scan list does.
   unsigned polled_slaves = 0;
 };
 
