@@ -8,18 +8,30 @@ import os
 import pty
 import subprocess
 import sys
+import threading
+import time
 
 MODTAP, BUSGEN, WORK = sys.argv[1:4]
 failures = []
 
 
+def drain_late(stream, delay):
+    """Reads a pipe only after `delay` seconds: modtap stalls on it, so the run lasts long
+    enough for the bar to be redrawn whatever the build's speed."""
+    time.sleep(delay)
+    while stream.read(65536):
+        pass
+
+
 def run_on_terminal(args, stdout_on_terminal=False):
     """Runs modtap with standard error (and optionally standard output) on a pty; returns what
-    the terminal showed."""
+    the terminal showed. Standard output not on the pty goes to a pipe read 1.5 s late."""
     master, slave = pty.openpty()
     process = subprocess.Popen([MODTAP, *args], stderr=slave,
-                               stdout=slave if stdout_on_terminal else subprocess.DEVNULL)
+                               stdout=slave if stdout_on_terminal else subprocess.PIPE)
     os.close(slave)
+    if not stdout_on_terminal:
+        threading.Thread(target=drain_late, args=(process.stdout, 1.5), daemon=True).start()
     shown = b""
     while True:
         try:
@@ -43,7 +55,7 @@ def main():
                    capture_output=True)
     size = os.path.getsize(capture)
 
-    # -V to standard output elsewhere: a long review, the bar on the terminal.
+    # Frame lines to standard output elsewhere (a pipe read late): the bar on the terminal.
     shown = run_on_terminal(["-r", capture, "--format", "raw", "-T", "text", "-V"])
     draws = [d for d in shown.split("\r\x1b[K") if d]
     if not draws or not draws[0].startswith("[" + "-" * 24 + "]   0% of"):
