@@ -28,6 +28,10 @@ struct ExchangeCounts {
   uint64_t exceptions = 0;
   uint64_t bad_checks = 0;
   uint64_t retries = 0;
+
+  double timeout_rate() const {
+    return requests ? static_cast<double>(timeouts) / static_cast<double>(requests) : 0.0;
+  }
 };
 
 struct SlaveStatistics {
@@ -101,6 +105,12 @@ class BusStatistics final : public RecordSink {
   size_t stray_addresses() const;
 
   double duration_s() const;
+  // Whether the times are dates (since the Unix epoch), as a pcap's are, rather than counted from
+  // the capture's start, as a raw file's nominal times and a logic analyzer's are.
+  bool dated() const {
+    constexpr int64_t year_2000_ns = 946'684'800'000'000'000;
+    return first_t_ns && *first_t_ns >= year_2000_ns;
+  }
   // The share of the capture's time the wire carried characters, from the character format.
   // Unknown (nullopt) when the source has no clock: its times are nominal.
   std::optional<double> bus_load() const;

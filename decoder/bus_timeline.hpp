@@ -59,6 +59,9 @@ class BusTimeline final : public RecordSink {
   // The start of bin 0 (the first record's time), or nothing before the first record.
   std::optional<int64_t> origin_ns() const { return origin_; }
   int64_t bin_ns() const { return bin_ns_; }
+  double bin_s() const { return static_cast<double>(bin_ns_) / 1e9; }
+  // The time the bins cover, from the origin to the end of the last.
+  double span_s() const { return static_cast<double>(traffic_.size()) * bin_s(); }
   const std::vector<TrafficBin>& traffic() const { return traffic_; }
   const std::map<RegisterKey, FollowedSeries>& followed() const { return followed_; }
   uint64_t followed_not_kept() const { return followed_not_kept_; }

@@ -2,7 +2,6 @@
 
 #include <stdexcept>
 
-#include "decoder/number_text.hpp"
 #include "tools/modtap/render.hpp"
 
 namespace modtap::tools {

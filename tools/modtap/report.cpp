@@ -46,10 +46,6 @@ svg.chart { max-width: 100%; height: auto; font-size: 11px; }
 footer { color: #5a6673; font-size: 12px; margin-top: 32px; }
 )";
 
-double share(uint64_t part, uint64_t whole) {
-  return whole ? static_cast<double>(part) / static_cast<double>(whole) : 0.0;
-}
-
 std::string milliseconds(uint64_t ns, int decimals = 1) {
   return fmt::format("{}", Fixed{static_cast<int64_t>(ns), 6, decimals});
 }
@@ -74,24 +70,28 @@ TimeUnit time_unit(double span_s) {
   return {86400, "days"};
 }
 
-// A number the statistics hold, shown with the key --stats gives it; `scale` turns what is shown
-// into the statistic's unit (a millisecond shown is 1000 of latency_us).
+// A number the statistics hold, as an element that names the key --stats gives it; `scale`
+// turns what is shown into the statistic's unit (a millisecond shown is 1000 of latency_us).
+void stat_element(fmt::memory_buffer& out, std::string_view tag, std::string_view css_class,
+                  std::string_view key, std::string_view shown, double scale) {
+  auto put = fmt::appender(out);
+  fmt::format_to(put, "<{}", tag);
+  if (!css_class.empty()) fmt::format_to(put, " class=\"{}\"", css_class);
+  fmt::format_to(put, " data-stat=\"{}\"", key);
+  if (scale != 1) fmt::format_to(put, " data-scale=\"{:g}\"", scale);
+  fmt::format_to(put, ">{}</{}>", shown, tag);
+}
+
 void stat_cell(fmt::memory_buffer& out, std::string_view key, std::string_view shown,
                double scale = 1, std::string_view css_class = {}) {
-  auto put = fmt::appender(out);
-  fmt::format_to(put, "<td data-stat=\"{}\"", key);
-  if (!css_class.empty()) fmt::format_to(put, " class=\"{}\"", css_class);
-  if (scale != 1) fmt::format_to(put, " data-scale=\"{:g}\"", scale);
-  fmt::format_to(put, ">{}</td>", shown);
+  stat_element(out, "td", css_class, key, shown, scale);
 }
 
 void card(fmt::memory_buffer& out, std::string_view key, std::string_view name,
           std::string_view shown, bool trouble, double scale = 1) {
-  auto put = fmt::appender(out);
-  fmt::format_to(put, "<div class=\"card{}\"><div class=\"value\" data-stat=\"{}\"",
-                 trouble ? " trouble" : "", key);
-  if (scale != 1) fmt::format_to(put, " data-scale=\"{:g}\"", scale);
-  fmt::format_to(put, ">{}</div><div class=\"name\">{}</div></div>\n", shown, name);
+  fmt::format_to(fmt::appender(out), "<div class=\"card{}\">", trouble ? " trouble" : "");
+  stat_element(out, "div", "value", key, shown, scale);
+  fmt::format_to(fmt::appender(out), "<div class=\"name\">{}</div></div>\n", name);
 }
 
 void append_head(fmt::memory_buffer& out, const BusStatistics& s, const ReportInfo& info) {
@@ -106,8 +106,7 @@ void append_head(fmt::memory_buffer& out, const BusStatistics& s, const ReportIn
                  style);
   append_html(out, info.capture);
   fmt::format_to(put, " · {} · clock {}", describe(s.format()), to_string(s.clock()));
-  constexpr int64_t year_2000_ns = 946'684'800'000'000'000;
-  if (s.first_t_ns && *s.first_t_ns >= year_2000_ns) {
+  if (s.dated()) {
     const auto first = static_cast<std::time_t>(*s.first_t_ns / 1'000'000'000);
     const auto last = static_cast<std::time_t>(*s.last_t_ns / 1'000'000'000);
     fmt::format_to(put, " · {:%Y-%m-%d %H:%M:%S} to {:%Y-%m-%d %H:%M:%S} UTC", fmt::gmtime(first),
@@ -201,8 +200,7 @@ void append_slave_row(fmt::memory_buffer& out, uint8_t address, const SlaveStati
   stat_cell(out, key + "requests", fmt::format("{}", c.requests));
   stat_cell(out, key + "responses", fmt::format("{}", c.responses));
   stat_cell(out, key + "timeouts", fmt::format("{}", c.timeouts));
-  stat_cell(out, key + "timeout_rate", fmt::format("{:.1f}%", 100 * share(c.timeouts, c.requests)),
-            0.01);
+  stat_cell(out, key + "timeout_rate", fmt::format("{:.1f}%", 100 * c.timeout_rate()), 0.01);
   stat_cell(out, key + "exceptions", exceptions_text(slave), 1, "text");
   stat_cell(out, key + "bad_checks", fmt::format("{}", c.bad_checks));
   stat_cell(out, key + "retries", fmt::format("{}", c.retries));
@@ -227,7 +225,7 @@ void append_slave_row(fmt::memory_buffer& out, uint8_t address, const SlaveStati
 void append_slaves(fmt::memory_buffer& out, const BusStatistics& s) {
   out.append(std::string_view("<h2>Slaves</h2>\n"));
   const auto& all = s.addresses();
-  if (std::none_of(all.begin(), all.end(), [](const auto& a) { return a.second->good; })) {
+  if (all.size() == s.stray_addresses()) {  // no address is a slave
     out.append(std::string_view("<p>No slave: no frame with a good check named one.</p>\n"));
     return;
   }
@@ -323,9 +321,7 @@ void append_latency(fmt::memory_buffer& out, const BusStatistics& s) {
 // A frame of the capture's time for a chart, ticks in `unit`.
 PlotFrame time_frame(const BusTimeline& timeline, TimeUnit unit) {
   PlotFrame frame;
-  const double span = static_cast<double>(timeline.traffic().size()) *
-                      static_cast<double>(timeline.bin_ns()) / 1e9 / unit.seconds;
-  frame.x_max = std::max(span, 1e-9);
+  frame.x_max = std::max(timeline.span_s() / unit.seconds, 1e-9);
   frame.x_ticks = round_ticks(0, frame.x_max, 8);
   std::erase_if(frame.x_ticks, [&](double x) { return x > frame.x_max * (1 + 1e-9); });
   frame.x_label = fmt::format("time since the first record ({})", unit.name);
@@ -334,7 +330,7 @@ PlotFrame time_frame(const BusTimeline& timeline, TimeUnit unit) {
 
 void append_traffic_chart(fmt::memory_buffer& out, const BusTimeline& timeline, TimeUnit unit) {
   const auto& bins = timeline.traffic();
-  const double bin_s = static_cast<double>(timeline.bin_ns()) / 1e9;
+  const double bin_s = timeline.bin_s();
   const double width = bin_s / unit.seconds;
   double highest = 1;
   for (const TrafficBin& bin : bins)
@@ -352,7 +348,7 @@ void append_traffic_chart(fmt::memory_buffer& out, const BusTimeline& timeline, 
 
 void append_trouble_chart(fmt::memory_buffer& out, const BusTimeline& timeline, TimeUnit unit) {
   const auto& bins = timeline.traffic();
-  const double width = static_cast<double>(timeline.bin_ns()) / 1e9 / unit.seconds;
+  const double width = timeline.bin_s() / unit.seconds;
   uint64_t highest = 1;
   for (const TrafficBin& bin : bins) highest = std::max(highest, bin.trouble());
   PlotFrame frame = time_frame(timeline, unit);
@@ -376,8 +372,7 @@ void append_trouble_chart(fmt::memory_buffer& out, const BusTimeline& timeline, 
 
 void append_timeline(fmt::memory_buffer& out, const BusTimeline& timeline, ClockQuality clock) {
   if (timeline.traffic().empty()) return;
-  const TimeUnit unit = time_unit(static_cast<double>(timeline.traffic().size()) *
-                                  static_cast<double>(timeline.bin_ns()) / 1e9);
+  const TimeUnit unit = time_unit(timeline.span_s());
   out.append(std::string_view("<h2>Over time</h2>\n"));
   if (clock == ClockQuality::none)
     out.append(std::string_view(
@@ -423,7 +418,7 @@ void append_outages(fmt::memory_buffer& out, const BusStatistics& s, const BusDi
 void append_followed_chart(fmt::memory_buffer& out, const BusTimeline& timeline, TimeUnit unit,
                            const RegisterKey& key, const FollowedSeries& series,
                            RegisterBase base) {
-  const double width = static_cast<double>(timeline.bin_ns()) / 1e9 / unit.seconds;
+  const double width = timeline.bin_s() / unit.seconds;
   std::vector<std::pair<double, double>> low, high, last;
   double lowest = INFINITY, highest = -INFINITY;
   for (size_t i = 0; i < series.bins.size(); ++i) {
@@ -462,8 +457,7 @@ void append_followed_chart(fmt::memory_buffer& out, const BusTimeline& timeline,
 
 void append_followed(fmt::memory_buffer& out, const BusTimeline& timeline, RegisterBase base) {
   if (timeline.followed().empty()) return;
-  const TimeUnit unit = time_unit(static_cast<double>(timeline.traffic().size()) *
-                                  static_cast<double>(timeline.bin_ns()) / 1e9);
+  const TimeUnit unit = time_unit(timeline.span_s());
   out.append(std::string_view(
       "<h2>Followed registers</h2>\n<p class=\"meta\">The line is the last value in each stretch "
       "of time; the band spans its lowest and highest.</p>\n"));

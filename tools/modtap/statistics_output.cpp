@@ -33,8 +33,7 @@ Fixed microseconds(uint64_t ns) {
 void print_span(Output& out, const BusStatistics& s) {
   if (!s.first_t_ns) return;
   out.print("{:<16}{:.3f} s", "capture", s.duration_s());
-  constexpr int64_t year_2000_ns = 946'684'800'000'000'000;
-  if (*s.first_t_ns >= year_2000_ns) {
+  if (s.dated()) {
     const std::time_t first = static_cast<std::time_t>(*s.first_t_ns / 1'000'000'000);
     out.print(" from {:%Y-%m-%d %H:%M:%S} UTC", fmt::gmtime(first));
   }
@@ -61,7 +60,7 @@ void print_ms(Output& out, uint64_t ns, int decimals, int width) {
 // One row per slave, in columns a 120-character terminal holds.
 void print_slaves(Output& out, const BusStatistics& s) {
   const auto& all = s.addresses();
-  if (std::none_of(all.begin(), all.end(), [](const auto& a) { return a.second->good; })) return;
+  if (all.size() == s.stray_addresses()) return;  // no address is a slave
   out.print(
       "\n                                                              "
       "       latency ms                 poll ms\n"
@@ -71,8 +70,8 @@ void print_slaves(Output& out, const BusStatistics& s) {
     if (!slave->good) continue;
     const ExchangeCounts& c = slave->counts;
     out.print("{:5}  {:8}  {:9}  {:8}  {:4.1f}%  {:7}  {:3}  {:7}  ", address, c.requests,
-              c.responses, c.timeouts, 100 * share(c.timeouts, c.requests), c.exceptions,
-              c.bad_checks, c.retries);
+              c.responses, c.timeouts, 100 * c.timeout_rate(), c.exceptions, c.bad_checks,
+              c.retries);
     const Histogram& latency = slave->latency_ns;
     if (latency.count()) {
       for (double p : {50.0, 95.0, 99.0}) print_ms(out, latency.percentile(p), 1, 8);
@@ -211,7 +210,7 @@ void append_slave(fmt::memory_buffer& out, uint8_t address, const SlaveStatistic
   fmt::format_to(put, "{{\"slave\":{},", address);
   append_counts(out, slave.counts);
   fmt::format_to(put, ",\"timeout_rate\":{},\"exceptions_by_code\":{{",
-                 share(slave.counts.timeouts, slave.counts.requests));
+                 slave.counts.timeout_rate());
   bool first = true;
   for (const auto& [code, count] : slave.exceptions_by_code) {
     fmt::format_to(put, "{}\"{}\":{}", first ? "" : ",", code, count);
