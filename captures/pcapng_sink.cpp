@@ -47,6 +47,13 @@ PacketDirection direction_of(Role role, ChannelRole channel) {
   return PacketDirection::unknown;
 }
 
+// " finding=NAME" for each finding in `bits`, as modtap.lua reads them.
+void append_findings(fmt::memory_buffer& out, uint32_t bits) {
+  for_each_frame_finding(bits, [&](size_t slot) {
+    fmt::format_to(fmt::appender(out), FMT_COMPILE(" finding={}"), frame_findings()[slot].name);
+  });
+}
+
 // The device model's reading, one line each after the verdicts, for modtap.lua and for people:
 // "register 2502H frequency_command = 60.00 Hz" and "note read_only_write: ... is read-only".
 void append_meaning(fmt::memory_buffer& out, const Meaning& meaning) {
@@ -84,9 +91,7 @@ void append_frame_comment(fmt::memory_buffer& out, const Frame& f) {
   if (f.latency_ns)  // microseconds with three decimals: the nanoseconds, exactly
     fmt::format_to(it, FMT_COMPILE(" latency_us={}.{:03}"), *f.latency_ns / 1000,
                    *f.latency_ns % 1000);
-  for_each_frame_finding(f.findings, [&](size_t slot) {
-    fmt::format_to(it, FMT_COMPILE(" finding={}"), frame_findings()[slot].name);
-  });
+  append_findings(out, f.findings);
   if (f.meaning) append_meaning(out, *f.meaning);
 }
 
@@ -97,8 +102,12 @@ std::string frame_comment(const Frame& f) {
 }
 
 std::string noise_comment(const Noise& n) {
-  return fmt::format("modtap index={} mode={} noise={} duration_ns={}", n.index, to_string(n.mode),
-                     to_string(n.reason), n.end_ns - n.t_ns);
+  fmt::memory_buffer out;
+  fmt::format_to(fmt::appender(out), FMT_COMPILE("modtap index={} mode={} noise={} duration_ns={}"),
+                 n.index, to_string(n.mode), to_string(n.reason), n.end_ns - n.t_ns);
+  if (n.request) fmt::format_to(fmt::appender(out), FMT_COMPILE(" request={}"), *n.request);
+  append_findings(out, n.findings);
+  return fmt::to_string(out);
 }
 
 std::string interface_comment(ChannelRole role, ClockQuality clock) {

@@ -181,6 +181,7 @@ void Analyzer::on_frame(Frame& frame) {
 
 void Analyzer::on_noise(Noise& noise) {
   noise.index = next_index_++;
+  matcher_.on_noise(noise, channels_[noise.channel].info.role);
   out_.on_noise(noise);
 }
 

@@ -123,6 +123,7 @@ void BusStatistics::on_noise(const Noise& noise) {
   ++noise_records;
   noise_bytes += noise.raw.size();
   ++noise_by_reason[static_cast<size_t>(noise.reason)];
+  for_each_frame_finding(noise.findings, [&](size_t slot) { count_finding(slot, noise.index); });
   see_time(noise.t_ns, noise.end_ns);
 }
 

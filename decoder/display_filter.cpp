@@ -456,12 +456,17 @@ bool register_values(const Name& name, const Meaning* meaning, Visit&& visit) {
 }
 
 template <typename Visit>
-bool finding_values(const Frame& frame, Visit&& visit) {
+bool finding_names(uint32_t bits, Visit&& visit) {
   const auto names = frame_findings();
   bool stop = false;
-  for_each_frame_finding(frame.findings,
-                         [&](size_t slot) { stop = stop || visit(text(names[slot].name)); });
-  if (stop || !frame.meaning) return stop;
+  for_each_frame_finding(bits, [&](size_t slot) { stop = stop || visit(text(names[slot].name)); });
+  return stop;
+}
+
+template <typename Visit>
+bool finding_values(const Frame& frame, Visit&& visit) {
+  if (finding_names(frame.findings, visit)) return true;
+  if (!frame.meaning) return false;
   for (const RuleFinding& finding : frame.meaning->findings)
     if (visit(text(to_string(finding.kind)))) return true;
   return false;
@@ -555,6 +560,10 @@ bool noise_field(FieldId id, const Noise& noise, std::string& scratch, Visit&& v
       return visit(text(hex(noise.raw, scratch)));
     case FieldId::reason:
       return visit(text(to_string(noise.reason)));
+    case FieldId::request:
+      return noise.request && visit(number(static_cast<double>(*noise.request)));
+    case FieldId::findings:
+      return finding_names(noise.findings, visit);
     default:
       return false;
   }
@@ -618,6 +627,9 @@ struct NoiseRecord {
   const std::vector<std::string>& channels;
   template <typename Visit>
   bool any(const Name& name, std::string& scratch, Visit&& visit) const {
+    if (name.kind == NameKind::finding)
+      return name.finding < frame_finding_count && ((noise.findings >> name.finding) & 1) &&
+             visit(number(1));
     if (name.kind != NameKind::field) return false;
     if (channel_value(name, noise.channel, channels, visit)) return true;
     for (FieldId id : name.ids)

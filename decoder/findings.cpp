@@ -32,6 +32,13 @@ constexpr FindingInfo registry[] = {
     {"poll-jitter", Severity::note,
      "a request to a slave far (by half or more) from its usual poll interval: the master's "
      "cycle stalled or hurried"},
+    {"gap-in-frame", Severity::warning,
+     "a silence longer than 1.5 characters between two bytes of one frame, which the standard "
+     "forbids: a strict slave drops the frame"},
+    {"garbage-after-request", Severity::warning,
+     "bytes that are no answer where a request's answer was awaited (noise, or a frame with a "
+     "bad check from another slave or function): two devices talking at once, a slave at "
+     "another baud rate or parity, or an answer garbled on the way"},
     // The device model's, in RuleKind order.
     {"reserved-write", Severity::warning, "a write to a register the manual says not to write"},
     {"read-only-write", Severity::warning, "a write to a register the device only reports"},

@@ -9,8 +9,8 @@
 
 namespace modtap::decoder {
 
-// A frame's findings, a bit set so records stay plain values. Bit i is entry i of
-// finding_registry(), which is also the order they are shown in.
+// A record's findings (a frame's, or noise's), a bit set so records stay plain values. Bit i is
+// entry i of finding_registry(), which is also the order they are shown in.
 enum Finding : uint32_t {
   finding_none = 0,
   finding_bad_check = 1u << 0,             // CRC or LRC wrong
@@ -31,8 +31,11 @@ enum Finding : uint32_t {
   finding_exception_storm = 1u << 14,  // the same exception from a slave, again and again
   finding_answers_again = 1u << 15,    // a slave's first answer after time-outs in a row
   finding_poll_jitter = 1u << 16,      // a request far from the slave's usual poll interval
+  // What the framer's clock and the matcher see:
+  finding_gap_in_frame = 1u << 17,           // a silence over t1.5 between two bytes of one frame
+  finding_garbage_after_request = 1u << 18,  // no answer, where a request awaits its answer
 };
-inline constexpr size_t frame_finding_count = 17;
+inline constexpr size_t frame_finding_count = 19;
 
 // What a device model's rules say of a frame; entry frame_finding_count + kind of the registry.
 enum class RuleKind : uint8_t {

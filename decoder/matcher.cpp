@@ -23,6 +23,8 @@ void Matcher::set_pending(Pending* pending) {
 
 void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
   advance(frame.t_ns);
+  if (!frame.check_ok && awaits_answer(channel_role) && !pending_matches(frame))
+    frame.findings |= finding_garbage_after_request;
   const Copy copy = judge_copy(frame);
   frame.role = decide_role(frame, channel_role, copy);
   if (frame.role == Role::request) {
@@ -30,6 +32,20 @@ void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
   } else if (frame.role == Role::response) {
     on_response(frame, copy);
   }
+}
+
+// A glitch is a driver turning on, so it says nothing of the answer.
+void Matcher::on_noise(Noise& noise, ChannelRole channel_role) {
+  advance(noise.t_ns);
+  if (!awaits_answer(channel_role) || noise.reason == NoiseReason::glitch) return;
+  noise.findings |= finding_garbage_after_request;
+  noise.request = pending_->index;
+}
+
+// Whether what comes on this channel now is where the pending request's answer belongs: on a
+// split tap, the master's own channel carries none.
+bool Matcher::awaits_answer(ChannelRole channel_role) const {
+  return pending_ && channel_role != ChannelRole::master;
 }
 
 Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role, Copy copy) const {

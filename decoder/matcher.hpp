@@ -1,5 +1,6 @@
 // Pairs requests with responses on one bus: decides each frame's role, measures turnaround,
-// and reports time-outs, broadcasts, unsolicited responses and responses that do not fit.
+// and reports time-outs, broadcasts, unsolicited responses, responses that do not fit, and
+// noise where an answer was awaited.
 #pragma once
 
 #include <algorithm>
@@ -30,6 +31,8 @@ class Matcher {
   // Decides the role and fills request, latency and findings. `channel_role` is what the
   // frame's port says of its direction.
   void on_frame(Frame& frame, ChannelRole channel_role);
+  // Noise where a slave's answer was awaited is marked so, with the request it came after.
+  void on_noise(Noise& noise, ChannelRole channel_role);
   // Any record or the clock moving on: a pending request older than the time-out expires.
   void advance(int64_t now_ns);
   void finish(int64_t end_ns);
@@ -64,6 +67,7 @@ class Matcher {
   void on_response(Frame& frame, Copy copy);
   void expire(int64_t now_ns, TimeoutReason reason);
   bool pending_matches(const Frame& frame) const;
+  bool awaits_answer(ChannelRole channel_role) const;
 
   MatcherOptions options_;
   TimeoutHandler on_timeout_;

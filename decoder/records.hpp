@@ -104,6 +104,8 @@ struct Noise {
   uint64_t offset = 0;
   std::span<const uint8_t> raw;
   NoiseReason reason = NoiseReason::junk;
+  uint32_t findings = finding_none;
+  std::optional<uint64_t> request;  // the request whose answer was awaited when it came
 };
 
 // Why a request's wait ended without a response. end_of_capture is no time-out: the input

@@ -42,6 +42,7 @@ RtuFramer::RtuFramer(uint16_t channel, const RtuFramerOptions& options, FrameSin
       sink_(sink),
       expected_(sink.expectation()),
       char_ns_(options.format.char_time_ns()),
+      t15_ns_(options.format.t15_ns()),
       gap_threshold_ns_(options.format.t35_ns() +
                         (options.clock == ClockQuality::per_chunk ? options.chunk_jitter_ns : 0)) {
   buf_.reserve(compact_after + 4096);
@@ -329,7 +330,8 @@ bool RtuFramer::fits_role(Role role, uint64_t at, uint16_t length) const {
 bool RtuFramer::confirmed_end(uint64_t begin, uint64_t end, bool final, int search,
                               bool allow_glitch) const {
   if (end == end_) return final;
-  if (gap_at(end) || match_at(end, final, search).kind == Match::Kind::found) return true;
+  if (gap_at(end) || paused_before(end) || match_at(end, final, search).kind == Match::Kind::found)
+    return true;
   if (copy_follows(begin, end)) return true;
   // A turnaround glitch between this frame and the next still confirms this end; without
   // this, the glitch's 0x00 would be taken into the frame (it keeps the CRC residue zero).
@@ -389,7 +391,31 @@ Frame RtuFramer::frame_of(uint64_t begin, uint64_t end, RoleFit fit) const {
   frame.raw = frame.adu = {at_ptr(begin), static_cast<size_t>(end - begin)};
   frame.t_ns = end_time(begin) - char_ns_;
   frame.end_ns = end_time(end - 1);
+  if (paused_inside(begin, end)) frame.findings = finding_gap_in_frame;
   return frame;
+}
+
+// Whether a clock per byte saw a silence over t1.5 before the byte at `offset`: no frame goes on
+// across one, so a CRC that holds right before it ends a frame (a request with junk after it).
+bool RtuFramer::paused_before(uint64_t offset) const {
+  return options_.clock == ClockQuality::per_byte && offset > head_ &&
+         end_time(offset) - char_ns_ - end_time(offset - 1) > t15_ns_;
+}
+
+// Whether the clock saw a silence over t1.5 between two of the bytes [begin, end), where the
+// standard allows none. Only a clock per byte can time a pause of a character or two.
+bool RtuFramer::paused_inside(uint64_t begin, uint64_t end) const {
+  if (options_.clock != ClockQuality::per_byte) return false;
+  auto it = std::upper_bound(marks_.begin(), marks_.end(), begin,
+                             [](uint64_t o, const TimeMark& m) { return o < m.end; });
+  for (; it != marks_.end(); ++it) {
+    const auto next = std::next(it);
+    if (next == marks_.end() || next->first >= end) return false;
+    const int64_t next_start =
+        next->end_ns - static_cast<int64_t>(next->end - next->first) * char_ns_;
+    if (next_start - it->end_ns > t15_ns_) return true;
+  }
+  return false;
 }
 
 void RtuFramer::emit_frame(uint64_t at, const Match& match) {
@@ -432,7 +458,7 @@ void RtuFramer::emit_damaged(uint64_t begin, uint64_t end, Damage damage) {
   if (damage != Damage::cut)
     frame.expected_check = crc16(frame.adu.first(frame.adu.size() - crc_size));
   frame.check_ok = false;
-  frame.findings = finding_bad_check;
+  frame.findings |= finding_bad_check;
   sink_.on_frame(frame);
   consume(end);
 }
@@ -467,7 +493,7 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
       Frame frame = frame_of(begin, end, fit);
       frame.expected_check = crc16({p, static_cast<size_t>(size - crc_size)});
       frame.check_ok = frame.expected_check == wire_crc(frame.adu);
-      frame.findings = frame.check_ok ? finding_none : finding_bad_check;
+      if (!frame.check_ok) frame.findings |= finding_bad_check;
       if (!frame.check_ok) frame.damage = Damage::corrupted;
       sink_.on_frame(frame);
       consume(end);

@@ -90,6 +90,8 @@ class RtuFramer {
   // First position >= from that starts a good frame; `decided` false if one is still open.
   uint64_t next_start(uint64_t from, bool final, bool& decided);
   Frame frame_of(uint64_t begin, uint64_t end, RoleFit fit) const;
+  bool paused_inside(uint64_t begin, uint64_t end) const;
+  bool paused_before(uint64_t offset) const;
   void emit_frame(uint64_t at, const Match& match);
   void emit_unframed(uint64_t begin, uint64_t end);
   void emit_piece(uint64_t begin, uint64_t end);
@@ -108,6 +110,7 @@ class RtuFramer {
   FrameSink& sink_;
   const Expectation& expected_;
   int64_t char_ns_;
+  int64_t t15_ns_;
   int64_t gap_threshold_ns_;
 
   std::vector<uint8_t> buf_;    // bytes from stream offset base_ on

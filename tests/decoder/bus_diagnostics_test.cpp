@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+#include <set>
+
 #include "decoder/analyzer.hpp"
 #include "decoder/checksum.hpp"
 #include "tests/support/collector.hpp"
@@ -148,15 +151,8 @@ TEST(BusDiagnostics, PollJitterNeedsAClockThatCanSeeIt) {
   EXPECT_EQ(per_read.frame(Role::request, "05 03 00 00 00 04", t + 12) & finding_poll_jitter, 0u);
 }
 
-// The simulator's bus through the analyzer and the stage, timed per byte: frames sent back to
-// back crowd each other; a master that waits 5 ms between transactions does not. With a scan
-// list of `polled_slaves`, the master polls them in turn.
-Collector simulated(bool back_to_back, unsigned polled_slaves = 0, bool faults = false) {
-  busgen::BusOptions options;
-  options.transactions = 2000;
-  options.back_to_back = back_to_back;
-  options.polled_slaves = polled_slaves;
-  if (faults) options.noise_rate = options.truncation_rate = options.retry_rate = 0.02;
+// The simulator's bus through the analyzer and the stage, timed per byte.
+Collector simulated(const busgen::BusOptions& options) {
   const busgen::BusCapture capture = busgen::simulate(options);
   Collector out;
   BusDiagnostics stage(options.format, ClockQuality::per_byte, out);
@@ -170,6 +166,17 @@ Collector simulated(bool back_to_back, unsigned polled_slaves = 0, bool faults =
   return out;
 }
 
+// Frames sent back to back crowd each other; a master that waits 5 ms between transactions
+// does not. With a scan list of `polled_slaves`, the master polls them in turn.
+Collector simulated(bool back_to_back, unsigned polled_slaves = 0, bool faults = false) {
+  busgen::BusOptions options;
+  options.transactions = 2000;
+  options.back_to_back = back_to_back;
+  options.polled_slaves = polled_slaves;
+  if (faults) options.noise_rate = options.truncation_rate = options.retry_rate = 0.02;
+  return simulated(options);
+}
+
 size_t count(const Collector& out, uint32_t finding) {
   size_t n = 0;
   for (const auto& r : out.records) n += (r.findings & finding) != 0;
@@ -181,6 +188,7 @@ TEST(BusDiagnostics, CleanTrafficShowsNoneAndCrowdedTrafficShowsShortGaps) {
   for (uint32_t finding :
        {finding_short_gap, finding_late_response, finding_exception_storm, finding_answers_again})
     EXPECT_EQ(count(clean, finding), 0u) << finding;
+  EXPECT_EQ(count(clean, finding_gap_in_frame | finding_garbage_after_request), 0u);
   const Collector crowded = simulated(true);
   EXPECT_GT(count(crowded, finding_short_gap), 1000u);
 }
@@ -194,6 +202,58 @@ TEST(BusDiagnostics, AScanListPollsWithoutJitterUntilFaultsStallIt) {
   // Junk, broken-off requests sent again and retries after the master's time-out stretch the
   // cycle.
   EXPECT_GT(count(simulated(false, 4, true), finding_poll_jitter), 5u);
+}
+
+// Senders that stall inside a frame: each pause the simulator made is found in its frame, and
+// no other frame has one, glitches and fast turnarounds around them notwithstanding.
+TEST(BusDiagnostics, APauseLongerThanT15InsideAFrameIsAGapInFrame) {
+  busgen::BusOptions options;
+  options.transactions = 2000;
+  options.pause_rate = 0.05;
+  options.glitch_rate = options.request_glitch_rate = 0.3;
+  const busgen::BusCapture capture = busgen::simulate(options);
+  std::set<uint64_t> paused;
+  for (const auto& frame : capture.frames)
+    if (frame.findings & finding_gap_in_frame) paused.insert(frame.offset);
+  ASSERT_GT(paused.size(), 100u);
+  std::set<uint64_t> found;
+  for (const auto& r : simulated(options).frames())
+    if (r.findings & finding_gap_in_frame) found.insert(r.offset);
+  EXPECT_EQ(found, paused);
+}
+
+// A slave answering at another baud rate: its bytes are marked where its answer was awaited
+// (noise also names the request). A glitch as a driver turns on is not.
+TEST(BusDiagnostics, NoiseWhereAnAnswerWasAwaitedNamesTheRequest) {
+  busgen::BusOptions options;
+  options.transactions = 2000;
+  options.garbled_rate = 0.05;
+  options.glitch_rate = options.request_glitch_rate = 0.3;
+  const busgen::BusCapture capture = busgen::simulate(options);
+  ASSERT_GT(capture.garbled.size(), 50u);
+  const Collector out = simulated(options);
+  std::map<uint64_t, testing::Record> frames;
+  for (const auto& f : out.frames()) frames[f.index] = f;
+  std::set<uint64_t> marked;
+  for (const auto& r : out.noise()) {
+    if (!(r.findings & finding_garbage_after_request)) continue;
+    marked.insert(r.offset);
+    ASSERT_TRUE(r.request.has_value());
+    ASSERT_TRUE(frames.count(*r.request));
+    EXPECT_EQ(frames[*r.request].role, Role::request);
+    EXPECT_LT(frames[*r.request].offset, r.offset);
+  }
+  // Junk as long as its second byte's function code allows (any length, for a code the length
+  // rules do not know) is a frame with a bad check (docs/framing.md), marked the same.
+  size_t as_frames = 0;
+  for (const auto& f : out.frames()) {
+    if (!(f.findings & finding_garbage_after_request)) continue;
+    EXPECT_FALSE(f.check_ok);
+    marked.insert(f.offset);
+    ++as_frames;
+  }
+  EXPECT_GT(as_frames, 0u);
+  EXPECT_EQ(marked, std::set<uint64_t>(capture.garbled.begin(), capture.garbled.end()));
 }
 
 }  // namespace

@@ -171,7 +171,9 @@ TEST_P(BusScenario, WrittenAsPcapngReadsBackToTheSameRecords) {
     EXPECT_EQ(b.role, a.role) << i;
     EXPECT_EQ(b.check_ok, a.check_ok) << i;
     EXPECT_EQ(b.damage, a.damage) << i;
-    EXPECT_EQ(b.findings, a.findings) << i;
+    // A packet has one time: a pause inside a frame is in its comment for Wireshark, but
+    // reading the file again cannot time it.
+    EXPECT_EQ(b.findings, a.findings & ~finding_gap_in_frame) << i;
     EXPECT_EQ(b.request, a.request) << i;
     EXPECT_EQ(b.latency_ns, a.latency_ns) << i;
     EXPECT_EQ(b.t_ns, a.t_ns) << i;
@@ -303,6 +305,16 @@ BusOptions glitch_every_turnaround(uint64_t seed) {
   return o;
 }
 
+// Senders that pause inside frames, and slaves that answer in junk (at another baud rate):
+// where each byte has its time, every pause is seen and no frame is lost to the junk.
+BusOptions faulty_senders(uint64_t seed) {
+  BusOptions o = clean(seed, 3000);
+  o.pause_rate = 0.05;
+  o.garbled_rate = 0.05;
+  o.glitch_rate = o.request_glitch_rate = 0.2;
+  return o;
+}
+
 constexpr busgen::ClockError usb_jitter{8'000'000, 1};
 constexpr busgen::ClockError coarse_timer{0, 10'000'000};
 constexpr busgen::ClockError sample_clock{0, 2'000};  // a logic analyzer at 500 kHz
@@ -322,6 +334,7 @@ INSTANTIATE_TEST_SUITE_P(
                  usb_jitter},
         Scenario{"pcap_per_frame_jitter", Delivery::per_frame, real_masters(26), 16, Via::pcap,
                  usb_jitter},
+        Scenario{"faulty_senders_per_byte", Delivery::per_byte, faulty_senders(31)},
         Scenario{"glitches_per_byte", Delivery::per_byte, glitch_every_turnaround(27)},
         Scenario{"glitches_bursts", Delivery::bursts, glitch_every_turnaround(28), 2},
         Scenario{"glitches_per_frame", Delivery::per_frame, glitch_every_turnaround(29), 2},

@@ -237,25 +237,95 @@ class GapCollector : public ::testing::Test {
  protected:
   // Pushes each byte with its own exact time: bytes of a frame back to back, then `gap_ns`.
   Collector run_per_byte(const std::vector<std::vector<uint8_t>>& frames, int64_t gap_ns) {
+    std::vector<Piece> pieces;
+    for (const auto& f : frames) pieces.push_back({gap_ns, f});
+    return run(pieces, ClockQuality::per_byte);
+  }
+
+  // Bytes sent back to back after `silence_ns`; a clock per byte times each, one per chunk
+  // stamps the piece as one read.
+  struct Piece {
+    int64_t silence_ns;
+    std::vector<uint8_t> bytes;
+  };
+  Collector run(const std::vector<Piece>& pieces, ClockQuality clock) {
     Collector out;
     AnalyzerOptions options;
     options.mode = ModeChoice::rtu;
-    options.clock = ClockQuality::per_byte;
+    options.clock = clock;
     options.format = {9600, 8, Parity::none, 1};
     Analyzer analyzer(options, {{"bus", ChannelRole::bus}}, out);
     const int64_t char_ns = options.format.char_time_ns();
     int64_t t = 0;
-    for (const auto& f : frames) {
-      t += gap_ns;
-      for (uint8_t b : f) {
+    for (const auto& piece : pieces) {
+      t += piece.silence_ns;
+      for (const uint8_t& b : piece.bytes) {
         t += char_ns;
-        analyzer.push({0, t, {&b, 1}});
+        if (clock == ClockQuality::per_byte) analyzer.push({0, t, {&b, 1}});
       }
+      if (clock != ClockQuality::per_byte) analyzer.push({0, t, piece.bytes});
     }
     analyzer.finish();
     return out;
   }
 };
+
+// At 9600 baud a character is 1.04 ms: t1.5 is 1.56 ms and t3.5 3.65 ms.
+TEST_F(GapCollector, APauseOverT15InsideAFrameIsAFindingNotABoundary) {
+  const auto head = hex("01 03 00"), tail = hex("00 00 0a c5 cd");
+  for (ClockQuality clock : {ClockQuality::per_byte, ClockQuality::per_chunk}) {
+    const auto paused = run({{0, head}, {2'500'000, tail}}, clock).frames();
+    ASSERT_EQ(paused.size(), 1u);
+    EXPECT_TRUE(paused[0].check_ok);
+    EXPECT_EQ(paused[0].raw, read_request);
+    // A clock per read cannot time a pause of a character or two.
+    EXPECT_EQ(paused[0].findings & finding_gap_in_frame,
+              clock == ClockQuality::per_byte ? finding_gap_in_frame : 0u);
+  }
+  const auto steady = run({{0, head}, {1'000'000, tail}}, ClockQuality::per_byte).frames();
+  ASSERT_EQ(steady.size(), 1u);
+  EXPECT_EQ(steady[0].findings & finding_gap_in_frame, 0u);
+}
+
+// FC08 Return Query Data has no fixed length: its CRC needs something after it to confirm its
+// end. A pause over t1.5 does, so junk right after it (a slave at another baud rate) is no
+// part of it.
+TEST_F(GapCollector, APauseAfterAGoodCrcEndsAFrameOfNoFixedLength) {
+  const auto query = with_crc(hex("35 08 00 00 dc 49"));
+  const auto junk = hex("81 7b 3c 20 97 01 f2 04 63");
+  const auto out =
+      run({{0, query}, {2'000'000, junk}, {10'000'000, read_request}}, ClockQuality::per_byte);
+  const auto stream = out.stream();
+  ASSERT_EQ(stream.size(), 3u);
+  EXPECT_EQ(stream[0].raw, query);
+  EXPECT_TRUE(stream[0].check_ok);
+  EXPECT_EQ(stream[0].role, Role::request);
+  EXPECT_EQ(stream[1].raw, junk);
+  EXPECT_EQ(stream[1].findings & finding_garbage_after_request, finding_garbage_after_request);
+  EXPECT_EQ(stream[2].raw, read_request);
+}
+
+// Noise while a request waits is marked with that request; a glitch, or noise once the request
+// was answered, is not.
+TEST_F(GapCollector, NoiseWhereAnAnswerWasAwaitedIsGarbageAfterTheRequest) {
+  const auto junk = hex("f3 81 7b");
+  const auto out = run({{0, read_request},
+                        {5'000'000, hex("00")},
+                        {5'000'000, junk},
+                        {10'000'000, read_request},
+                        {5'000'000, read_response},
+                        {5'000'000, junk}},
+                       ClockQuality::per_byte);
+  const auto noise = out.noise();
+  ASSERT_EQ(noise.size(), 3u);
+  EXPECT_EQ(noise[0].reason, NoiseReason::glitch);
+  EXPECT_EQ(noise[0].findings, 0u);
+  EXPECT_EQ(noise[1].raw, junk);
+  EXPECT_EQ(noise[1].findings, finding_garbage_after_request);
+  EXPECT_EQ(noise[1].request, out.frames()[0].index);
+  EXPECT_EQ(noise[2].findings, 0u);
+  EXPECT_FALSE(noise[2].request.has_value());
+}
 
 TEST_F(GapCollector, CutsATruncatedFrameAtASilence) {
   const auto out = run_per_byte({hex("01 03 00 00 00"), read_request}, 10'000'000);

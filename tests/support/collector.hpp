@@ -55,6 +55,8 @@ class Collector final : public decoder::RecordSink {
     r.offset = n.offset;
     r.raw.assign(n.raw.begin(), n.raw.end());
     r.reason = n.reason;
+    r.findings = n.findings;
+    r.request = n.request;
     r.t_ns = n.t_ns;
     records.push_back(std::move(r));
   }

@@ -62,11 +62,11 @@ def expected(records):
     noise = [r for r in records if r["type"] == "noise"]
     findings = collections.Counter()
     first = collections.defaultdict(list)
-    for f in frames:
-        for name in f["findings"]:
+    for r in records:  # frames and noise both carry findings
+        for name in r.get("findings", []):
             findings[name] += 1
             if len(first[name]) < 5:
-                first[name].append(f["index"])
+                first[name].append(r["index"])
     e = {
         "frames": len(frames),
         "requests": sum(f["role"] == "request" for f in frames),
@@ -203,7 +203,8 @@ def main():
     # Every diagnostic the faulty captures should show, shown.
     with open(os.path.join(WORK, "faults-model.stats.json")) as f:
         diagnostics = json.load(f)["diagnostics"]
-    for name in ("bad-check", "broadcast", "quantity-out-of-spec", "out-of-range"):
+    for name in ("bad-check", "broadcast", "quantity-out-of-spec", "out-of-range",
+                 "garbage-after-request"):
         if name not in diagnostics:
             failures.append(f"faults-model: no {name} among {sorted(diagnostics)}")
 

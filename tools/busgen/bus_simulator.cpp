@@ -73,9 +73,28 @@ class Simulator {
   size_t send_frame(const Bytes& body, Role role, int64_t gap_ns, std::optional<size_t> request) {
     Bytes wire;
     encode_frame(o_.mode, body, wire);
-    const uint64_t offset = send(wire, gap_ns);
-    capture_.frames.push_back({offset, static_cast<uint32_t>(wire.size()), role, request});
+    uint32_t findings = 0;
+    uint64_t offset;
+    if (o_.mode == Mode::rtu && chance(o_.pause_rate)) {
+      offset = send_with_pause(wire, gap_ns);
+      findings = decoder::finding_gap_in_frame;
+    } else {
+      offset = send(wire, gap_ns);
+    }
+    capture_.frames.push_back(
+        {offset, static_cast<uint32_t>(wire.size()), role, request, findings});
     return capture_.frames.size() - 1;
+  }
+
+  // The sender stalls once between two of the frame's bytes, longer than t1.5 but short of the
+  // t3.5 that would end the frame.
+  uint64_t send_with_pause(const Bytes& wire, int64_t gap_ns) {
+    const auto split = static_cast<ptrdiff_t>(pick(1, static_cast<unsigned>(wire.size() - 1)));
+    const int64_t t15 = o_.format.t15_ns();
+    const int64_t pause = t15 + (t35_ - t15) * pick(2, 8) / 10;
+    const uint64_t offset = send(Bytes(wire.begin(), wire.begin() + split), gap_ns);
+    send(Bytes(wire.begin() + split, wire.end()), pause);
+    return offset;
   }
 
   int64_t idle_gap() {
@@ -127,6 +146,10 @@ class Simulator {
     int64_t turnaround =
         chance(o_.fast_turnaround_rate) ? char_ns_ * pick(15, 30) / 10 : t35_ + pick(0, 3'000'000);
     if (o_.back_to_back) turnaround = 0;
+    if (chance(o_.garbled_rate)) {
+      capture_.timed_out.push_back(req);
+      return send_garbled(slave, turnaround);
+    }
     if (chance(o_.glitch_rate)) turnaround = glitch(turnaround);
     ++answered_;
     if (damageable(response) && chance(o_.cut_rate)) return send_cut(response, turnaround, req);
@@ -138,7 +161,7 @@ class Simulator {
   size_t send_request(const Bytes& request, uint32_t findings, int64_t gap_ns) {
     if (chance(o_.request_glitch_rate)) gap_ns = glitch(gap_ns);
     const size_t req = send_frame(request, Role::request, gap_ns, std::nullopt);
-    capture_.frames[req].findings = findings;
+    capture_.frames[req].findings |= findings;
     return req;
   }
 
@@ -176,6 +199,15 @@ class Simulator {
     Bytes other;
     random_bytes(other, pick(1, 6));
     send(other, 0);
+  }
+
+  // An answer at another baud rate or character format reads as junk: never the slave's address
+  // first (that would read as its damaged answer), never a lone glitch.
+  void send_garbled(uint8_t slave, int64_t gap_ns) {
+    Bytes junk;
+    random_bytes(junk, pick(3, 12));
+    if (junk[0] == slave) junk[0] ^= 0x80;
+    capture_.garbled.push_back(send(junk, gap_ns));
   }
 
   void send_damaged(const Bytes& wire, int64_t gap_ns, size_t req, decoder::Damage damage) {

@@ -33,6 +33,9 @@ struct BusOptions {
   int64_t retry_after_ns = 200'000'000;
   double cut_rate = 0.0;        // the response breaks off (the slave resets, a wire comes loose)
   double collision_rate = 0.0;  // another device talks over the response's last bytes
+  double pause_rate = 0.0;      // a sender pauses inside a frame, longer than t1.5 (RTU)
+  double garbled_rate = 0.0;    // the answer comes as bytes that are no frame (a slave at another
+                                // baud rate), and the master times out
   int64_t poll_gap_ns = 5'000'000;  // master's idle time between transactions (at least)
   bool back_to_back = false;        // no idle time at all: the densest file for benchmarks
   // 0: each request goes to a slave picked at random from 1-247 (every address exercised);
@@ -56,6 +59,7 @@ struct BusCapture {
   std::vector<int64_t> end_ns;  // when each byte's stop bit ended
   std::vector<TruthFrame> frames;
   std::vector<size_t> timed_out;  // positions in `frames` of requests left unanswered
+  std::vector<uint64_t> garbled;  // where each garbled answer begins in the byte stream
 };
 
 BusCapture simulate(const BusOptions& options);

@@ -59,13 +59,15 @@ int main(int argc, char** argv) {
   bool faults = false, ascii = false;
   app.add_flag("--faults", faults,
                "What real buses add: glitches, line noise, requests broken off and sent again, "
-               "retries, responses cut or collided with, out-of-spec requests, vendor codes");
+               "retries, responses cut or collided with or garbled, pauses inside frames, "
+               "out-of-spec requests, vendor codes");
   app.add_flag("--ascii", ascii, "Modbus ASCII instead of RTU (7E1)");
   CLI11_PARSE(app, argc, argv);
   if (faults) {
     o.glitch_rate = o.request_glitch_rate = 0.01;
     o.noise_rate = o.truncation_rate = o.retry_rate = o.cut_rate = o.collision_rate = 0.01;
     o.out_of_spec_rate = o.unknown_function_rate = 0.01;
+    o.pause_rate = o.garbled_rate = 0.01;
   }
   if (ascii) {
     o.mode = decoder::Mode::ascii;

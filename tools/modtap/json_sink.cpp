@@ -56,11 +56,7 @@ void JsonSink::on_frame(const Frame& frame) {
     out_.print(FMT_COMPILE(",\"latency_us\":null"));
   }
   out_.print(FMT_COMPILE(",\"findings\":["));
-  bool first = true;
-  for_each_frame_finding(frame.findings, [&](size_t slot) {
-    out_.print(FMT_COMPILE("{}\"{}\""), first ? "" : ",", frame_findings()[slot].name);
-    first = false;
-  });
+  bool first = finding_names(frame.findings);
   if (frame.meaning) {
     for (const RuleFinding& finding : frame.meaning->findings) {
       out_.print(FMT_COMPILE("{}\"{}\""), first ? "" : ",", to_string(finding.kind));
@@ -77,6 +73,16 @@ void JsonSink::on_frame(const Frame& frame) {
   if (pdu.truncated) out_.print(FMT_COMPILE(",\"truncated\":true"));
   out_.print(FMT_COMPILE("}}\n"));
   out_.end_record();
+}
+
+// The names of the findings in `bits`, comma-separated; true if there were none.
+bool JsonSink::finding_names(uint32_t bits) {
+  bool none = true;
+  for_each_frame_finding(bits, [&](size_t slot) {
+    out_.print(FMT_COMPILE("{}\"{}\""), none ? "" : ",", frame_findings()[slot].name);
+    none = false;
+  });
+  return none;
 }
 
 // "model", "registers" and "notes": each model finding's kind, address and explanation.
@@ -113,7 +119,15 @@ void JsonSink::on_noise(const Noise& noise) {
   out_.print(FMT_COMPILE(",\"offset\":{},\"mode\":\"{}\",\"raw\":\""), noise.offset,
              to_string(noise.mode));
   append_hex(out_.buffer(), noise.raw, false);
-  out_.print(FMT_COMPILE("\",\"reason\":\"{}\"}}\n"), to_string(noise.reason));
+  out_.print(FMT_COMPILE("\",\"reason\":\"{}\""), to_string(noise.reason));
+  if (noise.request) {
+    out_.print(FMT_COMPILE(",\"request\":{}"), *noise.request);
+  } else {
+    out_.print(FMT_COMPILE(",\"request\":null"));
+  }
+  out_.print(FMT_COMPILE(",\"findings\":["));
+  finding_names(noise.findings);
+  out_.print(FMT_COMPILE("]}}\n"));
   out_.end_record();
 }
 

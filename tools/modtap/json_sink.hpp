@@ -21,6 +21,7 @@ class JsonSink final : public decoder::RecordSink {
  private:
   void channel(uint16_t id);
   void meaning(const decoder::Meaning& meaning);
+  bool finding_names(uint32_t bits);
 
   Output& out_;
   const std::vector<decoder::ChannelInfo>& channels_;

@@ -220,7 +220,12 @@ void TextSink::on_noise(const Noise& noise) {
   out_.print(FMT_COMPILE("{:6}"), noise.index);
   time_column(noise.t_ns);
   channel_column(noise.channel);
-  out_.print(FMT_COMPILE(" noise {} bytes ({}): "), noise.raw.size(), to_string(noise.reason));
+  out_.print(FMT_COMPILE(" noise {} bytes ({})"), noise.raw.size(), to_string(noise.reason));
+  if (noise.request) out_.print(FMT_COMPILE(" after request #{}"), *noise.request);
+  for_each_frame_finding(noise.findings, [&](size_t slot) {
+    out_.print(FMT_COMPILE(" [{}]"), frame_findings()[slot].name);
+  });
+  out_.print(FMT_COMPILE(": "));
   append_hex(out_.buffer(), noise.raw.first(std::min<size_t>(noise.raw.size(), 32)), true);
   if (noise.raw.size() > 32) out_.print(FMT_COMPILE(" ..."));
   out_.print(FMT_COMPILE("\n"));
