@@ -92,6 +92,9 @@ struct DeviceModel {
   // 2 retries): modtap's time-out for these slaves unless --timeout is given.
   std::optional<int64_t> response_timeout_ns;
   std::optional<uint8_t> retries;
+  // The least time between a request and the device's answer, where the manual sets one
+  // (NTA5000, N3: 10 ms).
+  std::optional<int64_t> min_turnaround_ns;
   bool same_group_only = false;  // a multi-register access must stay inside one GGxxH block
   std::optional<ParameterGroups> groups;
   std::optional<WriteOnlyAlias> alias;

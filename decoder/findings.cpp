@@ -52,6 +52,9 @@ constexpr FindingInfo registry[] = {
     {"unmapped-register", Severity::warning, "an address in none of the model's tables"},
     {"too-many-retries", Severity::warning,
      "a request sent again more often than the model's masters do"},
+    {"early-response", Severity::warning,
+     "an answer sooner after its request than the model's manual says the device answers: "
+     "another device answered, or the slave is not the model it is read as"},
     {"reserved-address", Severity::warning,
      "a slave address from 248 to 255, which Modbus reserves"},
     {"exception", Severity::note, "an exception response, with the model's meaning of its code"},

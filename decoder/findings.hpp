@@ -50,11 +50,12 @@ enum class RuleKind : uint8_t {
   station_out_of_range,
   unmapped_register,  // an address in none of the model's tables
   too_many_retries,   // a request sent again more often than the model's masters do
+  early_response,     // an answer sooner after its request than the manual says the device answers
   reserved_address,   // 248-255, which Modbus reserves, to a slave whose model does not allow it
   exception,          // an exception response, explained with the model's meaning
   identified,
 };
-inline constexpr size_t rule_kind_count = 14;
+inline constexpr size_t rule_kind_count = 15;
 
 // How much a finding matters to someone looking for a fault (Wireshark's expert severities).
 enum class Severity : uint8_t { note, warning, error };

@@ -19,8 +19,11 @@ std::map<uint8_t, int64_t> model_timeouts(const ModelChoice& choice) {
 }
 
 ModelInterpreter::ModelInterpreter(std::vector<const DeviceModel*> known, ModelChoice choice,
-                                   RecordSink& next)
-    : known_(std::move(known)), choice_(std::move(choice)), next_(next) {}
+                                   ClockQuality clock, RecordSink& next)
+    : known_(std::move(known)),
+      choice_(std::move(choice)),
+      exact_clock_(clock == ClockQuality::per_byte),
+      next_(next) {}
 
 const DeviceModel* ModelInterpreter::model_for(uint8_t slave) const {
   if (auto it = choice_.by_slave.find(slave); it != choice_.by_slave.end()) return it->second;
@@ -34,10 +37,24 @@ void ModelInterpreter::on_frame(const Frame& frame) {
   if (!model || frame.damage == Damage::cut || frame.damage == Damage::collision)
     return next_.on_frame(frame);
   interpret(*model, frame, meaning_);
+  check_turnaround(*model, frame);
   identify(frame);
   Frame annotated = frame;
   annotated.meaning = &meaning_;
   next_.on_frame(annotated);
+}
+
+// A manual's least turnaround holds only against a clock that times each byte: one per read
+// may be late by more than the 10 ms the drives' manuals ask for.
+void ModelInterpreter::check_turnaround(const DeviceModel& model, const Frame& frame) {
+  if (!exact_clock_ || !model.min_turnaround_ns || frame.role != Role::response ||
+      !frame.latency_ns || *frame.latency_ns >= *model.min_turnaround_ns)
+    return;
+  meaning_.findings.push_back(
+      {RuleKind::early_response, std::nullopt,
+       fmt::format("answered {:.3f} ms after the request; {} answers no sooner than {} ms",
+                   static_cast<double>(*frame.latency_ns) / 1e6, model.name,
+                   *model.min_turnaround_ns / 1'000'000)});
 }
 
 // A read response that covers a model's identification register with its value names the

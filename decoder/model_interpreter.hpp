@@ -21,8 +21,10 @@ std::map<uint8_t, int64_t> model_timeouts(const ModelChoice& choice);
 
 class ModelInterpreter final : public RecordSink {
  public:
-  // `known` are the models whose identification rule may match the traffic.
-  ModelInterpreter(std::vector<const DeviceModel*> known, ModelChoice choice, RecordSink& next);
+  // `known` are the models whose identification rule may match the traffic; `clock` is the
+  // source's, which says whether a turnaround is timed well enough to hold against a manual.
+  ModelInterpreter(std::vector<const DeviceModel*> known, ModelChoice choice, ClockQuality clock,
+                   RecordSink& next);
 
   void on_frame(const Frame& frame) override;
   void on_noise(const Noise& noise) override { next_.on_noise(noise); }
@@ -32,9 +34,11 @@ class ModelInterpreter final : public RecordSink {
 
  private:
   void identify(const Frame& frame);
+  void check_turnaround(const DeviceModel& model, const Frame& frame);
 
   std::vector<const DeviceModel*> known_;
   ModelChoice choice_;
+  bool exact_clock_;
   std::map<uint8_t, const DeviceModel*> identified_;
   RecordSink& next_;
   Meaning meaning_;

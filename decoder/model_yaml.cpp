@@ -170,8 +170,8 @@ class ModelReader {
   void read(const YAML::Node& root) {
     MapReader map(
         root, problems_,
-        {"model", "extends", "title", "source", "stations", "limits", "timeout", "exceptions",
-         "enums", "groups", "alias", "identify", "registers", "parameters"});
+        {"model", "extends", "title", "source", "stations", "limits", "timeout", "turnaround",
+         "exceptions", "enums", "groups", "alias", "identify", "registers", "parameters"});
     if (!root.IsMap()) return;
     if (map["model"]) model_.name = read_text(map["model"], problems_);
     if (model_.name.empty()) problems_.add(root, "a model needs 'model: NAME'");
@@ -180,6 +180,7 @@ class ModelReader {
     if (map["stations"]) read_stations(map["stations"]);
     if (map["limits"]) read_limits(map["limits"]);
     if (map["timeout"]) read_timeout(map["timeout"]);
+    if (map["turnaround"]) read_turnaround(map["turnaround"]);
     if (map["exceptions"]) read_exceptions(map["exceptions"]);
     if (map["enums"]) read_enums(map["enums"]);
     if (map["groups"]) read_groups(map["groups"]);
@@ -218,6 +219,13 @@ class ModelReader {
     if (map["response_ms"] && read_integer(map["response_ms"], problems_, ms, 1, 60'000))
       model_.response_timeout_ns = int64_t{ms} * 1'000'000;
     if (map["retries"]) read_integer(map["retries"], problems_, model_.retries.emplace(), 0, 100);
+  }
+
+  void read_turnaround(const YAML::Node& node) {
+    MapReader map(node, problems_, {"min_ms"});
+    unsigned ms = 0;
+    if (map["min_ms"] && read_integer(map["min_ms"], problems_, ms, 1, 10'000))
+      model_.min_turnaround_ns = int64_t{ms} * 1'000'000;
   }
 
   bool read_flag(const YAML::Node& node) {

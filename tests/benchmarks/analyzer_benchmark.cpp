@@ -87,7 +87,8 @@ void BM_AnalyzeWithModel(benchmark::State& state, const char* model) {
   uint64_t frames = 0;
   for (auto _ : state) {
     Counting sink;
-    decoder::ModelInterpreter interpreter(catalog.all(), catalog.choose({model}), sink);
+    decoder::ModelInterpreter interpreter(catalog.all(), catalog.choose({model}),
+                                          decoder::ClockQuality::none, sink);
     analyze(interpreter);
     frames += sink.frames;
   }
@@ -117,7 +118,8 @@ void BM_Output(benchmark::State& state, Sink kind, const char* model) {
     if (kind == Sink::json) sink = std::make_unique<tools::JsonSink>(out, channels);
     if (kind == Sink::pcapng)
       sink = std::make_unique<captures::PcapngSink>(writer, channels, captures::PcapngOptions{});
-    decoder::ModelInterpreter interpreter(catalog.all(), catalog.choose({model}), *sink);
+    decoder::ModelInterpreter interpreter(catalog.all(), catalog.choose({model}),
+                                          decoder::ClockQuality::none, *sink);
     const uint64_t before = allocations.load();
     analyze(interpreter);
     allocated += allocations.load() - before;

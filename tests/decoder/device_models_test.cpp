@@ -21,6 +21,7 @@ namespace {
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 using ::testing::IsEmpty;
+using ::testing::SizeIs;
 
 std::vector<uint8_t> hex(const std::string& text) {
   std::vector<uint8_t> bytes;
@@ -456,7 +457,7 @@ TEST_F(Models, ASlaveReadingGd20sIdentifyingCodeIsDecodedAsGd20) {
   Recorder out;
   ModelChoice choice;
   choice.bus = &model("generic");
-  ModelInterpreter interpreter(catalog_->all(), choice, out);
+  ModelInterpreter interpreter(catalog_->all(), choice, ClockQuality::per_byte, out);
   const auto req = rtu("05 03 21 03 00 01");
   const auto rsp = rtu("05 03 02 01 06");
   Frame q = frame(req, Role::request);
@@ -476,7 +477,7 @@ TEST_F(Models, AnIdentificationDoesNotOverrideTheUsersChoice) {
   ModelChoice choice;
   choice.bus = &model("generic");
   choice.by_slave[5] = &model("n3");
-  ModelInterpreter interpreter(catalog_->all(), choice, out);
+  ModelInterpreter interpreter(catalog_->all(), choice, ClockQuality::per_byte, out);
   const auto req = rtu("05 03 21 03 00 01");
   const auto rsp = rtu("05 03 02 01 06");
   Frame r = frame(rsp, Role::response);
@@ -484,6 +485,35 @@ TEST_F(Models, AnIdentificationDoesNotOverrideTheUsersChoice) {
   interpreter.on_frame(r);
   EXPECT_THAT(out.models, ElementsAre("n3"));
   EXPECT_THAT(out.findings[0][0].text, HasSubstr("but is decoded as n3"));
+}
+
+// The NTA5000 and N3 manuals ask for 10 ms between a command and its reply; an answer sooner,
+// timed by a clock per byte, is not what such a drive does. GD20's manual sets no such time.
+TEST_F(Models, AnAnswerSoonerThanTheManualsTurnaroundIsEarly) {
+  const auto req = rtu("01 03 25 20 00 01");
+  const auto rsp = rtu("01 03 02 00 00");
+  auto early_findings = [&](const char* name, int64_t latency_ms, ClockQuality clock) {
+    Recorder out;
+    ModelChoice choice;
+    choice.bus = &model(name);
+    ModelInterpreter interpreter(catalog_->all(), choice, clock, out);
+    Frame r = frame(rsp, Role::response);
+    r.request_pdu = std::span<const uint8_t>(req).subspan(1, 5);
+    r.latency_ns = latency_ms * 1'000'000;
+    interpreter.on_frame(r);
+    std::vector<std::string> texts;
+    for (const RuleFinding& f : out.findings[0])
+      if (f.kind == RuleKind::early_response) texts.push_back(f.text);
+    return texts;
+  };
+  EXPECT_THAT(early_findings("nta5000", 4, ClockQuality::per_byte),
+              ElementsAre("answered 4.000 ms after the request; nta5000 answers no sooner than "
+                          "10 ms"));
+  EXPECT_THAT(early_findings("nta5000-cn", 4, ClockQuality::per_byte), SizeIs(1));
+  EXPECT_THAT(early_findings("n3", 9, ClockQuality::per_byte), SizeIs(1));
+  EXPECT_THAT(early_findings("n3", 10, ClockQuality::per_byte), IsEmpty());
+  EXPECT_THAT(early_findings("nta5000", 4, ClockQuality::per_chunk), IsEmpty());
+  EXPECT_THAT(early_findings("gd20", 1, ClockQuality::per_byte), IsEmpty());
 }
 
 // --- Every register of the manuals' tables -------------------------------------------------

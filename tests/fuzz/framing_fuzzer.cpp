@@ -123,7 +123,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const auto models = fuzz::catalog().all();
     decoder::ModelChoice choice;
     choice.bus = models[(setup >> 4) % models.size()];
-    decoder::ModelInterpreter interpreter(models, choice, properties);
+    decoder::ModelInterpreter interpreter(models, choice, options.clock, properties);
     decoder::Analyzer analyzer(options, channels, interpreter);
     int64_t t = 1'000'000'000;
     while (!in.empty()) {

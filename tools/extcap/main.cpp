@@ -133,7 +133,7 @@ int main(int argc, char** argv) {
     const std::vector<decoder::ChannelInfo> channels{{port, decoder::ChannelRole::bus}};
     captures::PcapngSink pcapng(writer, channels, {});
     const decoder::ModelChoice choice = catalog.choose({model});
-    decoder::ModelInterpreter sink(catalog.all(), choice, pcapng);
+    decoder::ModelInterpreter sink(catalog.all(), choice, decoder::ClockQuality::per_chunk, pcapng);
     live::LiveOptions options;
     options.announce = false;  // Wireshark reads anything on stderr as an error
     options.analyzer.format = {baud, static_cast<uint8_t>(data_bits), decoder::parity_named(parity),

@@ -166,7 +166,8 @@ class Sinks {
       if (!o.display_filter.empty()) filter(o.display_filter, channels);
       decoder::RecordSink& after = filter_ ? static_cast<decoder::RecordSink&>(*filter_) : fan_out_;
       if (interpret)
-        interpreter_ = std::make_unique<decoder::ModelInterpreter>(catalog_.all(), choice, after);
+        interpreter_ =
+            std::make_unique<decoder::ModelInterpreter>(catalog_.all(), choice, clock, after);
     }
     diagnostics_ = std::make_unique<decoder::BusDiagnostics>(format, clock, after_diagnostics());
     if (o.write_file.empty()) return;
