@@ -7,8 +7,10 @@
 
 #include "decoder/analyzer.hpp"
 #include "decoder/checksum.hpp"
+#include "decoder/model_interpreter.hpp"
 #include "tests/support/collector.hpp"
 #include "tools/busgen/bus_simulator.hpp"
+#include "tools/modtap/model_catalog.hpp"
 
 namespace modtap::decoder {
 namespace {
@@ -254,6 +256,47 @@ TEST(BusDiagnostics, NoiseWhereAnAnswerWasAwaitedNamesTheRequest) {
   }
   EXPECT_GT(as_frames, 0u);
   EXPECT_EQ(marked, std::set<uint64_t>(capture.garbled.begin(), capture.garbled.end()));
+}
+
+// A bus of NTA5000 drives, read through their model on a clock per byte: drives that keep the
+// manual's 10 ms show no early-response; slaves that answer within a few characters show it
+// on every answer.
+TEST(BusDiagnostics, AnswersSoonerThanTheModelsTurnaroundAreEarly) {
+  tools::ModelCatalog catalog;
+  catalog.load_builtin();
+  auto early_answers = [&](int64_t min_turnaround_ns) {
+    busgen::BusOptions options;
+    options.transactions = 1000;
+    options.polled_slaves = 4;
+    options.min_turnaround_ns = min_turnaround_ns;
+    const busgen::BusCapture capture = busgen::simulate(options);
+    struct Counter final : RecordSink {
+      size_t responses = 0, early = 0;
+      void on_frame(const Frame& f) override {
+        if (f.role != Role::response || !f.check_ok) return;
+        ++responses;
+        if (f.meaning)
+          for (const RuleFinding& finding : f.meaning->findings)
+            early += finding.kind == RuleKind::early_response;
+      }
+      void on_noise(const Noise&) override {}
+      void on_timeout(const Timeout&) override {}
+    } counter;
+    ModelInterpreter models(catalog.all(), catalog.choose({"nta5000"}), ClockQuality::per_byte,
+                            counter);
+    AnalyzerOptions analyzer_options;
+    analyzer_options.mode = ModeChoice::rtu;
+    analyzer_options.clock = ClockQuality::per_byte;
+    Analyzer analyzer(analyzer_options, {{"bus", ChannelRole::bus}}, models);
+    for (size_t i = 0; i < capture.bytes.size(); ++i)
+      analyzer.push({0, capture.end_ns[i], {&capture.bytes[i], 1}});
+    analyzer.finish();
+    EXPECT_GT(counter.responses, 900u);
+    return std::pair{counter.early, counter.responses};
+  };
+  EXPECT_EQ(early_answers(10'000'000).first, 0u);
+  const auto [early, responses] = early_answers(0);
+  EXPECT_EQ(early, responses);
 }
 
 }  // namespace

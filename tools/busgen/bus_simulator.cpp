@@ -145,6 +145,7 @@ class Simulator {
     }
     int64_t turnaround =
         chance(o_.fast_turnaround_rate) ? char_ns_ * pick(15, 30) / 10 : t35_ + pick(0, 3'000'000);
+    if (o_.min_turnaround_ns) turnaround = o_.min_turnaround_ns + pick(0, 3'000'000);
     if (o_.back_to_back) turnaround = 0;
     if (chance(o_.garbled_rate)) {
       capture_.timed_out.push_back(req);

@@ -21,8 +21,9 @@ struct BusOptions {
   double exception_rate = 0.05;
   double no_response_rate = 0.03;  // the slave stays silent: the master moves on
   double broadcast_rate = 0.03;
-  double fast_turnaround_rate = 0.2;   // the slave answers after less than t3.5
-  double glitch_rate = 0.0;            // a 0x00 or 0xFF as the slave's driver turns on
+  double fast_turnaround_rate = 0.2;  // the slave answers after less than t3.5
+  int64_t min_turnaround_ns = 0;  // slaves answer after this and up to 3 ms more (NTA5000: 10 ms)
+  double glitch_rate = 0.0;       // a 0x00 or 0xFF as the slave's driver turns on
   double request_glitch_rate = 0.0;    // the same as the master's driver turns on
   double noise_rate = 0.0;             // a burst of junk between transactions
   double truncation_rate = 0.0;        // the master's request breaks off, then is sent again
