@@ -24,10 +24,12 @@ class Histogram {
   void add(uint64_t value) {
     ++counts_[bucket_of(value)];
     ++count_;
+    sum_ += value;
     min_ = std::min(min_, value);
     max_ = std::max(max_, value);
   }
   uint64_t count() const { return count_; }
+  uint64_t sum() const { return sum_; }  // exact: a Prometheus histogram's _sum
   uint64_t min() const { return count_ ? min_ : 0; }
   uint64_t max() const { return max_; }
 
@@ -82,6 +84,7 @@ class Histogram {
 
   std::array<uint64_t, bucket_count> counts_{};
   uint64_t count_ = 0;
+  uint64_t sum_ = 0;
   uint64_t min_ = std::numeric_limits<uint64_t>::max();
   uint64_t max_ = 0;
 };

@@ -69,6 +69,7 @@ TEST(Histogram, CountsAtMostABound) {
   EXPECT_EQ(h.count_at_most(10), 0u);
   const double half = static_cast<double>(h.count_at_most(500'000));
   EXPECT_NEAR(half, 500, 500 * Histogram::relative_error * 2);
+  EXPECT_EQ(h.sum(), 500'500'000u);  // exact, unlike the buckets
 }
 
 // Memory is the same for one value and for a year of them.

@@ -12,12 +12,14 @@ import json
 import os
 import select
 import signal
+import socket
 import subprocess
 import sys
 import termios
 import threading
 import time
 import tty
+import urllib.request
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
 from modbus import with_crc  # noqa: E402
@@ -350,7 +352,11 @@ def reconnects():
     if os.path.lexists(link):
         os.unlink(link)
     os.symlink(first.path, link)
-    modtap = subprocess.Popen([MODTAP, "-i", link, "--reconnect", "-T", "json", "--baud", "19200"],
+    with socket.socket() as s:  # a free port for --metrics, which counts the read error
+        s.bind(("127.0.0.1", 0))
+        metrics = f"127.0.0.1:{s.getsockname()[1]}"
+    modtap = subprocess.Popen([MODTAP, "-i", link, "--reconnect", "-T", "json", "--baud", "19200",
+                               "--metrics", metrics],
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     time.sleep(0.5)
     before = with_crc([1, 3, 0, 0, 0, 1])
@@ -365,11 +371,19 @@ def reconnects():
     time.sleep(2.0)  # modtap retries once a second
     os.write(second.master, after)
     time.sleep(0.5)
+    try:
+        with urllib.request.urlopen(f"http://{metrics}/metrics", timeout=5) as response:
+            scrape = response.read().decode()
+    except OSError as e:
+        scrape = str(e)
     modtap.send_signal(signal.SIGTERM)
     out, err = modtap.communicate(timeout=10)
     frames = [json.loads(line)["raw"] for line in out.splitlines() if '"type":"frame"' in line]
     ok = check("reconnect", frames == [before.hex(), after.hex()], f"frames {frames}; {err!r}")
     ok &= check("reconnect", "is back" in err and modtap.returncode == 0, f"{modtap.returncode}: {err!r}")
+    ok &= check("reconnect metrics", "modtap_port_read_errors_total 1\n" in scrape and
+                "modtap_port_reconnects_total 1\n" in scrape,
+                [line for line in scrape.splitlines() if line.startswith("modtap_port")])
     for fd in (first.slave, second.master, second.slave):
         try:
             os.close(fd)

@@ -185,6 +185,7 @@ int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options,
       }
     } catch (const captures::CaptureError& e) {
       fmt::print(stderr, "modtap: {}\n", e.what());
+      if (options.on_port_event) options.on_port_event(PortEvent::read_failed);
       if (!options.reconnect) {
         status = 1;
         break;
@@ -194,6 +195,7 @@ int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options,
           try {
             ports[i] = std::make_unique<SerialPort>(specs[i].path, options.analyzer.format);
             fmt::print(stderr, "modtap: {} is back\n", specs[i].path);
+            if (options.on_port_event) options.on_port_event(PortEvent::came_back);
             break;
           } catch (const captures::CaptureError&) {
             std::this_thread::sleep_for(std::chrono::seconds(1));

@@ -29,6 +29,9 @@ struct ReadBytes {
   std::vector<uint8_t> bytes;
 };
 
+// What happens to a port: a read fails (unplugged), or it comes back (--reconnect).
+enum class PortEvent : uint8_t { read_failed, came_back };
+
 struct LiveOptions {
   decoder::AnalyzerOptions analyzer;  // its clock is set to per_chunk
   bool reconnect = false;             // wait for an unplugged port instead of ending
@@ -36,6 +39,7 @@ struct LiveOptions {
   bool announce = true;               // say on stderr what is being listened to
   std::vector<ReadBytes> replay;      // analysed before the first read
   std::function<void(const decoder::Chunk&)> on_read;  // every read, as read (--save-raw)
+  std::function<void(PortEvent)> on_port_event;        // for the metrics
 };
 
 // Runs until `stop` is set (a signal) or a port disappears without --reconnect; then

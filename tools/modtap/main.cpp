@@ -30,6 +30,7 @@
 #include "tools/modtap/auto_format.hpp"
 #include "tools/modtap/csv_sink.hpp"
 #include "tools/modtap/json_sink.hpp"
+#include "tools/modtap/metrics.hpp"
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/output.hpp"
 #include "tools/modtap/progress.hpp"
@@ -74,6 +75,7 @@ struct Options {
   std::string display_filter;
   std::string follow;
   std::string register_base = "hex";
+  std::string metrics_address;
 };
 
 std::optional<uint32_t> fixed_baud(const Options& o) {
@@ -125,7 +127,8 @@ tools::ModelCatalog load_models(const Options& o) {
 }
 
 bool wants_statistics(const Options& o) {
-  return o.output == "stats" || !o.stats_file.empty() || !o.report_file.empty();
+  return o.output == "stats" || !o.stats_file.empty() || !o.report_file.empty() ||
+         !o.metrics_address.empty();
 }
 
 // The report's registers over time: those --follow names, none without it.
@@ -147,7 +150,12 @@ class Sinks {
     fan_out_.add(*terminal_);
     if (wants_statistics(o)) {
       statistics_ = std::make_unique<decoder::BusStatistics>(format, clock);
-      fan_out_.add(*statistics_);
+      if (o.metrics_address.empty()) {
+        fan_out_.add(*statistics_);
+      } else {  // read by the metrics server's thread while records come in
+        shared_statistics_ = std::make_unique<tools::SharedStatistics>(*statistics_);
+        fan_out_.add(*shared_statistics_);
+      }
     }
     if (!o.report_file.empty()) {
       timeline_ = std::make_unique<decoder::BusTimeline>(report_follow(o));
@@ -194,6 +202,7 @@ class Sinks {
   }
   bool limit_reached() const { return limit_ && limit_->reached(); }
   const decoder::BusStatistics* statistics() const { return statistics_.get(); }
+  tools::SharedStatistics* shared_statistics() { return shared_statistics_.get(); }
   const decoder::BusTimeline* timeline() const { return timeline_.get(); }
   // The slaves whose model sets a response time-out, unless --timeout was given.
   const std::map<uint8_t, int64_t>& model_timeouts() const { return model_timeouts_; }
@@ -225,6 +234,7 @@ class Sinks {
   decoder::FanOut fan_out_;
   std::unique_ptr<decoder::RecordSink> terminal_;
   std::unique_ptr<decoder::BusStatistics> statistics_;
+  std::unique_ptr<tools::SharedStatistics> shared_statistics_;
   std::unique_ptr<decoder::BusTimeline> timeline_;
   tools::ModelCatalog catalog_;
   std::unique_ptr<decoder::FilterStage> filter_;
@@ -324,6 +334,18 @@ std::unique_ptr<tools::ProgressBar> progress_bar(const Options& o,
   return std::make_unique<tools::ProgressBar>(stderr, size);
 }
 
+// --metrics: /metrics served from the statistics while the run goes on.
+std::unique_ptr<tools::MetricsServer> serve_metrics(const Options& o, Sinks& sinks,
+                                                    const tools::PortHealth& ports) {
+  if (o.metrics_address.empty()) return nullptr;
+  tools::SharedStatistics& shared = *sinks.shared_statistics();
+  return std::make_unique<tools::MetricsServer>(o.metrics_address, [&shared, &ports] {
+    fmt::memory_buffer text;
+    shared.read([&](const decoder::BusStatistics& s) { tools::append_metrics(text, s, ports); });
+    return fmt::to_string(text);
+  });
+}
+
 std::unique_ptr<captures::RawRecorder> raw_recorder(
     const Options& o, const std::vector<decoder::ChannelInfo>& channels,
     const decoder::SerialFormat& format) {
@@ -392,6 +414,8 @@ int read_file(const Options& o) {
   // break, in every output, and then the error.
   std::optional<captures::CaptureError> broken;
   auto progress = progress_bar(o, *source, piped);
+  const tools::PortHealth no_ports;
+  auto metrics = serve_metrics(o, sinks, no_ports);
   try {
     while (!sinks.limit_reached() && source->next(chunk)) {
       if (progress) progress->update(*source->file_position());
@@ -404,6 +428,7 @@ int read_file(const Options& o) {
   }
   progress.reset();  // wiped before anything else reaches the terminal
   bus.finish();
+  metrics.reset();
   summarise(o, out, sinks, !broken);
   out.flush();
   sinks.close();
@@ -447,9 +472,15 @@ int listen(const Options& o) {
   auto raw = raw_recorder(o, channels, options.analyzer.format);
   if (raw) options.on_read = [&](const decoder::Chunk& chunk) { raw->write(chunk); };
   options.reconnect = o.reconnect;
+  tools::PortHealth port_health;
+  options.on_port_event = [&port_health](live::PortEvent event) {
+    ++(event == live::PortEvent::read_failed ? port_health.read_errors : port_health.reconnects);
+  };
+  auto metrics = serve_metrics(o, sinks, port_health);
   // A status line on the terminal, unless frame lines are printed on that same terminal.
   options.status_line = terminal_free_for_status(o);
   const int status = live::run_live(ports, options, sinks.all(), stop);
+  metrics.reset();
   summarise(o, out, sinks, true);  // Ctrl-C is how a live run ends
   out.flush();
   sinks.close();
@@ -498,6 +529,9 @@ int main(int argc, char** argv) {
          "drives' manuals), 0 (0-based decimal, as on the wire), 1 (1-based, as mbpoll), "
          "4xxxx (Modicon: 40001 is holding register 0); --follow reads numbers the same way")
       ->check(CLI::IsMember({"hex", "0", "1", "4xxxx"}));
+  app.add_option("--metrics", o.metrics_address,
+                 "Serve bus-health metrics for Prometheus on http://ADDR:PORT/metrics while "
+                 "running (ADDR:PORT, [IPV6]:PORT, or :PORT for every interface)");
   app.add_option("--link", o.link, "pcapng link: user (DLT_USER + modtap.lua), exported-pdu, bare")
       ->check(CLI::IsMember({"user", "exported-pdu", "bare"}));
   app.add_option("--dlt", o.dlt, "DLT_USER link type for --link user or bare")

@@ -1,0 +1,75 @@
+// Bus health for Prometheus: the statistics --stats writes, in the text exposition format,
+// served on /metrics while modtap runs. The counters are BusStatistics', read under the same
+// lock the pipeline adds records with; nothing here counts on its own but the ports' troubles.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "decoder/bus_statistics.hpp"
+
+namespace modtap::tools {
+
+// What the live loop knows of its own ports: reads that failed (an unplugged adapter) and
+// ports that came back (--reconnect). Written by the pipeline, read by the server.
+struct PortHealth {
+  std::atomic<uint64_t> read_errors{0};
+  std::atomic<uint64_t> reconnects{0};
+};
+
+// The exposition (version 0.0.4) of the statistics and the ports' health.
+void append_metrics(fmt::memory_buffer& out, const decoder::BusStatistics& statistics,
+                    const PortHealth& ports);
+
+// The statistics, fed by the pipeline and read by the server's thread, one at a time.
+class SharedStatistics final : public decoder::RecordSink {
+ public:
+  explicit SharedStatistics(decoder::BusStatistics& statistics) : statistics_(statistics) {}
+
+  void on_frame(const decoder::Frame& frame) override {
+    std::lock_guard lock(mutex_);
+    statistics_.on_frame(frame);
+  }
+  void on_noise(const decoder::Noise& noise) override {
+    std::lock_guard lock(mutex_);
+    statistics_.on_noise(noise);
+  }
+  void on_timeout(const decoder::Timeout& timeout) override {
+    std::lock_guard lock(mutex_);
+    statistics_.on_timeout(timeout);
+  }
+  void read(const std::function<void(const decoder::BusStatistics&)>& reader) {
+    std::lock_guard lock(mutex_);
+    reader(statistics_);
+  }
+
+ private:
+  std::mutex mutex_;
+  decoder::BusStatistics& statistics_;
+};
+
+// An HTTP server (libmicrohttpd, on its own thread) that answers GET /metrics with what
+// `render` returns. `address` is HOST:PORT, [IPV6]:PORT, or :PORT for every interface.
+// Throws std::runtime_error naming the address when it cannot listen there.
+class MetricsServer {
+ public:
+  MetricsServer(const std::string& address, std::function<std::string()> render);
+  ~MetricsServer();
+  MetricsServer(const MetricsServer&) = delete;
+  MetricsServer& operator=(const MetricsServer&) = delete;
+
+  const std::function<std::string()>& render() const { return render_; }
+
+ private:
+  struct Daemon;
+  std::function<std::string()> render_;
+  std::unique_ptr<Daemon> daemon_;
+};
+
+}  // namespace modtap::tools
