@@ -37,6 +37,7 @@ OutputFile::~OutputFile() {
 void OutputFile::write(std::span<const uint8_t> bytes) {
   if (bytes.empty() || !file_) return;
   if (std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size()) fail();
+  written_ += bytes.size();
 }
 
 void OutputFile::flush() {

@@ -41,11 +41,13 @@ class OutputFile {
   // Flushes and closes; throws WriteError if anything written did not reach the file.
   void close();
   const std::string& name() const { return name_; }
+  uint64_t bytes_written() const { return written_; }  // handed to the stream so far
 
  private:
   [[noreturn]] void fail();
 
   FILE* file_;
+  uint64_t written_ = 0;
   bool owned_;
   std::string name_;
 };

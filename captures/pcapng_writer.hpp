@@ -31,6 +31,7 @@ class PcapngWriter {
   void write_packet(uint32_t interface, int64_t t_ns, std::span<const uint8_t> data,
                     PacketDirection direction, std::string_view comment);
   void flush();
+  uint64_t bytes_written() const { return file_.bytes_written(); }
   // Writes out what is buffered and closes the file, reporting any failure.
   void close();
 

@@ -393,6 +393,31 @@ def reconnects():
     print(f"port unplugged and back with --reconnect: {'ok' if ok else 'FAILED'}")
 
 
+def stops_by_itself():
+    """-a duration:S ends a live run after S seconds of wall time, as SIGTERM would."""
+    global passed
+    port = Pty()
+    request = with_crc([1, 3, 0, 0, 0, 1])
+    started = time.time()
+    modtap = subprocess.Popen([MODTAP, "-i", port.path, "-T", "json", "--mode", "rtu",
+                               "-a", "duration:1.5"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    wait_until_open(modtap, port.path)
+    os.write(port.master, request)
+    try:
+        out, err = modtap.communicate(timeout=15)
+    except subprocess.TimeoutExpired:
+        modtap.kill()
+        out, err = modtap.communicate()
+    took = time.time() - started
+    frames = [json.loads(line)["raw"] for line in out.splitlines() if '"type":"frame"' in line]
+    ok = check("autostop", modtap.returncode == 0 and frames == [request.hex()] and 1.5 <= took < 8,
+               f"status {modtap.returncode} after {took:.1f} s, frames {frames}; {err!r}")
+    port.close()
+    passed += ok
+    print(f"-a duration:1.5 on a port: {'ok' if ok else 'FAILED'} ({took:.1f} s)")
+
+
 def unprivileged_and_read_only():
     """As an ordinary user in the dialout group, modtap opens the tap read-only and never
     writes to it: strace shows the open's flags and every write; the pty's other side stays
@@ -542,11 +567,12 @@ run_case("mbpoll -> libmodbus, --baud auto", 19200, "even", 8, "rtu",
 error_cases()
 port_disappears()
 reconnects()
+stops_by_itself()
 junk_and_clean_exit()
 unprivileged_and_read_only()
 signals_at_random_moments()
 for f in failures:
     print("FAIL", f)
-cases = 14
+cases = 15
 print(f"{passed} passed, {cases - passed} failed")
 sys.exit(1 if failures else 0)

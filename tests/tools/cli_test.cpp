@@ -130,6 +130,36 @@ TEST(Cli, StatsFileIsJsonBesideTheTextOutput) {
   EXPECT_NE(json.str().find("\"slaves\":[{\"slave\":1,\"requests\":15,"), std::string::npos);
 }
 
+// dumpcap's autostop: after so many frames, so much capture time, or a -w file so large; the
+// first condition reached wins. Conditions that are none are refused before any work.
+TEST(Cli, AutostopEndsTheRunAtTheFirstConditionReached) {
+  EXPECT_EQ(run(brainchild + " -a frames:5 -T json").lines.size(), 5u);
+  EXPECT_EQ(run(brainchild + " -a frames:5 -c 3 -T json").lines.size(), 3u);
+  // The capture spans 262 ms; its first 100 ms hold 14 frames.
+  const Outcome early = run(brainchild + " -a duration:0.1 -T json");
+  ASSERT_EQ(early.status, 0);
+  EXPECT_EQ(early.lines.size(), 14u);
+  const auto pcapng = (std::filesystem::temp_directory_path() / "modtap-autostop.pcapng").string();
+  std::filesystem::remove(pcapng);
+  ASSERT_EQ(run(brainchild + " -a filesize:1 -a duration:10 -w " + pcapng).status, 0);
+  const auto size = std::filesystem::file_size(pcapng);
+  EXPECT_GE(size, 1000u);
+  EXPECT_LT(size, 1400u);
+  const Outcome written = run("-r " + pcapng + " -T json");
+  EXPECT_GT(written.lines.size(), 2u);
+  EXPECT_LT(written.lines.size(), 30u);
+  std::filesystem::remove(pcapng);
+  for (const char* bad : {"size:3", "frames:2.5", "duration:0", "duration:", "frames"}) {
+    const Outcome refused = run(brainchild + " -a " + bad);
+    EXPECT_NE(refused.status, 0) << bad;
+    ASSERT_FALSE(refused.lines.empty()) << bad;
+    EXPECT_THAT(refused.lines.back(), ::testing::HasSubstr(std::string("-a ") + bad)) << bad;
+  }
+  const Outcome no_file = run(brainchild + " -a filesize:1");
+  EXPECT_NE(no_file.status, 0);
+  EXPECT_THAT(no_file.lines.back(), ::testing::HasSubstr("give -w"));
+}
+
 // tshark's habits: -c stops after N frames (statistics included), -q keeps only the summary,
 // -t chooses the time column, --version says which modtap this is.
 TEST(Cli, TsharkHabitsCountQuietTimeAndVersion) {

@@ -133,6 +133,10 @@ ProbeResult probe_ports(const std::vector<PortSpec>& specs, const LiveOptions& o
   return {best.format, std::move(reads[static_cast<size_t>(&best - trials.data())])};
 }
 
+int64_t wall_clock_ns() {
+  return now_ns();
+}
+
 const std::atomic<bool>& stop_on_signals() {
   struct sigaction action {};
   action.sa_handler = on_signal;
@@ -206,6 +210,7 @@ int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options,
     }
     const int64_t now = now_ns();
     bus.flush(now);
+    if (options.done && options.done(now)) break;
     if (options.status_line && now - last_status >= 1'000'000'000) {
       fmt::print(stderr, "\r{} frames/s  frames {}  bad checks {}  noise {}  time-outs {}   ",
                  counting.frames - last_frames, counting.frames, counting.errors, counting.noise,

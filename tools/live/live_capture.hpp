@@ -40,6 +40,7 @@ struct LiveOptions {
   std::vector<ReadBytes> replay;      // analysed before the first read
   std::function<void(const decoder::Chunk&)> on_read;  // every read, as read (--save-raw)
   std::function<void(PortEvent)> on_port_event;        // for the metrics
+  std::function<bool(int64_t now_ns)> done;            // -a: stop when it says so
 };
 
 // Runs until `stop` is set (a signal) or a port disappears without --reconnect; then
@@ -58,6 +59,9 @@ struct ProbeResult {
 ProbeResult probe_ports(const std::vector<PortSpec>& ports, const LiveOptions& options,
                         std::optional<uint32_t> baud, std::optional<decoder::Parity> parity,
                         int64_t window_ns, const std::atomic<bool>& stop);
+
+// The wall clock the live loop stamps reads with (it never jumps, docs/live.md).
+int64_t wall_clock_ns();
 
 // Installs SIGINT and SIGTERM handlers that set the returned flag.
 const std::atomic<bool>& stop_on_signals();

@@ -76,7 +76,40 @@ struct Options {
   std::string follow;
   std::string register_base = "hex";
   std::string metrics_address;
+  std::vector<std::string> autostop;  // -a duration:S, filesize:KB, frames:N
 };
+
+// -a, as dumpcap's: stop after so long (capture time for a file, wall time on a port), once
+// the -w file holds so many kilobytes (1000 bytes), or after so many frames.
+struct Autostop {
+  std::optional<int64_t> duration_ns;
+  std::optional<uint64_t> filesize_bytes;
+  std::optional<uint64_t> frames;
+};
+
+Autostop parse_autostop(const std::vector<std::string>& conditions) {
+  Autostop stop;
+  for (const auto& condition : conditions) {
+    const auto colon = condition.find(':');
+    const std::string key = condition.substr(0, colon);
+    const std::string value = colon == std::string::npos ? "" : condition.substr(colon + 1);
+    char* end = nullptr;
+    const double number = std::strtod(value.c_str(), &end);
+    const bool positive = !value.empty() && *end == '\0' && number > 0 && number < 1e15;
+    const bool whole = positive && number == static_cast<double>(static_cast<uint64_t>(number));
+    if (key == "duration" && positive) {
+      stop.duration_ns = static_cast<int64_t>(number * 1e9);
+    } else if (key == "filesize" && whole) {
+      stop.filesize_bytes = static_cast<uint64_t>(number) * 1000;
+    } else if (key == "frames" && whole) {
+      stop.frames = static_cast<uint64_t>(number);
+    } else {
+      throw std::invalid_argument(fmt::format(
+          "-a {}: give duration:SECONDS, filesize:KB or frames:N, each above 0", condition));
+    }
+  }
+  return stop;
+}
 
 std::optional<uint32_t> fixed_baud(const Options& o) {
   if (o.baud == "auto") return std::nullopt;
@@ -201,6 +234,8 @@ class Sinks {
     limit_ = std::make_unique<decoder::FrameLimit>(max_frames, next, std::move(on_reached));
   }
   bool limit_reached() const { return limit_ && limit_->reached(); }
+  // How much the -w file holds so far (0 without -w).
+  uint64_t pcapng_bytes() const { return pcapng_ ? pcapng_->bytes_written() : 0; }
   const decoder::BusStatistics* statistics() const { return statistics_.get(); }
   tools::SharedStatistics* shared_statistics() { return shared_statistics_.get(); }
   const decoder::BusTimeline* timeline() const { return timeline_.get(); }
@@ -334,6 +369,12 @@ std::unique_ptr<tools::ProgressBar> progress_bar(const Options& o,
   return std::make_unique<tools::ProgressBar>(stderr, size);
 }
 
+// -c N and -a frames:N: whichever stops first (0: no limit).
+uint64_t frame_limit(const Options& o, const Autostop& autostop) {
+  if (!autostop.frames) return o.max_frames;
+  return o.max_frames ? std::min(o.max_frames, *autostop.frames) : *autostop.frames;
+}
+
 // --metrics: /metrics served from the statistics while the run goes on.
 std::unique_ptr<tools::MetricsServer> serve_metrics(const Options& o, Sinks& sinks,
                                                     const tools::PortHealth& ports) {
@@ -401,7 +442,8 @@ int read_file(const Options& o) {
   captures::OutputFile standard_output(stdout, "standard output");
   tools::Output out(standard_output);
   Sinks sinks(o, out, source->channels(), open.serial, source->clock());
-  sinks.limit_frames(o.max_frames);
+  const Autostop autostop = parse_autostop(o.autostop);
+  sinks.limit_frames(frame_limit(o, autostop));
   decoder::LineHealth health(&sinks.all());
   decoder::AnalyzerOptions options = analyzer_options(o, source->clock());
   options.format = open.serial;
@@ -417,7 +459,11 @@ int read_file(const Options& o) {
   const tools::PortHealth no_ports;
   auto metrics = serve_metrics(o, sinks, no_ports);
   try {
+    std::optional<int64_t> first_ns;
     while (!sinks.limit_reached() && source->next(chunk)) {
+      if (!first_ns) first_ns = chunk.t_ns;
+      if (autostop.duration_ns && chunk.t_ns - *first_ns >= *autostop.duration_ns) break;
+      if (autostop.filesize_bytes && sinks.pcapng_bytes() >= *autostop.filesize_bytes) break;
       if (progress) progress->update(*source->file_position());
       if (source->clock() == decoder::ClockQuality::per_chunk) pace.add(chunk);
       if (raw) raw->write(chunk);
@@ -467,7 +513,13 @@ int listen(const Options& o) {
     options.replay = std::move(probed.read);  // the winning setting's bytes are analysed too
   }
   Sinks sinks(o, out, channels, options.analyzer.format, decoder::ClockQuality::per_chunk);
-  sinks.limit_frames(o.max_frames, live::request_stop);
+  const Autostop autostop = parse_autostop(o.autostop);
+  sinks.limit_frames(frame_limit(o, autostop), live::request_stop);
+  const int64_t started_ns = live::wall_clock_ns();
+  options.done = [&](int64_t now_ns) {
+    return (autostop.duration_ns && now_ns - started_ns >= *autostop.duration_ns) ||
+           (autostop.filesize_bytes && sinks.pcapng_bytes() >= *autostop.filesize_bytes);
+  };
   options.analyzer.slave_timeout_ns = sinks.model_timeouts();
   auto raw = raw_recorder(o, channels, options.analyzer.format);
   if (raw) options.on_read = [&](const decoder::Chunk& chunk) { raw->write(chunk); };
@@ -545,6 +597,9 @@ int main(int argc, char** argv) {
                  "Only records that match, in every output: 'slave == 3 && fc == 6', "
                  "'latency_us > 50000', 'finding', 'register.name == \"fault\"' (docs/output.md)");
   app.add_option("-c", o.max_frames, "Stop after this many frames")->check(CLI::PositiveNumber);
+  app.add_option("-a,--autostop", o.autostop,
+                 "Stop after duration:SECONDS (capture time of a file, wall time on a port), "
+                 "filesize:KB (the -w file), or frames:N; repeatable, the first reached wins");
   app.add_flag("-q,--quiet", o.quiet,
                "No line per frame: only what the run adds up to (-T stats, --stats)");
   app.set_version_flag("--version", std::string("modtap ") + MODTAP_VERSION);
@@ -594,6 +649,11 @@ int main(int argc, char** argv) {
     }
     if (o.interfaces.size() > 2) {
       fmt::print(stderr, "modtap: at most two ports (master=PATH slave=PATH)\n");
+      return 2;
+    }
+    const Autostop autostop = parse_autostop(o.autostop);  // its errors before any work
+    if (autostop.filesize_bytes && o.write_file.empty()) {
+      fmt::print(stderr, "modtap: -a filesize stops on the size of the -w file: give -w\n");
       return 2;
     }
     if (auto refusal = refuse_outputs(o)) {
