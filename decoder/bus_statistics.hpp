@@ -101,6 +101,12 @@ class BusStatistics final : public RecordSink {
   const std::map<uint8_t, std::unique_ptr<SlaveStatistics>>& addresses() const {
     return addresses_;
   }
+  // Calls visit(address, statistics) for each slave (an address `good`), in address order.
+  template <typename Visit>
+  void for_each_slave(Visit&& visit) const {
+    for (const auto& [address, slave] : addresses_)
+      if (slave->good) visit(address, *slave);
+  }
   uint64_t stray_bad_checks() const;
   size_t stray_addresses() const;
 

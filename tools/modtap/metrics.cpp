@@ -52,20 +52,18 @@ class Exposition {
 void exchange_family(Exposition& e, const BusStatistics& s, std::string_view name,
                      std::string_view help, uint64_t ExchangeCounts::*count) {
   e.family(name, "counter", help);
-  for (const auto& [address, slave] : s.addresses()) {
-    if (!slave->good) continue;
-    for (const auto& [fc, counts] : slave->by_function)
+  s.for_each_slave([&](uint8_t address, const SlaveStatistics& slave) {
+    for (const auto& [fc, counts] : slave.by_function)
       e.sample(name, fmt::format("slave=\"{}\",fc=\"{}\"", address, fc), counts.*count);
-  }
+  });
 }
 
 void latency_histogram(Exposition& e, const BusStatistics& s) {
   constexpr std::string_view name = "modtap_response_latency_seconds";
   e.family(name, "histogram",
            "Time from the end of a request to the start of its good response, per slave");
-  for (const auto& [address, slave] : s.addresses()) {
-    if (!slave->good) continue;
-    const auto& latency = slave->latency_ns;
+  s.for_each_slave([&](uint8_t address, const SlaveStatistics& slave) {
+    const auto& latency = slave.latency_ns;
     for (double bound : latency_bounds_s)
       e.sample("modtap_response_latency_seconds_bucket",
                fmt::format("slave=\"{}\",le=\"{}\"", address, bound),
@@ -76,7 +74,7 @@ void latency_histogram(Exposition& e, const BusStatistics& s) {
              static_cast<double>(latency.sum()) / ns_per_s);
     e.sample("modtap_response_latency_seconds_count", fmt::format("slave=\"{}\"", address),
              latency.count());
-  }
+  });
 }
 
 void per_slave(Exposition& e, const BusStatistics& s) {
@@ -95,24 +93,23 @@ void per_slave(Exposition& e, const BusStatistics& s) {
   // A frame's function code may be as corrupted as its check: bad checks are counted per slave.
   e.family("modtap_bad_checks_total", "counter",
            "Frames to or from a slave with a wrong CRC or LRC");
-  for (const auto& [address, slave] : s.addresses())
-    if (slave->good)
-      e.sample("modtap_bad_checks_total", fmt::format("slave=\"{}\"", address),
-               slave->counts.bad_checks);
+  s.for_each_slave([&](uint8_t address, const SlaveStatistics& slave) {
+    e.sample("modtap_bad_checks_total", fmt::format("slave=\"{}\"", address),
+             slave.counts.bad_checks);
+  });
   e.family("modtap_exceptions_total", "counter", "Exception responses of a slave, per code");
-  for (const auto& [address, slave] : s.addresses()) {
-    if (!slave->good) continue;
-    for (const auto& [code, count] : slave->exceptions_by_code)
+  s.for_each_slave([&](uint8_t address, const SlaveStatistics& slave) {
+    for (const auto& [code, count] : slave.exceptions_by_code)
       e.sample("modtap_exceptions_total", fmt::format("slave=\"{}\",code=\"{}\"", address, code),
                count);
-  }
+  });
   latency_histogram(e, s);
   e.family("modtap_last_frame_timestamp_seconds", "gauge",
            "When the last frame to or from a slave began, in seconds since the Unix epoch");
-  for (const auto& [address, slave] : s.addresses())
-    if (slave->good)
-      e.sample("modtap_last_frame_timestamp_seconds", fmt::format("slave=\"{}\"", address),
-               static_cast<double>(slave->last_frame_ns) / ns_per_s);
+  s.for_each_slave([&](uint8_t address, const SlaveStatistics& slave) {
+    e.sample("modtap_last_frame_timestamp_seconds", fmt::format("slave=\"{}\"", address),
+             static_cast<double>(slave.last_frame_ns) / ns_per_s);
+  });
 }
 
 void bus_wide(Exposition& e, const BusStatistics& s) {

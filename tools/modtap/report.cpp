@@ -234,8 +234,9 @@ void append_slaves(fmt::memory_buffer& out, const BusStatistics& s) {
       "<th>rate</th><th class=\"text\">exceptions</th><th>bad checks</th><th>retries</th>"
       "<th>latency ms p50</th><th>p95</th><th>p99</th><th>max</th><th>poll ms p50</th>"
       "<th>p95</th></tr>\n"));
-  for (const auto& [address, slave] : all)
-    if (slave->good) append_slave_row(out, address, *slave);
+  s.for_each_slave([&](uint8_t address, const SlaveStatistics& slave) {
+    append_slave_row(out, address, slave);
+  });
   out.append(std::string_view("</table>\n"));
   if (const size_t stray = s.stray_addresses())
     fmt::format_to(fmt::appender(out),

@@ -66,26 +66,25 @@ void print_slaves(Output& out, const BusStatistics& s) {
       "       latency ms                 poll ms\n"
       "slave  requests  responses  timeouts   rate  excepts  bad  retries"
       "      p50     p95     p99     max      p50     p95\n");
-  for (const auto& [address, slave] : all) {
-    if (!slave->good) continue;
-    const ExchangeCounts& c = slave->counts;
+  s.for_each_slave([&](uint8_t address, const SlaveStatistics& slave) {
+    const ExchangeCounts& c = slave.counts;
     out.print("{:5}  {:8}  {:9}  {:8}  {:4.1f}%  {:7}  {:3}  {:7}  ", address, c.requests,
               c.responses, c.timeouts, 100 * c.timeout_rate(), c.exceptions, c.bad_checks,
               c.retries);
-    const Histogram& latency = slave->latency_ns;
+    const Histogram& latency = slave.latency_ns;
     if (latency.count()) {
       for (double p : {50.0, 95.0, 99.0}) print_ms(out, latency.percentile(p), 1, 8);
       print_ms(out, latency.max(), 1, 8);
     } else {
       out.print("{:>32}", "-");
     }
-    const Histogram& poll = slave->poll_interval_ns;
+    const Histogram& poll = slave.poll_interval_ns;
     if (poll.count()) {
       print_ms(out, poll.percentile(50), 0, 9);
       print_ms(out, poll.percentile(95), 0, 8);
     }
     out.print("\n");
-  }
+  });
   if (const size_t stray = s.stray_addresses())
     out.print("{} {} only in frames with a bad check ({} bad checks): not counted as slaves\n",
               stray, stray == 1 ? "address" : "addresses", s.stray_bad_checks());
@@ -331,12 +330,11 @@ void append_statistics_json(fmt::memory_buffer& out, const BusStatistics& s,
   append_latency(out, s.latency_ns);
   fmt::format_to(put, ",\"slaves\":[");
   bool first = true;
-  for (const auto& [address, slave] : s.addresses()) {
-    if (!slave->good) continue;
+  s.for_each_slave([&](uint8_t address, const SlaveStatistics& slave) {
     if (!first) out.push_back(',');
-    append_slave(out, address, *slave);
+    append_slave(out, address, slave);
     first = false;
-  }
+  });
   fmt::format_to(put, "],\"stray_addresses\":{},\"stray_bad_checks\":{}", s.stray_addresses(),
                  s.stray_bad_checks());
   append_outages(out, d);
