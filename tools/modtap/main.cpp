@@ -419,7 +419,7 @@ void hint_settings(const decoder::SerialFormat& format, const decoder::LineHealt
                100 * health.good_share(), health.bytes, decoder::describe(format));
 }
 
-int read_file(const Options& o) {
+int read_file(const Options& o, const Autostop& autostop) {
   captures::OpenOptions open;
   open.format = captures::parse_format(o.format);
   open.serial = serial_format(o);
@@ -442,8 +442,7 @@ int read_file(const Options& o) {
   captures::OutputFile standard_output(stdout, "standard output");
   tools::Output out(standard_output);
   Sinks sinks(o, out, source->channels(), open.serial, source->clock());
-  const Autostop autostop = parse_autostop(o.autostop);
-  sinks.limit_frames(frame_limit(o, autostop));
+  sinks.limit_frames(o.max_frames);
   decoder::LineHealth health(&sinks.all());
   decoder::AnalyzerOptions options = analyzer_options(o, source->clock());
   options.format = open.serial;
@@ -493,7 +492,7 @@ int read_file(const Options& o) {
   return 0;
 }
 
-int listen(const Options& o) {
+int listen(const Options& o, const Autostop& autostop) {
   std::vector<live::PortSpec> ports;
   std::vector<decoder::ChannelInfo> channels;
   for (const auto& spec : o.interfaces) {
@@ -513,8 +512,7 @@ int listen(const Options& o) {
     options.replay = std::move(probed.read);  // the winning setting's bytes are analysed too
   }
   Sinks sinks(o, out, channels, options.analyzer.format, decoder::ClockQuality::per_chunk);
-  const Autostop autostop = parse_autostop(o.autostop);
-  sinks.limit_frames(frame_limit(o, autostop), live::request_stop);
+  sinks.limit_frames(o.max_frames, live::request_stop);
   const int64_t started_ns = live::wall_clock_ns();
   options.done = [&](int64_t now_ns) {
     return (autostop.duration_ns && now_ns - started_ns >= *autostop.duration_ns) ||
@@ -652,6 +650,7 @@ int main(int argc, char** argv) {
       return 2;
     }
     const Autostop autostop = parse_autostop(o.autostop);  // its errors before any work
+    o.max_frames = frame_limit(o, autostop);
     if (autostop.filesize_bytes && o.write_file.empty()) {
       fmt::print(stderr, "modtap: -a filesize stops on the size of the -w file: give -w\n");
       return 2;
@@ -660,7 +659,7 @@ int main(int argc, char** argv) {
       fmt::print(stderr, "modtap: {}\n", *refusal);
       return 2;
     }
-    return o.interfaces.empty() ? read_file(o) : listen(o);
+    return o.interfaces.empty() ? read_file(o, autostop) : listen(o, autostop);
   } catch (const decoder::FilterError& e) {
     fmt::print(stderr, "modtap: -Y: {}\n", e.what());
     return 2;
