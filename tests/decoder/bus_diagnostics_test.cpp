@@ -153,18 +153,22 @@ TEST(BusDiagnostics, PollJitterNeedsAClockThatCanSeeIt) {
   EXPECT_EQ(per_read.frame(Role::request, "05 03 00 00 00 04", t + 12) & finding_poll_jitter, 0u);
 }
 
-// The simulator's bus through the analyzer and the stage, timed per byte.
-Collector simulated(const busgen::BusOptions& options) {
-  const busgen::BusCapture capture = busgen::simulate(options);
-  Collector out;
-  BusDiagnostics stage(options.format, ClockQuality::per_byte, out);
+// A simulated capture through the analyzer, each byte with its exact time.
+void analyze_per_byte(const busgen::BusCapture& capture, RecordSink& out) {
   AnalyzerOptions analyzer_options;
   analyzer_options.mode = ModeChoice::rtu;
   analyzer_options.clock = ClockQuality::per_byte;
-  Analyzer analyzer(analyzer_options, {{"bus", ChannelRole::bus}}, stage);
+  Analyzer analyzer(analyzer_options, {{"bus", ChannelRole::bus}}, out);
   for (size_t i = 0; i < capture.bytes.size(); ++i)
     analyzer.push({0, capture.end_ns[i], {&capture.bytes[i], 1}});
   analyzer.finish();
+}
+
+// The simulator's bus through the analyzer and the stage, timed per byte.
+Collector simulated(const busgen::BusOptions& options) {
+  Collector out;
+  BusDiagnostics stage(options.format, ClockQuality::per_byte, out);
+  analyze_per_byte(busgen::simulate(options), stage);
   return out;
 }
 
@@ -269,7 +273,6 @@ TEST(BusDiagnostics, AnswersSoonerThanTheModelsTurnaroundAreEarly) {
     options.transactions = 1000;
     options.polled_slaves = 4;
     options.min_turnaround_ns = min_turnaround_ns;
-    const busgen::BusCapture capture = busgen::simulate(options);
     struct Counter final : RecordSink {
       size_t responses = 0, early = 0;
       void on_frame(const Frame& f) override {
@@ -284,13 +287,7 @@ TEST(BusDiagnostics, AnswersSoonerThanTheModelsTurnaroundAreEarly) {
     } counter;
     ModelInterpreter models(catalog.all(), catalog.choose({"nta5000"}), ClockQuality::per_byte,
                             counter);
-    AnalyzerOptions analyzer_options;
-    analyzer_options.mode = ModeChoice::rtu;
-    analyzer_options.clock = ClockQuality::per_byte;
-    Analyzer analyzer(analyzer_options, {{"bus", ChannelRole::bus}}, models);
-    for (size_t i = 0; i < capture.bytes.size(); ++i)
-      analyzer.push({0, capture.end_ns[i], {&capture.bytes[i], 1}});
-    analyzer.finish();
+    analyze_per_byte(busgen::simulate(options), models);
     EXPECT_GT(counter.responses, 900u);
     return std::pair{counter.early, counter.responses};
   };
