@@ -37,6 +37,7 @@ class HexlogWriter {
   HexlogWriter(const std::string& path, int64_t char_time_ns);
   void write(const decoder::Chunk& chunk, const std::string& tty = {});
   void close() { file_.close(); }
+  uint64_t bytes_written() const { return file_.bytes_written(); }
 
  private:
   OutputFile file_;

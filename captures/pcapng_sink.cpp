@@ -182,3 +182,46 @@ void PcapngSink::on_noise(const Noise& noise) {
 }
 
 }  // namespace modtap::captures
+
+namespace modtap::captures {
+
+PcapngFiles::PcapngFiles(const std::string& path, const RingLimits& limits,
+                         const std::vector<decoder::ChannelInfo>& channels,
+                         const PcapngOptions& options)
+    : ring_(path, limits), channels_(channels), options_(options) {
+  if (!limits.rotates()) begin_file(ring_.begin(0));
+}
+
+void PcapngFiles::on_frame(const decoder::Frame& frame) {
+  sink_at(frame.t_ns).on_frame(frame);
+}
+
+void PcapngFiles::on_noise(const decoder::Noise& noise) {
+  sink_at(noise.t_ns).on_noise(noise);
+}
+
+uint64_t PcapngFiles::bytes_written() const {
+  return closed_bytes_ + (writer_ ? writer_->bytes_written() : 0);
+}
+
+PcapngSink& PcapngFiles::sink_at(int64_t t_ns) {
+  if (!writer_ || ring_.due(t_ns, writer_->bytes_written())) begin_file(ring_.begin(t_ns));
+  return *sink_;
+}
+
+void PcapngFiles::begin_file(const std::string& path) {
+  if (writer_) {
+    sink_.reset();
+    writer_->close();
+    closed_bytes_ += writer_->bytes_written();
+  }
+  writer_ = std::make_unique<PcapngWriter>(path);
+  sink_ = std::make_unique<PcapngSink>(*writer_, channels_, options_);
+}
+
+void PcapngFiles::close() {
+  if (!writer_) begin_file(ring_.begin_now());  // a ring that saw no record
+  writer_->close();
+}
+
+}  // namespace modtap::captures

@@ -2,11 +2,13 @@
 // one interface per channel, the direction in epb_flags and the verdicts in a comment.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <fmt/format.h>
 
+#include "captures/file_ring.hpp"
 #include "captures/pcapng_writer.hpp"
 #include "decoder/record_sink.hpp"
 
@@ -52,6 +54,36 @@ class PcapngSink final : public decoder::RecordSink {
   std::vector<int64_t> interface_of_channel_;  // -1 until its interface block is written
   std::vector<uint8_t> payload_;
   fmt::memory_buffer comment_;  // the packet's comment, its storage kept from frame to frame
+};
+
+// -w: the pcapng file, or with -b a ring of them. Each file is whole (its own section and
+// interfaces), and a record is never split between two.
+class PcapngFiles final : public decoder::RecordSink {
+ public:
+  // Without rotation the file is created at once (an empty capture leaves an empty pcapng);
+  // with it, each file when its first record comes.
+  PcapngFiles(const std::string& path, const RingLimits& limits,
+              const std::vector<decoder::ChannelInfo>& channels, const PcapngOptions& options);
+
+  void on_frame(const decoder::Frame& frame) override;
+  void on_noise(const decoder::Noise& noise) override;
+  void on_timeout(const decoder::Timeout&) override {}
+
+  uint64_t bytes_written() const;  // by all its files together
+  uint64_t files_begun() const { return ring_.files_begun(); }
+  // Completes the last file (or the one file of a run that saw no record), reporting failures.
+  void close();
+
+ private:
+  PcapngSink& sink_at(int64_t t_ns);
+  void begin_file(const std::string& path);
+
+  FileRing ring_;
+  const std::vector<decoder::ChannelInfo>& channels_;
+  PcapngOptions options_;
+  uint64_t closed_bytes_ = 0;  // what the files before the current one hold
+  std::unique_ptr<PcapngWriter> writer_;
+  std::unique_ptr<PcapngSink> sink_;
 };
 
 // The comment modtap writes on a frame: "modtap key=value ...", parsed by modtap.lua.

@@ -13,18 +13,18 @@ constexpr int raw_dlt = 147;  // DLT_USER0: what modtap -r reads as timed chunks
 }  // namespace
 
 RawRecorder::RawRecorder(const std::string& path, std::vector<decoder::ChannelInfo> channels,
-                         int64_t char_time_ns)
-    : channels_(std::move(channels)) {
-  if (ends_with(path, ".pcapng")) {
-    pcapng_ = std::make_unique<PcapngWriter>(path);
-    for (const auto& channel : channels_)
-      interfaces_.push_back(pcapng_->add_interface(raw_dlt, channel.name));
-  } else {
-    hexlog_ = std::make_unique<HexlogWriter>(path, char_time_ns);
-  }
+                         int64_t char_time_ns, const RingLimits& limits)
+    : channels_(std::move(channels)),
+      as_pcapng_(ends_with(path, ".pcapng")),
+      char_time_ns_(char_time_ns),
+      ring_(path, limits) {
+  if (!limits.rotates()) begin_file(ring_.begin(0));
 }
 
-void RawRecorder::write(const decoder::Chunk& chunk) {
+void RawRecorder::write(const decoder::Chunk& chunk, bool between_frames) {
+  const uint64_t bytes = bytes_in_file();
+  if ((between_frames && ring_.due(chunk.t_ns, bytes)) || ring_.overdue(chunk.t_ns, bytes))
+    begin_file(ring_.begin(chunk.t_ns));
   if (pcapng_) {
     pcapng_->write_packet(interfaces_.at(chunk.channel), chunk.t_ns, chunk.bytes,
                           PacketDirection::unknown, {});
@@ -34,13 +34,35 @@ void RawRecorder::write(const decoder::Chunk& chunk) {
   }
 }
 
+void RawRecorder::begin_file(const std::string& path) {
+  close_file();
+  if (as_pcapng_) {
+    pcapng_ = std::make_unique<PcapngWriter>(path);
+    interfaces_.clear();
+    for (const auto& channel : channels_)
+      interfaces_.push_back(pcapng_->add_interface(raw_dlt, channel.name));
+  } else {
+    hexlog_ = std::make_unique<HexlogWriter>(path, char_time_ns_);
+  }
+}
+
+uint64_t RawRecorder::bytes_in_file() const {
+  if (pcapng_) return pcapng_->bytes_written();
+  return hexlog_ ? hexlog_->bytes_written() : 0;
+}
+
 void RawRecorder::flush() {
   if (pcapng_) pcapng_->flush();
 }
 
-void RawRecorder::close() {
+void RawRecorder::close_file() {
   if (pcapng_) pcapng_->close();
   if (hexlog_) hexlog_->close();
+}
+
+void RawRecorder::close() {
+  if (ring_.files_begun() == 0) begin_file(ring_.begin_now());
+  close_file();
 }
 
 }  // namespace modtap::captures

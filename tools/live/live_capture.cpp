@@ -169,7 +169,7 @@ int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options,
   const int wake_ms =
       static_cast<int>(std::max<int64_t>(1, analyzer_options.format.t35_ns() / 1'000'000));
   auto take = [&](const decoder::Chunk& chunk) {
-    if (options.on_read) options.on_read(chunk);
+    if (options.on_read) options.on_read(chunk, bus.between_frames());
     bus.push(chunk);
   };
   for (const auto& read : options.replay) take({read.channel, read.t_ns, read.bytes});

@@ -38,9 +38,11 @@ struct LiveOptions {
   bool status_line = false;           // a rate/frames/errors line on stderr, once a second
   bool announce = true;               // say on stderr what is being listened to
   std::vector<ReadBytes> replay;      // analysed before the first read
-  std::function<void(const decoder::Chunk&)> on_read;  // every read, as read (--save-raw)
-  std::function<void(PortEvent)> on_port_event;        // for the metrics
-  std::function<bool(int64_t now_ns)> done;            // -a: stop when it says so
+  // Every read, as read (--save-raw), and whether it begins after every frame before it
+  // was out (where a file of reads may turn).
+  std::function<void(const decoder::Chunk&, bool between_frames)> on_read;
+  std::function<void(PortEvent)> on_port_event;  // for the metrics
+  std::function<bool(int64_t now_ns)> done;      // -a: stop when it says so
 };
 
 // Runs until `stop` is set (a signal) or a port disappears without --reconnect; then

@@ -28,6 +28,7 @@
 #include "decoder/format_probe.hpp"
 #include "tools/live/live_capture.hpp"
 #include "tools/modtap/auto_format.hpp"
+#include "tools/modtap/capture_conditions.hpp"
 #include "tools/modtap/csv_sink.hpp"
 #include "tools/modtap/json_sink.hpp"
 #include "tools/modtap/metrics.hpp"
@@ -76,40 +77,11 @@ struct Options {
   std::string follow;
   std::string register_base = "hex";
   std::string metrics_address;
-  std::vector<std::string> autostop;  // -a duration:S, filesize:KB, frames:N
+  std::vector<std::string> autostop;     // -a duration:S, filesize:KB, frames:N
+  std::vector<std::string> ring_buffer;  // -b duration:S, filesize:KB, files:N
 };
 
-// -a, as dumpcap's: stop after so long (capture time for a file, wall time on a port), once
-// the -w file holds so many kilobytes (1000 bytes), or after so many frames.
-struct Autostop {
-  std::optional<int64_t> duration_ns;
-  std::optional<uint64_t> filesize_bytes;
-  std::optional<uint64_t> frames;
-};
-
-Autostop parse_autostop(const std::vector<std::string>& conditions) {
-  Autostop stop;
-  for (const auto& condition : conditions) {
-    const auto colon = condition.find(':');
-    const std::string key = condition.substr(0, colon);
-    const std::string value = colon == std::string::npos ? "" : condition.substr(colon + 1);
-    char* end = nullptr;
-    const double number = std::strtod(value.c_str(), &end);
-    const bool positive = !value.empty() && *end == '\0' && number > 0 && number < 1e15;
-    const bool whole = positive && number == static_cast<double>(static_cast<uint64_t>(number));
-    if (key == "duration" && positive) {
-      stop.duration_ns = static_cast<int64_t>(number * 1e9);
-    } else if (key == "filesize" && whole) {
-      stop.filesize_bytes = static_cast<uint64_t>(number) * 1000;
-    } else if (key == "frames" && whole) {
-      stop.frames = static_cast<uint64_t>(number);
-    } else {
-      throw std::invalid_argument(fmt::format(
-          "-a {}: give duration:SECONDS, filesize:KB or frames:N, each above 0", condition));
-    }
-  }
-  return stop;
-}
+using tools::Autostop;
 
 std::optional<uint32_t> fixed_baud(const Options& o) {
   if (o.baud == "auto") return std::nullopt;
@@ -177,8 +149,9 @@ std::function<bool(const decoder::RegisterValue&)> report_follow(const Options& 
 // front of them, the stage that reads frames through the device models.
 class Sinks {
  public:
-  Sinks(const Options& o, tools::Output& out, const std::vector<decoder::ChannelInfo>& channels,
-        const decoder::SerialFormat& format, decoder::ClockQuality clock)
+  Sinks(const Options& o, const captures::RingLimits& ring, tools::Output& out,
+        const std::vector<decoder::ChannelInfo>& channels, const decoder::SerialFormat& format,
+        decoder::ClockQuality clock)
       : terminal_(make_sink(o, out, channels)) {
     fan_out_.add(*terminal_);
     if (wants_statistics(o)) {
@@ -216,9 +189,8 @@ class Sinks {
     options.link = captures::parse_link(o.link);
     options.dlt = o.dlt;
     options.clock = clock;
-    pcapng_ = std::make_unique<captures::PcapngWriter>(o.write_file);
-    pcapng_sink_ = std::make_unique<captures::PcapngSink>(*pcapng_, channels, options);
-    fan_out_.add(*pcapng_sink_);
+    pcapng_ = std::make_unique<captures::PcapngFiles>(o.write_file, ring, channels, options);
+    fan_out_.add(*pcapng_);
   }
   // Where records enter: the frame limit, the bus's history, the model stage, the filter,
   // then every sink.
@@ -234,7 +206,7 @@ class Sinks {
     limit_ = std::make_unique<decoder::FrameLimit>(max_frames, next, std::move(on_reached));
   }
   bool limit_reached() const { return limit_ && limit_->reached(); }
-  // How much the -w file holds so far (0 without -w).
+  // How much the -w files hold so far (0 without -w).
   uint64_t pcapng_bytes() const { return pcapng_ ? pcapng_->bytes_written() : 0; }
   const decoder::BusStatistics* statistics() const { return statistics_.get(); }
   tools::SharedStatistics* shared_statistics() { return shared_statistics_.get(); }
@@ -276,8 +248,7 @@ class Sinks {
   std::unique_ptr<decoder::BusDiagnostics> diagnostics_;
   std::unique_ptr<decoder::ModelInterpreter> interpreter_;
   std::map<uint8_t, int64_t> model_timeouts_;
-  std::unique_ptr<captures::PcapngWriter> pcapng_;
-  std::unique_ptr<captures::PcapngSink> pcapng_sink_;
+  std::unique_ptr<captures::PcapngFiles> pcapng_;
   std::unique_ptr<decoder::FrameLimit> limit_;
 };
 
@@ -312,6 +283,16 @@ std::optional<std::string> refuse_outputs(const Options& o) {
   if (on_standard_output.size() > 1)
     return fmt::format("{} and {} would both write to standard output", on_standard_output[0],
                        on_standard_output[1]);
+  return std::nullopt;
+}
+
+// -b turns files: it needs a file to turn, and standard output is none.
+std::optional<std::string> refuse_ring(const Options& o, const captures::RingLimits& ring) {
+  if (!ring.rotates()) return std::nullopt;
+  if (o.write_file.empty() && o.save_raw.empty())
+    return "-b turns the files of -w and --save-raw: give one of them";
+  if (o.write_file == "-" || o.save_raw == "-")
+    return "-b writes a ring of files; standard output is one stream: give a file name";
   return std::nullopt;
 }
 
@@ -388,10 +369,10 @@ std::unique_ptr<tools::MetricsServer> serve_metrics(const Options& o, Sinks& sin
 }
 
 std::unique_ptr<captures::RawRecorder> raw_recorder(
-    const Options& o, const std::vector<decoder::ChannelInfo>& channels,
-    const decoder::SerialFormat& format) {
+    const Options& o, const captures::RingLimits& ring,
+    const std::vector<decoder::ChannelInfo>& channels, const decoder::SerialFormat& format) {
   if (o.save_raw.empty()) return nullptr;
-  return std::make_unique<captures::RawRecorder>(o.save_raw, channels, format.char_time_ns());
+  return std::make_unique<captures::RawRecorder>(o.save_raw, channels, format.char_time_ns(), ring);
 }
 
 // After a run whose traffic made little sense, or came faster than the baud allows, say so.
@@ -419,7 +400,7 @@ void hint_settings(const decoder::SerialFormat& format, const decoder::LineHealt
                100 * health.good_share(), health.bytes, decoder::describe(format));
 }
 
-int read_file(const Options& o, const Autostop& autostop) {
+int read_file(const Options& o, const Autostop& autostop, const captures::RingLimits& ring) {
   captures::OpenOptions open;
   open.format = captures::parse_format(o.format);
   open.serial = serial_format(o);
@@ -441,7 +422,7 @@ int read_file(const Options& o, const Autostop& autostop) {
 
   captures::OutputFile standard_output(stdout, "standard output");
   tools::Output out(standard_output);
-  Sinks sinks(o, out, source->channels(), open.serial, source->clock());
+  Sinks sinks(o, ring, out, source->channels(), open.serial, source->clock());
   sinks.limit_frames(o.max_frames);
   decoder::LineHealth health(&sinks.all());
   decoder::AnalyzerOptions options = analyzer_options(o, source->clock());
@@ -449,7 +430,7 @@ int read_file(const Options& o, const Autostop& autostop) {
   options.slave_timeout_ns = sinks.model_timeouts();
   decoder::Analyzer bus(options, source->channels(), health);
   decoder::ChunkPace pace(open.serial);
-  auto raw = raw_recorder(o, source->channels(), open.serial);
+  auto raw = raw_recorder(o, ring, source->channels(), open.serial);
   decoder::Chunk chunk;
   // A capture that breaks off (a truncated file) still gives everything read before the
   // break, in every output, and then the error.
@@ -465,7 +446,7 @@ int read_file(const Options& o, const Autostop& autostop) {
       if (autostop.filesize_bytes && sinks.pcapng_bytes() >= *autostop.filesize_bytes) break;
       if (progress) progress->update(*source->file_position());
       if (source->clock() == decoder::ClockQuality::per_chunk) pace.add(chunk);
-      if (raw) raw->write(chunk);
+      if (raw) raw->write(chunk, bus.between_frames());
       bus.push(chunk);
     }
   } catch (const captures::CaptureError& e) {
@@ -492,7 +473,7 @@ int read_file(const Options& o, const Autostop& autostop) {
   return 0;
 }
 
-int listen(const Options& o, const Autostop& autostop) {
+int listen(const Options& o, const Autostop& autostop, const captures::RingLimits& ring) {
   std::vector<live::PortSpec> ports;
   std::vector<decoder::ChannelInfo> channels;
   for (const auto& spec : o.interfaces) {
@@ -511,7 +492,7 @@ int listen(const Options& o, const Autostop& autostop) {
     options.analyzer.format = probed.format;
     options.replay = std::move(probed.read);  // the winning setting's bytes are analysed too
   }
-  Sinks sinks(o, out, channels, options.analyzer.format, decoder::ClockQuality::per_chunk);
+  Sinks sinks(o, ring, out, channels, options.analyzer.format, decoder::ClockQuality::per_chunk);
   sinks.limit_frames(o.max_frames, live::request_stop);
   const int64_t started_ns = live::wall_clock_ns();
   options.done = [&](int64_t now_ns) {
@@ -519,8 +500,11 @@ int listen(const Options& o, const Autostop& autostop) {
            (autostop.filesize_bytes && sinks.pcapng_bytes() >= *autostop.filesize_bytes);
   };
   options.analyzer.slave_timeout_ns = sinks.model_timeouts();
-  auto raw = raw_recorder(o, channels, options.analyzer.format);
-  if (raw) options.on_read = [&](const decoder::Chunk& chunk) { raw->write(chunk); };
+  auto raw = raw_recorder(o, ring, channels, options.analyzer.format);
+  if (raw)
+    options.on_read = [&](const decoder::Chunk& chunk, bool between_frames) {
+      raw->write(chunk, between_frames);
+    };
   options.reconnect = o.reconnect;
   tools::PortHealth port_health;
   options.on_port_event = [&port_health](live::PortEvent event) {
@@ -597,7 +581,10 @@ int main(int argc, char** argv) {
   app.add_option("-c", o.max_frames, "Stop after this many frames")->check(CLI::PositiveNumber);
   app.add_option("-a,--autostop", o.autostop,
                  "Stop after duration:SECONDS (capture time of a file, wall time on a port), "
-                 "filesize:KB (the -w file), or frames:N; repeatable, the first reached wins");
+                 "filesize:KB (the -w files), or frames:N; repeatable, the first reached wins");
+  app.add_option("-b,--ring-buffer", o.ring_buffer,
+                 "Write -w and --save-raw as a ring of files, named as dumpcap names them: a "
+                 "new file after duration:SECONDS or filesize:KB, keeping the newest files:N");
   app.add_flag("-q,--quiet", o.quiet,
                "No line per frame: only what the run adds up to (-T stats, --stats)");
   app.set_version_flag("--version", std::string("modtap ") + MODTAP_VERSION);
@@ -649,17 +636,23 @@ int main(int argc, char** argv) {
       fmt::print(stderr, "modtap: at most two ports (master=PATH slave=PATH)\n");
       return 2;
     }
-    const Autostop autostop = parse_autostop(o.autostop);  // its errors before any work
+    // The conditions' errors come before any work.
+    const Autostop autostop = tools::parse_autostop(o.autostop);
+    const captures::RingLimits ring = tools::parse_ring_buffer(o.ring_buffer);
     o.max_frames = frame_limit(o, autostop);
     if (autostop.filesize_bytes && o.write_file.empty()) {
       fmt::print(stderr, "modtap: -a filesize stops on the size of the -w file: give -w\n");
+      return 2;
+    }
+    if (auto refusal = refuse_ring(o, ring)) {
+      fmt::print(stderr, "modtap: {}\n", *refusal);
       return 2;
     }
     if (auto refusal = refuse_outputs(o)) {
       fmt::print(stderr, "modtap: {}\n", *refusal);
       return 2;
     }
-    return o.interfaces.empty() ? read_file(o, autostop) : listen(o, autostop);
+    return o.interfaces.empty() ? read_file(o, autostop, ring) : listen(o, autostop, ring);
   } catch (const decoder::FilterError& e) {
     fmt::print(stderr, "modtap: -Y: {}\n", e.what());
     return 2;
