@@ -210,6 +210,7 @@ int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options,
     }
     const int64_t now = now_ns();
     bus.flush(now);
+    if (options.on_wake) options.on_wake(now);
     if (options.done && options.done(now)) break;
     if (options.status_line && now - last_status >= 1'000'000'000) {
       fmt::print(stderr, "\r{} frames/s  frames {}  bad checks {}  noise {}  time-outs {}   ",

@@ -41,6 +41,9 @@ struct LiveOptions {
   // Every read, as read (--save-raw), and whether it begins after every frame before it
   // was out (where a file of reads may turn).
   std::function<void(const decoder::Chunk&, bool between_frames)> on_read;
+  // After every wake of the loop (a read, or a wait of about t3.5 with none), with the time:
+  // what paces itself by the clock even on a silent bus (--mqtt).
+  std::function<void(int64_t now_ns)> on_wake;
   std::function<void(PortEvent)> on_port_event;  // for the metrics
   std::function<bool(int64_t now_ns)> done;      // -a: stop when it says so
 };

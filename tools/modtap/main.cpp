@@ -33,6 +33,8 @@
 #include "tools/modtap/json_sink.hpp"
 #include "tools/modtap/metrics.hpp"
 #include "tools/modtap/model_catalog.hpp"
+#include "tools/modtap/mosquitto_broker.hpp"
+#include "tools/modtap/mqtt_publisher.hpp"
 #include "tools/modtap/output.hpp"
 #include "tools/modtap/progress.hpp"
 #include "tools/modtap/report.hpp"
@@ -77,6 +79,10 @@ struct Options {
   std::string follow;
   std::string register_base = "hex";
   std::string metrics_address;
+  std::string mqtt_url;
+  double mqtt_interval_s = 10;
+  std::string mqtt_bus;
+  std::string mqtt_discovery;            // Home Assistant's discovery prefix; empty: no discovery
   std::vector<std::string> autostop;     // -a duration:S, filesize:KB, frames:N
   std::vector<std::string> ring_buffer;  // -b duration:S, filesize:KB, files:N
 };
@@ -133,7 +139,7 @@ tools::ModelCatalog load_models(const Options& o) {
 
 bool wants_statistics(const Options& o) {
   return o.output == "stats" || !o.stats_file.empty() || !o.report_file.empty() ||
-         !o.metrics_address.empty();
+         !o.metrics_address.empty() || !o.mqtt_url.empty();
 }
 
 // The report's registers over time: those --follow names, none without it.
@@ -167,7 +173,7 @@ class Sinks {
       timeline_ = std::make_unique<decoder::BusTimeline>(report_follow(o));
       fan_out_.add(*timeline_);
     }
-    // Only text, JSON, pcapng comments and statistics with --model show what the models say;
+    // Only text, JSON, CSV, MQTT, pcapng comments and statistics show what the models say;
     // the other outputs skip the work, and the YAML is not read unless models are asked for.
     // A filter may name registers, so it reads frames through the models too.
     const bool interpret = o.output == "text" || o.output == "json" || o.output == "csv" ||
@@ -206,6 +212,12 @@ class Sinks {
     limit_ = std::make_unique<decoder::FrameLimit>(max_frames, next, std::move(on_reached));
   }
   bool limit_reached() const { return limit_ && limit_->reached(); }
+  // --mqtt: the register values and the statistics' summary, to `broker`.
+  tools::MqttPublisher& publish(tools::MessageBroker& broker, tools::MqttOptions options) {
+    mqtt_ = std::make_unique<tools::MqttPublisher>(broker, *statistics_, std::move(options));
+    fan_out_.add(*mqtt_);
+    return *mqtt_;
+  }
   // How much the -w files hold so far (0 without -w).
   uint64_t pcapng_bytes() const { return pcapng_ ? pcapng_->bytes_written() : 0; }
   const decoder::BusStatistics* statistics() const { return statistics_.get(); }
@@ -250,6 +262,7 @@ class Sinks {
   std::map<uint8_t, int64_t> model_timeouts_;
   std::unique_ptr<captures::PcapngFiles> pcapng_;
   std::unique_ptr<decoder::FrameLimit> limit_;
+  std::unique_ptr<tools::MqttPublisher> mqtt_;
 };
 
 bool same_file(const std::string& a, const std::string& b) {
@@ -356,6 +369,12 @@ uint64_t frame_limit(const Options& o, const Autostop& autostop) {
   return o.max_frames ? std::min(o.max_frames, *autostop.frames) : *autostop.frames;
 }
 
+// What names the bus in MQTT topics unless --mqtt-bus does: the port's or the file's name.
+std::string bus_name(const std::string& path) {
+  if (path == "-") return "stdin";
+  return std::filesystem::path(path).stem().string();
+}
+
 // --metrics: /metrics served from the statistics while the run goes on.
 std::unique_ptr<tools::MetricsServer> serve_metrics(const Options& o, Sinks& sinks,
                                                     const tools::PortHealth& ports) {
@@ -373,6 +392,51 @@ std::unique_ptr<captures::RawRecorder> raw_recorder(
     const std::vector<decoder::ChannelInfo>& channels, const decoder::SerialFormat& format) {
   if (o.save_raw.empty()) return nullptr;
   return std::make_unique<captures::RawRecorder>(o.save_raw, channels, format.char_time_ns(), ring);
+}
+
+// --mqtt: the publisher and its broker, connected. A file read waits for the broker and fails
+// without it; a port goes on listening while the client keeps trying (a service may start
+// before its broker).
+class MqttOutput {
+ public:
+  MqttOutput(const Options& o, Sinks& sinks, const std::string& bus, bool live) {
+    const tools::MqttUrl url = tools::parse_mqtt_url(o.mqtt_url);
+    tools::MqttOptions options;
+    options.prefix = url.prefix;
+    options.bus = o.mqtt_bus.empty() ? bus : o.mqtt_bus;
+    options.interval_ns = static_cast<int64_t>(o.mqtt_interval_s * 1e9);
+    const auto base = decoder::register_base_named(o.register_base);
+    options.follow = tools::parse_follow_or_all(o.follow, base);
+    options.base = base;
+    if (!o.mqtt_discovery.empty()) options.discovery_prefix = o.mqtt_discovery;
+    broker_ = std::make_unique<tools::MosquittoBroker>(url, tools::status_topic(options));
+    if (!broker_->wait_connected(live ? 3 : 10)) {
+      const std::string why =
+          fmt::format("{}: cannot connect: {}", broker_->name(), broker_->connect_error());
+      if (!live) throw std::runtime_error(why);
+      fmt::print(stderr, "modtap: {}; trying again while listening\n", why);
+    }
+    publisher_ = &sinks.publish(*broker_, std::move(options));
+  }
+  void tick(int64_t now_ns) { publisher_->tick(now_ns); }
+  // The last values and summary, status offline, and what the broker missed.
+  void finish() {
+    publisher_->finish();
+    broker_->close();
+    if (broker_->dropped())
+      fmt::print(stderr, "modtap: {}: {} messages not sent while the broker was away\n",
+                 broker_->name(), broker_->dropped());
+  }
+
+ private:
+  std::unique_ptr<tools::MosquittoBroker> broker_;
+  tools::MqttPublisher* publisher_ = nullptr;
+};
+
+std::unique_ptr<MqttOutput> mqtt_output(const Options& o, Sinks& sinks, const std::string& bus,
+                                        bool live) {
+  if (o.mqtt_url.empty()) return nullptr;
+  return std::make_unique<MqttOutput>(o, sinks, bus, live);
 }
 
 // After a run whose traffic made little sense, or came faster than the baud allows, say so.
@@ -438,6 +502,7 @@ int read_file(const Options& o, const Autostop& autostop, const captures::RingLi
   auto progress = progress_bar(o, *source, piped);
   const tools::PortHealth no_ports;
   auto metrics = serve_metrics(o, sinks, no_ports);
+  auto mqtt = mqtt_output(o, sinks, bus_name(o.read_file), false);
   try {
     std::optional<int64_t> first_ns;
     while (!sinks.limit_reached() && source->next(chunk)) {
@@ -455,6 +520,7 @@ int read_file(const Options& o, const Autostop& autostop, const captures::RingLi
   progress.reset();  // wiped before anything else reaches the terminal
   bus.finish();
   metrics.reset();
+  if (mqtt) mqtt->finish();
   summarise(o, out, sinks, !broken);
   out.flush();
   sinks.close();
@@ -511,10 +577,13 @@ int listen(const Options& o, const Autostop& autostop, const captures::RingLimit
     ++(event == live::PortEvent::read_failed ? port_health.read_errors : port_health.reconnects);
   };
   auto metrics = serve_metrics(o, sinks, port_health);
+  auto mqtt = mqtt_output(o, sinks, bus_name(ports.front().path), true);
+  if (mqtt) options.on_wake = [&](int64_t now_ns) { mqtt->tick(now_ns); };
   // A status line on the terminal, unless frame lines are printed on that same terminal.
   options.status_line = terminal_free_for_status(o);
   const int status = live::run_live(ports, options, sinks.all(), stop);
   metrics.reset();
+  if (mqtt) mqtt->finish();
   summarise(o, out, sinks, true);  // Ctrl-C is how a live run ends
   out.flush();
   sinks.close();
@@ -566,6 +635,19 @@ int main(int argc, char** argv) {
   app.add_option("--metrics", o.metrics_address,
                  "Serve bus-health metrics for Prometheus on http://ADDR:PORT/metrics while "
                  "running (ADDR:PORT, [IPV6]:PORT, or :PORT for every interface)");
+  app.add_option("--mqtt", o.mqtt_url,
+                 "Publish register values (retained, on change), a health summary and an "
+                 "online/offline status to an MQTT broker: mqtt://[USER[:PASS]@]HOST[:PORT]/PREFIX "
+                 "(docs/monitoring.md)");
+  app.add_option("--mqtt-interval", o.mqtt_interval_s,
+                 "Seconds: a register at most this often, the health summary this often "
+                 "(at least 1 s); 0 sends every change at once (default 10)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--mqtt-bus", o.mqtt_bus,
+                 "The topic level naming the bus (default: the port's or capture's name)");
+  app.add_flag("--mqtt-discovery{homeassistant}", o.mqtt_discovery,
+               "Announce each register to Home Assistant (--mqtt-discovery=PREFIX for another "
+               "discovery prefix than homeassistant)");
   app.add_option("--link", o.link, "pcapng link: user (DLT_USER + modtap.lua), exported-pdu, bare")
       ->check(CLI::IsMember({"user", "exported-pdu", "bare"}));
   app.add_option("--dlt", o.dlt, "DLT_USER link type for --link user or bare")

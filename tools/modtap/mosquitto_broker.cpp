@@ -1,0 +1,176 @@
+#include "tools/modtap/mosquitto_broker.hpp"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <mosquitto.h>
+
+namespace modtap::tools {
+
+namespace {
+
+constexpr int keepalive_s = 30;
+const char* const online = "online";
+const char* const offline = "offline";
+
+void initialise_library() {
+  static const int done = [] {
+    mosquitto_lib_init();
+    return 0;
+  }();
+  (void)done;
+}
+
+}  // namespace
+
+MqttUrl parse_mqtt_url(const std::string& url) {
+  const std::string scheme = "mqtt://";
+  auto bad = [&](const std::string& why) {
+    return std::invalid_argument(
+        fmt::format("--mqtt {}: {}; give mqtt://[USER[:PASSWORD]@]HOST[:PORT][/PREFIX]", url, why));
+  };
+  if (url.rfind(scheme, 0) != 0) throw bad("not an mqtt:// URL");
+  MqttUrl parsed;
+  std::string rest = url.substr(scheme.size());
+  if (const auto slash = rest.find('/'); slash != std::string::npos) {
+    if (slash + 1 < rest.size()) parsed.prefix = rest.substr(slash + 1);
+    rest.resize(slash);
+    while (!parsed.prefix.empty() && parsed.prefix.back() == '/') parsed.prefix.pop_back();
+    if (parsed.prefix.empty()) parsed.prefix = "modtap";
+  }
+  if (const auto at = rest.rfind('@'); at != std::string::npos) {
+    const std::string credentials = rest.substr(0, at);
+    rest = rest.substr(at + 1);
+    const auto colon = credentials.find(':');
+    parsed.user = credentials.substr(0, colon);
+    if (colon != std::string::npos) parsed.password = credentials.substr(colon + 1);
+  }
+  const auto colon = rest.rfind(':');
+  const bool has_port = colon != std::string::npos && rest.find(']', colon) == std::string::npos;
+  parsed.host = has_port ? rest.substr(0, colon) : rest;
+  if (parsed.host.size() > 2 && parsed.host.front() == '[' && parsed.host.back() == ']')
+    parsed.host = parsed.host.substr(1, parsed.host.size() - 2);
+  if (parsed.host.empty()) throw bad("no host");
+  if (has_port) {
+    const std::string port = rest.substr(colon + 1);
+    char* end = nullptr;
+    const long number = std::strtol(port.c_str(), &end, 10);
+    if (port.empty() || *end != '\0' || number < 1 || number > 65535)
+      throw bad("the port is not a number from 1 to 65535");
+    parsed.port = static_cast<int>(number);
+  }
+  return parsed;
+}
+
+MosquittoBroker::MosquittoBroker(const MqttUrl& url, std::string status_topic)
+    : name_(fmt::format("mqtt://{}:{}", url.host, url.port)),
+      status_topic_(std::move(status_topic)) {
+  initialise_library();
+  char host[256] = "";
+  gethostname(host, sizeof host - 1);
+  const std::string id = fmt::format("modtap-{}-{}", host, getpid());
+  client_ = mosquitto_new(id.c_str(), true, this);
+  if (!client_) throw std::runtime_error(fmt::format("{}: cannot make an MQTT client", name_));
+  if (!url.user.empty())
+    mosquitto_username_pw_set(client_, url.user.c_str(),
+                              url.password.empty() ? nullptr : url.password.c_str());
+  mosquitto_will_set(client_, status_topic_.c_str(), static_cast<int>(std::strlen(offline)),
+                     offline, 1, true);
+  mosquitto_reconnect_delay_set(client_, 1, 30, true);
+  mosquitto_connect_callback_set(client_, on_connect);
+  mosquitto_disconnect_callback_set(client_, on_disconnect);
+  mosquitto_publish_callback_set(client_, on_publish);
+  // A broker not there yet is tried again by the network thread: a service may start first.
+  if (mosquitto_connect_async(client_, url.host.c_str(), url.port, keepalive_s) == MOSQ_ERR_ERRNO)
+    start_error_ = errno;
+  if (mosquitto_loop_start(client_) != MOSQ_ERR_SUCCESS) {
+    mosquitto_destroy(client_);
+    throw std::runtime_error(fmt::format("{}: cannot start the MQTT client's thread", name_));
+  }
+}
+
+MosquittoBroker::~MosquittoBroker() {
+  if (!stopped_) {
+    mosquitto_disconnect(client_);
+    mosquitto_loop_stop(client_, false);
+  }
+  mosquitto_destroy(client_);
+}
+
+void MosquittoBroker::on_connect(mosquitto* client, void* self, int code) {
+  auto& broker = *static_cast<MosquittoBroker*>(self);
+  if (code != 0) {
+    broker.refused_ = code;
+    return;
+  }
+  mosquitto_publish(client, nullptr, broker.status_topic_.c_str(),
+                    static_cast<int>(std::strlen(online)), online, 1, true);
+  broker.reconnected_ = true;
+  {
+    std::lock_guard lock(broker.mutex_);
+    broker.connected_ = true;
+  }
+  broker.changed_.notify_all();
+}
+
+void MosquittoBroker::on_disconnect(mosquitto*, void* self, int) {
+  auto& broker = *static_cast<MosquittoBroker*>(self);
+  {
+    std::lock_guard lock(broker.mutex_);
+    broker.connected_ = false;
+  }
+  broker.changed_.notify_all();
+}
+
+void MosquittoBroker::on_publish(mosquitto*, void* self, int message_id) {
+  auto& broker = *static_cast<MosquittoBroker*>(self);
+  {
+    std::lock_guard lock(broker.mutex_);
+    if (message_id == broker.offline_id_) broker.offline_taken_ = true;
+  }
+  broker.changed_.notify_all();
+}
+
+bool MosquittoBroker::wait_connected(double seconds) {
+  std::unique_lock lock(mutex_);
+  return changed_.wait_for(lock, std::chrono::duration<double>(seconds),
+                           [this] { return connected_.load(); });
+}
+
+std::string MosquittoBroker::connect_error() const {
+  if (refused_) return mosquitto_connack_string(refused_);
+  if (start_error_) return std::strerror(start_error_);
+  return "no answer";
+}
+
+void MosquittoBroker::publish(std::string_view topic, std::string_view payload, bool retain) {
+  if (!connected_) {
+    ++dropped_;
+    return;
+  }
+  const std::string name(topic);
+  if (mosquitto_publish(client_, nullptr, name.c_str(), static_cast<int>(payload.size()),
+                        payload.data(), 0, retain) != MOSQ_ERR_SUCCESS)
+    ++dropped_;
+}
+
+void MosquittoBroker::close() {
+  if (stopped_) return;
+  {
+    std::unique_lock lock(mutex_);
+    if (connected_ && mosquitto_publish(client_, &offline_id_, status_topic_.c_str(),
+                                        static_cast<int>(std::strlen(offline)), offline, 1,
+                                        true) == MOSQ_ERR_SUCCESS)
+      changed_.wait_for(lock, std::chrono::seconds(5), [this] { return offline_taken_; });
+  }
+  mosquitto_disconnect(client_);
+  mosquitto_loop_stop(client_, false);
+  stopped_ = true;
+}
+
+}  // namespace modtap::tools
