@@ -55,7 +55,12 @@ speed_t speed_of(uint32_t baud) {
 SerialPort::SerialPort(const std::string& path, const decoder::SerialFormat& format) : path_(path) {
   // O_RDONLY: the tap cannot transmit. O_NOCTTY: the port never becomes our terminal.
   fd_ = ::open(path.c_str(), O_RDONLY | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
-  if (fd_ < 0) throw CaptureError(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
+  if (fd_ < 0) {
+    const int error = errno;
+    // Serial ports belong to the dialout group: membership is all modtap needs, never root.
+    throw CaptureError(fmt::format("{}: cannot open: {}{}", path, std::strerror(error),
+                                   error == EACCES ? " (is the user in the dialout group?)" : ""));
+  }
   if (!isatty(fd_)) {
     ::close(fd_);
     throw CaptureError(fmt::format("{}: not a serial port", path));
