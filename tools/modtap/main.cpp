@@ -635,19 +635,23 @@ int main(int argc, char** argv) {
   app.add_option("--metrics", o.metrics_address,
                  "Serve bus-health metrics for Prometheus on http://ADDR:PORT/metrics while "
                  "running (ADDR:PORT, [IPV6]:PORT, or :PORT for every interface)");
-  app.add_option("--mqtt", o.mqtt_url,
-                 "Publish register values (retained, on change), a health summary and an "
-                 "online/offline status to an MQTT broker: mqtt://[USER[:PASS]@]HOST[:PORT]/PREFIX "
-                 "(docs/monitoring.md)");
+  auto* mqtt = app.add_option(
+      "--mqtt", o.mqtt_url,
+      "Publish register values (retained, on change), a health summary and an "
+      "online/offline status to an MQTT broker: mqtt://[USER[:PASS]@]HOST[:PORT]/PREFIX "
+      "(docs/monitoring.md)");
   app.add_option("--mqtt-interval", o.mqtt_interval_s,
                  "Seconds: a register at most this often, the health summary this often "
                  "(at least 1 s); 0 sends every change at once (default 10)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::NonNegativeNumber)
+      ->needs(mqtt);
   app.add_option("--mqtt-bus", o.mqtt_bus,
-                 "The topic level naming the bus (default: the port's or capture's name)");
+                 "The topic level naming the bus (default: the port's or capture's name)")
+      ->needs(mqtt);
   app.add_flag("--mqtt-discovery{homeassistant}", o.mqtt_discovery,
                "Announce each register to Home Assistant (--mqtt-discovery=PREFIX for another "
-               "discovery prefix than homeassistant)");
+               "discovery prefix than homeassistant)")
+      ->needs(mqtt);
   app.add_option("--link", o.link, "pcapng link: user (DLT_USER + modtap.lua), exported-pdu, bare")
       ->check(CLI::IsMember({"user", "exported-pdu", "bare"}));
   app.add_option("--dlt", o.dlt, "DLT_USER link type for --link user or bare")
