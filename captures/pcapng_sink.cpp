@@ -1,5 +1,7 @@
 #include "captures/pcapng_sink.hpp"
 
+#include <algorithm>
+#include <iterator>
 #include <stdexcept>
 
 #include <fmt/compile.h>
@@ -87,6 +89,14 @@ void append_frame_comment(fmt::memory_buffer& out, const Frame& f) {
                    f.mode == Mode::rtu ? 4 : 2);
   if (const char* damage = to_string(f.damage))
     fmt::format_to(it, FMT_COMPILE(" damage={}"), damage);
+  // Names from modtap's function-code table, so the plugin knows no function code itself.
+  if (const auto name = function_name(f.function() & 0x7F); !name.empty() && f.adu.size() >= 2)
+    fmt::format_to(it, FMT_COMPILE(" function=\"{}\""), name);
+  if (f.is_exception()) {
+    fmt::format_to(it, FMT_COMPILE(" exception={}"), f.adu[2]);
+    if (const auto name = exception_name(f.adu[2]); !name.empty())
+      fmt::format_to(it, FMT_COMPILE(" exception_name=\"{}\""), name);
+  }
   if (f.request) fmt::format_to(it, FMT_COMPILE(" request={}"), *f.request);
   if (f.latency_ns)  // microseconds with three decimals: the nanoseconds, exactly
     fmt::format_to(it, FMT_COMPILE(" latency_us={}.{:03}"), *f.latency_ns / 1000,
@@ -101,12 +111,16 @@ std::string frame_comment(const Frame& f) {
   return fmt::to_string(out);
 }
 
-std::string noise_comment(const Noise& n) {
-  fmt::memory_buffer out;
+void append_noise_comment(fmt::memory_buffer& out, const Noise& n) {
   fmt::format_to(fmt::appender(out), FMT_COMPILE("modtap index={} mode={} noise={} duration_ns={}"),
                  n.index, to_string(n.mode), to_string(n.reason), n.end_ns - n.t_ns);
   if (n.request) fmt::format_to(fmt::appender(out), FMT_COMPILE(" request={}"), *n.request);
   append_findings(out, n.findings);
+}
+
+std::string noise_comment(const Noise& n) {
+  fmt::memory_buffer out;
+  append_noise_comment(out, n);
   return fmt::to_string(out);
 }
 
@@ -161,6 +175,7 @@ void PcapngSink::on_frame(const Frame& frame) {
     writer_.write_packet(interface, frame.t_ns, frame.raw, direction, {});
     return;
   }
+  if (frame.request) answered(*frame.request);
   comment_.clear();
   append_frame_comment(comment_, frame);
   std::span<const uint8_t> data = frame.raw;
@@ -169,8 +184,11 @@ void PcapngSink::on_frame(const Frame& frame) {
     data = exported_pdu(frame.mode == Mode::rtu ? "mbrtu" : "data",
                         direction != PacketDirection::inbound, frame.raw);
   }
-  writer_.write_packet(interface, frame.t_ns, data, direction,
-                       std::string_view(comment_.data(), comment_.size()));
+  // A request that awaits its answer is held, with all after it, until the answer or the
+  // time-out comes, so that a request that timed out says so in its own comment.
+  const bool awaits =
+      frame.role == Role::request && frame.check_ok && frame.slave() != 0 && frame.index != 0;
+  emit(interface, frame.t_ns, data, direction, awaits ? frame.index : 0);
 }
 
 void PcapngSink::on_noise(const Noise& noise) {
@@ -178,7 +196,67 @@ void PcapngSink::on_noise(const Noise& noise) {
   const uint32_t interface = interface_for(noise.channel);
   std::span<const uint8_t> data = noise.raw;
   if (options_.link == PcapngLink::exported_pdu) data = exported_pdu("data", true, noise.raw);
-  writer_.write_packet(interface, noise.t_ns, data, PacketDirection::unknown, noise_comment(noise));
+  comment_.clear();
+  append_noise_comment(comment_, noise);
+  emit(interface, noise.t_ns, data, PacketDirection::unknown, 0);
+}
+
+void PcapngSink::on_timeout(const Timeout& timeout) {
+  for (size_t i = 0; i < held_count_; ++i) {
+    Held& h = held_[i];
+    if (h.awaits != timeout.request) continue;
+    h.awaits = 0;
+    if (timeout.timed_out())  // not when the capture merely ended first
+      fmt::format_to(std::back_inserter(h.comment), FMT_COMPILE(" timeout={} waited_us={}.{:03}"),
+                     to_string(timeout.reason), timeout.waited_ns / 1000, timeout.waited_ns % 1000);
+  }
+  write_resolved();
+}
+
+void PcapngSink::finish() {
+  for (size_t i = 0; i < held_count_; ++i) held_[i].awaits = 0;
+  write_resolved();
+}
+
+void PcapngSink::emit(uint32_t interface, int64_t t_ns, std::span<const uint8_t> data,
+                      PacketDirection direction, uint64_t awaits) {
+  const std::string_view comment(comment_.data(), comment_.size());
+  if (held_count_ == 0 && awaits == 0) {
+    writer_.write_packet(interface, t_ns, data, direction, comment);
+    return;
+  }
+  // Bounded: past this many, the oldest go out as they are.
+  if (held_count_ == max_held) {
+    held_[0].awaits = 0;
+    write_resolved();
+  }
+  if (held_count_ == held_.size()) held_.emplace_back();
+  Held& h = held_[held_count_++];
+  h.interface = interface;
+  h.t_ns = t_ns;
+  h.direction = direction;
+  h.data.assign(data.begin(), data.end());
+  h.comment.assign(comment);
+  h.awaits = awaits;
+  write_resolved();
+}
+
+void PcapngSink::answered(uint64_t request) {
+  for (size_t i = 0; i < held_count_; ++i)
+    if (held_[i].awaits == request) held_[i].awaits = 0;
+}
+
+// Writes the held packets up to the first request still waiting; their storage is kept.
+void PcapngSink::write_resolved() {
+  size_t done = 0;
+  while (done < held_count_ && held_[done].awaits == 0) {
+    const Held& h = held_[done++];
+    writer_.write_packet(h.interface, h.t_ns, h.data, h.direction, h.comment);
+  }
+  if (done == 0) return;
+  std::rotate(held_.begin(), held_.begin() + static_cast<ptrdiff_t>(done),
+              held_.begin() + static_cast<ptrdiff_t>(held_count_));
+  held_count_ -= done;
 }
 
 }  // namespace modtap::captures
@@ -200,6 +278,10 @@ void PcapngFiles::on_noise(const decoder::Noise& noise) {
   sink_at(noise.t_ns).on_noise(noise);
 }
 
+void PcapngFiles::on_timeout(const decoder::Timeout& timeout) {
+  if (sink_) sink_->on_timeout(timeout);
+}
+
 uint64_t PcapngFiles::bytes_written() const {
   return closed_bytes_ + (writer_ ? writer_->bytes_written() : 0);
 }
@@ -211,6 +293,7 @@ PcapngSink& PcapngFiles::sink_at(int64_t t_ns) {
 
 void PcapngFiles::begin_file(const std::string& path) {
   if (writer_) {
+    sink_->finish();  // a request still waiting stays in its file, without its outcome
     sink_.reset();
     writer_->close();
     closed_bytes_ += writer_->bytes_written();
@@ -221,6 +304,7 @@ void PcapngFiles::begin_file(const std::string& path) {
 
 void PcapngFiles::close() {
   if (!writer_) begin_file(ring_.begin_now());  // a ring that saw no record
+  sink_->finish();
   writer_->close();
 }
 

@@ -4,6 +4,8 @@
 #include <pcap/pcap.h>
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "captures/pcapng_sink.hpp"
 #include "tests/support/collector.hpp"
@@ -90,7 +92,76 @@ TEST(PcapngSink, CommentsCarryTheVerdictsForTheLuaDissector) {
   frame.end_ns = 4'645'833;  // 7 bytes at 19200 8E1: what a reread needs to time it again
   EXPECT_EQ(frame_comment(frame),
             "modtap index=7 mode=rtu role=response check=bad duration_ns=3645833 "
-            "expected=0xe8bb request=6 latency_us=2500.000 finding=bad-check");
+            "expected=0xe8bb function=\"Read Holding Registers\" request=6 latency_us=2500.000 "
+            "finding=bad-check");
+  const auto exception = hex("01 83 02 c0 f1");
+  frame.raw = frame.adu = exception;
+  frame.check_ok = true;
+  frame.findings = 0;
+  EXPECT_EQ(frame_comment(frame),
+            "modtap index=7 mode=rtu role=response check=ok duration_ns=3645833 "
+            "function=\"Read Holding Registers\" exception=2 exception_name=\"Illegal Data "
+            "Address\" request=6 latency_us=2500.000");
+}
+
+// A request that timed out says so in its own comment: the sink holds it, and what follows it,
+// until its outcome is known, and writes everything in order.
+TEST(PcapngSink, ARequestThatTimedOutSaysSoAndOrderIsKept) {
+  const auto path = temp_path("modtap-timeout-test.pcapng");
+  const std::vector<decoder::ChannelInfo> channels{{"bus", decoder::ChannelRole::bus}};
+  const auto request = hex("01 03 00 00 00 01 84 0a");
+  const auto answer = hex("02 03 02 00 07 7c 46");
+  auto frame = [&](uint64_t index, decoder::Role role, std::span<const uint8_t> raw) {
+    decoder::Frame f;
+    f.index = index;
+    f.role = role;
+    f.raw = f.adu = raw;
+    f.check_ok = true;
+    f.t_ns = f.end_ns = static_cast<int64_t>(index) * 1'000'000;
+    return f;
+  };
+  {
+    PcapngWriter writer(path);
+    PcapngSink sink(writer, channels, {});
+    sink.on_frame(frame(1, decoder::Role::request, request));  // slave 1 never answers
+    decoder::Noise noise;
+    noise.index = 2;
+    const auto junk = hex("ff");
+    noise.raw = junk;
+    sink.on_noise(noise);
+    decoder::Timeout timeout;
+    timeout.index = 3;
+    timeout.request = 1;
+    timeout.waited_ns = 1'000'000'123;
+    timeout.reason = decoder::TimeoutReason::silence;
+    sink.on_timeout(timeout);
+    sink.on_frame(frame(4, decoder::Role::request, request));
+    auto response = frame(5, decoder::Role::response, answer);
+    response.request = 4;
+    sink.on_frame(response);
+    sink.on_frame(frame(6, decoder::Role::request, request));  // the capture ends first
+    sink.finish();
+    writer.close();
+  }
+  char error[PCAP_ERRBUF_SIZE];
+  pcap_t* p = pcap_open_offline(path.c_str(), error);
+  ASSERT_NE(p, nullptr) << error;
+  pcap_pkthdr* header;
+  const u_char* data;
+  std::vector<size_t> lengths;
+  while (pcap_next_ex(p, &header, &data) == 1) lengths.push_back(header->caplen);
+  pcap_close(p);
+  EXPECT_EQ(lengths, (std::vector<size_t>{8, 1, 8, 7, 8}));
+  const std::string file = [&] {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  EXPECT_NE(file.find("modtap index=1 mode=rtu role=request check=ok duration_ns=0 "
+                      "function=\"Read Holding Registers\" timeout=silence "
+                      "waited_us=1000000.123"),
+            std::string::npos);
+  EXPECT_EQ(file.find("timeout=", file.find("index=4 ")), std::string::npos);
+  std::filesystem::remove(path);
 }
 
 }  // namespace

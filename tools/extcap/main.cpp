@@ -142,6 +142,7 @@ int main(int argc, char** argv) {
     options.analyzer.slave_timeout_ns = decoder::model_timeouts(choice);
     const int status =
         live::run_live({{port, port, decoder::ChannelRole::bus}}, options, sink, stop);
+    pcapng.finish();
     writer.close();
     if (std::fclose(out) != 0) throw captures::WriteError(fifo, errno);
     return status;
