@@ -1,19 +1,21 @@
 -- modtap.lua: Wireshark support for the pcapng files `modtap -w` writes (DLT_USER0..15).
 --
--- It shows modtap's verdicts (role, check, pairing, latency, findings, noise), and hands each
--- RTU frame to Wireshark's own Modbus RTU dissector with the direction modtap decided, so
--- that the echo codes (05, 06, 08) that mbrtu cannot classify by length are classified too.
--- Modbus ASCII frames, which Wireshark has no dissector for, are decoded here and passed on
--- to the Modbus dissector in RTU form. With a device model (modtap --model, or a device that
--- identified itself), each register's name, scaled value and unit, and the model's findings,
--- come from modtap's one implementation of the models, carried in the packet comment.
+-- It shows modtap's verdicts (role, slave, function, check, pairing, latency, time-outs,
+-- findings, noise) and an Info line of its own for every record, and hands each frame's PDU to
+-- Wireshark's own Modbus dissector with the direction modtap decided. The PDU goes through
+-- Modbus/TCP's dissector behind a header made here: that one tells a query from a response by
+-- port 502, which is its default, where Modbus RTU's needs a port preference set by hand; the
+-- header's transaction number is the request's record number, so Wireshark pairs what modtap
+-- paired. Modbus ASCII frames, which Wireshark has no dissector for, go the same way. With a
+-- device model (modtap --model, or a device that identified itself), each register's name,
+-- scaled value and unit, and the model's findings, come from modtap's one implementation of the
+-- models, carried in the packet comment; so do the names of function and exception codes.
 --
--- Use: tshark -X lua_script:modtap.lua -o mbrtu.tcp.port:502 -r capture.pcapng
--- (or copy it to ~/.local/lib/wireshark/plugins/ and set the mbrtu TCP port to 502 once).
+-- Use: tshark -X lua_script:modtap.lua -r capture.pcapng (or install it: docs/wireshark.md).
 
 local modtap = Proto("modtap", "modtap serial Modbus")
 
--- modtap puts the slave side of every frame on this port, the master side on the other.
+-- The slave side of every frame is on Modbus/TCP's port, the master side on another.
 local SLAVE_PORT = 502
 local MASTER_PORT = 50200
 
@@ -25,10 +27,15 @@ local fields = {
   expected = ProtoField.string("modtap.expected", "Expected check"),
   request = ProtoField.framenum("modtap.request", "Request in frame", base.NONE, frametype.REQUEST),
   latency = ProtoField.double("modtap.latency_us", "Latency (us)"),
+  slave = ProtoField.uint8("modtap.slave", "Slave"),
+  fc = ProtoField.uint8("modtap.fc", "Function code", base.DEC),
+  func = ProtoField.string("modtap.function", "Function"),
+  exception = ProtoField.uint8("modtap.exception", "Exception code", base.DEC),
+  exception_name = ProtoField.string("modtap.exception_name", "Exception"),
+  timeout = ProtoField.string("modtap.timeout", "Timed out"),
+  waited = ProtoField.double("modtap.waited_us", "Waited (us)"),
   finding = ProtoField.string("modtap.finding", "Finding"),
   noise = ProtoField.string("modtap.noise", "Noise"),
-  slave = ProtoField.uint8("modtap.ascii.slave", "Slave"),
-  fc = ProtoField.uint8("modtap.ascii.fc", "Function code", base.DEC),
   data = ProtoField.bytes("modtap.ascii.data", "Data"),
   lrc = ProtoField.uint8("modtap.ascii.lrc", "LRC", base.HEX),
   model = ProtoField.string("modtap.model", "Device model"),
@@ -48,10 +55,18 @@ local finding_expert = ProtoExpert.new("modtap.finding.expert", "modtap finding"
                                        expert.group.SEQUENCE, expert.severity.WARN)
 local noise_expert = ProtoExpert.new("modtap.noise.expert", "Bytes outside any frame",
                                      expert.group.MALFORMED, expert.severity.NOTE)
-modtap.experts = {bad_check, finding_expert, noise_expert}
+local timeout_expert = ProtoExpert.new("modtap.timeout.expert", "No response", expert.group.SEQUENCE,
+                                       expert.severity.WARN)
+local exception_expert = ProtoExpert.new("modtap.exception.expert", "Exception response",
+                                         expert.group.RESPONSE_CODE, expert.severity.NOTE)
+modtap.experts = {bad_check, finding_expert, noise_expert, timeout_expert, exception_expert}
 
 local comment_field = Field.new("frame.comment")
-local mbrtu = Dissector.get("mbrtu")
+local mbtcp = Dissector.get("mbtcp")
+
+-- Records are numbered by modtap, packets by Wireshark; they differ where records were left
+-- out (-Y, a ring of files). Wireshark's first pass goes in order, which fills this in.
+local frame_of_record = {}
 
 -- "modtap index=3 mode=rtu role=response check=ok request=2 finding=... model=gd20", then a
 -- line per register ("register 2502H frequency_command = 60.00 Hz") and per model finding
@@ -62,7 +77,8 @@ local function verdicts()
     local text = tostring(c.value)
     if text:sub(1, 7) == "modtap " then
       local first = text:match("^[^\n]*")
-      for key, value in first:gmatch("([%w_]+)=(%S+)") do
+      for key, value in first:gmatch('([%w_]+)="([^"]*)"') do v[key] = value end
+      for key, value in first:gmatch('([%w_]+)=([^"%s]%S*)') do
         if key == "finding" then table.insert(v.findings, value) else v[key] = value end
       end
       for line in text:gmatch("\n([^\n]*)") do
@@ -76,21 +92,6 @@ local function verdicts()
     end
   end
   return v
-end
-
-local function crc16(bytes)
-  local crc = 0xFFFF
-  for i = 0, bytes:len() - 1 do
-    crc = bit32.bxor(crc, bytes:get_index(i))
-    for _ = 1, 8 do
-      if bit32.band(crc, 1) == 1 then
-        crc = bit32.bxor(bit32.rshift(crc, 1), 0xA001)
-      else
-        crc = bit32.rshift(crc, 1)
-      end
-    end
-  end
-  return crc
 end
 
 -- ':' hex pairs LRC CR LF -> the binary ADU (slave .. LRC), or nil.
@@ -109,7 +110,7 @@ local function set_ports(pinfo, role)
   end
 end
 
-local function add_verdicts(tree, tvb, v)
+local function add_verdicts(tree, v, pinfo)
   if v.index then tree:add(fields.index, tonumber(v.index)) end
   if v.mode then tree:add(fields.mode, v.mode) end
   if v.role then tree:add(fields.role, v.role) end
@@ -118,8 +119,14 @@ local function add_verdicts(tree, tvb, v)
     if v.check == "bad" then item:add_proto_expert_info(bad_check, "Bad check, expected " .. (v.expected or "?")) end
   end
   if v.expected then tree:add(fields.expected, v.expected) end
-  if v.request then tree:add(fields.request, tonumber(v.request)) end
+  local request = v.request and frame_of_record[tonumber(v.request)]
+  if request and request < pinfo.number then tree:add(fields.request, request) end
   if v.latency_us then tree:add(fields.latency, tonumber(v.latency_us)) end
+  if v.timeout then
+    tree:add(fields.timeout, v.timeout):add_proto_expert_info(timeout_expert,
+      string.format("No response (%s) after %.1f ms", v.timeout, (tonumber(v.waited_us) or 0) / 1000))
+    if v.waited_us then tree:add(fields.waited, tonumber(v.waited_us)) end
+  end
   for _, finding in ipairs(v.findings) do
     tree:add(fields.finding, finding):add_proto_expert_info(finding_expert, finding)
   end
@@ -139,43 +146,107 @@ local function add_verdicts(tree, tvb, v)
   end
 end
 
+-- The frame's ADU without its check (binary, also for ASCII) and the source's bytes, or nil.
+local function adu_of(tvb, v)
+  if v.mode == "ascii" or (not v.mode and tvb:len() > 0 and tvb(0, 1):uint() == 0x3A) then
+    local adu = ascii_adu(tvb)
+    if not adu then return nil end
+    return adu:subset(0, adu:len() - 1), true
+  end
+  if v.damage == "cut" then  -- no check at its end: what there is names slave and function
+    if tvb:len() < 2 then return nil end
+    return tvb:bytes(), false
+  end
+  if tvb:len() < 4 then return nil end
+  return tvb:bytes():subset(0, tvb:len() - 2), false
+end
+
+-- Slave, function, exception: the fields every frame has, and the words of the Info line.
+local function add_identity(tree, adu, v)
+  local slave, fc = adu:get_index(0), adu:get_index(1)
+  tree:add(fields.slave, slave)
+  tree:add(fields.fc, bit32.band(fc, 0x7F))
+  local name = v["function"] or string.format("Function %d", bit32.band(fc, 0x7F))
+  tree:add(fields.func, name)
+  if v.exception then
+    local text = v.exception_name or "not a standard exception"
+    for _, note in ipairs(v.notes) do  -- a vendor's meaning, from the device model
+      local vendor = note:match("^exception: (.*)$")
+      if vendor then text = vendor end
+    end
+    tree:add(fields.exception, tonumber(v.exception))
+    tree:add(fields.exception_name, text):add_proto_expert_info(exception_expert,
+      "Exception " .. v.exception .. ": " .. text)
+    return slave, fc, name, text
+  end
+  return slave, fc, name, nil
+end
+
+local ROLE_WORDS = {request = "Request ", response = "Response", unknown = "Unknown "}
+
+local function info_line(v, slave, fc, name, exception)
+  local words = {string.format("%s slave %-3d %s (%d)", ROLE_WORDS[v.role] or "Frame   ", slave, name,
+                               bit32.band(fc, 0x7F))}
+  if exception then
+    local vendor = exception:match("^vendor ")
+    table.insert(words, vendor and exception or string.format("exception %02d: %s", tonumber(v.exception), exception))
+  end
+  if v.latency_us then table.insert(words, string.format("%.3f ms", tonumber(v.latency_us) / 1000)) end
+  if v.check == "bad" then
+    local check = "BAD " .. (v.mode == "ascii" and "LRC" or "CRC")
+    table.insert(words, v.damage and check .. " (" .. v.damage .. ")" or check)
+  end
+  if v.timeout then table.insert(words, "NO RESPONSE (" .. v.timeout .. ")") end
+  for _, finding in ipairs(v.findings) do
+    if finding ~= "bad-check" then table.insert(words, "[" .. finding .. "]") end
+  end
+  return table.concat(words, "  ")
+end
+
+-- The PDU behind a Modbus/TCP header: transaction = the request's record number.
+local function as_modbus_tcp(adu, v)
+  local pair = tonumber(v.role == "response" and v.request or v.index) or 0
+  local length = adu:len()  -- unit and PDU
+  local header = ByteArray.new()
+  header:set_size(6)
+  header:set_index(0, bit32.band(bit32.rshift(pair, 8), 0xFF))
+  header:set_index(1, bit32.band(pair, 0xFF))
+  header:set_index(4, bit32.band(bit32.rshift(length, 8), 0xFF))
+  header:set_index(5, bit32.band(length, 0xFF))
+  header:append(adu)
+  return header
+end
+
 function modtap.dissector(tvb, pinfo, tree)
   local v = verdicts()
+  if v.index and not pinfo.visited then frame_of_record[tonumber(v.index)] = pinfo.number end
   local subtree = tree:add(modtap, tvb(), "modtap")
-  add_verdicts(subtree, tvb, v)
+  add_verdicts(subtree, v, pinfo)
 
   if v.noise then
     pinfo.cols.protocol = "modtap"
     pinfo.cols.info = "Noise (" .. v.noise .. "), " .. tvb:len() .. " bytes"
     return
   end
-  set_ports(pinfo, v.role)
-
-  if v.mode == "ascii" or (not v.mode and tvb:len() > 0 and tvb(0, 1):uint() == 0x3A) then
-    local adu = ascii_adu(tvb)
-    if not adu then
-      pinfo.cols.info = "Modbus ASCII (not hex pairs)"
-      return
-    end
-    local n = adu:len()
-    local ascii = subtree:add(tvb(), "Modbus ASCII")
-    ascii:add(fields.slave, adu:get_index(0))
-    ascii:add(fields.fc, adu:get_index(1))
-    if n > 3 then ascii:add(fields.data, adu:subset(2, n - 3)) end
-    ascii:add(fields.lrc, adu:get_index(n - 1))
-    -- The same ADU in RTU form, so Wireshark's Modbus dissector decodes the PDU.
-    local rtu = adu:subset(0, n - 1)
-    local crc = crc16(rtu)
-    local tail = ByteArray.new()
-    tail:set_size(2)
-    tail:set_index(0, bit32.band(crc, 0xFF))
-    tail:set_index(1, bit32.rshift(crc, 8))
-    rtu:append(tail)
-    mbrtu:call(rtu:tvb("Modbus ASCII as RTU"), pinfo, tree)
-    pinfo.cols.protocol = "Modbus ASCII"
+  local adu, ascii = adu_of(tvb, v)
+  if not adu then
+    pinfo.cols.protocol = ascii and "Modbus ASCII" or "Modbus RTU"
+    pinfo.cols.info = "Frame cut before its function code, " .. tvb:len() .. " byte(s)"
     return
   end
-  mbrtu:call(tvb, pinfo, tree)
+  if ascii then
+    local n = adu:len()
+    local item = subtree:add(tvb(), "Modbus ASCII")
+    if n > 2 then item:add(fields.data, adu:subset(2, n - 2)) end
+    item:add(fields.lrc, tonumber(tvb:raw():sub(-4, -3), 16))
+  end
+  local slave, fc, name, exception = add_identity(subtree, adu, v)
+  if v.damage ~= "cut" then  -- half a PDU would only read as malformed
+    set_ports(pinfo, v.role)
+    mbtcp:call(as_modbus_tcp(adu, v):tvb("Modbus PDU"), pinfo, tree)
+  end
+  pinfo.cols.protocol = ascii and "Modbus ASCII" or "Modbus RTU"
+  pinfo.cols.info = info_line(v, slave, fc, name, exception)
 end
 
 local wtap_encap = DissectorTable.get("wtap_encap")

@@ -2,24 +2,27 @@
 """Wireshark's own Modbus decoder as an independent check of modtap.
 
 For simulated scenarios and the real sigrok captures, modtap writes JSON Lines and a pcapng
-(DLT_USER0); tshark reads the pcapng with plugins/wireshark/modtap.lua and must show, frame
-by frame, the same roles, check verdicts, slaves, function codes, exception codes, request
-pairs and register values, and with a device model the same register addresses and names. The
-exported-PDU pcapng must decode with no plugin at all, with
-every frame mbrtu can take classified as a query or a response.
+(DLT_USER0); tshark reads the pcapng with plugins/wireshark/modtap.lua and no preference set,
+and must show, frame by frame, the same roles, check verdicts, slaves, function codes and
+names, exception codes, request pairs and register values, and with a device model the same
+register addresses and names; every frame decoded by Wireshark's Modbus dissector (a frame cut
+before its end aside) and none unclassified. The exported-PDU pcapng must decode with no plugin
+at all: every frame classified, and Wireshark's CRC verdict equal to modtap's.
 
 Usage: tshark_agreement.py MODTAP BUSGEN LUA SAMPLES_DIR WORK_DIR
 """
 import json
 import os
+import shutil
 import subprocess
 import sys
 
 MODTAP, BUSGEN, LUA, SAMPLES, WORK = sys.argv[1:6]
 TSHARK = "tshark"
-FIELDS = ["frame.number", "modtap.role", "modtap.check", "modtap.request", "mbrtu.unit_id",
+FIELDS = ["frame.number", "modtap.role", "modtap.check", "modtap.request", "modtap.slave",
+          "modtap.fc", "modtap.function", "modtap.exception", "mbtcp.unit_id",
           "modbus.func_code", "modbus.exception_code", "modbus.request_frame",
-          "mbrtu.crc16.status", "modbus.regval_uint16", "modtap.model", "modtap.register.addr",
+          "modbus.regval_uint16", "modtap.model", "modtap.register.addr",
           "modtap.register.name"]
 failures = []
 
@@ -36,11 +39,10 @@ def modtap_records(capture, extra):
     return [json.loads(line) for line in out.splitlines()]
 
 
-def tshark_rows(pcapng, lua=True):
-    args = [TSHARK, "-n", "-r", pcapng, "-o", "mbrtu.tcp.port:502", "-o",
-            "mbrtu.crc_verification:TRUE", "-T", "fields", "-E", "separator=|"]
-    if lua:
-        args += ["-X", f"lua_script:{LUA}"]
+def tshark_rows(pcapng):
+    """Out of the box: the plugin, and no preference."""
+    args = [TSHARK, "-n", "-r", pcapng, "-X", f"lua_script:{LUA}", "-T", "fields", "-E",
+            "separator=|"]
     for f in FIELDS:
         args += ["-e", f]
     rows = {}
@@ -63,7 +65,7 @@ def compare(name, capture, extra):
     records = [r for r in modtap_records(capture, extra) if r["type"] not in ("timeout", "unanswered")]
     rows = tshark_rows(pcapng)
     check(name, len(rows) == len(records), f"{len(rows)} packets for {len(records)} records")
-    decoded_by_mbrtu = set()
+    decoded = set()
     compared = 0
     for r in records:
         row = rows.get(r["index"])
@@ -85,34 +87,44 @@ def compare(name, capture, extra):
         check(name, row["modtap.check"] == r["check"], f"{where}: check {row['modtap.check']} != {r['check']}")
         if r["request"] is not None:
             check(name, row["modtap.request"] == str(r["request"]), f"{where}: request")
-        if not row["mbrtu.unit_id"]:
-            # mbrtu takes no ADU under 5 bytes and no broadcast (unit 0); nothing else may fail.
-            check(name, len(r["raw"]) < 10 or r["slave"] == 0 or r["mode"] == "ascii",
-                  f"{where}: Wireshark did not decode {r['raw']}")
+        # Every frame: slave, function code and name as modtap's JSON has them.
+        identity = (row["modtap.slave"], row["modtap.fc"], row["modtap.function"])
+        fc = r["fc"] & 0x7F
+        named = r["function"] if not r["function"].startswith("Function 0x") else f"Function {fc}"
+        check(name, identity == (str(r["slave"]), str(fc), named),
+              f"{where}: slave, function {identity} != {(r['slave'], fc, r['function'])}")
+        if r["exception"] is not None:
+            check(name, row["modtap.exception"] == str(r["exception"]), f"{where}: exception")
+        if not row["mbtcp.unit_id"]:
+            # Wireshark's Modbus dissector takes every frame but one cut before its end.
+            check(name, r.get("damage") == "cut", f"{where}: Wireshark did not decode {r['raw']}")
             continue
-        decoded_by_mbrtu.add(r["index"])
+        decoded.add(r["index"])
         compared += 1
-        check(name, int(row["mbrtu.unit_id"]) == r["slave"], f"{where}: slave")
+        check(name, int(row["mbtcp.unit_id"]) == r["slave"], f"{where}: Wireshark's slave")
         check(name, int(row["modbus.func_code"]) == r["fc"], f"{where}: function {row['modbus.func_code']} != {r['fc']}")
         if r["exception"] is not None:
             check(name, row["modbus.exception_code"] == str(r["exception"]), f"{where}: exception")
-        if r["mode"] == "rtu":
-            good = row["mbrtu.crc16.status"] == "1"
-            check(name, good == (r["check"] == "ok"), f"{where}: CRC verdict {row['mbrtu.crc16.status']}")
-        if r["role"] == "response" and r["request"] in decoded_by_mbrtu and r["check"] == "ok":
-            # Wireshark 4.0 links no exception response to its request; it must not link
-            # one to another request either.
+        if r["role"] == "response" and r["request"] in decoded and r["check"] == "ok":
+            # Wireshark 4.0 links no exception response to its request (modtap.request does);
+            # it must not link one to another request either.
             expected = ("", str(r["request"])) if r["exception"] is not None else (str(r["request"]),)
             check(name, row["modbus.request_frame"] in expected,
                   f"{where}: Wireshark pairs it with {row['modbus.request_frame']!r}, modtap with {r['request']}")
         if r["role"] == "response" and r["fc"] in (3, 4) and r["exception"] is None and "values" in r:
             theirs = [int(v) for v in row["modbus.regval_uint16"].split(",") if v]
             check(name, theirs == r["values"], f"{where}: registers {theirs} != {r['values']}")
+    unclassified = run([TSHARK, "-n", "-r", pcapng, "-X", f"lua_script:{LUA}", "-Y",
+                        "mbtcp.cannot_classify"]).splitlines()
+    unknown = sum(1 for r in records if r["type"] == "frame" and r["role"] == "unknown")
+    check(name, len(unclassified) == unknown,
+          f"{len(unclassified)} frames unclassified by Wireshark, {unknown} of unknown role")
     check(name, compared > 0, "no frame compared")
     print(f"{name}: {len(records)} records, {compared} frames compared with Wireshark's decoder")
 
 
 def exported_pdu(name, capture, extra):
+    """No plugin: stock Wireshark with the modtap profile's one preference."""
     pcapng = os.path.join(WORK, name + "-exported.pcapng")
     run([MODTAP, "-r", capture, "-w", pcapng, "--link", "exported-pdu"] + extra)
     text = run([TSHARK, "-n", "-r", pcapng, "-o", "mbrtu.tcp.port:502"])
@@ -120,7 +132,48 @@ def exported_pdu(name, capture, extra):
     classified = [l for l in text.splitlines() if " Query: " in l or " Response: " in l]
     check(name, not unclassified, f"exported PDU: {len(unclassified)} frames unclassified")
     check(name, classified, "exported PDU: nothing classified")
-    print(f"{name}: exported PDU, {len(classified)} frames classified with no plugin")
+    # Wireshark's own CRC check, against modtap's verdict, frame by frame.
+    verdicts = run([TSHARK, "-n", "-r", pcapng, "-o", "mbrtu.tcp.port:502", "-o",
+                    "mbrtu.crc_verification:TRUE", "-T", "fields", "-e", "frame.number",
+                    "-e", "mbrtu.crc16.status"]).splitlines()
+    records = {r["index"]: r for r in modtap_records(capture, extra) if r["type"] == "frame"}
+    crc_compared = 0
+    for line in verdicts:
+        number, status = (line.split("\t") + [""])[:2]
+        r = records.get(int(number))
+        if r is None or not status or r["mode"] != "rtu":
+            continue
+        crc_compared += 1
+        check(name, (status == "1") == (r["check"] == "ok"),
+              f"exported PDU frame {number}: Wireshark's CRC verdict {status}, modtap's {r['check']}")
+    check(name, crc_compared > 0 or "ascii" in name, "exported PDU: no CRC compared")
+    print(f"{name}: exported PDU, {len(classified)} frames classified with no plugin, "
+          f"{crc_compared} CRC verdicts compared")
+
+
+def profile_columns():
+    """The modtap profile (as installed among the global profiles, here as a personal one):
+    tshark -C modtap shows modtap's columns, and exported-PDU files are classified by it alone."""
+    home = os.path.join(WORK, "home")
+    profile = os.path.join(home, ".config", "wireshark", "profiles", "modtap")
+    shutil.rmtree(home, ignore_errors=True)
+    shutil.copytree(os.path.join(os.path.dirname(os.path.abspath(LUA)), "profile"), profile)
+    env = dict(os.environ, HOME=home)
+    pcapng = os.path.join(WORK, "frames.pcapng")
+    records = [r for r in modtap_records(os.path.join(WORK, "frames.pcap"), [])
+               if r["type"] == "frame"][:50]
+    lines = subprocess.run([TSHARK, "-n", "-C", "modtap", "-X", f"lua_script:{LUA}", "-r", pcapng,
+                            "-c", "50"], capture_output=True, text=True, env=env).stdout.splitlines()
+    for r, line in zip(records, lines):
+        columns = f" {r['role']} {r['slave']} {r['function']} "
+        check("profile", columns in line, f"frame {r['index']}: {line!r} lacks {columns!r}")
+    check("profile", len(lines) == 50, f"{len(lines)} lines")
+    exported = os.path.join(WORK, "frames-exported.pcapng")
+    text = subprocess.run([TSHARK, "-n", "-C", "modtap", "-r", exported], capture_output=True,
+                          text=True, env=env).stdout
+    check("profile", "Unable to classify" not in text and " Query: " in text,
+          "exported PDU not classified by the profile")
+    print("profile: modtap's columns, and exported PDUs classified")
 
 
 def simulated(name, args, delivery):
@@ -143,6 +196,7 @@ scenarios = [
 for name, capture, extra in scenarios:
     compare(name, capture, extra)
     exported_pdu(name, capture, extra)
+profile_columns()
 
 for f in failures[:40]:
     print("FAIL", f)
