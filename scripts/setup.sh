@@ -6,7 +6,7 @@ packages=(cmake g++ make pkg-config libfmt-dev libpcap-dev libcli11-dev libyaml-
           libgmock-dev libbenchmark-dev sigrok-cli tshark python3 libmodbus-dev mbpoll
           python3-pymodbus nlohmann-json3-dev clang libclang-rt-14-dev strace chromium
           python3-pil libmicrohttpd-dev prometheus libmosquitto-dev mosquitto mosquitto-clients
-          systemd)
+          systemd wireshark xvfb)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

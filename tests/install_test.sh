@@ -9,6 +9,7 @@ cmake --install "$build" --prefix "$stage" >/dev/null
 for f in bin/modtap share/modtap/models/nta5000.yaml share/modtap/models/gd20.yaml \
          "$libdir/wireshark/plugins/modtap.lua" "$libdir/wireshark/extcap/modtap-extcap" \
          share/wireshark/profiles/modtap/preferences share/wireshark/profiles/modtap/colorfilters \
+         share/wireshark/profiles/modtap/recent \
          lib/systemd/system/modtap@.service share/modtap/line3.conf.example; do
   [ -e "$stage/$f" ] || { echo "missing after install: $f"; exit 1; }
 done

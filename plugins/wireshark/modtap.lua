@@ -166,12 +166,12 @@ local function add_identity(tree, adu, v)
   local slave, fc = adu:get_index(0), adu:get_index(1)
   tree:add(fields.slave, slave)
   tree:add(fields.fc, bit32.band(fc, 0x7F))
-  local name = v["function"] or string.format("Function %d", bit32.band(fc, 0x7F))
+  local name = v["function"] or string.format("Function 0x%02X", bit32.band(fc, 0x7F))
   tree:add(fields.func, name)
   if v.exception then
     local text = v.exception_name or "not a standard exception"
     for _, note in ipairs(v.notes) do  -- a vendor's meaning, from the device model
-      local vendor = note:match("^exception: (.*)$")
+      local vendor = note:match("^exception: (vendor .*)$")
       if vendor then text = vendor end
     end
     tree:add(fields.exception, tonumber(v.exception))
@@ -185,8 +185,8 @@ end
 local ROLE_WORDS = {request = "Request ", response = "Response", unknown = "Unknown "}
 
 local function info_line(v, slave, fc, name, exception)
-  local words = {string.format("%s slave %-3d %s (%d)", ROLE_WORDS[v.role] or "Frame   ", slave, name,
-                               bit32.band(fc, 0x7F))}
+  local code = v["function"] and string.format(" (%d)", bit32.band(fc, 0x7F)) or ""
+  local words = {string.format("%s slave %-3d %s%s", ROLE_WORDS[v.role] or "Frame   ", slave, name, code)}
   if exception then
     local vendor = exception:match("^vendor ")
     table.insert(words, vendor and exception or string.format("exception %02d: %s", tonumber(v.exception), exception))
@@ -225,7 +225,7 @@ function modtap.dissector(tvb, pinfo, tree)
 
   if v.noise then
     pinfo.cols.protocol = "modtap"
-    pinfo.cols.info = "Noise (" .. v.noise .. "), " .. tvb:len() .. " bytes"
+    pinfo.cols.info = string.format("Noise (%s), %d byte%s", v.noise, tvb:len(), tvb:len() == 1 and "" or "s")
     return
   end
   local adu, ascii = adu_of(tvb, v)

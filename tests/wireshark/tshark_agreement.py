@@ -90,8 +90,7 @@ def compare(name, capture, extra):
         # Every frame: slave, function code and name as modtap's JSON has them.
         identity = (row["modtap.slave"], row["modtap.fc"], row["modtap.function"])
         fc = r["fc"] & 0x7F
-        named = r["function"] if not r["function"].startswith("Function 0x") else f"Function {fc}"
-        check(name, identity == (str(r["slave"]), str(fc), named),
+        check(name, identity == (str(r["slave"]), str(fc), r["function"]),
               f"{where}: slave, function {identity} != {(r['slave'], fc, r['function'])}")
         if r["exception"] is not None:
             check(name, row["modtap.exception"] == str(r["exception"]), f"{where}: exception")

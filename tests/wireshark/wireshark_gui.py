@@ -1,0 +1,138 @@
+#!/usr/bin/python3
+"""Wireshark itself (Debian's Qt wireshark) under Xvfb opens a modtap pcapng of the simulator's
+traffic of every public function code, with modtap's plugin and profile as a user installs
+them, and a screenshot shows it: modtap's columns, and rows in the profile's colors (requests,
+responses, and the trouble rows: a bad check, no response, noise). The content is tshark's
+over the same profile (tshark_agreement.py); the window is checked here. The screenshot is
+kept in WORK_DIR to look at.
+
+Exits 77 (ctest: skipped) with a message when no X server can be started.
+
+usage: wireshark_gui.py MODTAP BUSGEN PLUGIN_DIR WORK_DIR"""
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+MODTAP, BUSGEN, PLUGIN_DIR, WORK = map(os.path.abspath, sys.argv[1:5])
+WIDTH, HEIGHT = 1600, 1000
+
+# The profile's coloring rules (plugins/wireshark/profile/colorfilters), 16-bit to 8-bit.
+COLORS = {
+    "request": (238, 255, 238),
+    "response": (221, 238, 255),
+    "bad check": (255, 170, 170),
+    "no response": (255, 204, 153),
+    "noise": (204, 204, 204),
+}
+
+
+def skip(why):
+    print(f"SKIP: {why}")
+    sys.exit(77)
+
+
+def start_x():
+    """Xvfb on a display it chooses itself (-displayfd), so parallel tests do not collide."""
+    if not shutil.which("Xvfb") or not shutil.which("wireshark"):
+        skip("Xvfb or wireshark is not installed (scripts/setup.sh installs both)")
+    read, write = os.pipe()
+    xvfb = subprocess.Popen(["Xvfb", "-displayfd", str(write), "-screen", "0",
+                             f"{WIDTH}x{HEIGHT}x24", "-nolisten", "tcp"], pass_fds=(write,),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    os.close(write)
+    with os.fdopen(read) as f:
+        number = f.readline().strip()
+    if not number:
+        xvfb.kill()
+        skip("Xvfb did not start")
+    return xvfb, f":{number}"
+
+
+def user_home():
+    """A user's home with the plugin and the profile where a personal install puts them, and
+    Wireshark's main window filling the screen (there is no window manager to maximise it)."""
+    home = os.path.join(WORK, "home")
+    shutil.rmtree(home, ignore_errors=True)
+    config = os.path.join(home, ".config", "wireshark")
+    shutil.copytree(os.path.join(PLUGIN_DIR, "profile"), os.path.join(config, "profiles", "modtap"))
+    plugins = os.path.join(home, ".local", "lib", "wireshark", "plugins")
+    os.makedirs(plugins)
+    shutil.copy(os.path.join(PLUGIN_DIR, "modtap.lua"), plugins)
+    with open(os.path.join(config, "recent_common"), "w") as f:
+        f.write(f"gui.geometry_main_x: 0\ngui.geometry_main_y: 0\n"
+                f"gui.geometry_main_width: {WIDTH}\ngui.geometry_main_height: {HEIGHT}\n")
+    return home
+
+
+def colors_seen(image):
+    """Which of the profile's row colors fill at least a row's worth of pixels."""
+    counts = {name: 0 for name in COLORS}
+    wanted = {rgb: name for name, rgb in COLORS.items()}
+    for count, rgb in image.convert("RGB").getcolors(WIDTH * HEIGHT):
+        if rgb in wanted:
+            counts[wanted[rgb]] += count
+    return {name for name, count in counts.items() if count > 2000}
+
+
+def main():
+    from PIL import ImageGrab
+
+    shutil.rmtree(WORK, ignore_errors=True)
+    os.makedirs(WORK)
+    capture = os.path.join(WORK, "bus.pcap")
+    subprocess.run([BUSGEN, "-n", "2000", "--seed", "7", "--faults", "--format", "pcap", "-o",
+                    capture], check=True, stderr=subprocess.DEVNULL)
+    pcapng = os.path.join(WORK, "bus.pcapng")
+    subprocess.run([MODTAP, "-r", capture, "-w", pcapng], check=True)
+    # The first screen of the capture shows requests and responses, noise and a request
+    # that got no answer; a filter for trouble brings the bad checks into view as well.
+    views = [("all", []),
+             ("trouble", ["-Y", 'modtap.check == "bad" || modtap.timeout || modtap.noise'])]
+    expected = {"all": {"request", "response", "noise", "no response"},
+                "trouble": {"bad check", "no response", "noise"}}
+
+    xvfb, display = start_x()
+    home = user_home()
+    env = dict(os.environ, HOME=home, DISPLAY=display, XDG_RUNTIME_DIR=WORK)
+    failures = []
+    try:
+        for name, extra in views:
+            log = open(os.path.join(WORK, f"wireshark-{name}.log"), "w")
+            wireshark = subprocess.Popen(["wireshark", "-C", "modtap", "-r", pcapng] + extra,
+                                         env=env, stdout=log, stderr=subprocess.STDOUT)
+            seen, shot = set(), None
+            deadline = time.time() + 90
+            while time.time() < deadline and not expected[name] <= seen:
+                time.sleep(2)
+                if wireshark.poll() is not None:
+                    break
+                shot = ImageGrab.grab(xdisplay=display)
+                seen = colors_seen(shot)
+            wireshark.terminate()
+            try:
+                wireshark.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                wireshark.kill()
+            if shot is None:
+                failures.append(f"{name}: Wireshark ended before showing anything "
+                                f"(see wireshark-{name}.log)")
+                continue
+            path = os.path.join(WORK, f"wireshark-{name}.png")
+            shot.save(path)
+            print(f"{name}: screenshot {path}; rows colored {sorted(seen)}")
+            if not expected[name] <= seen:
+                failures.append(f"{name}: the window shows rows colored {sorted(seen)}, "
+                                f"expected {sorted(expected[name])}")
+    finally:
+        xvfb.terminate()
+        xvfb.wait(timeout=20)
+    for failure in failures:
+        print("FAIL:", failure)
+    print("wireshark window:", "failed" if failures else "ok")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
