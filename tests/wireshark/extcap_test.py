@@ -27,9 +27,10 @@ import tty
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
 from modbus import with_crc  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from extcap_link import link_extcap, preference_prefix  # noqa: E402
 
 EXTCAP, LUA, WORK, MODTAP, BUSGEN = sys.argv[1:6]
-GLOBAL_EXTCAP = "/usr/lib/x86_64-linux-gnu/wireshark/extcap"
 
 
 def traffic():
@@ -71,26 +72,12 @@ def simulated_blocks(log):
     return [(at, bytes(data)) for at, data in blocks]
 
 
-def link_extcap():
-    """Returns (how, cleanup): 'tshark' when tshark can find the build's extcap."""
-    target = os.path.join(GLOBAL_EXTCAP, "modtap-extcap")
-    if os.path.lexists(target):
-        if os.path.realpath(target) == os.path.realpath(EXTCAP):
-            return "tshark", lambda: None
-        return "fifo", lambda: None
-    try:
-        os.symlink(os.path.realpath(EXTCAP), target)
-    except OSError:
-        return "fifo", lambda: None
-    return "tshark", lambda: os.unlink(target)
-
-
 def capture_with_tshark(port, pcapng, settings):
     env = dict(os.environ, MODTAP_EXTCAP_PORTS=port)
     listed = subprocess.run(["tshark", "-D"], capture_output=True, text=True, env=env).stdout
     if f"modtap:{port}" not in listed:
         raise SystemExit(f"tshark -D does not list modtap:{port}:\n{listed}")
-    pref = "extcap.modtap_" + "".join(c if c.isalnum() else "_" for c in port)
+    pref = preference_prefix(port)
     options = [x for key, value in settings.items() for x in ("-o", f"{pref}.{key}:{value}")]
     return subprocess.Popen(["tshark", "-i", f"modtap:{port}"] + options + ["-a", "duration:8", "-w", pcapng],
                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -117,9 +104,10 @@ def capture(name, blocks, settings):
     tty.setraw(slave)
     port = os.ttyname(slave)
     pcapng = os.path.join(WORK, name + ".pcapng")
-    how, cleanup = link_extcap()
+    linked, cleanup = link_extcap(EXTCAP)
+    how = "tshark" if linked else "fifo"
     try:
-        start = capture_with_tshark if how == "tshark" else capture_with_fifo
+        start = capture_with_tshark if linked else capture_with_fifo
         process = start(port, pcapng, settings)
         feed(master, blocks)
         _, err = process.communicate(timeout=60)

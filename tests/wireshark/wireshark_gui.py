@@ -2,20 +2,28 @@
 """Wireshark itself (Debian's Qt wireshark) under Xvfb opens a modtap pcapng of the simulator's
 traffic of every public function code, with modtap's plugin and profile as a user installs
 them, and a screenshot shows it: modtap's columns, and rows in the profile's colors (requests,
-responses, and the trouble rows: a bad check, no response, noise). The content is tshark's
-over the same profile (tshark_agreement.py); the window is checked here. The screenshot is
-kept in WORK_DIR to look at.
+responses, and the trouble rows: a bad check, no response, noise). Then Wireshark captures
+live through modtap-extcap from a pty, and the same colors show as the traffic comes. The
+content is tshark's over the same profile (tshark_agreement.py, extcap_test.py); the window is
+checked here. The screenshots are kept in WORK_DIR to look at.
 
 Exits 77 (ctest: skipped) with a message when no X server can be started.
 
-usage: wireshark_gui.py MODTAP BUSGEN PLUGIN_DIR WORK_DIR"""
+usage: wireshark_gui.py MODTAP BUSGEN PLUGIN_DIR WORK_DIR EXTCAP"""
 import os
 import shutil
 import subprocess
 import sys
+import threading
 import time
+import tty
 
-MODTAP, BUSGEN, PLUGIN_DIR, WORK = map(os.path.abspath, sys.argv[1:5])
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from extcap_link import link_extcap, preference_prefix  # noqa: E402
+from modbus import with_crc  # noqa: E402
+
+MODTAP, BUSGEN, PLUGIN_DIR, WORK, EXTCAP = map(os.path.abspath, sys.argv[1:6])
 WIDTH, HEIGHT = 1600, 1000
 
 # The profile's coloring rules (plugins/wireshark/profile/colorfilters), 16-bit to 8-bit.
@@ -76,9 +84,63 @@ def colors_seen(image):
     return {name for name, count in counts.items() if count > 2000}
 
 
-def main():
+def look(name, command, env, expected, display, feed=None):
+    """Runs Wireshark until its window shows rows in every `expected` color (or 90 s pass),
+    and keeps the last screenshot. Returns the failures."""
     from PIL import ImageGrab
 
+    log = open(os.path.join(WORK, f"wireshark-{name}.log"), "w")
+    wireshark = subprocess.Popen(command, env=env, stdout=log, stderr=subprocess.STDOUT)
+    stop = threading.Event()
+    if feed:
+        threading.Thread(target=feed, args=(stop,), daemon=True).start()
+    seen, shot = set(), None
+    deadline = time.time() + 90
+    try:
+        while time.time() < deadline and not expected <= seen:
+            time.sleep(2)
+            if wireshark.poll() is not None:
+                break
+            shot = ImageGrab.grab(xdisplay=display)
+            seen = colors_seen(shot)
+    finally:
+        stop.set()
+        wireshark.terminate()
+        try:
+            wireshark.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            wireshark.kill()
+    if shot is None:
+        return [f"{name}: Wireshark ended before showing anything (see wireshark-{name}.log)"]
+    path = os.path.join(WORK, f"wireshark-{name}.png")
+    shot.save(path)
+    print(f"{name}: screenshot {path}; rows colored {sorted(seen)}")
+    if not expected <= seen:
+        return [f"{name}: the window shows rows colored {sorted(seen)}, expected {sorted(expected)}"]
+    return []
+
+
+def live_traffic(master):
+    """A master polling two slaves through the pty, one of which stops answering now and
+    then, with a stray byte between polls: requests, responses, no response and noise."""
+    def feed(stop):
+        time.sleep(3)  # Wireshark starts the extcap, which opens the port
+        number = 0
+        while not stop.is_set():
+            slave = 1 + number % 2
+            os.write(master, with_crc([slave, 3, 0, number % 50, 0, 1]))
+            time.sleep(0.005)
+            if number % 5 != 4:
+                os.write(master, with_crc([slave, 3, 2, 0, number % 256]))
+            time.sleep(0.05)
+            if number % 7 == 3:
+                os.write(master, b"\x55")
+                time.sleep(0.05)
+            number += 1
+    return feed
+
+
+def main():
     shutil.rmtree(WORK, ignore_errors=True)
     os.makedirs(WORK)
     capture = os.path.join(WORK, "bus.pcap")
@@ -99,32 +161,28 @@ def main():
     failures = []
     try:
         for name, extra in views:
-            log = open(os.path.join(WORK, f"wireshark-{name}.log"), "w")
-            wireshark = subprocess.Popen(["wireshark", "-C", "modtap", "-r", pcapng] + extra,
-                                         env=env, stdout=log, stderr=subprocess.STDOUT)
-            seen, shot = set(), None
-            deadline = time.time() + 90
-            while time.time() < deadline and not expected[name] <= seen:
-                time.sleep(2)
-                if wireshark.poll() is not None:
-                    break
-                shot = ImageGrab.grab(xdisplay=display)
-                seen = colors_seen(shot)
-            wireshark.terminate()
+            failures += look(name, ["wireshark", "-C", "modtap", "-r", pcapng] + extra, env,
+                             expected[name], display)
+        linked, cleanup = link_extcap(EXTCAP)
+        if not linked:
+            print("live: skipped: Wireshark's extcap folder cannot take the build's extcap")
+        else:
+            master, slave = os.openpty()
+            tty.setraw(master)
+            tty.setraw(slave)
+            port = os.ttyname(slave)
+            prefix = preference_prefix(port)
             try:
-                wireshark.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                wireshark.kill()
-            if shot is None:
-                failures.append(f"{name}: Wireshark ended before showing anything "
-                                f"(see wireshark-{name}.log)")
-                continue
-            path = os.path.join(WORK, f"wireshark-{name}.png")
-            shot.save(path)
-            print(f"{name}: screenshot {path}; rows colored {sorted(seen)}")
-            if not expected[name] <= seen:
-                failures.append(f"{name}: the window shows rows colored {sorted(seen)}, "
-                                f"expected {sorted(expected[name])}")
+                failures += look(
+                    "live", ["wireshark", "-C", "modtap", "-k", "-i", f"modtap:{port}", "-o",
+                             f"{prefix}.baud:115200", "-o", f"{prefix}.parity:none"],
+                    dict(env, MODTAP_EXTCAP_PORTS=port), {"request", "response", "noise",
+                                                          "no response"},
+                    display, live_traffic(master))
+            finally:
+                cleanup()
+                os.close(master)
+                os.close(slave)
     finally:
         xvfb.terminate()
         xvfb.wait(timeout=20)
