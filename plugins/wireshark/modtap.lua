@@ -237,7 +237,7 @@ function modtap.dissector(tvb, pinfo, tree)
   if ascii then
     local n = adu:len()
     local item = subtree:add(tvb(), "Modbus ASCII")
-    if n > 2 then item:add(fields.data, adu:subset(2, n - 2)) end
+    if n > 2 then item:add(fields.data, adu:tvb("Modbus ASCII, decoded")(2, n - 2)) end
     item:add(fields.lrc, tonumber(tvb:raw():sub(-4, -3), 16))
   end
   local slave, fc, name, exception = add_identity(subtree, adu, v)

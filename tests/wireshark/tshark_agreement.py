@@ -145,7 +145,7 @@ def exported_pdu(name, capture, extra):
         crc_compared += 1
         check(name, (status == "1") == (r["check"] == "ok"),
               f"exported PDU frame {number}: Wireshark's CRC verdict {status}, modtap's {r['check']}")
-    check(name, crc_compared > 0 or "ascii" in name, "exported PDU: no CRC compared")
+    check(name, crc_compared > 0, "exported PDU: no CRC compared")
     print(f"{name}: exported PDU, {len(classified)} frames classified with no plugin, "
           f"{crc_compared} CRC verdicts compared")
 
@@ -187,6 +187,8 @@ scenarios = [
     ("sniffer", simulated("sniffer", ["-n", "3000", "--seed", "22"], "sniffer"), []),
     ("bursts", simulated("bursts", ["-n", "3000", "--seed", "23"], "bursts"), []),
     ("gd20", simulated("gd20", ["-n", "3000", "--seed", "24"], "frames"), ["--model", "gd20"]),
+    ("ascii", simulated("ascii", ["-n", "1000", "--seed", "25", "--ascii"], "frames"),
+     ["--mode", "ascii", "--data-bits", "7"]),
     ("brainchild", os.path.join(SAMPLES, "brainchild-io-16do.sr"),
      ["--baud", "19200", "--parity", "even", "--sigrok-channels", "tx=1,rx=0", "--sigrok-invert"]),
     ("flowmeter", os.path.join(SAMPLES, "flowmeter_target_15liter_per_min.sr"),
@@ -194,11 +196,12 @@ scenarios = [
 ]
 for name, capture, extra in scenarios:
     compare(name, capture, extra)
-    exported_pdu(name, capture, extra)
+    if name != "ascii":  # stock Wireshark has no Modbus ASCII dissector to export to
+        exported_pdu(name, capture, extra)
 profile_columns()
 
 for f in failures[:40]:
     print("FAIL", f)
-print(f"{len(scenarios) * 2 - len({f.split(':')[0] for f in failures})} passed, "
+print(f"{len(scenarios) * 2 - 1 - len({f.split(':')[0] for f in failures})} passed, "
       f"{len({f.split(':')[0] for f in failures})} failed")
 sys.exit(1 if failures else 0)
