@@ -68,6 +68,10 @@ local mbtcp = Dissector.get("mbtcp")
 -- out (-Y, a ring of files). Wireshark's first pass goes in order, which fills this in.
 local frame_of_record = {}
 
+function modtap.init()  -- a new file, or everything dissected again
+  frame_of_record = {}
+end
+
 -- "modtap index=3 mode=rtu role=response check=ok request=2 finding=... model=gd20", then a
 -- line per register ("register 2502H frequency_command = 60.00 Hz") and per model finding
 -- ("note read-only-write: ...") -> table
