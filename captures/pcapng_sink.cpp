@@ -298,7 +298,7 @@ void PcapngFiles::begin_file(const std::string& path) {
     writer_->close();
     closed_bytes_ += writer_->bytes_written();
   }
-  writer_ = std::make_unique<PcapngWriter>(path);
+  writer_ = std::make_unique<PcapngWriter>(path, options_.live);
   sink_ = std::make_unique<PcapngSink>(*writer_, channels_, options_);
 }
 

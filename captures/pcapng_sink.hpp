@@ -29,6 +29,9 @@ struct PcapngOptions {
   uint32_t master_port = 50200;
   // How well the source knew each byte's time: said in the file, so a reread times alike.
   decoder::ClockQuality clock = decoder::ClockQuality::per_chunk;
+  // Someone reads the file as it grows (a port's capture into Wireshark's FIFO or a pipe):
+  // every packet is flushed as it is written.
+  bool live = false;
 };
 
 // Parses "user", "exported-pdu" or "bare"; throws std::invalid_argument.

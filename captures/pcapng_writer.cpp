@@ -46,14 +46,9 @@ class Body {
 
 }  // namespace
 
-PcapngWriter::PcapngWriter(const std::string& path) : file_(path) {
+PcapngWriter::PcapngWriter(const std::string& path, bool live) : file_(path), live_(live) {
   write_section_header();
-}
-
-PcapngWriter::PcapngWriter(FILE* stream, std::string name, bool live)
-    : file_(stream, std::move(name)), live_(live) {
-  write_section_header();
-  flush();
+  if (live_) flush();
 }
 
 // One write per block, so a failure leaves the file whole up to its last complete block

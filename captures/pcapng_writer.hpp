@@ -20,9 +20,9 @@ enum class PacketDirection : uint8_t { unknown = 0, inbound = 1, outbound = 2 };
 class PcapngWriter {
  public:
   // Throws WriteError when the file cannot be created or written. "-" is standard output.
-  explicit PcapngWriter(const std::string& path);
-  // Takes an open stream (an extcap FIFO); flushes after every packet when `live`.
-  PcapngWriter(FILE* stream, std::string name, bool live);
+  // `live`: a reader follows the file as it grows (a FIFO, a pipe), so the header and every
+  // packet are flushed at once.
+  explicit PcapngWriter(const std::string& path, bool live = false);
   PcapngWriter(const PcapngWriter&) = delete;
   PcapngWriter& operator=(const PcapngWriter&) = delete;
 

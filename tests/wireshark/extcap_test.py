@@ -171,6 +171,14 @@ check("simulated", len(decoded) == len(decodable),
       f"Wireshark decoded {len(decoded)} of {len(decodable)} frames")
 check("simulated", not unclassified, f"unclassified: {unclassified[:3]}")
 
+# The capture options are checked as modtap checks its own: a setting Wireshark never offers
+# is refused by name, before the port is opened.
+refused = subprocess.run([EXTCAP, "--capture", "--extcap-interface", "modtap:/dev/null", "--fifo",
+                          os.path.join(WORK, "never.fifo"), "--parity", "sideways"],
+                         capture_output=True, text=True)
+check("options", refused.returncode != 0 and "--parity" in refused.stderr,
+      f"--parity sideways gave {refused.returncode}: {refused.stderr!r}")
+
 for f in failures:
     print("FAIL", f)
 if failures:

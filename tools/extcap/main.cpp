@@ -3,7 +3,6 @@
 // --capture --fifo PATH; it writes pcapng (DLT_USER0 with modtap's verdicts) to the FIFO.
 #include <dirent.h>
 
-#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -12,10 +11,8 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
-#include "captures/pcapng_sink.hpp"
-#include "captures/pcapng_writer.hpp"
-#include "tools/live/live_capture.hpp"
 #include "tools/modtap/model_catalog.hpp"
+#include "tools/modtap/run.hpp"
 
 namespace {
 
@@ -83,9 +80,9 @@ int main(int argc, char** argv) {
   CLI::App app{"modtap-extcap: modtap's serial Modbus capture for Wireshark"};
   app.allow_extras();  // Wireshark may add options of its own in later versions
   bool interfaces = false, dlts = false, config = false, capture = false;
-  std::string interface, fifo, version, filter, parity = "even", mode = "auto", model = "generic";
-  uint32_t baud = 19200;
-  unsigned data_bits = 8, stop_bits = 1;
+  std::string interface, fifo, version, filter;
+  tools::RunOptions run;
+  run.models = {"generic"};
   app.add_flag("--extcap-interfaces", interfaces);
   app.add_flag("--extcap-dlts", dlts);
   app.add_flag("--extcap-config", config);
@@ -94,12 +91,7 @@ int main(int argc, char** argv) {
   app.add_option("--extcap-version", version);
   app.add_option("--extcap-capture-filter", filter);
   app.add_option("--fifo", fifo);
-  app.add_option("--baud", baud);
-  app.add_option("--parity", parity);
-  app.add_option("--data-bits", data_bits);
-  app.add_option("--stop-bits", stop_bits);
-  app.add_option("--mode", mode);
-  app.add_option("--model", model);
+  tools::add_line_options(app, run);  // as modtap's, with the same checks
   CLI11_PARSE(app, argc, argv);
 
   if (interfaces) {
@@ -114,9 +106,9 @@ int main(int argc, char** argv) {
     fmt::print("dlt {{number=147}}{{name=USER0}}{{display=Modbus serial with modtap verdicts}}\n");
     return 0;
   }
-  tools::ModelCatalog catalog;
-  catalog.load_builtin();
   if (config) {
+    tools::ModelCatalog catalog;
+    catalog.load_builtin();
     print_config(catalog);
     return 0;
   }
@@ -124,28 +116,14 @@ int main(int argc, char** argv) {
     fmt::print(stderr, "modtap-extcap: nothing to do\n");
     return 1;
   }
+  // Wireshark's capture is modtap's `-i PORT -w FIFO`, quietly: Wireshark reads anything on
+  // standard error as an error.
+  run.interfaces = {interface.substr(std::string(prefix).size())};
+  run.write_file = fifo;
+  run.output = "none";
+  run.announce = false;
   try {
-    const std::string port = interface.substr(std::string(prefix).size());
-    const auto& stop = live::stop_on_signals();
-    FILE* out = std::fopen(fifo.c_str(), "wb");
-    if (!out) throw std::runtime_error(fifo + ": cannot open the FIFO");
-    captures::PcapngWriter writer(out, fifo, true);
-    const std::vector<decoder::ChannelInfo> channels{{port, decoder::ChannelRole::bus}};
-    captures::PcapngSink pcapng(writer, channels, {});
-    const decoder::ModelChoice choice = catalog.choose({model});
-    decoder::ModelInterpreter sink(catalog.all(), choice, decoder::ClockQuality::per_chunk, pcapng);
-    live::LiveOptions options;
-    options.announce = false;  // Wireshark reads anything on stderr as an error
-    options.analyzer.format = {baud, static_cast<uint8_t>(data_bits), decoder::parity_named(parity),
-                               static_cast<uint8_t>(stop_bits)};
-    options.analyzer.mode = decoder::mode_named(mode);
-    options.analyzer.slave_timeout_ns = decoder::model_timeouts(choice);
-    const int status =
-        live::run_live({{port, port, decoder::ChannelRole::bus}}, options, sink, stop);
-    pcapng.finish();
-    writer.close();
-    if (std::fclose(out) != 0) throw captures::WriteError(fifo, errno);
-    return status;
+    return tools::listen(run, {}, {});
   } catch (const std::exception& e) {
     fmt::print(stderr, "modtap-extcap: {}\n", e.what());
     return 1;

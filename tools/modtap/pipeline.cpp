@@ -1,0 +1,159 @@
+#include "tools/modtap/pipeline.hpp"
+
+#include <algorithm>
+
+#include "tools/modtap/csv_sink.hpp"
+#include "tools/modtap/json_sink.hpp"
+#include "tools/modtap/render.hpp"
+#include "tools/modtap/text_sink.hpp"
+
+namespace modtap::tools {
+namespace {
+
+std::unique_ptr<decoder::RecordSink> make_sink(const RunOptions& o, Output& out,
+                                               const std::vector<decoder::ChannelInfo>& channels) {
+  if (o.output == "json") return std::make_unique<JsonSink>(out, channels);
+  if (o.output == "csv")
+    return std::make_unique<CsvSink>(
+        out, parse_follow_or_all(o.follow, decoder::register_base_named(o.register_base)),
+        time_format_named(o.time_format), decoder::register_base_named(o.register_base));
+  if (o.output == "text")
+    return std::make_unique<TextSink>(out, channels,
+                                      TextOptions{o.verbose, time_format_named(o.time_format),
+                                                  decoder::register_base_named(o.register_base)});
+  return std::make_unique<decoder::NullSink>();  // stats: the statistics print at the end
+}
+
+bool wants_statistics(const RunOptions& o) {
+  return o.output == "stats" || !o.stats_file.empty() || !o.report_file.empty() ||
+         !o.metrics_address.empty() || !o.mqtt_url.empty();
+}
+
+// The report's registers over time: those --follow names, none without it.
+std::function<bool(const decoder::RegisterValue&)> report_follow(const RunOptions& o) {
+  if (o.follow.empty()) return {};
+  const auto base = decoder::register_base_named(o.register_base);
+  return [follow = parse_follow(o.follow, base)](const decoder::RegisterValue& reg) {
+    return follows(follow, reg);
+  };
+}
+
+}  // namespace
+
+std::optional<uint32_t> fixed_baud(const RunOptions& o) {
+  if (o.baud == "auto") return std::nullopt;
+  return static_cast<uint32_t>(std::stoul(o.baud));
+}
+
+std::optional<decoder::Parity> fixed_parity(const RunOptions& o) {
+  if (o.parity == "auto") return std::nullopt;
+  return decoder::parity_named(o.parity);
+}
+
+decoder::SerialFormat serial_format(const RunOptions& o) {
+  return {fixed_baud(o).value_or(19200), static_cast<uint8_t>(o.data_bits),
+          decoder::parity_named(o.parity), static_cast<uint8_t>(o.stop_bits)};
+}
+
+decoder::AnalyzerOptions analyzer_options(const RunOptions& o, decoder::ClockQuality clock) {
+  decoder::AnalyzerOptions analyzer;
+  analyzer.mode = decoder::mode_named(o.mode);
+  analyzer.format = serial_format(o);
+  analyzer.clock = clock;
+  analyzer.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
+  analyzer.ascii_char_timeout_ns = static_cast<int64_t>(o.ascii_timeout_s * 1e9);
+  analyzer.chunk_jitter_ns = static_cast<int64_t>(o.jitter_ms * 1e6);
+  return analyzer;
+}
+
+ModelCatalog load_models(const RunOptions& o) {
+  ModelCatalog catalog;
+  catalog.load_builtin();
+  if (!o.models_dir.empty()) catalog.load_dir(o.models_dir);
+  return catalog;
+}
+
+Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output& out,
+                   const std::vector<decoder::ChannelInfo>& channels,
+                   const decoder::SerialFormat& format, decoder::ClockQuality clock)
+    : terminal_(make_sink(o, out, channels)) {
+  fan_out_.add(*terminal_);
+  if (wants_statistics(o)) {
+    statistics_ = std::make_unique<decoder::BusStatistics>(format, clock);
+    if (o.metrics_address.empty()) {
+      fan_out_.add(*statistics_);
+    } else {  // read by the metrics server's thread while records come in
+      shared_statistics_ = std::make_unique<SharedStatistics>(*statistics_);
+      fan_out_.add(*shared_statistics_);
+    }
+  }
+  if (!o.report_file.empty()) {
+    timeline_ = std::make_unique<decoder::BusTimeline>(report_follow(o));
+    fan_out_.add(*timeline_);
+  }
+  // Only text, JSON, CSV, MQTT, pcapng comments and statistics show what the models say;
+  // the other outputs skip the work, and the YAML is not read unless models are asked for.
+  // A filter may name registers, so it reads frames through the models too.
+  const bool interpret = o.output == "text" || o.output == "json" || o.output == "csv" ||
+                         wants_statistics(o) ||  // the registers' last values
+                         (!o.write_file.empty() && o.link != "bare") || !o.display_filter.empty();
+  if (interpret || !o.models.empty() || !o.models_dir.empty()) {
+    catalog_ = load_models(o);
+    auto choice = catalog_.choose(o.models);
+    if (!o.timeout_given) model_timeouts_ = decoder::model_timeouts(choice);
+    if (!o.display_filter.empty()) filter(o.display_filter, channels);
+    decoder::RecordSink& after = filter_ ? static_cast<decoder::RecordSink&>(*filter_) : fan_out_;
+    if (interpret)
+      interpreter_ =
+          std::make_unique<decoder::ModelInterpreter>(catalog_.all(), choice, clock, after);
+  }
+  diagnostics_ = std::make_unique<decoder::BusDiagnostics>(format, clock, after_diagnostics());
+  if (!o.write_file.empty()) write_pcapng(o, ring, channels, clock);
+}
+
+void Pipeline::write_pcapng(const RunOptions& o, const captures::RingLimits& ring,
+                            const std::vector<decoder::ChannelInfo>& channels,
+                            decoder::ClockQuality clock) {
+  captures::PcapngOptions options;
+  options.link = captures::parse_link(o.link);
+  options.dlt = o.dlt;
+  options.clock = clock;
+  // On a port, someone may read the file as it grows (Wireshark through the extcap's FIFO,
+  // `-w -` into a pipe): each packet is flushed when it is written.
+  options.live = !o.interfaces.empty();
+  pcapng_ = std::make_unique<captures::PcapngFiles>(o.write_file, ring, channels, options);
+  fan_out_.add(*pcapng_);
+}
+
+void Pipeline::limit_frames(uint64_t max_frames, std::function<void()> on_reached) {
+  if (max_frames == 0) return;
+  decoder::RecordSink& next = all();
+  limit_ = std::make_unique<decoder::FrameLimit>(max_frames, next, std::move(on_reached));
+}
+
+MqttPublisher& Pipeline::publish(MessageBroker& broker, MqttOptions options) {
+  mqtt_ = std::make_unique<MqttPublisher>(broker, *statistics_, std::move(options));
+  fan_out_.add(*mqtt_);
+  return *mqtt_;
+}
+
+decoder::RecordSink& Pipeline::after_diagnostics() {
+  if (interpreter_) return *interpreter_;
+  if (filter_) return *filter_;
+  return fan_out_;
+}
+
+// -Y: every output (text, JSON, statistics, pcapng) sees only the records it matches.
+void Pipeline::filter(const std::string& text, const std::vector<decoder::ChannelInfo>& channels) {
+  const auto models = catalog_.all();
+  decoder::DisplayFilter filter(text, [models](std::string_view name) {
+    return std::any_of(models.begin(), models.end(),
+                       [&](const decoder::DeviceModel* m) { return names_register(*m, name); });
+  });
+  std::vector<std::string> names;
+  for (const auto& channel : channels) names.push_back(channel.name);
+  filter.set_channel_names(std::move(names));
+  filter_ = std::make_unique<decoder::FilterStage>(std::move(filter), fan_out_);
+}
+
+}  // namespace modtap::tools

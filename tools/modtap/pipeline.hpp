@@ -1,0 +1,135 @@
+// One way from a source to the outputs, for modtap and for modtap-extcap alike: the options a
+// run takes and the chain of stages and sinks they build (docs/architecture.md). Wireshark's
+// capture through the extcap is modtap's own `-i PORT -w FIFO` run.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "captures/file_ring.hpp"
+#include "captures/pcapng_sink.hpp"
+#include "decoder/analyzer.hpp"
+#include "decoder/bus_diagnostics.hpp"
+#include "decoder/bus_statistics.hpp"
+#include "decoder/bus_timeline.hpp"
+#include "decoder/display_filter.hpp"
+#include "decoder/model_interpreter.hpp"
+#include "decoder/record_sink.hpp"
+#include "tools/modtap/metrics.hpp"
+#include "tools/modtap/model_catalog.hpp"
+#include "tools/modtap/mqtt_publisher.hpp"
+#include "tools/modtap/output.hpp"
+
+namespace modtap::tools {
+
+// Everything a run is given: modtap's command line, or the extcap's translation of
+// Wireshark's.
+struct RunOptions {
+  std::string read_file;
+  std::vector<std::string> interfaces;
+  bool reconnect = false;
+  std::string format = "auto";
+  std::string mode = "auto";
+  std::string output = "text";
+  bool verbose = false;
+  std::string baud = "19200";  // or "auto"
+  std::string parity = "even";
+  unsigned stop_bits = 1;
+  unsigned data_bits = 8;
+  double timeout_s = 1.0;
+  bool timeout_given = false;  // --timeout wins over the models' own time-outs
+  double ascii_timeout_s = 1.0;
+  double jitter_ms = 20.0;
+  std::string sigrok_channels;
+  bool sigrok_invert = false;
+  std::string write_file;
+  std::string link = "user";
+  int dlt = 147;
+  std::vector<std::string> models;
+  std::string models_dir;
+  double probe_s = 2.0;
+  std::string save_raw;
+  std::string stats_file;
+  std::string report_file;
+  std::string time_format = "r";
+  uint64_t max_frames = 0;  // 0: no limit
+  bool quiet = false;
+  std::string display_filter;
+  std::string follow;
+  std::string register_base = "hex";
+  std::string metrics_address;
+  std::string mqtt_url;
+  double mqtt_interval_s = 10;
+  std::string mqtt_bus;
+  std::string mqtt_discovery;            // Home Assistant's discovery prefix; empty: no discovery
+  std::vector<std::string> autostop;     // -a duration:S, filesize:KB, frames:N
+  std::vector<std::string> ring_buffer;  // -b duration:S, filesize:KB, files:N
+  // Say on standard error which port is listened to (not to Wireshark: it reads anything
+  // there as an error).
+  bool announce = true;
+};
+
+std::optional<uint32_t> fixed_baud(const RunOptions& o);  // none: --baud auto
+std::optional<decoder::Parity> fixed_parity(const RunOptions& o);
+decoder::SerialFormat serial_format(const RunOptions& o);
+decoder::AnalyzerOptions analyzer_options(const RunOptions& o, decoder::ClockQuality clock);
+ModelCatalog load_models(const RunOptions& o);
+
+// The stages and sinks a run writes to: in front, the frame limit, the bus's history, the
+// stage that reads frames through the device models and the filter; then the terminal's
+// output, the statistics, the report's timeline, MQTT and the pcapng files of -w.
+class Pipeline {
+ public:
+  Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output& out,
+           const std::vector<decoder::ChannelInfo>& channels, const decoder::SerialFormat& format,
+           decoder::ClockQuality clock);
+  // Where records enter.
+  decoder::RecordSink& all() {
+    if (limit_) return *limit_;
+    return *diagnostics_;
+  }
+  const decoder::BusDiagnostics& diagnostics() const { return *diagnostics_; }
+  // -c N: stop after N frames; `on_reached` stops a live run.
+  void limit_frames(uint64_t max_frames, std::function<void()> on_reached = {});
+  bool limit_reached() const { return limit_ && limit_->reached(); }
+  // --mqtt: the register values and the statistics' summary, to `broker`.
+  MqttPublisher& publish(MessageBroker& broker, MqttOptions options);
+  // How much the -w files hold so far (0 without -w).
+  uint64_t pcapng_bytes() const { return pcapng_ ? pcapng_->bytes_written() : 0; }
+  const decoder::BusStatistics* statistics() const { return statistics_.get(); }
+  SharedStatistics* shared_statistics() { return shared_statistics_.get(); }
+  const decoder::BusTimeline* timeline() const { return timeline_.get(); }
+  // The slaves whose model sets a response time-out, unless --timeout was given.
+  const std::map<uint8_t, int64_t>& model_timeouts() const { return model_timeouts_; }
+  // The end of a run: the pcapng file is complete, or its failure is reported.
+  void close() {
+    if (pcapng_) pcapng_->close();
+  }
+
+ private:
+  decoder::RecordSink& after_diagnostics();
+  void filter(const std::string& text, const std::vector<decoder::ChannelInfo>& channels);
+  void write_pcapng(const RunOptions& o, const captures::RingLimits& ring,
+                    const std::vector<decoder::ChannelInfo>& channels, decoder::ClockQuality clock);
+
+  decoder::FanOut fan_out_;
+  std::unique_ptr<decoder::RecordSink> terminal_;
+  std::unique_ptr<decoder::BusStatistics> statistics_;
+  std::unique_ptr<SharedStatistics> shared_statistics_;
+  std::unique_ptr<decoder::BusTimeline> timeline_;
+  ModelCatalog catalog_;
+  std::unique_ptr<decoder::FilterStage> filter_;
+  std::unique_ptr<decoder::BusDiagnostics> diagnostics_;
+  std::unique_ptr<decoder::ModelInterpreter> interpreter_;
+  std::map<uint8_t, int64_t> model_timeouts_;
+  std::unique_ptr<captures::PcapngFiles> pcapng_;
+  std::unique_ptr<decoder::FrameLimit> limit_;
+  std::unique_ptr<MqttPublisher> mqtt_;
+};
+
+}  // namespace modtap::tools

@@ -1,0 +1,310 @@
+#include "tools/modtap/run.hpp"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+
+#include <fmt/format.h>
+
+#include "captures/open_capture.hpp"
+#include "captures/piped_input.hpp"
+#include "captures/raw_recorder.hpp"
+#include "decoder/format_probe.hpp"
+#include "tools/live/live_capture.hpp"
+#include "tools/modtap/auto_format.hpp"
+#include "tools/modtap/mosquitto_broker.hpp"
+#include "tools/modtap/progress.hpp"
+#include "tools/modtap/report.hpp"
+#include "tools/modtap/statistics_output.hpp"
+
+namespace modtap::tools {
+namespace {
+
+void write_whole(const std::string& path, const fmt::memory_buffer& content) {
+  captures::OutputFile file(path);
+  file.write(std::string_view(content.data(), content.size()));
+  file.close();
+}
+
+// The end of a run: -T stats prints the statistics, --stats and --report write them
+// (`complete` false when the input broke off: they cover what was read).
+void summarise(const RunOptions& o, Output& out, const Pipeline& pipeline, bool complete) {
+  const decoder::BusStatistics* statistics = pipeline.statistics();
+  if (!statistics) return;
+  const auto base = decoder::register_base_named(o.register_base);
+  if (o.output == "stats") print_statistics(out, *statistics, pipeline.diagnostics(), base);
+  if (!o.stats_file.empty()) {
+    fmt::memory_buffer json;
+    append_statistics_json(json, *statistics, pipeline.diagnostics(), complete);
+    write_whole(o.stats_file, json);
+  }
+  if (!o.report_file.empty()) {
+    fmt::memory_buffer html;
+    const std::string capture = o.read_file.empty()
+                                    ? fmt::format("{}", fmt::join(o.interfaces, " "))
+                                : o.read_file == "-" ? "standard input"
+                                                     : o.read_file;
+    append_report(html, *statistics, pipeline.diagnostics(), *pipeline.timeline(),
+                  {capture, MODTAP_VERSION, complete, base});
+    write_whole(o.report_file, html);
+  }
+}
+
+// Whether the terminal is free for a status or progress line: standard error is one, and
+// frame lines are not printed on that same terminal.
+bool terminal_free_for_status(const RunOptions& o) {
+  const bool lines_on_stdout = o.output == "text" || o.output == "json" || o.output == "csv";
+  return isatty(STDERR_FILENO) && (!lines_on_stdout || !isatty(STDOUT_FILENO));
+}
+
+// A bar for a file read straight through, on a terminal that has room for it.
+std::unique_ptr<ProgressBar> progress_bar(const RunOptions& o, const captures::ChunkSource& source,
+                                          bool piped) {
+  if (piped || !source.file_position() || !terminal_free_for_status(o)) return nullptr;
+  std::error_code error;
+  const auto size = std::filesystem::file_size(o.read_file, error);
+  if (error) return nullptr;
+  return std::make_unique<ProgressBar>(stderr, size);
+}
+
+// What names the bus in MQTT topics unless --mqtt-bus does: the port's or the file's name.
+std::string bus_name(const std::string& path) {
+  if (path == "-") return "stdin";
+  return std::filesystem::path(path).stem().string();
+}
+
+// --metrics: /metrics served from the statistics while the run goes on.
+std::unique_ptr<MetricsServer> serve_metrics(const RunOptions& o, Pipeline& pipeline,
+                                             const PortHealth& ports) {
+  if (o.metrics_address.empty()) return nullptr;
+  SharedStatistics& shared = *pipeline.shared_statistics();
+  return std::make_unique<MetricsServer>(o.metrics_address, [&shared, &ports] {
+    fmt::memory_buffer text;
+    shared.read([&](const decoder::BusStatistics& s) { append_metrics(text, s, ports); });
+    return fmt::to_string(text);
+  });
+}
+
+std::unique_ptr<captures::RawRecorder> raw_recorder(
+    const RunOptions& o, const captures::RingLimits& ring,
+    const std::vector<decoder::ChannelInfo>& channels, const decoder::SerialFormat& format) {
+  if (o.save_raw.empty()) return nullptr;
+  return std::make_unique<captures::RawRecorder>(o.save_raw, channels, format.char_time_ns(), ring);
+}
+
+// --mqtt: the publisher and its broker, connected. A file read waits for the broker and fails
+// without it; a port goes on listening while the client keeps trying (a service may start
+// before its broker).
+class MqttOutput {
+ public:
+  MqttOutput(const RunOptions& o, Pipeline& pipeline, const std::string& bus, bool live) {
+    const MqttUrl url = parse_mqtt_url(o.mqtt_url);
+    MqttOptions options;
+    options.prefix = url.prefix;
+    options.bus = o.mqtt_bus.empty() ? bus : o.mqtt_bus;
+    options.interval_ns = static_cast<int64_t>(o.mqtt_interval_s * 1e9);
+    const auto base = decoder::register_base_named(o.register_base);
+    options.follow = parse_follow_or_all(o.follow, base);
+    options.base = base;
+    if (!o.mqtt_discovery.empty()) options.discovery_prefix = o.mqtt_discovery;
+    broker_ = std::make_unique<MosquittoBroker>(url, status_topic(options));
+    if (!broker_->wait_connected(live ? 3 : 10)) {
+      const std::string why =
+          fmt::format("{}: cannot connect: {}", broker_->name(), broker_->connect_error());
+      if (!live) throw std::runtime_error(why);
+      fmt::print(stderr, "modtap: {}; trying again while listening\n", why);
+    }
+    publisher_ = &pipeline.publish(*broker_, std::move(options));
+  }
+  void tick(int64_t now_ns) { publisher_->tick(now_ns); }
+  // The last values and summary, status offline, and what the broker missed.
+  void finish() {
+    publisher_->finish();
+    broker_->close();
+    if (broker_->dropped())
+      fmt::print(stderr, "modtap: {}: {} messages not sent while the broker was away\n",
+                 broker_->name(), broker_->dropped());
+  }
+
+ private:
+  std::unique_ptr<MosquittoBroker> broker_;
+  MqttPublisher* publisher_ = nullptr;
+};
+
+std::unique_ptr<MqttOutput> mqtt_output(const RunOptions& o, Pipeline& pipeline,
+                                        const std::string& bus, bool live) {
+  if (o.mqtt_url.empty()) return nullptr;
+  return std::make_unique<MqttOutput>(o, pipeline, bus, live);
+}
+
+// After a run whose traffic made little sense, or came faster than the baud allows, say so.
+void hint_settings(const decoder::SerialFormat& format, const decoder::LineHealth& health,
+                   const decoder::ChunkPace& pace, bool logic_analyzer) {
+  // A logic-analyzer capture that reads as nothing is usually a line inverted (RS-232 levels)
+  // or probes swapped, which no baud rate mends.
+  if (logic_analyzer && health.looks_wrong() && health.good_frames == 0) {
+    fmt::print(stderr,
+               "modtap: hint: no frame had a good check; is the line inverted (try "
+               "--sigrok-invert), are the channels right (--sigrok-channels tx=NAME,rx=NAME), "
+               "or are {} not the line's settings (try --baud auto)?\n",
+               decoder::describe(format));
+    return;
+  }
+  if (pace.too_fast())
+    fmt::print(stderr,
+               "modtap: hint: bytes arrive faster than {} allows ({} of {} reads); "
+               "the line is faster: try --baud auto\n",
+               decoder::describe(format), pace.fast_reads, pace.reads);
+  else if (health.looks_wrong())
+    fmt::print(stderr,
+               "modtap: hint: only {:.0f}% of {} bytes formed frames with a good check; are {} "
+               "the line's settings? try --baud auto\n",
+               100 * health.good_share(), health.bytes, decoder::describe(format));
+}
+
+}  // namespace
+
+int read_capture(const RunOptions& o, const Autostop& autostop, const captures::RingLimits& ring) {
+  captures::OpenOptions open;
+  open.format = captures::parse_format(o.format);
+  open.serial = serial_format(o);
+  if (!o.sigrok_channels.empty())
+    open.sigrok.lines = captures::parse_sigrok_channels(o.sigrok_channels);
+  open.sigrok.invert = o.sigrok_invert;
+  const bool piped = captures::is_piped(o.read_file);
+  if (o.baud == "auto" || o.parity == "auto") {
+    if (piped)
+      throw std::runtime_error(fmt::format(
+          "{}: --baud auto and --parity auto read a capture once per setting; a pipe can be "
+          "read only once: give a file",
+          o.read_file == "-" ? "standard input" : o.read_file));
+    open.serial = choose_file_format(o.read_file, open, analyzer_options(o, {}), fixed_baud(o),
+                                     fixed_parity(o));
+  }
+  auto source = piped ? captures::open_piped_capture(o.read_file, open)
+                      : captures::open_capture(o.read_file, open);
+
+  captures::OutputFile standard_output(stdout, "standard output");
+  Output out(standard_output);
+  Pipeline pipeline(o, ring, out, source->channels(), open.serial, source->clock());
+  pipeline.limit_frames(o.max_frames);
+  decoder::LineHealth health(&pipeline.all());
+  decoder::AnalyzerOptions options = analyzer_options(o, source->clock());
+  options.format = open.serial;
+  options.slave_timeout_ns = pipeline.model_timeouts();
+  decoder::Analyzer bus(options, source->channels(), health);
+  decoder::ChunkPace pace(open.serial);
+  auto raw = raw_recorder(o, ring, source->channels(), open.serial);
+  decoder::Chunk chunk;
+  // A capture that breaks off (a truncated file) still gives everything read before the
+  // break, in every output, and then the error.
+  std::optional<captures::CaptureError> broken;
+  auto progress = progress_bar(o, *source, piped);
+  const PortHealth no_ports;
+  auto metrics = serve_metrics(o, pipeline, no_ports);
+  auto mqtt = mqtt_output(o, pipeline, bus_name(o.read_file), false);
+  try {
+    std::optional<int64_t> first_ns;
+    while (!pipeline.limit_reached() && source->next(chunk)) {
+      if (!first_ns) first_ns = chunk.t_ns;
+      if (autostop.duration_ns && chunk.t_ns - *first_ns >= *autostop.duration_ns) break;
+      if (autostop.filesize_bytes && pipeline.pcapng_bytes() >= *autostop.filesize_bytes) break;
+      if (progress) progress->update(*source->file_position());
+      if (source->clock() == decoder::ClockQuality::per_chunk) pace.add(chunk);
+      if (raw) raw->write(chunk, bus.between_frames());
+      bus.push(chunk);
+    }
+  } catch (const captures::CaptureError& e) {
+    broken = e;
+  }
+  progress.reset();  // wiped before anything else reaches the terminal
+  bus.finish();
+  metrics.reset();
+  if (mqtt) mqtt->finish();
+  summarise(o, out, pipeline, !broken);
+  out.flush();
+  pipeline.close();
+  if (raw) raw->close();
+  if (bus.clock_steps_back())
+    fmt::print(stderr,
+               "modtap: warning: {}: the time stamps go backwards {} times; latencies across "
+               "those steps are not measured\n",
+               o.read_file, bus.clock_steps_back());
+  if (broken) throw *broken;
+  // A pipe is not read again: it holds no logic-analyzer capture anyway.
+  const captures::Format format = open.format != captures::Format::automatic ? open.format
+                                  : piped                                    ? captures::Format::raw
+                                          : captures::detect_format(o.read_file);
+  hint_settings(open.serial, health, pace, format == captures::Format::sigrok);
+  return 0;
+}
+
+int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLimits& ring) {
+  std::vector<live::PortSpec> ports;
+  std::vector<decoder::ChannelInfo> channels;
+  for (const auto& spec : o.interfaces) {
+    ports.push_back(live::parse_port(spec));
+    channels.push_back({ports.back().name, ports.back().role});
+  }
+  const auto& stop = live::stop_on_signals();
+  captures::OutputFile standard_output(stdout, "standard output");
+  Output out(standard_output);
+  out.set_line_buffered(true);
+  live::LiveOptions options;
+  options.analyzer = analyzer_options(o, decoder::ClockQuality::per_chunk);
+  if (o.baud == "auto" || o.parity == "auto") {
+    auto probed = live::probe_ports(ports, options, fixed_baud(o), fixed_parity(o),
+                                    static_cast<int64_t>(o.probe_s * 1e9), stop);
+    options.analyzer.format = probed.format;
+    options.replay = std::move(probed.read);  // the winning setting's bytes are analysed too
+  }
+  Pipeline pipeline(o, ring, out, channels, options.analyzer.format,
+                    decoder::ClockQuality::per_chunk);
+  pipeline.limit_frames(o.max_frames, live::request_stop);
+  const int64_t started_ns = live::wall_clock_ns();
+  options.done = [&](int64_t now_ns) {
+    return (autostop.duration_ns && now_ns - started_ns >= *autostop.duration_ns) ||
+           (autostop.filesize_bytes && pipeline.pcapng_bytes() >= *autostop.filesize_bytes);
+  };
+  options.analyzer.slave_timeout_ns = pipeline.model_timeouts();
+  auto raw = raw_recorder(o, ring, channels, options.analyzer.format);
+  if (raw)
+    options.on_read = [&](const decoder::Chunk& chunk, bool between_frames) {
+      raw->write(chunk, between_frames);
+    };
+  options.reconnect = o.reconnect;
+  options.announce = o.announce;
+  PortHealth port_health;
+  options.on_port_event = [&port_health](live::PortEvent event) {
+    ++(event == live::PortEvent::read_failed ? port_health.read_errors : port_health.reconnects);
+  };
+  auto metrics = serve_metrics(o, pipeline, port_health);
+  auto mqtt = mqtt_output(o, pipeline, bus_name(ports.front().path), true);
+  if (mqtt) options.on_wake = [&](int64_t now_ns) { mqtt->tick(now_ns); };
+  // A status line on the terminal, unless frame lines are printed on that same terminal.
+  options.status_line = terminal_free_for_status(o);
+  const int status = live::run_live(ports, options, pipeline.all(), stop);
+  metrics.reset();
+  if (mqtt) mqtt->finish();
+  summarise(o, out, pipeline, true);  // Ctrl-C is how a live run ends
+  out.flush();
+  pipeline.close();
+  if (raw) raw->close();
+  return status;
+}
+
+void add_line_options(CLI::App& app, RunOptions& o) {
+  app.add_option("--mode", o.mode, "Transmission mode")
+      ->check(CLI::IsMember({"auto", "rtu", "ascii"}));
+  app.add_option("--baud", o.baud, "Baud rate, or auto to tell it from the traffic")
+      ->check(CLI::IsMember({"auto"}) | CLI::Range(50u, 4'000'000u));
+  app.add_option("--parity", o.parity, "Parity: none, even, odd, or auto")
+      ->check(CLI::IsMember({"none", "even", "odd", "auto"}));
+  app.add_option("--stop-bits", o.stop_bits, "Stop bits")->check(CLI::IsMember({1u, 2u}));
+  app.add_option("--data-bits", o.data_bits, "Data bits")->check(CLI::IsMember({7u, 8u}));
+  app.add_option("--model", o.models,
+                 "Device model for the bus (MODEL) or one slave (SLAVE=MODEL); repeatable");
+}
+
+}  // namespace modtap::tools
