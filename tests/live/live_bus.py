@@ -486,6 +486,32 @@ def byte_streams(path):
     return run.returncode, run.stderr, streams
 
 
+def pcapng_into_a_pipe():
+    """`-w -` on a port feeds a reader as frames come (`modtap -i PORT -w - | wireshark -k -i -`):
+    each packet reaches the pipe while modtap still runs, not when its buffer fills."""
+    global passed
+    port = Pty()
+    modtap = subprocess.Popen([MODTAP, "-i", port.path, "-w", "-", "--mode", "rtu"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    wait_until_open(modtap, port.path)
+    request, response = with_crc([1, 3, 0, 0, 0, 1]), with_crc([1, 3, 2, 0, 5])
+    os.write(port.master, request)
+    time.sleep(0.05)
+    os.write(port.master, response)
+    seen = b""
+    deadline = time.time() + 5
+    while time.time() < deadline and not (request in seen and response in seen):
+        if select.select([modtap.stdout], [], [], 0.2)[0]:
+            seen += os.read(modtap.stdout.fileno(), 65536)
+    modtap.terminate()
+    _, err = modtap.communicate(timeout=15)
+    ok = check("pcapng pipe", request in seen and response in seen,
+               f"{len(seen)} bytes reached the pipe while running; {err!r}")
+    port.close()
+    passed += ok
+    print(f"-w - on a port, read as it grows: {'ok' if ok else 'FAILED'}")
+
+
 def wait_until_open(process, path, timeout=20):
     """Waits until `process` holds `path` open: a slow start (sanitizers, a busy machine)
     must not turn into bytes written before anyone listened."""
@@ -568,11 +594,12 @@ error_cases()
 port_disappears()
 reconnects()
 stops_by_itself()
+pcapng_into_a_pipe()
 junk_and_clean_exit()
 unprivileged_and_read_only()
 signals_at_random_moments()
 for f in failures:
     print("FAIL", f)
-cases = 15
+cases = 16
 print(f"{passed} passed, {cases - passed} failed")
 sys.exit(1 if failures else 0)
