@@ -10,6 +10,7 @@ namespace modtap::decoder {
 namespace {
 
 using testing::analyze_untimed;
+using testing::expect_same_at_every_split;
 using testing::Record;
 
 std::vector<uint8_t> bytes(const std::string& s) {
@@ -89,6 +90,19 @@ TEST(AsciiFramer, AutomaticModeRecognisesAscii) {
   for (const auto& f : frames) EXPECT_TRUE(f.check_ok);
   EXPECT_EQ(frames[1].role, Role::response);
   EXPECT_EQ(frames[1].request, frames[0].index);
+}
+
+TEST(AsciiFramer, GivesTheSameRecordsHoweverTheReadsSplitTheBytes) {
+  // A request and its answer, an exception, a bad LRC, junk between frames, a frame cut by the
+  // next colon, non-hex inside a frame, a lone CR and LF, and a broadcast: cut at every pair of
+  // offsets, the framer must find the same records as in one piece.
+  const auto input = bytes(
+      ":010300000001FB\r\n:0103020005F5\r\nxx:0183027A\r\n:010300000001FA\r\n\r"
+      ":0106000\n:01030000000G\r\n:000600010003F6\r\n:0103");
+  const auto whole = analyze_untimed(input, {}, ModeChoice::ascii);
+  ASSERT_GE(whole.frames().size(), 4u);
+  EXPECT_EQ(whole.bytes_of(0), input);
+  expect_same_at_every_split(input, ModeChoice::ascii, true);
 }
 
 }  // namespace

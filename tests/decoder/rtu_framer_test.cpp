@@ -11,22 +11,9 @@ namespace {
 
 using testing::analyze_untimed;
 using testing::Collector;
+using testing::expect_same_at_every_split;
 using testing::hex;
 using testing::Record;
-
-// Feeds the bytes cut at every possible offset and expects the same records each time.
-void expect_same_at_every_split(const std::vector<uint8_t>& bytes) {
-  const auto whole = analyze_untimed(bytes);
-  for (size_t cut = 1; cut < bytes.size(); ++cut) {
-    const auto split = analyze_untimed(bytes, {cut});
-    ASSERT_EQ(split.records.size(), whole.records.size()) << "cut at " << cut;
-    for (size_t i = 0; i < whole.records.size(); ++i) {
-      EXPECT_EQ(split.records[i].raw, whole.records[i].raw) << "cut at " << cut;
-      EXPECT_EQ(split.records[i].type, whole.records[i].type) << "cut at " << cut;
-      EXPECT_EQ(split.records[i].role, whole.records[i].role) << "cut at " << cut;
-    }
-  }
-}
 
 const auto read_request = hex("01 03 00 00 00 0a c5 cd");
 const auto read_response =

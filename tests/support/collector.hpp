@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
+
 #include "decoder/analyzer.hpp"
 
 namespace modtap::testing {
@@ -136,6 +138,34 @@ inline Collector analyze_untimed(const std::vector<uint8_t>& bytes, std::vector<
   }
   analyzer.finish();
   return out;
+}
+
+// Feeds the bytes cut at every offset, and at every pair of offsets when `pairs`, and expects
+// the same records as from one piece: how a source splits its reads must change nothing.
+inline void expect_same_at_every_split(const std::vector<uint8_t>& bytes,
+                                       decoder::ModeChoice mode = decoder::ModeChoice::rtu,
+                                       bool pairs = false) {
+  const auto whole = analyze_untimed(bytes, {}, mode);
+  auto expect_same = [&](const std::vector<size_t>& cuts) {
+    const auto split = analyze_untimed(bytes, cuts, mode);
+    const std::string where = ::testing::PrintToString(cuts);
+    ASSERT_EQ(split.records.size(), whole.records.size()) << "cut at " << where;
+    for (size_t i = 0; i < whole.records.size(); ++i) {
+      const Record& a = split.records[i];
+      const Record& b = whole.records[i];
+      EXPECT_EQ(a.raw, b.raw) << "cut at " << where;
+      EXPECT_EQ(a.type, b.type) << "cut at " << where;
+      EXPECT_EQ(a.role, b.role) << "cut at " << where;
+      EXPECT_EQ(a.check_ok, b.check_ok) << "cut at " << where;
+      EXPECT_EQ(a.request, b.request) << "cut at " << where;
+      EXPECT_EQ(a.reason, b.reason) << "cut at " << where;
+    }
+  };
+  for (size_t cut = 1; cut < bytes.size(); ++cut) {
+    expect_same({cut});
+    if (pairs)
+      for (size_t second = cut + 1; second < bytes.size(); ++second) expect_same({cut, second});
+  }
 }
 
 }  // namespace modtap::testing
