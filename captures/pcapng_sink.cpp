@@ -85,7 +85,7 @@ void append_frame_comment(fmt::memory_buffer& out, const Frame& f) {
                  f.index, to_string(f.mode), to_string(f.role), f.check_ok ? "ok" : "bad",
                  f.end_ns - f.t_ns);
   if (!f.check_ok && f.damage != Damage::cut)
-    fmt::format_to(it, FMT_COMPILE(" expected=0x{:0{}x}"), f.expected_check,
+    fmt::format_to(it, FMT_COMPILE(" expected_check=0x{:0{}x}"), f.expected_check,
                    f.mode == Mode::rtu ? 4 : 2);
   if (const char* damage = to_string(f.damage))
     fmt::format_to(it, FMT_COMPILE(" damage={}"), damage);

@@ -102,6 +102,9 @@ enum class FieldId : uint8_t {
   object_value,
 };
 
+// The PDU's fields begin here; those before belong to the record.
+inline constexpr FieldId first_pdu_field = FieldId::address;
+
 struct FieldInfo {
   FieldId id;
   std::string_view name;
@@ -115,5 +118,6 @@ const FieldInfo& field_info(FieldId id);
 
 // What JSON makes of a type: "number", "string", "array", "boolean".
 std::string_view json_kind(FieldType type);
+std::string_view to_string(FieldType type);  // "integer", "address", ...
 
 }  // namespace modtap::decoder

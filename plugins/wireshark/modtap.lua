@@ -24,7 +24,7 @@ local fields = {
   mode = ProtoField.string("modtap.mode", "Mode"),
   role = ProtoField.string("modtap.role", "Role"),
   check = ProtoField.string("modtap.check", "Check"),
-  expected = ProtoField.string("modtap.expected", "Expected check"),
+  expected_check = ProtoField.string("modtap.expected_check", "Expected check"),
   request = ProtoField.framenum("modtap.request", "Request in frame", base.NONE, frametype.REQUEST),
   latency = ProtoField.double("modtap.latency_us", "Latency (us)"),
   slave = ProtoField.uint8("modtap.slave", "Slave"),
@@ -95,6 +95,7 @@ local function verdicts()
       end
     end
   end
+  v.expected_check = v.expected_check or v.expected  -- the key's name in older files
   return v
 end
 
@@ -120,9 +121,9 @@ local function add_verdicts(tree, v, pinfo)
   if v.role then tree:add(fields.role, v.role) end
   if v.check then
     local item = tree:add(fields.check, v.check)
-    if v.check == "bad" then item:add_proto_expert_info(bad_check, "Bad check, expected " .. (v.expected or "?")) end
+    if v.check == "bad" then item:add_proto_expert_info(bad_check, "Bad check, expected " .. (v.expected_check or "?")) end
   end
-  if v.expected then tree:add(fields.expected, v.expected) end
+  if v.expected_check then tree:add(fields.expected_check, v.expected_check) end
   local request = v.request and frame_of_record[tonumber(v.request)]
   if request and request < pinfo.number then tree:add(fields.request, request) end
   if v.latency_us then tree:add(fields.latency, tonumber(v.latency_us)) end

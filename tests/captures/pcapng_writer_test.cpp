@@ -90,10 +90,11 @@ TEST(PcapngSink, CommentsCarryTheVerdictsForTheLuaDissector) {
   frame.findings = decoder::finding_bad_check;
   frame.t_ns = 1'000'000;
   frame.end_ns = 4'645'833;  // 7 bytes at 19200 8E1: what a reread needs to time it again
-  EXPECT_EQ(frame_comment(frame),
-            "modtap index=7 mode=rtu role=response check=bad duration_ns=3645833 "
-            "expected=0xe8bb function=\"Read Holding Registers\" request=6 latency_us=2500.000 "
-            "finding=bad-check");
+  EXPECT_EQ(
+      frame_comment(frame),
+      "modtap index=7 mode=rtu role=response check=bad duration_ns=3645833 "
+      "expected_check=0xe8bb function=\"Read Holding Registers\" request=6 latency_us=2500.000 "
+      "finding=bad-check");
   const auto exception = hex("01 83 02 c0 f1");
   frame.raw = frame.adu = exception;
   frame.check_ok = true;

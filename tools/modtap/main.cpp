@@ -14,6 +14,7 @@
 
 #include "captures/output_file.hpp"
 #include "decoder/display_filter.hpp"
+#include "decoder/field_registry.hpp"
 #include "tools/modtap/capture_conditions.hpp"
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/run.hpp"
@@ -66,6 +67,19 @@ std::optional<std::string> refuse_ring(const RunOptions& o, const captures::Ring
   if (o.write_file == "-" || o.save_raw == "-")
     return "-b writes a ring of files; standard output is one stream: give a file name";
   return std::nullopt;
+}
+
+// Every field modtap shows, one a line: its name (the JSON key, the -Y name, Wireshark's
+// modtap.NAME), where it is (record, pdu, or item of a list), its JSON kind, its type, title.
+int list_fields() {
+  for (const auto& field : decoder::field_registry()) {
+    const char* where = field.item                            ? "item"
+                        : field.id < decoder::first_pdu_field ? "record"
+                                                              : "pdu";
+    fmt::print("{}\t{}\t{}\t{}\t{}\n", field.name, where, decoder::json_kind(field.type),
+               to_string(field.type), field.title);
+  }
+  return 0;
 }
 
 int list_models(const RunOptions& o) {
@@ -179,6 +193,10 @@ int main(int argc, char** argv) {
                  "sigrok lines: tx=NAME,rx=NAME (the master's transmit and receive) or bus=NAME");
   app.add_flag("--sigrok-invert", o.sigrok_invert, "The sigrok lines have inverted levels");
   app.add_option("--models-dir", o.models_dir, "A folder of the user's model files (*.yaml)");
+  auto* fields = app.add_subcommand(
+      "fields",
+      "List every field: name (JSON key, -Y, Wireshark's modtap.NAME), place, JSON kind, type, "
+      "title");
   auto* models = app.add_subcommand("models", "List the device models, or check a model file");
   models->fallthrough();  // `modtap models --models-dir DIR` lists the user's models too
   std::string check_file;
@@ -195,6 +213,7 @@ int main(int argc, char** argv) {
   try {
     if (check->parsed()) return tools::check_model_file(check_file);
     if (models->parsed()) return list_models(o);
+    if (fields->parsed()) return list_fields();
     if (o.interfaces.empty() && o.read_file.empty()) {
       fmt::print(stderr, "modtap: give a capture with -r FILE or a port with -i PORT\n");
       return 2;
