@@ -1,14 +1,19 @@
 #!/usr/bin/python3
 """Whole-process runs on inputs no one commits: a long capture streamed through a pipe (memory
-must stay flat, every frame found), a frame every microsecond, and a hex log with binary junk.
+must stay flat, every frame found), a frame every microsecond, a hex log with binary junk, and
+junk by the hundred megabytes: random bytes, and ':' with no CRLF (a capture read with the
+wrong settings, a line full of noise), each in bounded time and memory with every byte kept.
 
     large_inputs.py MODTAP BUSGEN WORKDIR MEGABYTES RSS_LIMIT_MB
 """
+import json
 import os
+import random
 import resource
 import struct
 import subprocess
 import sys
+import threading
 import time
 
 MODTAP, BUSGEN, WORK = sys.argv[1:4]
@@ -85,6 +90,38 @@ check("junk hex log", run.returncode == 2, f"exit {run.returncode}")
 check("junk hex log", err.startswith(f"modtap: {log}: line 3, column 1: expected a hex byte"), err)
 check("junk hex log", all(32 <= b < 127 or b == 10 for b in run.stderr), f"raw bytes in {err!r}")
 print(f"hex log with junk: {err.strip()}")
+
+# 4. Junk by the hundred megabytes (a few under the sanitizers), through a pipe in automatic
+# mode: every byte is in some record, in bounded time and memory.
+junk_mb = 100 if MEGABYTES >= 1024 else 4
+generator = random.Random(12)
+junk_inputs = {
+    "random bytes": lambda: generator.randbytes(1 << 20),
+    "':' with no CRLF": lambda: b":" * (1 << 20),
+}
+for name, megabyte in junk_inputs.items():
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    start = time.time()
+    proc = subprocess.Popen([MODTAP, "-r", "-", "--format", "raw", "-q", "--stats", "-"],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    feeder = threading.Thread(target=lambda: (
+        [proc.stdin.write(megabyte()) for _ in range(junk_mb)], proc.stdin.close()))
+    feeder.start()
+    out = proc.stdout.read()  # not communicate(): it would close the feeder's stdin
+    err = proc.stderr.read()
+    proc.wait(timeout=600)
+    feeder.join()
+    seconds = time.time() - start
+    rss_kb = max(before, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)
+    counted = json.loads(out) if proc.returncode == 0 else {}
+    check(name, proc.returncode == 0, f"exit {proc.returncode}: {err!r}")
+    check(name, counted.get("bytes") == junk_mb << 20 and
+          counted.get("frame_bytes", 0) + counted.get("noise_bytes", 0) == junk_mb << 20,
+          f"of {junk_mb << 20} bytes: {counted.get('frame_bytes')} in frames, "
+          f"{counted.get('noise_bytes')} in noise, {counted.get('bytes')} counted")
+    check(name, rss_kb < RSS_LIMIT_MB * 1024, f"peak RSS {rss_kb} kB")
+    print(f"{junk_mb} MB of {name}: {seconds:.1f} s, {counted.get('noise_records')} noise records, "
+          f"{counted.get('frames')} frames, peak RSS {rss_kb} kB")
 
 for f in failures:
     print("FAIL", f)

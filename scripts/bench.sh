@@ -1,0 +1,69 @@
+#!/bin/bash
+# Whole-process benchmark: modtap against tshark and pymodbus on the same captures.
+#
+#   scripts/bench.sh [TRANSACTIONS ...]     (default: 100000 515000 5150000, about 200 k,
+#                                            1 M and 10 M frames)
+#
+# The bus simulator writes a classic pcap of its traffic (every public function code, many
+# slaves, one frame a packet). Each program reads it once per output, timed by /usr/bin/time:
+# modtap with no output, text, JSON Lines and pcapng (-w); tshark 4.0 with text (its Modbus
+# RTU dissector on DLT_USER0); pymodbus's RTU framer and decoders (scripts/pymodbus_peer.py).
+# Prints a Markdown table: seconds, frames a second, peak RSS, and modtap's text against each
+# peer. tshark's time grows faster than the frame count (143 s at 1 M frames), so the peers run
+# only up to PEER_MAX_FRAMES (default 1,100,000); set it higher to wait for them.
+#
+# Environment: BUILD (default build), WORK (default /tmp/modtap-bench), PEER_MAX_FRAMES.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD=${BUILD:-build}
+WORK=${WORK:-/tmp/modtap-bench}
+PEER_MAX_FRAMES=${PEER_MAX_FRAMES:-1100000}
+MODTAP=$BUILD/tools/modtap/modtap
+BUSGEN=$BUILD/tools/busgen/modtap-busgen
+TSHARK_DLT='uat:user_dlts:"User 0 (DLT=147)","mbrtu","0","","0",""'
+sizes=("$@")
+[ ${#sizes[@]} -gt 0 ] || sizes=(100000 515000 5150000)
+mkdir -p "$WORK"
+
+# Runs a command with its output to /dev/null; prints "SECONDS PEAK_KB".
+measure() {
+  local times
+  times=$(mktemp)
+  /usr/bin/time -o "$times" -f "%e %M" "$@" > /dev/null 2> "$WORK/stderr" ||
+    { cat "$WORK/stderr" >&2; exit 1; }
+  cat "$times"
+  rm -f "$times"
+}
+
+# "1.23 s, 1.5 M/s, 7 MB" from SECONDS PEAK_KB and a frame count.
+cell() {
+  awk -v s="$1" -v kb="$2" -v n="$3" 'BEGIN {
+    rate = s > 0 ? n / s : 0
+    unit = rate >= 999.5e3 ? sprintf("%.2f M/s", rate / 1e6) : sprintf("%.0f k/s", rate / 1e3)
+    printf "%.2f s, %s, %.0f MB", s, unit, kb / 1024 }'
+}
+
+ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.1fx", (b > 0 ? a / b : 0) }'; }
+
+echo "| frames | modtap -T none | modtap text | modtap -T json | modtap -w pcapng | tshark text | pymodbus | text vs tshark | text vs pymodbus |"
+echo "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+for n in "${sizes[@]}"; do
+  capture=$WORK/bus-$n.pcap
+  [ -s "$capture" ] || "$BUSGEN" -n "$n" --seed 1 --format pcap -o "$capture" > /dev/null 2>&1
+  frames=$("$MODTAP" -r "$capture" -q --stats - | python3 -c 'import json,sys; print(json.load(sys.stdin)["frames"])')
+  read -r none_s none_kb < <(measure "$MODTAP" -r "$capture" -T none)
+  read -r text_s text_kb < <(measure "$MODTAP" -r "$capture" -T text)
+  read -r json_s json_kb < <(measure "$MODTAP" -r "$capture" -T json)
+  read -r pcapng_s pcapng_kb < <(measure "$MODTAP" -r "$capture" -w "$WORK/out.pcapng")
+  rm -f "$WORK/out.pcapng"
+  tshark_cell="not run" pymodbus_cell="not run" vs_tshark="" vs_pymodbus=""
+  if [ "$frames" -le "$PEER_MAX_FRAMES" ]; then
+    read -r tshark_s tshark_kb < <(measure tshark -n -o "$TSHARK_DLT" -r "$capture")
+    read -r py_s py_kb < <(measure /usr/bin/python3 scripts/pymodbus_peer.py "$capture")
+    tshark_cell=$(cell "$tshark_s" "$tshark_kb" "$frames")
+    pymodbus_cell=$(cell "$py_s" "$py_kb" "$frames")
+    vs_tshark=$(ratio "$tshark_s" "$text_s")
+    vs_pymodbus=$(ratio "$py_s" "$text_s")
+  fi
+  echo "| $frames | $(cell "$none_s" "$none_kb" "$frames") | $(cell "$text_s" "$text_kb" "$frames") | $(cell "$json_s" "$json_kb" "$frames") | $(cell "$pcapng_s" "$pcapng_kb" "$frames") | $tshark_cell | $pymodbus_cell | $vs_tshark | $vs_pymodbus |"
+done
