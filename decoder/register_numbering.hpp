@@ -11,6 +11,7 @@
 #include <string>
 #include <string_view>
 
+#include <fmt/compile.h>
 #include <fmt/format.h>
 
 #include "decoder/function_codes.hpp"
@@ -88,11 +89,11 @@ struct fmt::formatter<modtap::decoder::RegisterNumber> : formatter<string_view> 
     const unsigned number = r.address;
     switch (r.base) {
       case RegisterBase::hex:
-        return fmt::format_to(ctx.out(), "{:04X}H", number);
+        return fmt::format_to(ctx.out(), FMT_COMPILE("{:04X}H"), number);
       case RegisterBase::zero:
-        return fmt::format_to(ctx.out(), "{}", number);
+        return fmt::format_to(ctx.out(), FMT_COMPILE("{}"), number);
       case RegisterBase::one:
-        return fmt::format_to(ctx.out(), "{}", number + 1);
+        return fmt::format_to(ctx.out(), FMT_COMPILE("{}"), number + 1);
       case RegisterBase::modicon:
         return fmt::format_to(ctx.out(), "{}{:0{}}", modicon_digit(r.table), number + 1,
                               number + 1 > 9999 ? 5 : 4);

@@ -66,15 +66,15 @@ void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_item
   auto it = fmt::appender(out);
   switch (f.type()) {
     case FieldType::hex:
-      fmt::format_to(it, "0x{:04x}", f.number);
+      fmt::format_to(it, FMT_COMPILE("0x{:04x}"), f.number);
       break;
     case FieldType::address:  // as the manuals write registers (2502H), or --register-base
-      fmt::format_to(it, "{}",
+      fmt::format_to(it, FMT_COMPILE("{}"),
                      decoder::RegisterNumber{numbering.table, static_cast<uint16_t>(f.number),
                                              numbering.base});
       break;
     case FieldType::code:  // as vendors' tables write codes: 52H
-      fmt::format_to(it, "{:02X}H", f.number);
+      fmt::format_to(it, FMT_COMPILE("{:02X}H"), f.number);
       break;
     case FieldType::name:
       out.push_back('"');
@@ -228,8 +228,10 @@ auto fmt::formatter<modtap::tools::FunctionLabel>::format(modtap::tools::Functio
                                                           format_context& ctx) const
     -> decltype(ctx.out()) {
   const std::string_view name = modtap::decoder::function_name(label.fc);
-  if (!name.empty()) return formatter<string_view>::format(name, ctx);
-  return fmt::format_to(ctx.out(), "Function 0x{:02X}", label.fc & 0x7F);
+  if (!name.empty()) return write(ctx.out(), name);
+  char unnamed[16];
+  const auto end = fmt::format_to(unnamed, FMT_COMPILE("Function 0x{:02X}"), label.fc & 0x7F);
+  return write(ctx.out(), std::string_view(unnamed, static_cast<size_t>(end - unnamed)));
 }
 
 auto fmt::formatter<modtap::tools::Fixed>::format(modtap::tools::Fixed number,
@@ -249,6 +251,5 @@ auto fmt::formatter<modtap::tools::Fixed>::format(modtap::tools::Fixed number,
   do *--at = static_cast<char>('0' + units % 10);
   while ((units /= 10) != 0);
   if (negative) *--at = '-';
-  return formatter<string_view>::format(string_view(at, static_cast<size_t>(std::end(text) - at)),
-                                        ctx);
+  return write(ctx.out(), std::string_view(at, static_cast<size_t>(std::end(text) - at)));
 }

@@ -2,6 +2,7 @@
 // registry says each type prints, and register values.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <string_view>
@@ -53,14 +54,38 @@ struct Fixed {
   int decimals;
 };
 
+// The format of text modtap composes itself (digits, the standard's names): `[<>]WIDTH` pads
+// it with spaces, on the left with `>`. Being ASCII, its width is its length, so fmt's Unicode
+// width computation, which cost more than making the digits, is not needed.
+struct AsciiFormatter {
+  char align = '<';
+  int width = 0;
+
+  constexpr auto parse(fmt::format_parse_context& ctx) -> decltype(ctx.begin()) {
+    auto it = ctx.begin();
+    if (it != ctx.end() && (*it == '<' || *it == '>')) align = *it++;
+    while (it != ctx.end() && *it >= '0' && *it <= '9') width = width * 10 + (*it++ - '0');
+    if (it != ctx.end() && *it != '}') throw fmt::format_error("expected [<>]WIDTH");
+    return it;
+  }
+  template <typename Out>
+  Out write(Out out, std::string_view text) const {
+    const size_t pad = static_cast<size_t>(width) > text.size() ? width - text.size() : 0;
+    if (align == '>') out = std::fill_n(out, pad, ' ');
+    out = std::copy(text.begin(), text.end(), out);
+    if (align != '>') out = std::fill_n(out, pad, ' ');
+    return out;
+  }
+};
+
 }  // namespace modtap::tools
 
 template <>
-struct fmt::formatter<modtap::tools::Fixed> : formatter<string_view> {
+struct fmt::formatter<modtap::tools::Fixed> : modtap::tools::AsciiFormatter {
   auto format(modtap::tools::Fixed number, format_context& ctx) const -> decltype(ctx.out());
 };
 
 template <>
-struct fmt::formatter<modtap::tools::FunctionLabel> : formatter<string_view> {
+struct fmt::formatter<modtap::tools::FunctionLabel> : modtap::tools::AsciiFormatter {
   auto format(modtap::tools::FunctionLabel label, format_context& ctx) const -> decltype(ctx.out());
 };

@@ -53,8 +53,9 @@ void print_breakdown(Output& out, const char* const* names, std::span<const uint
 // Milliseconds with `decimals` digits, right-aligned in `width`: the histogram is good to
 // 1.6%, so a tenth of a millisecond says all a latency percentile knows.
 void print_ms(Output& out, uint64_t ns, int decimals, int width) {
-  const Fixed ms{static_cast<int64_t>(ns), 6, decimals};
-  out.print("{:>{}}", ms, width);
+  char ms[32];
+  const auto end = fmt::format_to(ms, "{}", Fixed{static_cast<int64_t>(ns), 6, decimals});
+  out.print("{:>{}}", std::string_view(ms, static_cast<size_t>(end - ms)), width);
 }
 
 // One row per slave, in columns a 120-character terminal holds.
