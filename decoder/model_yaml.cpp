@@ -439,15 +439,24 @@ YAML::Node load(std::string_view yaml, const std::string& file) {
 ModelError::ModelError(std::vector<std::string> problems)
     : std::runtime_error(join_lines(problems)), problems_(std::move(problems)) {}
 
-std::string model_base(std::string_view yaml, const std::string& file) {
-  const YAML::Node root = load(yaml, file);
-  if (!root.IsMap() || !root["extends"] || !root["extends"].IsScalar()) return {};
-  return root["extends"].Scalar();
+struct ModelFile::Document {
+  YAML::Node root;
+};
+
+ModelFile::ModelFile(std::string_view yaml, std::string file)
+    : document_(std::make_unique<Document>(Document{load(yaml, file)})), file_(std::move(file)) {
+  const YAML::Node& root = document_->root;
+  if (root.IsMap() && root["extends"] && root["extends"].IsScalar())
+    base_ = root["extends"].Scalar();
 }
 
-DeviceModel parse_model(std::string_view yaml, const std::string& file, const DeviceModel* base) {
-  const YAML::Node root = load(yaml, file);
-  Problems problems(file);
+ModelFile::ModelFile(ModelFile&&) noexcept = default;
+ModelFile& ModelFile::operator=(ModelFile&&) noexcept = default;
+ModelFile::~ModelFile() = default;
+
+DeviceModel ModelFile::model(const DeviceModel* base) const {
+  const YAML::Node& root = document_->root;
+  Problems problems(file_);
   DeviceModel model = base ? *base : DeviceModel{};
   model.name.clear();
   model.title = base ? "based on " + base->name : "";
@@ -461,6 +470,14 @@ DeviceModel parse_model(std::string_view yaml, const std::string& file, const De
   if (!root.IsMap() && !root.IsNull()) problems.add(root, "a model file must be a YAML map");
   problems.throw_if_any();
   return model;
+}
+
+std::string model_base(std::string_view yaml, const std::string& file) {
+  return ModelFile(yaml, file).base();
+}
+
+DeviceModel parse_model(std::string_view yaml, const std::string& file, const DeviceModel* base) {
+  return ModelFile(yaml, file).model(base);
 }
 
 }  // namespace modtap::decoder

@@ -29,46 +29,45 @@ std::string read_text(const std::string& path) {
 }  // namespace
 
 void ModelCatalog::load_builtin() {
-  std::vector<Text> texts;
+  std::vector<decoder::ModelFile> files;
   for (const auto& builtin : models::builtin_models())
-    texts.push_back({std::string(builtin.file), std::string(builtin.yaml)});
-  load(std::move(texts), "built-in");
+    files.emplace_back(builtin.yaml, std::string(builtin.file));
+  load(std::move(files), "built-in");
 }
 
 void ModelCatalog::load_dir(const std::string& dir) {
   namespace fs = std::filesystem;
   if (!fs::is_directory(dir)) throw std::runtime_error(fmt::format("{}: not a directory", dir));
-  std::vector<Text> texts;
-  for (const auto& item : fs::directory_iterator(dir)) {
-    if (item.path().extension() != ".yaml" && item.path().extension() != ".yml") continue;
-    texts.push_back({item.path().string(), read_text(item.path().string())});
-  }
-  std::sort(texts.begin(), texts.end(), [](auto& a, auto& b) { return a.file < b.file; });
-  load(std::move(texts), dir);
+  std::vector<std::string> paths;
+  for (const auto& item : fs::directory_iterator(dir))
+    if (item.path().extension() == ".yaml" || item.path().extension() == ".yml")
+      paths.push_back(item.path().string());
+  std::sort(paths.begin(), paths.end());
+  std::vector<decoder::ModelFile> files;
+  for (const auto& path : paths) files.emplace_back(read_text(path), path);
+  load(std::move(files), dir);
 }
 
 // Models that extend another load after it, so bases are loaded in passes until none is left.
-void ModelCatalog::load(std::vector<Text> texts, const std::string& origin) {
-  while (!texts.empty()) {
-    std::vector<Text> waiting;
-    for (auto& text : texts) {
-      const std::string base_name = decoder::model_base(text.yaml, text.file);
-      const DeviceModel* base = base_name.empty() ? nullptr : find(base_name);
-      if (!base_name.empty() && !base) {
-        waiting.push_back(std::move(text));
+void ModelCatalog::load(std::vector<decoder::ModelFile> files, const std::string& origin) {
+  while (!files.empty()) {
+    std::vector<decoder::ModelFile> waiting;
+    for (auto& file : files) {
+      const DeviceModel* base = file.base().empty() ? nullptr : find(file.base());
+      if (!file.base().empty() && !base) {
+        waiting.push_back(std::move(file));
         continue;
       }
-      add(decoder::parse_model(text.yaml, text.file, base),
-          origin == "built-in" ? origin : text.file);
+      add(file.model(base), origin == "built-in" ? origin : file.file());
     }
-    if (waiting.size() == texts.size()) {
+    if (waiting.size() == files.size()) {
       std::vector<std::string> problems;
-      for (const auto& text : waiting)
-        problems.push_back(fmt::format("{}: extends '{}', which is not a known model", text.file,
-                                       decoder::model_base(text.yaml, text.file)));
+      for (const auto& file : waiting)
+        problems.push_back(
+            fmt::format("{}: extends '{}', which is not a known model", file.file(), file.base()));
       throw ModelError(problems);
     }
-    texts = std::move(waiting);
+    files = std::move(waiting);
   }
 }
 

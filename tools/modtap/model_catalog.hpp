@@ -8,6 +8,7 @@
 
 #include "decoder/device_model.hpp"
 #include "decoder/model_interpreter.hpp"
+#include "decoder/model_yaml.hpp"
 
 namespace modtap::tools {
 
@@ -30,11 +31,7 @@ class ModelCatalog {
   decoder::ModelChoice choose(const std::vector<std::string>& specs) const;
 
  private:
-  struct Text {
-    std::string file;
-    std::string yaml;
-  };
-  void load(std::vector<Text> texts, const std::string& origin);
+  void load(std::vector<decoder::ModelFile> files, const std::string& origin);
   void add(decoder::DeviceModel model, std::string origin);
 
   std::deque<Entry> entries_;  // a deque: ModelChoice holds pointers into it
