@@ -32,7 +32,7 @@ std::optional<RegisterDef> group_parameter(const ParameterGroups& groups, uint16
 
 RegisterLookup find_register(const DeviceModel& model, Table table, uint16_t address) {
   RegisterLookup found;
-  if (model.registers.empty() && !model.groups) return found;  // the generic model maps nothing
+  if (maps_no_register(model)) return found;
   if (model.alias && (address & model.alias->flag) && table == Table::holding) {
     found = find_register(model, table, static_cast<uint16_t>(address & ~model.alias->flag));
     if (found.def()) found.via_alias = true;

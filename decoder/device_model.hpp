@@ -117,6 +117,10 @@ struct RegisterLookup {
 };
 
 RegisterLookup find_register(const DeviceModel& model, Table table, uint16_t address);
+// The generic model: every lookup finds nothing, so a loop of them can be skipped.
+inline bool maps_no_register(const DeviceModel& model) {
+  return model.registers.empty() && !model.groups;
+}
 
 // Whether the model calls a register so: a listed one, or a parameter its group rule names.
 bool names_register(const DeviceModel& model, std::string_view name);

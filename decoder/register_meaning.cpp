@@ -205,6 +205,7 @@ bool maps_table(const DeviceModel& model, Table table) {
 
 void check_registers(const DeviceModel& model, const RegisterAccess& access,
                      std::vector<RuleFinding>& found) {
+  if (maps_no_register(model)) return;
   bool closed_reported = false;
   unsigned mapped = 0;
   // A request beyond the standard's limits (2000 coils, 125 registers) is still read, but
@@ -280,6 +281,7 @@ void explain_exception(const DeviceModel& model, const Frame& frame,
 // listed: a read of 2000 coils of an unknown device would bury the line.
 void decode_bits(const DeviceModel& model, Table table, uint16_t start,
                  std::span<const uint8_t> packed, size_t count, std::vector<RegisterValue>& out) {
+  if (maps_no_register(model)) return;  // only named bits are listed
   for (size_t i = 0; i < count && i / 8 < packed.size(); ++i) {
     const auto address = static_cast<uint16_t>(start + i);
     const RegisterLookup lookup = find_register(model, table, address);
