@@ -7,6 +7,7 @@
 #include <span>
 #include <string_view>
 
+#include <fmt/compile.h>
 #include <fmt/format.h>
 
 #include "decoder/pdu_fields.hpp"
@@ -72,7 +73,7 @@ struct AsciiFormatter {
   Out write(Out out, std::string_view text) const {
     const size_t pad = static_cast<size_t>(width) > text.size() ? width - text.size() : 0;
     if (align == '>') out = std::fill_n(out, pad, ' ');
-    out = std::copy(text.begin(), text.end(), out);
+    out = fmt::format_to(out, FMT_COMPILE("{}"), text);  // a copy fmt makes in one piece
     if (align != '>') out = std::fill_n(out, pad, ' ');
     return out;
   }
