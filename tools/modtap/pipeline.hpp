@@ -69,8 +69,8 @@ struct RunOptions {
   std::string mqtt_discovery;            // Home Assistant's discovery prefix; empty: no discovery
   std::vector<std::string> autostop;     // -a duration:S, filesize:KB, frames:N
   std::vector<std::string> ring_buffer;  // -b duration:S, filesize:KB, files:N
-  // Say on standard error which port is listened to (not to Wireshark: it reads anything
-  // there as an error).
+  // Say on standard error which port is listened to, and keep a status line there (not to
+  // Wireshark: it reads anything there as an error).
   bool announce = true;
 };
 

@@ -283,7 +283,7 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
   auto mqtt = mqtt_output(o, pipeline, bus_name(ports.front().path), true);
   if (mqtt) options.on_wake = [&](int64_t now_ns) { mqtt->tick(now_ns); };
   // A status line on the terminal, unless frame lines are printed on that same terminal.
-  options.status_line = terminal_free_for_status(o);
+  options.status_line = o.announce && terminal_free_for_status(o);
   const int status = live::run_live(ports, options, pipeline.all(), stop);
   metrics.reset();
   if (mqtt) mqtt->finish();
