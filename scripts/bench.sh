@@ -25,14 +25,12 @@ sizes=("$@")
 [ ${#sizes[@]} -gt 0 ] || sizes=(100000 515000 5150000)
 mkdir -p "$WORK"
 
-# Runs a command with its output to /dev/null; prints "SECONDS PEAK_KB".
+# Runs a command with its output to /dev/null; prints "SECONDS PEAK_KB". A failed run stops
+# the script with the command's error (called as VAR=$(measure ...), which set -e checks).
 measure() {
-  local times
-  times=$(mktemp)
-  /usr/bin/time -o "$times" -f "%e %M" "$@" > /dev/null 2> "$WORK/stderr" ||
+  /usr/bin/time -o "$WORK/time" -f "%e %M" "$@" > /dev/null 2> "$WORK/stderr" ||
     { cat "$WORK/stderr" >&2; exit 1; }
-  cat "$times"
-  rm -f "$times"
+  cat "$WORK/time"
 }
 
 # "1.23 s, 1.5 M/s, 7 MB" from SECONDS PEAK_KB and a frame count.
@@ -51,15 +49,21 @@ for n in "${sizes[@]}"; do
   capture=$WORK/bus-$n.pcap
   [ -s "$capture" ] || "$BUSGEN" -n "$n" --seed 1 --format pcap -o "$capture" > /dev/null 2>&1
   frames=$("$MODTAP" -r "$capture" -q --stats - | python3 -c 'import json,sys; print(json.load(sys.stdin)["frames"])')
-  read -r none_s none_kb < <(measure "$MODTAP" -r "$capture" -T none)
-  read -r text_s text_kb < <(measure "$MODTAP" -r "$capture" -T text)
-  read -r json_s json_kb < <(measure "$MODTAP" -r "$capture" -T json)
-  read -r pcapng_s pcapng_kb < <(measure "$MODTAP" -r "$capture" -w "$WORK/out.pcapng")
+  times=$(measure "$MODTAP" -r "$capture" -T none)
+  read -r none_s none_kb <<< "$times"
+  times=$(measure "$MODTAP" -r "$capture" -T text)
+  read -r text_s text_kb <<< "$times"
+  times=$(measure "$MODTAP" -r "$capture" -T json)
+  read -r json_s json_kb <<< "$times"
+  times=$(measure "$MODTAP" -r "$capture" -w "$WORK/out.pcapng")
+  read -r pcapng_s pcapng_kb <<< "$times"
   rm -f "$WORK/out.pcapng"
   tshark_cell="not run" pymodbus_cell="not run" vs_tshark="" vs_pymodbus=""
   if [ "$frames" -le "$PEER_MAX_FRAMES" ]; then
-    read -r tshark_s tshark_kb < <(measure tshark -n -o "$TSHARK_DLT" -r "$capture")
-    read -r py_s py_kb < <(measure /usr/bin/python3 scripts/pymodbus_peer.py "$capture")
+    times=$(measure tshark -n -o "$TSHARK_DLT" -r "$capture")
+    read -r tshark_s tshark_kb <<< "$times"
+    times=$(measure /usr/bin/python3 scripts/pymodbus_peer.py "$capture")
+    read -r py_s py_kb <<< "$times"
     tshark_cell=$(cell "$tshark_s" "$tshark_kb" "$frames")
     pymodbus_cell=$(cell "$py_s" "$py_kb" "$frames")
     vs_tshark=$(ratio "$tshark_s" "$text_s")
