@@ -1,6 +1,8 @@
 // What a framer hands its records to, and what it may ask back.
 #pragma once
 
+#include <span>
+
 #include "decoder/records.hpp"
 
 namespace modtap::decoder {
@@ -11,6 +13,10 @@ struct Expectation {
   uint8_t slave = 0;
   uint8_t function = 0;
   uint16_t echo_size = 0;  // ADU size of an echo whose length its header does not tell, or 0
+  std::span<const uint8_t> request_pdu;  // the pending request's PDU, valid while it is pending
+  // A copy of the request that starts before this is its answer, not the master's retry (a
+  // master repeats only after its time-out); 0 where the source has no clock.
+  int64_t retry_from_ns = 0;
 };
 
 class FrameSink {

@@ -142,6 +142,42 @@ Finding diagnostics_fit(Bytes req, Bytes rsp) {
   return be16(req, 1) == 0 ? echoes_whole(req, rsp) : echoes_first<3>(req, rsp);
 }
 
+// ---- What a response starts with, told by its request --------------------------------------
+
+ResponsePrefix prefix_of(Bytes bytes) {
+  ResponsePrefix prefix;
+  prefix.size = static_cast<uint8_t>(std::min(bytes.size(), prefix.pdu.size()));
+  std::copy_n(bytes.begin(), prefix.size, prefix.pdu.begin());
+  return prefix;
+}
+
+ResponsePrefix code_only(Bytes req) {
+  return prefix_of(req.first(1));
+}
+
+template <size_t n>
+ResponsePrefix echo_prefix(Bytes req) {
+  return prefix_of(req.first(std::min(n, req.size())));
+}
+
+ResponsePrefix whole_echo_prefix(Bytes req) {
+  return prefix_of(req);
+}
+
+// The byte count a read's response carries, from the quantity at PDU offset `at`.
+template <size_t at, unsigned bits_per_item>
+ResponsePrefix byte_count_prefix(Bytes req) {
+  if (req.size() < at + 2) return code_only(req);
+  const unsigned count = (be16(req, at) * bits_per_item + 7u) / 8u;
+  if (count == 0 || count > 250) return code_only(req);
+  const uint8_t bytes[2] = {req[0], static_cast<uint8_t>(count)};
+  return prefix_of(bytes);
+}
+
+ResponsePrefix diagnostics_prefix(Bytes req) {
+  return req.size() >= 3 && be16(req, 1) == 0 ? whole_echo_prefix(req) : echo_prefix<3>(req);
+}
+
 // ---- Fields ------------------------------------------------------------------------------
 
 void no_fields(PduReader&, FieldWriter&) {}
@@ -445,57 +481,59 @@ constexpr bool broadcast = true;
 constexpr std::array public_codes{
     Row{0x01, "Read Coils", reads_only, fixed<6>, counted_at<2, 1, 250>, quantity_limits<3, 2000>,
         bit_count_fits, address_quantity, bits_read, reads<Table::coil>,
-        bits_read_values<Table::coil>},
+        bits_read_values<Table::coil>, byte_count_prefix<3, 1>},
     Row{0x02, "Read Discrete Inputs", reads_only, fixed<6>, counted_at<2, 1, 250>,
         quantity_limits<3, 2000>, bit_count_fits, address_quantity, bits_read,
-        reads<Table::discrete>, bits_read_values<Table::discrete>},
+        reads<Table::discrete>, bits_read_values<Table::discrete>, byte_count_prefix<3, 1>},
     Row{0x03, "Read Holding Registers", reads_only, fixed<6>, register_count,
         quantity_limits<3, 125>, register_count_fits, address_quantity, registers_read,
-        reads<Table::holding>, registers_read_values<Table::holding>},
+        reads<Table::holding>, registers_read_values<Table::holding>, byte_count_prefix<3, 16>},
     Row{0x04, "Read Input Registers", reads_only, fixed<6>, register_count, quantity_limits<3, 125>,
         register_count_fits, address_quantity, registers_read, reads<Table::input>,
-        registers_read_values<Table::input>},
+        registers_read_values<Table::input>, byte_count_prefix<3, 16>},
     Row{0x05, "Write Single Coil", broadcast, fixed<6>, fixed<6>, coil_value_limits, echoes_whole,
-        coil_write, echo<coil_write>, coil_write_access, echoed_values<coil_write_access>},
+        coil_write, echo<coil_write>, coil_write_access, echoed_values<coil_write_access>,
+        whole_echo_prefix},
     Row{0x06, "Write Single Register", broadcast, fixed<6>, fixed<6>, within_spec, echoes_whole,
         register_write, echo<register_write>, register_write_access,
-        echoed_values<register_write_access>},
+        echoed_values<register_write_access>, whole_echo_prefix},
     Row{0x07, "Read Exception Status", reads_only, fixed<2>, fixed<3>, within_spec, fits_anything,
-        no_fields, exception_status, no_access, no_values},
+        no_fields, exception_status, no_access, no_values, code_only},
     Row{0x08, "Diagnostics", broadcast, diagnostics_length, diagnostics_length, within_spec,
-        diagnostics_fit, diagnostics, echo<diagnostics>, no_access, no_values},
+        diagnostics_fit, diagnostics, echo<diagnostics>, no_access, no_values, diagnostics_prefix},
     Row{0x0B, "Get Comm Event Counter", reads_only, fixed<2>, fixed<6>, within_spec, fits_anything,
-        no_fields, event_counter, no_access, no_values},
+        no_fields, event_counter, no_access, no_values, code_only},
     Row{0x0C, "Get Comm Event Log", reads_only, fixed<2>, counted_at<2, 1>, within_spec,
-        fits_anything, no_fields, event_log, no_access, no_values},
+        fits_anything, no_fields, event_log, no_access, no_values, code_only},
     Row{0x0F, "Write Multiple Coils", broadcast, counted_at<6, 1>, fixed<6>,
         quantity_limits<3, 1968, 5, 1>, echoes_first<5>, coils_write, echo<address_quantity>,
-        coils_write_access, no_values},
+        coils_write_access, no_values, echo_prefix<5>},
     Row{0x10, "Write Multiple Registers", broadcast, counted_at<6, 1>, fixed<6>,
         quantity_limits<3, 123, 5>, echoes_first<5>, registers_write, echo<address_quantity>,
-        registers_write_access, no_values},
+        registers_write_access, no_values, echo_prefix<5>},
     Row{0x11, "Report Server ID", reads_only, fixed<2>, counted_at<2, 1>, within_spec,
-        fits_anything, no_fields, server_id, no_access, no_values},
+        fits_anything, no_fields, server_id, no_access, no_values, code_only},
     Row{0x14, "Read File Record", reads_only, counted_at<2, 7, 245>, counted_at<2, 1>, within_spec,
-        fits_anything, file_records<false>, file_read, no_access, no_values},
+        fits_anything, file_records<false>, file_read, no_access, no_values, code_only},
     Row{0x15, "Write File Record", broadcast, counted_at<2, 7, 245>, counted_at<2, 1>, within_spec,
-        fits_anything, file_records<true>, echo<file_records<true>>, no_access, no_values},
+        fits_anything, file_records<true>, echo<file_records<true>>, no_access, no_values,
+        code_only},
     Row{0x16, "Mask Write Register", broadcast, fixed<8>, fixed<8>, within_spec, echoes_whole,
-        mask_write, echo<mask_write>, mask_write_access, no_values},
+        mask_write, echo<mask_write>, mask_write_access, no_values, whole_echo_prefix},
     Row{0x17, "Read/Write Multiple Registers", reads_only, counted_at<10, 1>, counted_at<2, 1>,
         read_write_limits, register_count_fits, read_write_request, registers_read,
-        read_write_access, registers_read_values<Table::holding>},
+        read_write_access, registers_read_values<Table::holding>, byte_count_prefix<3, 16>},
     Row{0x18, "Read FIFO Queue", reads_only, fixed<4>, fifo_length, within_spec, fits_anything,
-        fifo_request, fifo_response, no_access, no_values},
+        fifo_request, fifo_response, no_access, no_values, code_only},
     Row{0x2B, "Encapsulated Interface Transport", reads_only, mei_request_length,
         mei_response_length, within_spec, echoes_first<2>, mei_request, mei_response, no_access,
-        no_values},
+        no_values, echo_prefix<2>},
 };
 
 // A code the standard does not define: its length only the CRC can tell.
 constexpr Row unknown_code{
-    0x00,          "",          broadcast,        searched,  searched, within_spec,
-    fits_anything, data_fields, unknown_response, no_access, no_values};
+    0x00,          "",          broadcast,        searched,  searched,  within_spec,
+    fits_anything, data_fields, unknown_response, no_access, no_values, code_only};
 
 // Row by code, so a lookup is one load.
 constexpr std::array<const Row*, 128> rows_by_code = [] {
@@ -527,6 +565,10 @@ BodyLength body_length(Role role, std::span<const uint8_t> p) {
 
 uint32_t request_spec_findings(std::span<const uint8_t> pdu) {
   return pdu.empty() ? finding_none : function_code(pdu[0]).request_findings(pdu);
+}
+
+ResponsePrefix response_prefix(std::span<const uint8_t> req) {
+  return req.empty() ? ResponsePrefix{} : function_code(req[0]).response_prefix(req);
 }
 
 Finding check_response_fit(std::span<const uint8_t> req, std::span<const uint8_t> rsp) {

@@ -62,6 +62,13 @@ struct RegisterAccesses {
   const RegisterAccess* end() const { return list.data() + size; }
 };
 
+// The first bytes of the PDU every good (non-exception) response to a request carries, as far
+// as the request tells them: its echo, a byte count from the quantity, at least the code.
+struct ResponsePrefix {
+  std::array<uint8_t, 8> pdu{};
+  uint8_t size = 0;
+};
+
 struct FunctionCode {
   uint8_t code = 0;
   std::string_view name;  // empty for a code the standard does not define
@@ -80,6 +87,7 @@ struct FunctionCode {
   // The values a response carries, placed by its request.
   std::optional<RegisterAccess> (*response_values)(std::span<const uint8_t> pdu,
                                                    std::span<const uint8_t> request_pdu);
+  ResponsePrefix (*response_prefix)(std::span<const uint8_t> request_pdu);
 
   bool is_public() const { return !name.empty(); }
 };
@@ -96,6 +104,8 @@ BodyLength body_length(Role role, std::span<const uint8_t> prefix);
 // What a request asks beyond the standard's limits: finding_quantity_out_of_spec,
 // finding_byte_count_mismatch, finding_value_out_of_spec.
 uint32_t request_spec_findings(std::span<const uint8_t> pdu);
+// What every good response to this request PDU starts with (ResponsePrefix).
+ResponsePrefix response_prefix(std::span<const uint8_t> request_pdu);
 // Whether a response's content fits its request: byte counts against quantities, echoes
 // against what was sent. Returns the finding to raise, or finding_none.
 Finding check_response_fit(std::span<const uint8_t> request_pdu,

@@ -17,8 +17,12 @@ void Matcher::set_pending(Pending* pending) {
   // FC08 Return Query Data: the response is the request again, so its length is known.
   const bool query_echo =
       pending->pdu[0] == 0x08 && pending->size >= 3 && pending->pdu[1] == 0 && pending->pdu[2] == 0;
-  expectation_ = {true, pending->slave, pending->pdu[0],
-                  static_cast<uint16_t>(query_echo ? pending->adu_size : 0)};
+  expectation_ = {true,
+                  pending->slave,
+                  pending->pdu[0],
+                  static_cast<uint16_t>(query_echo ? pending->adu_size : 0),
+                  {pending->pdu.data(), pending->size},
+                  options_.timed ? pending->end_ns + surely_answer_within_ns(pending->slave) : 0};
 }
 
 void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
@@ -74,15 +78,20 @@ bool Matcher::copies_pending(const Frame& frame) const {
 // much later than the slave ever answered is a retry. With no clock, or nothing learned and a
 // copy late enough to be a retry, it is taken for the response and marked ambiguous.
 Matcher::Copy Matcher::judge_copy(const Frame& frame) const {
-  constexpr int64_t earliest_retry_ns = 50'000'000;
-  constexpr int64_t slack_ns = 20'000'000;
   if (!pending_ || !copies_pending(frame)) return Copy::none;
   if (!options_.timed) return Copy::ambiguous;
   const int64_t waited = frame.t_ns - pending_->end_ns;
-  const int64_t learned =
-      turnaround_ns_[pending_->slave] ? turnaround_ns_[pending_->slave] : bus_turnaround_ns_;
-  if (learned) return waited > 2 * learned + slack_ns ? Copy::retry : Copy::response;
-  return waited >= earliest_retry_ns ? Copy::ambiguous : Copy::response;
+  if (waited < surely_answer_within_ns(pending_->slave)) return Copy::response;
+  return turnaround_learned(pending_->slave) ? Copy::retry : Copy::ambiguous;
+}
+
+// Twice the longest turnaround seen (the slave's, else the bus's) and 20 ms; with nothing
+// learned, 50 ms, the shortest time-out masters use.
+int64_t Matcher::surely_answer_within_ns(uint8_t slave) const {
+  constexpr int64_t earliest_retry_ns = 50'000'000;
+  constexpr int64_t slack_ns = 20'000'000;
+  const int64_t learned = turnaround_learned(slave);
+  return learned ? 2 * learned + slack_ns : earliest_retry_ns;
 }
 
 bool Matcher::pending_matches(const Frame& frame) const {

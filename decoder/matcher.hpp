@@ -57,6 +57,11 @@ class Matcher {
   enum class Copy : uint8_t { none, response, retry, ambiguous };
   Copy judge_copy(const Frame& frame) const;
   bool copies_pending(const Frame& frame) const;
+  // How soon after its request a copy of it can only be the answer.
+  int64_t surely_answer_within_ns(uint8_t slave) const;
+  int64_t turnaround_learned(uint8_t slave) const {
+    return turnaround_ns_[slave] ? turnaround_ns_[slave] : bus_turnaround_ns_;
+  }
   void learn_turnaround(uint8_t slave, int64_t latency_ns) {
     turnaround_ns_[slave] = std::max(turnaround_ns_[slave], latency_ns);
     bus_turnaround_ns_ = std::max(bus_turnaround_ns_, latency_ns);

@@ -163,9 +163,18 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, uint16_t length, const Ro
     if (gap - at >= min_adu && crc_ok(p, gap - at)) return Verdict::other_reading;
   }
   // A copy of the pending request with a glitch after it reads as a response of one more
-  // byte; on a bus of glitches, the copy is the likelier (a master's retry).
-  if (other && zero_glitches_common() && p[length - 1] == 0x00 && may_be_glitch(at + length - 1) &&
-      length - 1 >= min_adu && fits_role(*other, at, length - 1) && crc_ok(p, length - 1))
+  // byte (FC07: a status equal to the request's CRC low byte); on a bus of glitches, the copy
+  // is the likelier (a master's retry), unless it came too soon for a retry. (The other way
+  // round, a request whose CRC ends in 0x00 holds a response one byte shorter that nobody
+  // awaits.)
+  if (other && *other == Role::request && zero_glitches_common() && p[length - 1] == 0x00 &&
+      may_be_glitch(at + length - 1) && length - 1 >= min_adu &&
+      fits_role(*other, at, length - 1) && crc_ok(p, length - 1) &&
+      !too_soon_for_retry(at, length - 1))
+    return Verdict::other_reading;
+  // The pending request again (a retry) whose CRC ends in 0x00 holds a response one byte
+  // shorter, which its request would not have asked for: the copy is the reading.
+  if (other && *other == Role::request && copies_request(at, length + 1))
     return Verdict::other_reading;
   // A reserved address is as often a turnaround's 0xFF: such a frame never swallows one whose
   // length rules and CRC agree (a glitch, a response and the next glitch can read as one).
@@ -450,6 +459,32 @@ std::optional<uint16_t> RtuFramer::awaited_length(uint64_t begin, uint64_t size)
   return static_cast<uint16_t>(body.bytes + crc_size);
 }
 
+// Whether the byte at `pos` of the awaited response starting at `begin` is the one its request
+// says every good response has there (an echo, a byte count): then it is no glitch.
+bool RtuFramer::awaited_byte(uint64_t begin, uint64_t pos) const {
+  const uint8_t* p = at_ptr(begin);
+  if (pos < 2 || p[1] != expected_.function) return false;  // an exception echoes nothing
+  const ResponsePrefix prefix = response_prefix(expected_.request_pdu);
+  return pos - 1 < prefix.size && prefix.pdu[pos - 1] == p[pos];
+}
+
+// Whether [at, at + size) is the pending request again, byte for byte (its CRC included:
+// the same PDU has the same CRC).
+bool RtuFramer::copies_request(uint64_t at, uint64_t size) const {
+  const Expectation& expected = expected_;
+  const uint8_t* p = at_ptr(at);
+  return expected.pending && at + size <= end_ && p[0] == expected.slave &&
+         size == expected.request_pdu.size() + 1 + crc_size &&
+         std::equal(expected.request_pdu.begin(), expected.request_pdu.end(), p + 1);
+}
+
+// A copy of the pending request that starts before the master could have timed out is the
+// answer (an echo), not the master's retry.
+bool RtuFramer::too_soon_for_retry(uint64_t at, uint64_t size) const {
+  return expected_.retry_from_ns && copies_request(at, size) &&
+         end_time(at) - char_ns_ < expected_.retry_from_ns;
+}
+
 // A damaged response: reported as a frame with a bad check, so it stays in the slave's
 // picture. Cut short, it has no check to expect; run on, its end is where its structure says.
 void RtuFramer::emit_damaged(uint64_t begin, uint64_t end, Damage damage) {
@@ -477,7 +512,8 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
   // 1 in 128 frames, the glitch.
   const uint8_t last = p[size - 1];
   if (length && size <= *length && size > 3 && is_glitch_byte(last) &&
-      glitches_ * 128 > good_frames_ && end < end_ && !gap_at(end) && may_be_glitch(end - 1)) {
+      glitches_ * 128 > good_frames_ && end < end_ && !gap_at(end) && may_be_glitch(end - 1) &&
+      !awaited_byte(begin, size - 1)) {
     emit_piece(begin, end - 1);
     return emit_piece(end - 1, end);
   }

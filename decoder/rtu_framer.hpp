@@ -96,6 +96,9 @@ class RtuFramer {
   void emit_unframed(uint64_t begin, uint64_t end);
   void emit_piece(uint64_t begin, uint64_t end);
   std::optional<uint16_t> awaited_length(uint64_t begin, uint64_t size) const;
+  bool awaited_byte(uint64_t begin, uint64_t pos) const;
+  bool copies_request(uint64_t at, uint64_t size) const;
+  bool too_soon_for_retry(uint64_t at, uint64_t size) const;
   void emit_damaged(uint64_t begin, uint64_t end, Damage damage);
   void emit_noise(uint64_t begin, uint64_t end, NoiseReason reason);
   void consume(uint64_t to);

@@ -92,6 +92,24 @@ TEST(BodyLength, UnknownCodesAreSearchedFor) {
   EXPECT_EQ(request("01 41").kind, K::variable);
 }
 
+std::vector<uint8_t> prefix(const char* request_pdu) {
+  const ResponsePrefix p = response_prefix(hex(request_pdu));
+  return {p.pdu.begin(), p.pdu.begin() + p.size};
+}
+
+TEST(ResponsePrefix, IsWhatTheRequestTellsOfItsAnswer) {
+  EXPECT_EQ(prefix("03 00 10 00 0a"), hex("03 14"));  // 10 registers: 20 bytes
+  EXPECT_EQ(prefix("01 00 00 00 0b"), hex("01 02"));  // 11 coils: 2 bytes
+  EXPECT_EQ(prefix("03 00 00 00 7e"), hex("03"));     // over the limit: no byte count to expect
+  EXPECT_EQ(prefix("17 00 01 00 03 00 09 00 01 02 00 07"), hex("17 06"));  // reads 3
+  EXPECT_EQ(prefix("06 00 05 12 34"), hex("06 00 05 12 34"));
+  EXPECT_EQ(prefix("10 00 05 00 02 04 00 0a 01 02"), hex("10 00 05 00 02"));
+  EXPECT_EQ(prefix("08 00 00 ab cd ef 01 02 03"), hex("08 00 00 ab cd ef 01 02"));  // 8 kept
+  EXPECT_EQ(prefix("08 00 0b 00 00"), hex("08 00 0b"));  // a counter: its value is new
+  EXPECT_EQ(prefix("07"), hex("07"));
+  EXPECT_EQ(prefix("41 01 02"), hex("41"));  // a code the standard does not define
+}
+
 TEST(FunctionTable, NamesThePublicCodesOnly) {
   EXPECT_EQ(function_name(0x03), "Read Holding Registers");
   EXPECT_EQ(function_name(0x83), "Read Holding Registers");

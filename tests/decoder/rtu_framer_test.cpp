@@ -81,6 +81,53 @@ TEST(RtuFramer, AnAwaitedResponseCutShortIsABadFrameInItsSlavesPicture) {
   EXPECT_TRUE(out.noise().empty());
 }
 
+// A bus whose drivers put a 0x00 before every other frame, then a FC10 write whose response
+// breaks off with `cut`, right before the next request.
+std::vector<uint8_t> glitchy_bus_then_cut(const std::vector<uint8_t>& cut) {
+  std::vector<uint8_t> bytes;
+  for (int i = 0; i < 16; ++i) bytes = concat({bytes, hex("00"), read_request, read_response});
+  const auto write = with_crc(hex("01 10 00 05 00 02 04 00 0a 01 02"));
+  return concat({bytes, write, cut, read_request, read_response});
+}
+
+TEST(RtuFramer, ACutResponseKeepsTheByteItsRequestSaysComesThere) {
+  // FC10 echoes address and quantity: the 0x00 after the address is the quantity's high byte,
+  // not a glitch, however many glitches the bus has.
+  const auto cut = hex("01 10 00 05 00");
+  const auto out = analyze_untimed(glitchy_bus_then_cut(cut));
+  const auto frames = out.frames();
+  ASSERT_GE(frames.size(), 3u);
+  const auto& broken = frames[frames.size() - 3];
+  EXPECT_EQ(broken.raw, cut);
+  EXPECT_EQ(broken.damage, Damage::cut);
+  EXPECT_EQ(broken.role, Role::response);
+  EXPECT_EQ(out.noise().size(), 16u);  // the glitches before the reads, none after the cut
+}
+
+TEST(RtuFramer, ACutResponsesLastByteThatItsRequestRulesOutIsAGlitch) {
+  // 0xFF cannot be the quantity's high byte of an answer to a write of 2 registers.
+  const auto out = analyze_untimed(glitchy_bus_then_cut(hex("01 10 00 05 ff")));
+  const auto frames = out.frames();
+  ASSERT_GE(frames.size(), 3u);
+  EXPECT_EQ(frames[frames.size() - 3].raw, hex("01 10 00 05"));
+  ASSERT_EQ(out.noise().size(), 17u);
+  EXPECT_EQ(out.noise().back().raw, hex("ff"));
+  EXPECT_EQ(out.noise().back().reason, NoiseReason::glitch);
+}
+
+TEST(RtuFramer, ARetryWhoseCrcEndsInZeroIsNotAShorterResponse) {
+  // 3711 coils, over the limit; the CRC ends in 0x00, so the first 7 bytes read as a response
+  // of 2 bytes with a good CRC. Sent again after a silent time-out, the copy is the request.
+  const auto asked = hex("01 01 02 f5 0e 7f 68 00");
+  const auto refused = with_crc(hex("01 81 03"));
+  const auto out = analyze_untimed(concat({asked, hex("ff"), asked, refused}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[0].raw, asked);
+  EXPECT_EQ(frames[1].raw, asked);
+  EXPECT_EQ(frames[2].raw, refused);
+}
+
 TEST(RtuFramer, AnAwaitedResponseRunIntoEndsWhereItsStructureSays) {
   // Another device talked over the tail: its bytes follow the response, whose CRC broke.
   auto hit = read_response;
