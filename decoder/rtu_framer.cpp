@@ -164,12 +164,10 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, uint16_t length, const Ro
   }
   // A copy of the pending request with a glitch after it reads as a response of one more
   // byte (FC07: a status equal to the request's CRC low byte); on a bus of glitches, the copy
-  // is the likelier (a master's retry), unless it came too soon for a retry. (The other way
-  // round, a request whose CRC ends in 0x00 holds a response one byte shorter that nobody
-  // awaits.)
+  // is the likelier (a master's retry), unless it came too soon for a retry. (Any other frame
+  // whose CRC ends in 0x00 holds a frame one byte shorter too: that is no reason to cut it.)
   if (other && *other == Role::request && zero_glitches_common() && p[length - 1] == 0x00 &&
-      may_be_glitch(at + length - 1) && length - 1 >= min_adu &&
-      fits_role(*other, at, length - 1) && crc_ok(p, length - 1) &&
+      may_be_glitch(at + length - 1) && copies_request(at, length - 1) &&
       !too_soon_for_retry(at, length - 1))
     return Verdict::other_reading;
   // The pending request again (a retry) whose CRC ends in 0x00 holds a response one byte
@@ -459,13 +457,27 @@ std::optional<uint16_t> RtuFramer::awaited_length(uint64_t begin, uint64_t size)
   return static_cast<uint16_t>(body.bytes + crc_size);
 }
 
-// Whether the byte at `pos` of the awaited response starting at `begin` is the one its request
-// says every good response has there (an echo, a byte count): then it is no glitch.
-bool RtuFramer::awaited_byte(uint64_t begin, uint64_t pos) const {
+// What the request says of the byte at `pos` of its awaited response starting at `begin`:
+// that it is this byte (an echo, a byte count), that it cannot be, or nothing.
+std::optional<bool> RtuFramer::awaited_byte(uint64_t begin, uint64_t pos) const {
   const uint8_t* p = at_ptr(begin);
-  if (pos < 2 || p[1] != expected_.function) return false;  // an exception echoes nothing
-  const ResponsePrefix prefix = response_prefix(expected_.request_pdu);
-  return pos - 1 < prefix.size && prefix.pdu[pos - 1] == p[pos];
+  const auto request = expected_.request_pdu;
+  if (pos < 2 || p[1] != expected_.function) return std::nullopt;  // an exception echoes nothing
+  const ResponsePrefix prefix = response_prefix(request);
+  if (pos - 1 < prefix.size) return prefix.pdu[pos - 1] == p[pos];
+  // A whole echo repeats the request's CRC too.
+  const size_t crc_at = 1 + request.size();
+  if (prefix.size != request.size() || pos < crc_at || pos >= crc_at + crc_size)
+    return std::nullopt;
+  std::array<uint8_t, 1 + 8> adu{expected_.slave};
+  std::copy(request.begin(), request.end(), adu.begin() + 1);
+  const uint16_t crc = crc16({adu.data(), crc_at});
+  return (pos == crc_at ? (crc & 0xFF) : (crc >> 8)) == p[pos];
+}
+
+// Whether these bytes start the awaited response, or do with a glitch after them.
+bool RtuFramer::starts_awaited(uint64_t begin, uint64_t size) const {
+  return awaited_length(begin, size) || (size > 3 && awaited_length(begin, size - 1));
 }
 
 // Whether [at, at + size) is the pending request again, byte for byte (its CRC included:
@@ -502,20 +514,26 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
   const uint64_t size = end - begin;
   const uint8_t* p = at_ptr(begin);
   // The slave's driver turning on can put a glitch right before its damaged response.
-  if (size > 1 && is_glitch_byte(p[0]) && awaited_length(begin + 1, size - 1)) {
+  if (size > 1 && is_glitch_byte(p[0]) && starts_awaited(begin + 1, size - 1)) {
     emit_piece(begin, begin + 1);
     return emit_piece(begin + 1, end);
   }
   const auto length = awaited_length(begin, size);
   // A damaged response ending in 0x00 or 0xFF (2 in 256) right before the next frame, or one
   // cut short with that frame's glitch after it: on a bus where glitches come with more than
-  // 1 in 128 frames, the glitch.
+  // 1 in 128 frames, the glitch, unless the request says whether the byte is the response's
+  // (then a silence after it does not matter). Cut short, its length may be told only without
+  // the glitch (FC08 "68 08 00" and a 0x00 read as Return Query Data).
   const uint8_t last = p[size - 1];
-  if (length && size <= *length && size > 3 && is_glitch_byte(last) &&
-      glitches_ * 128 > good_frames_ && end < end_ && !gap_at(end) && may_be_glitch(end - 1) &&
-      !awaited_byte(begin, size - 1)) {
-    emit_piece(begin, end - 1);
-    return emit_piece(end - 1, end);
+  const bool cut_short =
+      (length && size <= *length) || (!length && awaited_length(begin, size - 1));
+  if (cut_short && size > 3 && is_glitch_byte(last) && glitches_ * 128 > good_frames_ &&
+      end < end_ && may_be_glitch(end - 1)) {
+    const std::optional<bool> told = awaited_byte(begin, size - 1);
+    if (told ? !*told : !gap_at(end)) {
+      emit_piece(begin, end - 1);
+      return emit_piece(end - 1, end);
+    }
   }
   if (length && *length != size) {
     if (size < *length) return emit_damaged(begin, end, Damage::cut);

@@ -96,7 +96,8 @@ class RtuFramer {
   void emit_unframed(uint64_t begin, uint64_t end);
   void emit_piece(uint64_t begin, uint64_t end);
   std::optional<uint16_t> awaited_length(uint64_t begin, uint64_t size) const;
-  bool awaited_byte(uint64_t begin, uint64_t pos) const;
+  std::optional<bool> awaited_byte(uint64_t begin, uint64_t pos) const;
+  bool starts_awaited(uint64_t begin, uint64_t size) const;
   bool copies_request(uint64_t at, uint64_t size) const;
   bool too_soon_for_retry(uint64_t at, uint64_t size) const;
   void emit_damaged(uint64_t begin, uint64_t end, Damage damage);

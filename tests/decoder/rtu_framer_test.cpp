@@ -81,12 +81,13 @@ TEST(RtuFramer, AnAwaitedResponseCutShortIsABadFrameInItsSlavesPicture) {
   EXPECT_TRUE(out.noise().empty());
 }
 
-// A bus whose drivers put a 0x00 before every other frame, then a FC10 write whose response
-// breaks off with `cut`, right before the next request.
-std::vector<uint8_t> glitchy_bus_then_cut(const std::vector<uint8_t>& cut) {
+// A bus whose drivers put a 0x00 before every other frame, then a write whose response breaks
+// off with `cut`, right before the next request.
+std::vector<uint8_t> glitchy_bus_then_cut(
+    const std::vector<uint8_t>& cut,
+    const std::vector<uint8_t>& write = with_crc(hex("01 10 00 05 00 02 04 00 0a 01 02"))) {
   std::vector<uint8_t> bytes;
   for (int i = 0; i < 16; ++i) bytes = concat({bytes, hex("00"), read_request, read_response});
-  const auto write = with_crc(hex("01 10 00 05 00 02 04 00 0a 01 02"));
   return concat({bytes, write, cut, read_request, read_response});
 }
 
@@ -113,6 +114,18 @@ TEST(RtuFramer, ACutResponsesLastByteThatItsRequestRulesOutIsAGlitch) {
   ASSERT_EQ(out.noise().size(), 17u);
   EXPECT_EQ(out.noise().back().raw, hex("ff"));
   EXPECT_EQ(out.noise().back().reason, NoiseReason::glitch);
+}
+
+TEST(RtuFramer, ACutEchoKeepsTheRequestsCrcByte) {
+  // Mask Write Register echoes its request whole, CRC and all: its CRC's first byte is 0xFF.
+  const auto mask_write = hex("01 16 00 04 ff f2 60 07 ff e3");
+  const auto cut = std::vector<uint8_t>(mask_write.begin(), mask_write.begin() + 9);
+  const auto out = analyze_untimed(glitchy_bus_then_cut(cut, mask_write));
+  const auto frames = out.frames();
+  ASSERT_GE(frames.size(), 3u);
+  EXPECT_EQ(frames[frames.size() - 3].raw, cut);
+  EXPECT_EQ(frames[frames.size() - 3].damage, Damage::cut);
+  EXPECT_EQ(out.noise().size(), 16u);
 }
 
 TEST(RtuFramer, ARetryWhoseCrcEndsInZeroIsNotAShorterResponse) {
