@@ -23,6 +23,17 @@ class Analyzer::ModeProbe {
   }
   Mode verdict() const { return ascii_count_.good > rtu_count_.good ? Mode::ascii : Mode::rtu; }
 
+  // A live port gone quiet: the silence ends what the trial framers hold, and a good frame in
+  // one mode and none in the other is evidence enough (a quiet bus may not send three soon).
+  bool flush(int64_t now_ns) {
+    for (auto& trial : trials_) {
+      if (!trial) continue;
+      trial->rtu.flush(now_ns);
+      trial->ascii.flush(now_ns);
+    }
+    return (rtu_count_.good > 0) != (ascii_count_.good > 0);
+  }
+
   template <typename Fn>
   void replay(Fn&& push) const {
     for (const auto& kept : chunks_) push(Chunk{kept.channel, kept.t_ns, kept.bytes});
@@ -138,6 +149,7 @@ void Analyzer::feed(const Chunk& chunk) {
 }
 
 void Analyzer::flush(int64_t now_ns) {
+  if (probe_ && probe_->flush(now_ns)) settle_mode();
   for (auto& c : channels_) {
     if (auto* rtu = std::get_if<std::unique_ptr<RtuFramer>>(&c.framer)) (*rtu)->flush(now_ns);
     if (auto* ascii = std::get_if<std::unique_ptr<AsciiFramer>>(&c.framer)) (*ascii)->flush(now_ns);

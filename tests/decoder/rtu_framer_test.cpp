@@ -280,6 +280,22 @@ TEST(Analyzer, DoesNotTimeARequestOutWhileItsResponseIsStillHeld) {
   for (const auto& timeout : out.timeouts()) EXPECT_NE(timeout.request, frames[0].index);
 }
 
+TEST(Analyzer, AQuietLiveBusShowsItsFirstFrameAtTheSilenceInAutomaticMode) {
+  // One request a second: waiting for three good frames before choosing RTU or ASCII would
+  // show nothing for three seconds. The silence after one frame, good only as RTU, decides.
+  AnalyzerOptions options;
+  options.mode = ModeChoice::automatic;
+  options.clock = ClockQuality::per_chunk;
+  options.format = {9600, 8, Parity::none, 1};
+  Collector out;
+  Analyzer analyzer(options, {{"bus", ChannelRole::bus}}, out);
+  analyzer.push({0, 1'000'000'000, read_request});
+  analyzer.flush(1'100'000'000);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_EQ(frames[0].raw, read_request);
+}
+
 class GapCollector : public ::testing::Test {
  protected:
   // Pushes each byte with its own exact time: bytes of a frame back to back, then `gap_ns`.
