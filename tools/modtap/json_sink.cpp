@@ -11,75 +11,97 @@ JsonSink::JsonSink(Output& out, const std::vector<ChannelInfo>& channels)
     : out_(out), channels_(channels) {}
 
 void JsonSink::channel(uint16_t id) {
-  out_.print(FMT_COMPILE(",\"channel\":"));
+  put(out_.buffer(), ",\"channel\":");
   append_json_string(out_.buffer(), id < channels_.size() ? channels_[id].name : "");
 }
 
 void JsonSink::on_frame(const Frame& frame) {
   auto& buf = out_.buffer();
-  out_.print(FMT_COMPILE("{{\"type\":\"frame\",\"index\":{},\"t_ns\":{},\"end_ns\":{}"),
-             frame.index, frame.t_ns, frame.end_ns);
+  put(buf, "{\"type\":\"frame\",\"index\":");
+  put_uint(buf, frame.index);
+  put(buf, ",\"t_ns\":");
+  put_int(buf, frame.t_ns);
+  put(buf, ",\"end_ns\":");
+  put_int(buf, frame.end_ns);
   channel(frame.channel);
-  out_.print(
-      FMT_COMPILE(
-          ",\"offset\":{},\"mode\":\"{}\",\"role\":\"{}\",\"slave\":{},\"fc\":{},\"function\":"),
-      frame.offset, to_string(frame.mode), to_string(frame.role), frame.slave(),
-      frame.function() & 0x7F);
-  out_.print(FMT_COMPILE("\"{}\""), FunctionLabel{frame.function()});
-  out_.print(FMT_COMPILE(",\"raw\":\""));
+  put(buf, ",\"offset\":");
+  put_uint(buf, frame.offset);
+  put(buf, ",\"mode\":\"");
+  put(buf, to_string(frame.mode));
+  put(buf, "\",\"role\":\"");
+  put(buf, to_string(frame.role));
+  put(buf, "\",\"slave\":");
+  put_uint(buf, frame.slave());
+  put(buf, ",\"fc\":");
+  put_uint(buf, frame.function() & 0x7F);
+  out_.print(FMT_COMPILE(",\"function\":\"{}\",\"raw\":\""), FunctionLabel{frame.function()});
   append_hex(buf, frame.raw, false);
-  out_.print(FMT_COMPILE("\",\"check\":\"{}\",\"check_value\":{}"), frame.check_ok ? "ok" : "bad",
-             frame.wire_check());
+  put(buf, frame.check_ok ? "\",\"check\":\"ok\",\"check_value\":"
+                          : "\",\"check\":\"bad\",\"check_value\":");
+  put_uint(buf, frame.wire_check());
+  put(buf, ",\"expected_check\":");
   if (frame.damage == Damage::cut) {
-    out_.print(FMT_COMPILE(",\"expected_check\":null"));
+    put(buf, "null");
   } else {
-    out_.print(FMT_COMPILE(",\"expected_check\":{}"), frame.expected_check);
+    put_uint(buf, frame.expected_check);
   }
+  put(buf, ",\"damage\":");
   if (const char* damage = to_string(frame.damage)) {
-    out_.print(FMT_COMPILE(",\"damage\":\"{}\""), damage);
+    buf.push_back('"');
+    put(buf, damage);
+    buf.push_back('"');
   } else {
-    out_.print(FMT_COMPILE(",\"damage\":null"));
+    put(buf, "null");
   }
+  put(buf, ",\"exception\":");
   if (frame.is_exception() && frame.adu.size() > 2) {
-    out_.print(FMT_COMPILE(",\"exception\":{}"), frame.adu[2]);
+    put_uint(buf, frame.adu[2]);
   } else {
-    out_.print(FMT_COMPILE(",\"exception\":null"));
+    put(buf, "null");
   }
+  put(buf, ",\"request\":");
   if (frame.request) {
-    out_.print(FMT_COMPILE(",\"request\":{}"), *frame.request);
+    put_uint(buf, *frame.request);
   } else {
-    out_.print(FMT_COMPILE(",\"request\":null"));
+    put(buf, "null");
   }
   if (frame.latency_ns) {
     out_.print(FMT_COMPILE(",\"latency_us\":{}"), Fixed{*frame.latency_ns, 3, 3});
   } else {
-    out_.print(FMT_COMPILE(",\"latency_us\":null"));
+    put(buf, ",\"latency_us\":null");
   }
-  out_.print(FMT_COMPILE(",\"findings\":["));
+  put(buf, ",\"findings\":[");
   bool first = finding_names(frame.findings);
   if (frame.meaning) {
     for (const RuleFinding& finding : frame.meaning->findings) {
-      out_.print(FMT_COMPILE("{}\"{}\""), first ? "" : ",", to_string(finding.kind));
+      if (!first) buf.push_back(',');
+      buf.push_back('"');
+      put(buf, to_string(finding.kind));
+      buf.push_back('"');
       first = false;
     }
   }
-  out_.print(FMT_COMPILE("]"));
+  buf.push_back(']');
   if (frame.meaning) meaning(*frame.meaning);
   const DecodedPdu& pdu = fields_of(frame, decoded_);
   for (size_t at = 0; at < pdu.fields.size();) {
     buf.push_back(',');
     at = append_json_field(buf, pdu, at);
   }
-  if (pdu.truncated) out_.print(FMT_COMPILE(",\"truncated\":true"));
-  out_.print(FMT_COMPILE("}}\n"));
+  if (pdu.truncated) put(buf, ",\"truncated\":true");
+  put(buf, "}\n");
   out_.end_record();
 }
 
 // The names of the findings in `bits`, comma-separated; true if there were none.
 bool JsonSink::finding_names(uint32_t bits) {
   bool none = true;
+  auto& buf = out_.buffer();
   for_each_frame_finding(bits, [&](size_t slot) {
-    out_.print(FMT_COMPILE("{}\"{}\""), none ? "" : ",", frame_findings()[slot].name);
+    if (!none) buf.push_back(',');
+    buf.push_back('"');
+    put(buf, frame_findings()[slot].name);
+    buf.push_back('"');
     none = false;
   });
   return none;
@@ -88,28 +110,30 @@ bool JsonSink::finding_names(uint32_t bits) {
 // "model", "registers" and "notes": each model finding's kind, address and explanation.
 void JsonSink::meaning(const Meaning& meaning) {
   auto& buf = out_.buffer();
-  out_.print(FMT_COMPILE(",\"model\":"));
+  put(buf, ",\"model\":");
   append_json_string(buf, meaning.model->name);
-  out_.print(FMT_COMPILE(",\"registers\":["));
+  put(buf, ",\"registers\":[");
   for (size_t i = 0; i < meaning.registers.size(); ++i) {
-    if (i) out_.print(FMT_COMPILE(","));
+    if (i) buf.push_back(',');
     append_register_json(buf, meaning.registers[i]);
   }
-  out_.print(FMT_COMPILE("],\"notes\":["));
+  put(buf, "],\"notes\":[");
   for (size_t i = 0; i < meaning.findings.size(); ++i) {
     const RuleFinding& finding = meaning.findings[i];
-    out_.print(FMT_COMPILE("{}{{\"finding\":\"{}\",\"addr\":"), i ? "," : "",
-               to_string(finding.kind));
+    if (i) buf.push_back(',');
+    put(buf, "{\"finding\":\"");
+    put(buf, to_string(finding.kind));
+    put(buf, "\",\"addr\":");
     if (finding.address) {
-      out_.print(FMT_COMPILE("{}"), *finding.address);
+      put_uint(buf, *finding.address);
     } else {
-      out_.print(FMT_COMPILE("null"));
+      put(buf, "null");
     }
-    out_.print(FMT_COMPILE(",\"text\":"));
+    put(buf, ",\"text\":");
     append_json_string(buf, finding.text);
-    out_.print(FMT_COMPILE("}}"));
+    buf.push_back('}');
   }
-  out_.print(FMT_COMPILE("]"));
+  buf.push_back(']');
 }
 
 void JsonSink::on_noise(const Noise& noise) {

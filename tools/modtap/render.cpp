@@ -15,17 +15,11 @@ using decoder::FieldType;
 namespace {
 
 void append_chars(fmt::memory_buffer& out, std::string_view text) {
-  out.append(text.data(), text.data() + text.size());
+  put(out, text);
 }
 
 std::string_view as_chars(std::span<const uint8_t> bytes) {
   return {reinterpret_cast<const char*>(bytes.data()), bytes.size()};
-}
-
-// Decimal without fmt's parsing: the hot path of every line.
-void append_int(fmt::memory_buffer& out, int64_t v) {
-  const fmt::format_int digits(v);
-  out.append(digits.data(), digits.data() + digits.size());
 }
 
 void append_json_scalar(fmt::memory_buffer& out, const Field& f) {
@@ -46,12 +40,12 @@ void append_json_scalar(fmt::memory_buffer& out, const Field& f) {
       out.push_back('[');
       for (size_t i = 0; i < f.count; ++i) {
         if (i) out.push_back(',');
-        append_int(out, f.type() == FieldType::bits ? f.bit(i) : f.word(i));
+        put_int(out, f.type() == FieldType::bits ? f.bit(i) : f.word(i));
       }
       out.push_back(']');
       break;
     default:
-      append_int(out, f.number);
+      put_int(out, f.number);
   }
 }
 
@@ -98,14 +92,14 @@ void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_item
       const size_t shown = std::min<size_t>(f.count, max_items);
       for (size_t i = 0; i < shown; ++i) {
         if (i) out.push_back(' ');
-        append_int(out, f.word(i));
+        put_int(out, f.word(i));
       }
       if (shown < f.count) fmt::format_to(it, " ...({} values)", f.count);
       out.push_back(']');
       break;
     }
     default:
-      append_int(out, f.number);
+      put_int(out, f.number);
   }
 }
 
@@ -205,11 +199,11 @@ void append_register_keys(fmt::memory_buffer& out, const decoder::RegisterValue&
     }
   };
   append_chars(out, "\"addr\":");
-  append_int(out, reg.address);
+  put_int(out, reg.address);
   append_chars(out, ",\"name\":");
   optional_string(reg.name);
   append_chars(out, ",\"raw\":");
-  append_int(out, reg.raw);
+  put_int(out, reg.raw);
   append_chars(out, ",\"value\":");
   if (std::isfinite(reg.value)) {
     decoder::append_number(out, reg.value, reg.decimals);
