@@ -34,7 +34,9 @@ void JsonSink::on_frame(const Frame& frame) {
   put_uint(buf, frame.slave());
   put(buf, ",\"fc\":");
   put_uint(buf, frame.function() & 0x7F);
-  out_.print(FMT_COMPILE(",\"function\":\"{}\",\"raw\":\""), FunctionLabel{frame.function()});
+  put(buf, ",\"function\":\"");
+  put_function_label(buf, frame.function());
+  put(buf, "\",\"raw\":\"");
   append_hex(buf, frame.raw, false);
   put(buf, frame.check_ok ? "\",\"check\":\"ok\",\"check_value\":"
                           : "\",\"check\":\"bad\",\"check_value\":");

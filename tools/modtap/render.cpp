@@ -218,14 +218,31 @@ void append_register_keys(fmt::memory_buffer& out, const decoder::RegisterValue&
 
 }  // namespace modtap::tools
 
+namespace modtap::tools {
+namespace {
+
+// The label in `unnamed`'s room when the standard has no name for the code.
+std::string_view function_label(uint8_t fc, char (&unnamed)[16]) {
+  const std::string_view name = decoder::function_name(fc);
+  if (!name.empty()) return name;
+  const auto end = fmt::format_to(unnamed, FMT_COMPILE("Function 0x{:02X}"), fc & 0x7F);
+  return {unnamed, static_cast<size_t>(end - unnamed)};
+}
+
+}  // namespace
+
+void put_function_label(fmt::memory_buffer& out, uint8_t fc) {
+  char unnamed[16];
+  put(out, function_label(fc, unnamed));
+}
+
+}  // namespace modtap::tools
+
 auto fmt::formatter<modtap::tools::FunctionLabel>::format(modtap::tools::FunctionLabel label,
                                                           format_context& ctx) const
     -> decltype(ctx.out()) {
-  const std::string_view name = modtap::decoder::function_name(label.fc);
-  if (!name.empty()) return write(ctx.out(), name);
   char unnamed[16];
-  const auto end = fmt::format_to(unnamed, FMT_COMPILE("Function 0x{:02X}"), label.fc & 0x7F);
-  return write(ctx.out(), std::string_view(unnamed, static_cast<size_t>(end - unnamed)));
+  return write(ctx.out(), modtap::tools::function_label(label.fc, unnamed));
 }
 
 auto fmt::formatter<modtap::tools::Fixed>::format(modtap::tools::Fixed number,

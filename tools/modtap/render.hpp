@@ -64,6 +64,14 @@ void append_register_keys(fmt::memory_buffer& out, const decoder::RegisterValue&
 struct FunctionLabel {
   uint8_t fc;
 };
+void put_function_label(fmt::memory_buffer& out, uint8_t fc);
+
+// `v` and spaces after it to `width` characters.
+inline void put_left_aligned(fmt::memory_buffer& out, uint64_t v, size_t width) {
+  const fmt::format_int digits(v);
+  put(out, {digits.data(), digits.size()});
+  for (size_t n = digits.size(); n < width; ++n) out.push_back(' ');
+}
 
 // value x 10^-exponent shown with `decimals` digits after the point, from integers: exact
 // where the digits suffice (nanoseconds as microseconds with 3), else rounded half away from

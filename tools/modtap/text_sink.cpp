@@ -106,10 +106,14 @@ void TextSink::on_frame(const Frame& frame) {
   out_.print(FMT_COMPILE("{:6}"), frame.index);
   time_column(frame.t_ns);
   channel_column(frame.channel);
-  out_.print(FMT_COMPILE(" {} slave {:<3} {}"), role_tag(frame.role), frame.slave(),
-             FunctionLabel{frame.function()});
-  const DecodedPdu& pdu = fields_of(frame, decoded_);
   auto& buf = out_.buffer();
+  buf.push_back(' ');
+  put(buf, role_tag(frame.role));
+  put(buf, " slave ");
+  put_left_aligned(buf, frame.slave(), 3);
+  buf.push_back(' ');
+  put_function_label(buf, frame.function());
+  const DecodedPdu& pdu = fields_of(frame, decoded_);
   const AddressNumbering numbering = numbering_of(frame);
   // Where the model gives exceptions the vendor's meanings, the standard's name would mislead
   // (GD20's 04H is "Operation failed", not "Server Device Failure"): the model's text stands.
@@ -122,25 +126,32 @@ void TextSink::on_frame(const Frame& frame) {
       at = pdu.next(at);
       continue;
     }
-    out_.print(FMT_COMPILE(" {}="), f.name());
+    buf.push_back(' ');
+    put(buf, f.name());
+    buf.push_back('=');
     at = append_text_value(buf, pdu, at, line_items, numbering);
   }
-  const char* check = frame.mode == Mode::rtu ? "crc" : "lrc";
+  const bool rtu = frame.mode == Mode::rtu;
   if (frame.check_ok) {
-    out_.print(FMT_COMPILE("  {} ok"), check);
+    put(buf, rtu ? "  crc ok" : "  lrc ok");
   } else {
-    out_.print(FMT_COMPILE("  {} BAD ("), check);
+    put(buf, rtu ? "  crc BAD (" : "  lrc BAD (");
     append_bad_check(buf, frame);
-    out_.print(FMT_COMPILE(")"));
+    buf.push_back(')');
   }
-  if (frame.request) out_.print(FMT_COMPILE("  req #{}"), *frame.request);
+  if (frame.request) {
+    put(buf, "  req #");
+    put_uint(buf, *frame.request);
+  }
   if (frame.latency_ns) out_.print(FMT_COMPILE(" {} ms"), Fixed{*frame.latency_ns, 6, 3});
   // A bad check is said in the check column already.
   for_each_frame_finding(frame.findings & ~finding_bad_check, [&](size_t slot) {
-    out_.print(FMT_COMPILE(" [{}]"), frame_findings()[slot].name);
+    put(buf, " [");
+    put(buf, frame_findings()[slot].name);
+    buf.push_back(']');
   });
   if (frame.meaning) registers_line(*frame.meaning);
-  out_.print(FMT_COMPILE("\n"));
+  buf.push_back('\n');
   if (options_.verbose) tree(frame, pdu, numbering);
   out_.end_record();
 }
