@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "captures/pcapng_format.hpp"
+#include "decoder/buffer_put.hpp"
 #include "decoder/register_meaning.hpp"
 
 namespace modtap::captures {
@@ -52,7 +53,8 @@ PacketDirection direction_of(Role role, ChannelRole channel) {
 // " finding=NAME" for each finding in `bits`, as modtap.lua reads them.
 void append_findings(fmt::memory_buffer& out, uint32_t bits) {
   for_each_frame_finding(bits, [&](size_t slot) {
-    fmt::format_to(fmt::appender(out), FMT_COMPILE(" finding={}"), frame_findings()[slot].name);
+    put(out, " finding=");
+    put(out, frame_findings()[slot].name);
   });
 }
 
@@ -61,8 +63,11 @@ void append_findings(fmt::memory_buffer& out, uint32_t bits) {
 void append_meaning(fmt::memory_buffer& out, const Meaning& meaning) {
   fmt::format_to(fmt::appender(out), FMT_COMPILE(" model={}"), meaning.model->name);
   for (const RegisterValue& reg : meaning.registers) {
-    fmt::format_to(fmt::appender(out), FMT_COMPILE("\nregister {:04X}H {} = "), reg.address,
-                   reg.name.empty() ? "-" : reg.name);
+    put(out, "\nregister ");
+    put_hex4(out, reg.address);
+    put(out, "H ");
+    put(out, reg.name.empty() ? "-" : reg.name);
+    put(out, " = ");
     append_value_text(out, reg);
   }
   for (const RuleFinding& finding : meaning.findings)
@@ -80,27 +85,49 @@ PcapngLink parse_link(const std::string& name) {
 }
 
 void append_frame_comment(fmt::memory_buffer& out, const Frame& f) {
-  auto it = fmt::appender(out);
-  fmt::format_to(it, FMT_COMPILE("modtap index={} mode={} role={} check={} duration_ns={}"),
-                 f.index, to_string(f.mode), to_string(f.role), f.check_ok ? "ok" : "bad",
-                 f.end_ns - f.t_ns);
+  put(out, "modtap index=");
+  put_uint(out, f.index);
+  put(out, " mode=");
+  put(out, to_string(f.mode));
+  put(out, " role=");
+  put(out, to_string(f.role));
+  put(out, f.check_ok ? " check=ok duration_ns=" : " check=bad duration_ns=");
+  put_int(out, f.end_ns - f.t_ns);
   if (!f.check_ok && f.damage != Damage::cut)
-    fmt::format_to(it, FMT_COMPILE(" expected_check=0x{:0{}x}"), f.expected_check,
+    fmt::format_to(fmt::appender(out), FMT_COMPILE(" expected_check=0x{:0{}x}"), f.expected_check,
                    f.mode == Mode::rtu ? 4 : 2);
-  if (const char* damage = to_string(f.damage))
-    fmt::format_to(it, FMT_COMPILE(" damage={}"), damage);
-  // Names from modtap's function-code table, so the plugin knows no function code itself.
-  if (const auto name = function_name(f.function() & 0x7F); !name.empty() && f.adu.size() >= 2)
-    fmt::format_to(it, FMT_COMPILE(" function=\"{}\""), name);
-  if (f.is_exception()) {
-    fmt::format_to(it, FMT_COMPILE(" exception={}"), f.adu[2]);
-    if (const auto name = exception_name(f.adu[2]); !name.empty())
-      fmt::format_to(it, FMT_COMPILE(" exception_name=\"{}\""), name);
+  if (const char* damage = to_string(f.damage)) {
+    put(out, " damage=");
+    put(out, damage);
   }
-  if (f.request) fmt::format_to(it, FMT_COMPILE(" request={}"), *f.request);
-  if (f.latency_ns)  // microseconds with three decimals: the nanoseconds, exactly
-    fmt::format_to(it, FMT_COMPILE(" latency_us={}.{:03}"), *f.latency_ns / 1000,
-                   *f.latency_ns % 1000);
+  // Names from modtap's function-code table, so the plugin knows no function code itself.
+  if (const auto name = function_name(f.function() & 0x7F); !name.empty() && f.adu.size() >= 2) {
+    put(out, " function=\"");
+    put(out, name);
+    out.push_back('"');
+  }
+  if (f.is_exception()) {
+    put(out, " exception=");
+    put_uint(out, f.adu[2]);
+    if (const auto name = exception_name(f.adu[2]); !name.empty()) {
+      put(out, " exception_name=\"");
+      put(out, name);
+      out.push_back('"');
+    }
+  }
+  if (f.request) {
+    put(out, " request=");
+    put_uint(out, *f.request);
+  }
+  if (f.latency_ns) {  // microseconds with three decimals: the nanoseconds, exactly
+    put(out, " latency_us=");
+    put_int(out, *f.latency_ns / 1000);
+    const auto ns = static_cast<int>(*f.latency_ns % 1000);
+    const char decimals[4] = {'.', static_cast<char>('0' + ns / 100),
+                              static_cast<char>('0' + ns / 10 % 10),
+                              static_cast<char>('0' + ns % 10)};
+    put(out, {decimals, 4});
+  }
   append_findings(out, f.findings);
   if (f.meaning) append_meaning(out, *f.meaning);
 }

@@ -1,5 +1,7 @@
 #include "captures/pcapng_writer.hpp"
 
+#include <algorithm>
+#include <cstring>
 #include <vector>
 
 #include "captures/pcapng_format.hpp"
@@ -12,16 +14,19 @@ using namespace pcapng;
 // Blocks are written in the machine's byte order; the byte-order magic tells readers which.
 class Body {
  public:
-  // Writes into `storage`, cleared first: a writer keeps one, so a packet allocates nothing.
-  explicit Body(std::vector<uint8_t>& storage) : bytes_(storage) { bytes_.clear(); }
+  // Writes into `storage`: a writer keeps one, so a packet allocates nothing once it has grown
+  // to the largest block, and each piece is a copy, not a vector insert.
+  explicit Body(std::vector<uint8_t>& storage) : bytes_(storage) {}
   template <typename T>
   void put(T value) {
-    const auto* p = reinterpret_cast<const uint8_t*>(&value);
-    bytes_.insert(bytes_.end(), p, p + sizeof value);
+    std::memcpy(room(sizeof value), &value, sizeof value);
   }
+  // The data and zeros to the next 32-bit boundary.
   void put_bytes(std::span<const uint8_t> data) {
-    bytes_.insert(bytes_.end(), data.begin(), data.end());
-    pad();
+    const size_t padded = (data.size() + 3) & ~size_t{3};
+    uint8_t* at = room(padded);
+    std::copy(data.begin(), data.end(), at);
+    std::fill(at + data.size(), at + padded, uint8_t{0});
   }
   void option(uint16_t code, std::span<const uint8_t> value) {
     put(code);
@@ -35,13 +40,17 @@ class Body {
     put(opt_endofopt);
     put(uint16_t{0});
   }
-  std::span<const uint8_t> bytes() const { return bytes_; }
+  std::span<const uint8_t> bytes() const { return {bytes_.data(), size_}; }
 
  private:
-  void pad() {
-    while (bytes_.size() % 4) bytes_.push_back(0);
+  [[gnu::always_inline]] uint8_t* room(size_t n) {
+    if (size_ + n > bytes_.size()) bytes_.resize(std::max(size_ + n, 2 * bytes_.size()));
+    uint8_t* at = bytes_.data() + size_;
+    size_ += n;
+    return at;
   }
   std::vector<uint8_t>& bytes_;
+  size_t size_ = 0;
 };
 
 }  // namespace

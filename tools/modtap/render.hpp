@@ -10,31 +10,13 @@
 #include <fmt/compile.h>
 #include <fmt/format.h>
 
+#include "decoder/buffer_put.hpp"
 #include "decoder/pdu_fields.hpp"
 #include "decoder/records.hpp"
 #include "decoder/register_meaning.hpp"
 #include "decoder/register_numbering.hpp"
 
 namespace modtap::tools {
-
-// Appends in place. fmt's own append is compiled into libfmt, one call per piece, and its
-// compiled formats copy each literal piece through it: for the many short pieces of a JSON
-// line, a third of the time.
-[[gnu::always_inline]] inline void put(fmt::memory_buffer& out, std::string_view text) {
-  const size_t at = out.size();
-  out.resize(at + text.size());
-  std::copy(text.begin(), text.end(), out.data() + at);
-}
-
-// Decimal without fmt's parsing: the hot path of every line.
-inline void put_int(fmt::memory_buffer& out, int64_t v) {
-  const fmt::format_int digits(v);
-  put(out, {digits.data(), digits.size()});
-}
-inline void put_uint(fmt::memory_buffer& out, uint64_t v) {
-  const fmt::format_int digits(v);
-  put(out, {digits.data(), digits.size()});
-}
 
 void append_hex(fmt::memory_buffer& out, std::span<const uint8_t> bytes, bool spaced);
 void append_json_string(fmt::memory_buffer& out, std::string_view text);
