@@ -107,15 +107,27 @@ void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_item
 
 void append_hex(fmt::memory_buffer& out, std::span<const uint8_t> bytes, bool spaced) {
   static constexpr char digits[] = "0123456789abcdef";
+  if (bytes.empty()) return;
+  const size_t at = out.size();
+  out.resize(at + bytes.size() * (spaced ? 3 : 2) - (spaced ? 1 : 0));
+  char* to = out.data() + at;
   for (size_t i = 0; i < bytes.size(); ++i) {
-    if (spaced && i) out.push_back(' ');
-    out.push_back(digits[bytes[i] >> 4]);
-    out.push_back(digits[bytes[i] & 15]);
+    if (spaced && i) *to++ = ' ';
+    *to++ = digits[bytes[i] >> 4];
+    *to++ = digits[bytes[i] & 15];
   }
 }
 
 void append_json_string(fmt::memory_buffer& out, std::string_view text) {
   out.push_back('"');
+  const bool plain = std::all_of(text.begin(), text.end(), [](unsigned char c) {
+    return c >= 0x20 && c < 0x7F && c != '"' && c != '\\';
+  });
+  if (plain) {  // names and units, nearly always: in one piece
+    put(out, text);
+    out.push_back('"');
+    return;
+  }
   for (unsigned char c : text) {
     if (c == '"' || c == '\\') {
       out.push_back('\\');
