@@ -36,6 +36,38 @@ TEST(FunctionLabel, NamesPublicCodesAndNumbersOthers) {
   EXPECT_EQ(fmt::format("{}", FunctionLabel{0x41}), "Function 0x41");
 }
 
+template <typename Append>
+std::string appended(Append&& append) {
+  fmt::memory_buffer out;
+  put(out, "x=");  // after what is already there
+  append(out);
+  return fmt::to_string(out);
+}
+
+TEST(Put, AppendsLabelsNumbersAndHexInPlace) {
+  EXPECT_EQ(appended([](auto& out) { put_function_label(out, 0x83); }), "x=Read Holding Registers");
+  EXPECT_EQ(appended([](auto& out) { put_function_label(out, 0x41); }), "x=Function 0x41");
+  EXPECT_EQ(appended([](auto& out) { put_int(out, -42); }), "x=-42");
+  EXPECT_EQ(appended([](auto& out) { put_uint(out, 18446744073709551615u); }),
+            "x=18446744073709551615");
+  EXPECT_EQ(appended([](auto& out) { put_left_aligned(out, 7, 3); }), "x=7  ");
+  EXPECT_EQ(appended([](auto& out) { put_hex4(out, 0x2a0f); }), "x=2A0F");
+  const uint8_t bytes[] = {0x01, 0xab, 0x00};
+  EXPECT_EQ(appended([&](auto& out) { append_hex(out, bytes, false); }), "x=01ab00");
+  EXPECT_EQ(appended([&](auto& out) { append_hex(out, bytes, true); }), "x=01 ab 00");
+  EXPECT_EQ(appended([](auto& out) { append_hex(out, {}, true); }), "x=");
+}
+
+// Device strings are bytes: anything outside printable ASCII is escaped, quotes and
+// backslashes too; a plain string is copied whole.
+TEST(JsonString, EscapesWhatJsonAndTerminalsNeed) {
+  EXPECT_EQ(appended([](auto& out) { append_json_string(out, "Hz"); }), "x=\"Hz\"");
+  EXPECT_EQ(appended([](auto& out) { append_json_string(out, ""); }), "x=\"\"");
+  EXPECT_EQ(appended([](auto& out) { append_json_string(out, "a\"b\\c"); }), "x=\"a\\\"b\\\\c\"");
+  EXPECT_EQ(appended([](auto& out) { append_json_string(out, std::string_view("\x01\xff", 2)); }),
+            "x=\"\\u0001\\u00ff\"");
+}
+
 }  // namespace
 }  // namespace modtap::tools
 
