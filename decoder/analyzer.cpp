@@ -12,6 +12,7 @@ class Analyzer::ModeProbe {
 
   // True once the evidence is in.
   bool push(const Chunk& chunk, ChannelRole role) {
+    last_ns_ = std::max(last_ns_, chunk.t_ns);
     auto& kept = chunks_.emplace_back(
         Kept{chunk.channel, chunk.t_ns, {chunk.bytes.begin(), chunk.bytes.end()}});
     buffered_ += kept.bytes.size();
@@ -23,15 +24,19 @@ class Analyzer::ModeProbe {
   }
   Mode verdict() const { return ascii_count_.good > rtu_count_.good ? Mode::ascii : Mode::rtu; }
 
-  // A live port gone quiet: the silence ends what the trial framers hold, and a good frame in
+  // A live port's idle moment: once the line has been quiet a while (no ASCII frame pauses
+  // that long between characters in practice) and the RTU trial holds nothing, a good frame in
   // one mode and none in the other is evidence enough (a quiet bus may not send three soon).
   bool flush(int64_t now_ns) {
+    bool holding = false;
     for (auto& trial : trials_) {
       if (!trial) continue;
       trial->rtu.flush(now_ns);
       trial->ascii.flush(now_ns);
+      holding |= trial->rtu.held_since_ns() != INT64_MAX;
     }
-    return (rtu_count_.good > 0) != (ascii_count_.good > 0);
+    return !chunks_.empty() && !holding && now_ns - last_ns_ >= quiet_ns &&
+           (rtu_count_.good > 0) != (ascii_count_.good > 0);
   }
 
   template <typename Fn>
@@ -41,6 +46,7 @@ class Analyzer::ModeProbe {
 
  private:
   static constexpr int enough = 3;
+  static constexpr int64_t quiet_ns = 100'000'000;  // longer than any t3.5 or master's pause
   static constexpr size_t max_buffered = 4096;
 
   struct Counter final : FrameSink {
@@ -75,6 +81,7 @@ class Analyzer::ModeProbe {
   std::vector<std::unique_ptr<Trial>> trials_;
   std::vector<Kept> chunks_;
   size_t buffered_ = 0;
+  int64_t last_ns_ = INT64_MIN;  // when the last chunk came
 };
 
 namespace {

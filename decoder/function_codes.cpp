@@ -161,7 +161,9 @@ ResponsePrefix echo_prefix(Bytes req) {
 }
 
 ResponsePrefix whole_echo_prefix(Bytes req) {
-  return prefix_of(req);
+  ResponsePrefix prefix = prefix_of(req);
+  prefix.whole_echo = prefix.size == req.size();
+  return prefix;
 }
 
 // The byte count a read's response carries, from the quantity at PDU offset `at`.

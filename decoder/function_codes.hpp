@@ -67,6 +67,7 @@ struct RegisterAccesses {
 struct ResponsePrefix {
   std::array<uint8_t, 8> pdu{};
   uint8_t size = 0;
+  bool whole_echo = false;  // the response repeats the whole request, CRC and all
 };
 
 struct FunctionCode {

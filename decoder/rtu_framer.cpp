@@ -171,9 +171,15 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, uint16_t length, const Ro
       !too_soon_for_retry(at, length - 1))
     return Verdict::other_reading;
   // The pending request again (a retry) whose CRC ends in 0x00 holds a response one byte
-  // shorter, which its request would not have asked for: the copy is the reading.
-  if (other && *other == Role::request && copies_request(at, length + 1))
-    return Verdict::other_reading;
+  // shorter, which its request would not have asked for: the copy is the reading, once its
+  // last byte is there to say so.
+  if (other && *other == Role::request && starts_request_copy(at, length)) {
+    if (at + length == end_) {
+      if (!final) return Verdict::wait;
+    } else if (copies_request(at, length + 1) && !too_soon_for_retry(at, length + 1)) {
+      return Verdict::other_reading;
+    }
+  }
   // A reserved address is as often a turnaround's 0xFF: such a frame never swallows one whose
   // length rules and CRC agree (a glitch, a response and the next glitch can read as one).
   if (p[0] > max_unicast_slave && swallows_known_frame(at, at + length)) return Verdict::refuse;
@@ -467,8 +473,7 @@ std::optional<bool> RtuFramer::awaited_byte(uint64_t begin, uint64_t pos) const 
   if (pos - 1 < prefix.size) return prefix.pdu[pos - 1] == p[pos];
   // A whole echo repeats the request's CRC too.
   const size_t crc_at = 1 + request.size();
-  if (prefix.size != request.size() || pos < crc_at || pos >= crc_at + crc_size)
-    return std::nullopt;
+  if (!prefix.whole_echo || pos < crc_at || pos >= crc_at + crc_size) return std::nullopt;
   std::array<uint8_t, 1 + 8> adu{expected_.slave};
   std::copy(request.begin(), request.end(), adu.begin() + 1);
   const uint16_t crc = crc16({adu.data(), crc_at});
@@ -480,13 +485,18 @@ bool RtuFramer::starts_awaited(uint64_t begin, uint64_t size) const {
   return awaited_length(begin, size) || (size > 3 && awaited_length(begin, size - 1));
 }
 
-// Whether [at, at + size) is the pending request again, byte for byte (its CRC included:
-// the same PDU has the same CRC).
+// Whether [at, at + size) is the pending request again, byte for byte: its slave, its PDU and
+// a good CRC (the same PDU has the same CRC).
 bool RtuFramer::copies_request(uint64_t at, uint64_t size) const {
+  return starts_request_copy(at, size - 1) && crc_ok(at_ptr(at), size);
+}
+
+// Whether [at, at + size) is the pending request again but for its last byte.
+bool RtuFramer::starts_request_copy(uint64_t at, uint64_t size) const {
   const Expectation& expected = expected_;
   const uint8_t* p = at_ptr(at);
-  return expected.pending && at + size <= end_ && p[0] == expected.slave &&
-         size == expected.request_pdu.size() + 1 + crc_size &&
+  return expected.pending && at + size <= end_ && size >= 2 && p[0] == expected.slave &&
+         size + 1 == expected.request_pdu.size() + 1 + crc_size &&
          std::equal(expected.request_pdu.begin(), expected.request_pdu.end(), p + 1);
 }
 

@@ -133,12 +133,14 @@ TEST(RtuFramer, ARetryWhoseCrcEndsInZeroIsNotAShorterResponse) {
   // of 2 bytes with a good CRC. Sent again after a silent time-out, the copy is the request.
   const auto asked = hex("01 01 02 f5 0e 7f 68 00");
   const auto refused = with_crc(hex("01 81 03"));
-  const auto out = analyze_untimed(concat({asked, hex("ff"), asked, refused}));
+  const auto bytes = concat({asked, hex("ff"), asked, refused});
+  const auto out = analyze_untimed(bytes);
   const auto frames = out.frames();
   ASSERT_EQ(frames.size(), 3u);
   EXPECT_EQ(frames[0].raw, asked);
   EXPECT_EQ(frames[1].raw, asked);
   EXPECT_EQ(frames[2].raw, refused);
+  expect_same_at_every_split(bytes);  // also when a read ends right before the copy's last byte
 }
 
 TEST(RtuFramer, AnAwaitedResponseRunIntoEndsWhereItsStructureSays) {
