@@ -167,8 +167,7 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, uint16_t length, const Ro
   // is the likelier (a master's retry), unless it came too soon for a retry. (Any other frame
   // whose CRC ends in 0x00 holds a frame one byte shorter too: that is no reason to cut it.)
   if (other && *other == Role::request && zero_glitches_common() && p[length - 1] == 0x00 &&
-      may_be_glitch(at + length - 1) && copies_request(at, length - 1) &&
-      !too_soon_for_retry(at, length - 1))
+      may_be_glitch(at + length - 1) && copies_request(at, length - 1) && !too_soon_for_retry(at))
     return Verdict::other_reading;
   // The pending request again (a retry) whose CRC ends in 0x00 holds a response one byte
   // shorter, which its request would not have asked for: the copy is the reading, once its
@@ -176,7 +175,7 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, uint16_t length, const Ro
   if (other && *other == Role::request && starts_request_copy(at, length)) {
     if (at + length == end_) {
       if (!final) return Verdict::wait;
-    } else if (copies_request(at, length + 1) && !too_soon_for_retry(at, length + 1)) {
+    } else if (copies_request(at, length + 1) && !too_soon_for_retry(at)) {
       return Verdict::other_reading;
     }
   }
@@ -500,11 +499,10 @@ bool RtuFramer::starts_request_copy(uint64_t at, uint64_t size) const {
          std::equal(expected.request_pdu.begin(), expected.request_pdu.end(), p + 1);
 }
 
-// A copy of the pending request that starts before the master could have timed out is the
-// answer (an echo), not the master's retry.
-bool RtuFramer::too_soon_for_retry(uint64_t at, uint64_t size) const {
-  return expected_.retry_from_ns && copies_request(at, size) &&
-         end_time(at) - char_ns_ < expected_.retry_from_ns;
+// A copy of the pending request (the caller knows it is one) that starts at `at` before the
+// master could have timed out is the answer (an echo), not the master's retry.
+bool RtuFramer::too_soon_for_retry(uint64_t at) const {
+  return expected_.retry_from_ns && end_time(at) - char_ns_ < expected_.retry_from_ns;
 }
 
 // A damaged response: reported as a frame with a bad check, so it stays in the slave's

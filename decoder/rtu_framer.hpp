@@ -100,7 +100,7 @@ class RtuFramer {
   bool starts_awaited(uint64_t begin, uint64_t size) const;
   bool copies_request(uint64_t at, uint64_t size) const;
   bool starts_request_copy(uint64_t at, uint64_t size) const;
-  bool too_soon_for_retry(uint64_t at, uint64_t size) const;
+  bool too_soon_for_retry(uint64_t at) const;
   void emit_damaged(uint64_t begin, uint64_t end, Damage damage);
   void emit_noise(uint64_t begin, uint64_t end, NoiseReason reason);
   void consume(uint64_t to);
