@@ -14,10 +14,6 @@ using decoder::FieldType;
 
 namespace {
 
-void append_chars(fmt::memory_buffer& out, std::string_view text) {
-  put(out, text);
-}
-
 std::string_view as_chars(std::span<const uint8_t> bytes) {
   return {reinterpret_cast<const char*>(bytes.data()), bytes.size()};
 }
@@ -51,8 +47,8 @@ void append_json_scalar(fmt::memory_buffer& out, const Field& f) {
 
 void append_json_key(fmt::memory_buffer& out, const Field& f) {
   out.push_back('"');
-  append_chars(out, f.name());
-  append_chars(out, "\":");
+  put(out, f.name());
+  put(out, "\":");
 }
 
 void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_items,
@@ -72,12 +68,12 @@ void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_item
       break;
     case FieldType::name:
       out.push_back('"');
-      append_chars(out, f.text);
+      put(out, f.text);
       out.push_back('"');
       break;
     case FieldType::string:
       out.push_back('"');
-      append_chars(out, as_chars(f.bytes));
+      put(out, as_chars(f.bytes));
       out.push_back('"');
       break;
     case FieldType::bytes:
@@ -154,12 +150,12 @@ size_t append_json_field(fmt::memory_buffer& out, const DecodedPdu& pdu, size_t 
   for (size_t i = at + 1; i < end; ++i) {
     const Field& field = pdu.fields[i];
     const bool first_of_item = pdu.fields[i - 1].item != field.item;
-    if (first_of_item) append_chars(out, i == at + 1 ? "{" : "},{");
+    if (first_of_item) put(out, i == at + 1 ? "{" : "},{");
     if (!first_of_item) out.push_back(',');
     append_json_key(out, field);
     append_json_scalar(out, field);
   }
-  append_chars(out, end > at + 1 ? "}]" : "]");
+  put(out, end > at + 1 ? "}]" : "]");
   return end;
 }
 
@@ -186,13 +182,13 @@ size_t append_text_value(fmt::memory_buffer& out, const DecodedPdu& pdu, size_t 
   for (size_t i = at + 1; i < end; ++i) {
     const Field& field = pdu.fields[i];
     const bool first_of_item = pdu.fields[i - 1].item != field.item;
-    if (first_of_item) append_chars(out, i == at + 1 ? "{" : "; ");
+    if (first_of_item) put(out, i == at + 1 ? "{" : "; ");
     if (!first_of_item) out.push_back(' ');
-    append_chars(out, field.name());
+    put(out, field.name());
     out.push_back('=');
     append_text_scalar(out, field, max_items, numbering);
   }
-  if (end > at + 1) append_chars(out, ";}");
+  if (end > at + 1) put(out, ";}");
   return end;
 }
 
@@ -205,33 +201,28 @@ void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue&
 void append_register_keys(fmt::memory_buffer& out, const decoder::RegisterValue& reg) {
   auto optional_string = [&](std::string_view text) {
     if (text.empty()) {
-      append_chars(out, "null");
+      put(out, "null");
     } else {
       append_json_string(out, text);
     }
   };
-  append_chars(out, "\"addr\":");
+  put(out, "\"addr\":");
   put_int(out, reg.address);
-  append_chars(out, ",\"name\":");
+  put(out, ",\"name\":");
   optional_string(reg.name);
-  append_chars(out, ",\"raw\":");
+  put(out, ",\"raw\":");
   put_int(out, reg.raw);
-  append_chars(out, ",\"value\":");
+  put(out, ",\"value\":");
   if (std::isfinite(reg.value)) {
     decoder::append_number(out, reg.value, reg.decimals);
   } else {
-    append_chars(out, "null");
+    put(out, "null");
   }
-  append_chars(out, ",\"unit\":");
+  put(out, ",\"unit\":");
   optional_string(reg.unit);
-  append_chars(out, ",\"text\":");
+  put(out, ",\"text\":");
   optional_string(reg.text);
 }
-
-}  // namespace modtap::tools
-
-namespace modtap::tools {
-namespace {
 
 // The label in `unnamed`'s room when the standard has no name for the code.
 std::string_view function_label(uint8_t fc, char (&unnamed)[16]) {
@@ -240,8 +231,6 @@ std::string_view function_label(uint8_t fc, char (&unnamed)[16]) {
   const auto end = fmt::format_to(unnamed, FMT_COMPILE("Function 0x{:02X}"), fc & 0x7F);
   return {unnamed, static_cast<size_t>(end - unnamed)};
 }
-
-}  // namespace
 
 void put_function_label(fmt::memory_buffer& out, uint8_t fc) {
   char unnamed[16];

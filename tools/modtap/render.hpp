@@ -47,12 +47,14 @@ struct FunctionLabel {
   uint8_t fc;
 };
 void put_function_label(fmt::memory_buffer& out, uint8_t fc);
+// The same into `unnamed`'s room, for fmt's formatter.
+std::string_view function_label(uint8_t fc, char (&unnamed)[16]);
 
 // `v` and spaces after it to `width` characters.
 inline void put_left_aligned(fmt::memory_buffer& out, uint64_t v, size_t width) {
-  const fmt::format_int digits(v);
-  put(out, {digits.data(), digits.size()});
-  for (size_t n = digits.size(); n < width; ++n) out.push_back(' ');
+  const size_t start = out.size();
+  put_uint(out, v);
+  for (size_t n = out.size() - start; n < width; ++n) out.push_back(' ');
 }
 
 // value x 10^-exponent shown with `decimals` digits after the point, from integers: exact
