@@ -251,14 +251,20 @@ TEST(RtuFramer, FindsAnUnknownFunctionCodeByCrcWhenTheNextFrameConfirmsIt) {
   EXPECT_EQ(frames[1].raw, read_request);
 }
 
+// A bus at 9600 8N1, read in `mode` with `clock`.
+AnalyzerOptions at_9600(ModeChoice mode, ClockQuality clock) {
+  AnalyzerOptions options;
+  options.mode = mode;
+  options.clock = clock;
+  options.format = {9600, 8, Parity::none, 1};
+  return options;
+}
+
 // Bytes of unknown length ahead of a response keep the framer waiting for their end; the
 // matcher's clock must not run past them, or the request times out before its response
 // comes out, however soon the slave answered.
 TEST(Analyzer, DoesNotTimeARequestOutWhileItsResponseIsStillHeld) {
-  AnalyzerOptions options;
-  options.mode = ModeChoice::rtu;
-  options.clock = ClockQuality::per_byte;
-  options.format = {9600, 8, Parity::none, 1};
+  const AnalyzerOptions options = at_9600(ModeChoice::rtu, ClockQuality::per_byte);
   Collector out;
   Analyzer analyzer(options, {{"bus", ChannelRole::bus}}, out);
   const int64_t char_ns = options.format.char_time_ns();
@@ -285,10 +291,7 @@ TEST(Analyzer, DoesNotTimeARequestOutWhileItsResponseIsStillHeld) {
 TEST(Analyzer, AQuietLiveBusShowsItsFirstFrameAtTheSilenceInAutomaticMode) {
   // One request a second: waiting for three good frames before choosing RTU or ASCII would
   // show nothing for three seconds. The silence after one frame, good only as RTU, decides.
-  AnalyzerOptions options;
-  options.mode = ModeChoice::automatic;
-  options.clock = ClockQuality::per_chunk;
-  options.format = {9600, 8, Parity::none, 1};
+  const AnalyzerOptions options = at_9600(ModeChoice::automatic, ClockQuality::per_chunk);
   Collector out;
   Analyzer analyzer(options, {{"bus", ChannelRole::bus}}, out);
   analyzer.push({0, 1'000'000'000, read_request});
@@ -315,10 +318,7 @@ class GapCollector : public ::testing::Test {
   };
   Collector run(const std::vector<Piece>& pieces, ClockQuality clock) {
     Collector out;
-    AnalyzerOptions options;
-    options.mode = ModeChoice::rtu;
-    options.clock = clock;
-    options.format = {9600, 8, Parity::none, 1};
+    const AnalyzerOptions options = at_9600(ModeChoice::rtu, clock);
     Analyzer analyzer(options, {{"bus", ChannelRole::bus}}, out);
     const int64_t char_ns = options.format.char_time_ns();
     int64_t t = 0;
