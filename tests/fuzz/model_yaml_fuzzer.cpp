@@ -7,6 +7,15 @@
 #include "tests/fuzz/fuzz_input.hpp"
 #include "tools/modtap/model_catalog.hpp"
 
+namespace {
+
+void expect_names_the_file(const modtap::decoder::ModelError& e) {
+  FUZZ_EXPECT(!e.problems().empty());
+  for (const auto& problem : e.problems()) FUZZ_EXPECT(problem.rfind("fuzz.yaml", 0) == 0);
+}
+
+}  // namespace
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace modtap;
   static const tools::ModelCatalog catalog = [] {
@@ -15,15 +24,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return c;
   }();
   const std::string_view yaml(reinterpret_cast<const char*>(data), size);
-  for (const decoder::DeviceModel* base :
-       {static_cast<const decoder::DeviceModel*>(nullptr), catalog.find("nta5000")}) {
-    try {
-      const decoder::DeviceModel model = decoder::parse_model(yaml, "fuzz.yaml", base);
-      FUZZ_EXPECT(!model.name.empty());
-    } catch (const decoder::ModelError& e) {
-      FUZZ_EXPECT(!e.problems().empty());
-      for (const auto& problem : e.problems()) FUZZ_EXPECT(problem.rfind("fuzz.yaml", 0) == 0);
+  // The text is parsed once and read as a model twice: alone and extending a built-in one.
+  try {
+    const decoder::ModelFile file(yaml, "fuzz.yaml");
+    for (const decoder::DeviceModel* base :
+         {static_cast<const decoder::DeviceModel*>(nullptr), catalog.find("nta5000")}) {
+      try {
+        FUZZ_EXPECT(!file.model(base).name.empty());
+      } catch (const decoder::ModelError& e) {
+        expect_names_the_file(e);
+      }
     }
+  } catch (const decoder::ModelError& e) {
+    expect_names_the_file(e);
   }
   return 0;
 }
