@@ -2,7 +2,7 @@
 # Installs what modtap needs on Debian 12 (as root) and builds it into build/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-packages=(cmake g++ make pkg-config libfmt-dev libpcap-dev libcli11-dev libyaml-cpp-dev libgtest-dev
+packages=(cmake g++ make pkg-config libfmt-dev libpcap-dev libcli11-dev libyaml-dev libgtest-dev
           libgmock-dev libbenchmark-dev sigrok-cli tshark python3 libmodbus-dev mbpoll
           python3-pymodbus nlohmann-json3-dev clang libclang-rt-14-dev strace chromium
           python3-pil libmicrohttpd-dev prometheus libmosquitto-dev mosquitto mosquitto-clients

@@ -678,6 +678,31 @@ TEST(ModelFiles, YamlSyntaxErrorsNameTheLine) {
   EXPECT_THROW(parse_model("", "empty.yaml"), ModelError);
 }
 
+TEST(ModelFiles, AKeyWrittenTwiceIsAProblem) {
+  try {
+    parse_model("model: x\nregisters:\n  - address: 1\n    name: a\n    name: b\n", "twice.yaml");
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_THAT(e.problems(),
+                ::testing::ElementsAre(HasSubstr("twice.yaml:5: 'name' is written twice")));
+  }
+}
+
+TEST(ModelFiles, FlagsAreYamlsWordsForTrueAndFalse) {
+  const auto reserved = [](const std::string& word) {
+    const DeviceModel model = parse_model(
+        "model: x\nregisters:\n  - {address: 1, name: a, reserved: " + word + "}\n", "f.yaml");
+    return model.registers.at({Table::holding, 1}).reserved;
+  };
+  EXPECT_TRUE(reserved("true"));
+  EXPECT_TRUE(reserved("yes"));
+  EXPECT_TRUE(reserved("On"));
+  EXPECT_FALSE(reserved("false"));
+  EXPECT_FALSE(reserved("no"));
+  EXPECT_THROW(reserved("maybe"), ModelError);
+  EXPECT_THROW(reserved("[true]"), ModelError);
+}
+
 // Value types that the built-in models do not use, on a model of their own.
 TEST(ModelTypes, MultiWordStringBcdAndOffsetValuesDecode) {
   const DeviceModel model = parse_model(

@@ -1,5 +1,5 @@
 // The device model loader on any text, alone and extending a built-in model. Properties: a
-// model or a ModelError whose problems name the file; never a crash, whatever yaml-cpp is fed.
+// model or a ModelError whose problems name the file; never a crash, whatever libyaml is fed.
 #include <string>
 #include <string_view>
 
