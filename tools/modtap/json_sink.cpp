@@ -68,7 +68,8 @@ void JsonSink::on_frame(const Frame& frame) {
     put(buf, "null");
   }
   if (frame.latency_ns) {
-    out_.print(FMT_COMPILE(",\"latency_us\":{}"), Fixed{*frame.latency_ns, 3, 3});
+    put(out_.buffer(), ",\"latency_us\":");
+    put_fixed(out_.buffer(), Fixed{*frame.latency_ns, 3, 3});
   } else {
     put(buf, ",\"latency_us\":null");
   }

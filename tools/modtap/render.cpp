@@ -59,9 +59,14 @@ void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_item
       fmt::format_to(it, FMT_COMPILE("0x{:04x}"), f.number);
       break;
     case FieldType::address:  // as the manuals write registers (2502H), or --register-base
-      fmt::format_to(it, FMT_COMPILE("{}"),
-                     decoder::RegisterNumber{numbering.table, static_cast<uint16_t>(f.number),
-                                             numbering.base});
+      if (numbering.base == decoder::RegisterBase::hex) {
+        put_hex4(out, static_cast<uint16_t>(f.number));
+        out.push_back('H');
+      } else {
+        fmt::format_to(it, FMT_COMPILE("{}"),
+                       decoder::RegisterNumber{numbering.table, static_cast<uint16_t>(f.number),
+                                               numbering.base});
+      }
       break;
     case FieldType::code:  // as vendors' tables write codes: 52H
       fmt::format_to(it, FMT_COMPILE("{:02X}H"), f.number);
@@ -81,7 +86,11 @@ void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_item
       break;
     case FieldType::bits:
       for (size_t i = 0; i < f.count && i < max_items; ++i) out.push_back(f.bit(i) ? '1' : '0');
-      if (f.count > max_items) fmt::format_to(it, "...({} bits)", f.count);
+      if (f.count > max_items) {
+        put(out, "...(");
+        put_uint(out, f.count);
+        put(out, " bits)");
+      }
       break;
     case FieldType::registers: {
       out.push_back('[');
@@ -90,7 +99,11 @@ void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_item
         if (i) out.push_back(' ');
         put_int(out, f.word(i));
       }
-      if (shown < f.count) fmt::format_to(it, " ...({} values)", f.count);
+      if (shown < f.count) {
+        put(out, " ...(");
+        put_uint(out, f.count);
+        put(out, " values)");
+      }
       out.push_back(']');
       break;
     }
@@ -249,13 +262,17 @@ auto fmt::formatter<modtap::tools::FunctionLabel>::format(modtap::tools::Functio
 auto fmt::formatter<modtap::tools::Fixed>::format(modtap::tools::Fixed number,
                                                   format_context& ctx) const
     -> decltype(ctx.out()) {
+  char room[48];
+  return write(ctx.out(), modtap::tools::fixed_text(number, room));
+}
+
+std::string_view modtap::tools::fixed_text(Fixed number, char (&text)[48]) {
   const bool negative = number.value < 0;
   uint64_t units =
       negative ? 0 - static_cast<uint64_t>(number.value) : static_cast<uint64_t>(number.value);
   uint64_t dropped = 1;  // the digits below the last one shown
   for (int i = number.decimals; i < number.exponent; ++i) dropped *= 10;
   units = (units + dropped / 2) / dropped;
-  char text[48];
   char* at = std::end(text);
   for (int i = 0; i < number.decimals; ++i, units /= 10)
     *--at = static_cast<char>('0' + units % 10);
@@ -263,5 +280,5 @@ auto fmt::formatter<modtap::tools::Fixed>::format(modtap::tools::Fixed number,
   do *--at = static_cast<char>('0' + units % 10);
   while ((units /= 10) != 0);
   if (negative) *--at = '-';
-  return write(ctx.out(), std::string_view(at, static_cast<size_t>(std::end(text) - at)));
+  return {at, static_cast<size_t>(std::end(text) - at)};
 }

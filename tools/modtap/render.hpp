@@ -57,6 +57,16 @@ inline void put_left_aligned(fmt::memory_buffer& out, uint64_t v, size_t width) 
   for (size_t n = out.size() - start; n < width; ++n) out.push_back(' ');
 }
 
+// Spaces, then `text`, to `width` characters.
+inline void put_right_aligned(fmt::memory_buffer& out, std::string_view text, size_t width) {
+  for (size_t n = text.size(); n < width; ++n) out.push_back(' ');
+  put(out, text);
+}
+inline void put_right_aligned(fmt::memory_buffer& out, uint64_t v, size_t width) {
+  const fmt::format_int digits(v);
+  put_right_aligned(out, {digits.data(), digits.size()}, width);
+}
+
 // value x 10^-exponent shown with `decimals` digits after the point, from integers: exact
 // where the digits suffice (nanoseconds as microseconds with 3), else rounded half away from
 // zero. Fixed{ns, 9, 6} is seconds as text shows them. A width in the format pads on the left.
@@ -65,6 +75,13 @@ struct Fixed {
   int exponent;
   int decimals;
 };
+// Its text, in `room`.
+std::string_view fixed_text(Fixed number, char (&room)[48]);
+// Its text after spaces to `width` characters, straight into the buffer.
+inline void put_fixed(fmt::memory_buffer& out, Fixed number, size_t width = 0) {
+  char room[48];
+  put_right_aligned(out, fixed_text(number, room), width);
+}
 
 // The format of text modtap composes itself (digits, the standard's names): `[<>]WIDTH` pads
 // it with spaces, on the left with `>`. Being ASCII, its width is its length, so fmt's Unicode

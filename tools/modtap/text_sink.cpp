@@ -64,10 +64,12 @@ void TextSink::time_column(int64_t t_ns) {
   switch (options_.time) {
     case TimeFormat::relative:
       if (!first_ns_) first_ns_ = t_ns;
-      out_.print(FMT_COMPILE(" {:>11}"), Fixed{t_ns - *first_ns_, 9, 6});
+      out_.buffer().push_back(' ');
+      put_fixed(out_.buffer(), Fixed{t_ns - *first_ns_, 9, 6}, 11);
       return;
     case TimeFormat::delta:
-      out_.print(FMT_COMPILE(" {:>11}"), Fixed{previous_ns_ ? t_ns - *previous_ns_ : 0, 9, 6});
+      out_.buffer().push_back(' ');
+      put_fixed(out_.buffer(), Fixed{previous_ns_ ? t_ns - *previous_ns_ : 0, 9, 6}, 11);
       previous_ns_ = t_ns;
       return;
     case TimeFormat::absolute:
@@ -103,10 +105,10 @@ void TextSink::channel_column(uint16_t channel) {
 }
 
 void TextSink::on_frame(const Frame& frame) {
-  out_.print(FMT_COMPILE("{:6}"), frame.index);
+  auto& buf = out_.buffer();
+  put_right_aligned(buf, frame.index, 6);
   time_column(frame.t_ns);
   channel_column(frame.channel);
-  auto& buf = out_.buffer();
   buf.push_back(' ');
   put(buf, role_tag(frame.role));
   put(buf, " slave ");
@@ -143,7 +145,11 @@ void TextSink::on_frame(const Frame& frame) {
     put(buf, "  req #");
     put_uint(buf, *frame.request);
   }
-  if (frame.latency_ns) out_.print(FMT_COMPILE(" {} ms"), Fixed{*frame.latency_ns, 6, 3});
+  if (frame.latency_ns) {
+    buf.push_back(' ');
+    put_fixed(buf, Fixed{*frame.latency_ns, 6, 3});
+    put(buf, " ms");
+  }
   // A bad check is said in the check column already.
   for_each_frame_finding(frame.findings & ~finding_bad_check, [&](size_t slot) {
     put(buf, " [");
