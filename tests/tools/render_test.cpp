@@ -22,6 +22,12 @@ TEST(Fixed, PrintsNanosecondsInALargerUnitFromTheIntegers) {
   EXPECT_EQ(fmt::format("{}", Fixed{0, 9, 6}), "0.000000");
   EXPECT_EQ(fmt::format("{}", Fixed{-1'500, 9, 6}), "-0.000002");  // a clock stepped back
   EXPECT_EQ(fmt::format("{:>11}", Fixed{2'291'664, 9, 6}), "   0.002292");
+  // The same straight into a buffer, as the text lines put their columns.
+  fmt::memory_buffer out;
+  put_fixed(out, Fixed{2'291'664, 9, 6}, 11);
+  put_fixed(out, Fixed{-1'500, 9, 6});
+  put_fixed(out, Fixed{123'456'789'000, 9, 6}, 4);  // wider than its column: all of it
+  EXPECT_EQ(fmt::to_string(out), "   0.002292-0.000002123.456789");
 }
 
 // Whole values skip fmt's float path and must print as "{:.{}f}" does.
