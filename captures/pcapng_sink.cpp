@@ -60,13 +60,16 @@ void append_findings(fmt::memory_buffer& out, uint32_t bits) {
 
 // The device model's reading, one line each after the verdicts, for modtap.lua and for people:
 // "register 2502H frequency_command = 60.00 Hz" and "note read_only_write: ... is read-only".
+// Only the registers the model names: Wireshark's Modbus dissector shows every raw value, and
+// repeating them made a packet's comment kilobytes long (a read of 125 registers).
 void append_meaning(fmt::memory_buffer& out, const Meaning& meaning) {
   fmt::format_to(fmt::appender(out), FMT_COMPILE(" model={}"), meaning.model->name);
   for (const RegisterValue& reg : meaning.registers) {
+    if (reg.name.empty()) continue;
     put(out, "\nregister ");
     put_hex4(out, reg.address);
     put(out, "H ");
-    put(out, reg.name.empty() ? "-" : reg.name);
+    put(out, reg.name);
     put(out, " = ");
     append_value_text(out, reg);
   }

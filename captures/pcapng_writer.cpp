@@ -7,18 +7,19 @@
 #include "captures/pcapng_format.hpp"
 
 namespace modtap::captures {
-namespace {
-
 using namespace pcapng;
 
 // Blocks are written in the machine's byte order; the byte-order magic tells readers which.
-class Body {
+class PcapngWriter::Block {
  public:
   // Writes into `storage`: a writer keeps one, so a packet allocates nothing once it has grown
   // to the largest block, and each piece is a copy, not a vector insert.
-  explicit Body(std::vector<uint8_t>& storage) : bytes_(storage) {}
+  Block(std::vector<uint8_t>& storage, uint32_t type) : bytes_(storage) {
+    put(type);
+    put(uint32_t{0});  // the total length, known at the end
+  }
   template <typename T>
-  void put(T value) {
+  [[gnu::always_inline]] void put(T value) {
     std::memcpy(room(sizeof value), &value, sizeof value);
   }
   // The data and zeros to the next 32-bit boundary.
@@ -40,7 +41,13 @@ class Body {
     put(opt_endofopt);
     put(uint16_t{0});
   }
-  std::span<const uint8_t> bytes() const { return {bytes_.data(), size_}; }
+  // The whole block, its total length at both ends.
+  std::span<const uint8_t> finish() {
+    const auto total = static_cast<uint32_t>(size_ + 4);
+    std::memcpy(bytes_.data() + 4, &total, 4);
+    put(total);
+    return {bytes_.data(), size_};
+  }
 
  private:
   [[gnu::always_inline]] uint8_t* room(size_t n) {
@@ -53,8 +60,6 @@ class Body {
   size_t size_ = 0;
 };
 
-}  // namespace
-
 PcapngWriter::PcapngWriter(const std::string& path, bool live) : file_(path), live_(live) {
   write_section_header();
   if (live_) flush();
@@ -62,34 +67,24 @@ PcapngWriter::PcapngWriter(const std::string& path, bool live) : file_(path), li
 
 // One write per block, so a failure leaves the file whole up to its last complete block
 // (as far as the C library's buffer allows: it writes whole buffers, never half a call).
-void PcapngWriter::write_block(uint32_t type, std::span<const uint8_t> body) {
-  const uint32_t total = static_cast<uint32_t>(12 + body.size());
-  block_.clear();
-  auto put = [&](const void* p, size_t n) {
-    const auto* b = static_cast<const uint8_t*>(p);
-    block_.insert(block_.end(), b, b + n);
-  };
-  put(&type, 4);
-  put(&total, 4);
-  put(body.data(), body.size());
-  put(&total, 4);
-  file_.write(block_);
+void PcapngWriter::write_block(Block& block) {
+  file_.write(block.finish());
 }
 
 void PcapngWriter::write_section_header() {
-  Body b(body_);
+  Block b(block_, section_header_block);
   b.put(byte_order_magic);
   b.put(uint16_t{1});
   b.put(uint16_t{0});
   b.put(int64_t{-1});  // section length not known in advance
   b.option(shb_userappl, std::string_view("modtap"));
   b.end_options();
-  write_block(section_header_block, b.bytes());
+  write_block(b);
 }
 
 uint32_t PcapngWriter::add_interface(int link_type, std::string_view name,
                                      std::string_view comment) {
-  Body b(body_);
+  Block b(block_, interface_description_block);
   b.put(static_cast<uint16_t>(link_type));
   b.put(uint16_t{0});
   b.put(uint32_t{0});  // no snap length
@@ -98,13 +93,13 @@ uint32_t PcapngWriter::add_interface(int link_type, std::string_view name,
   const uint8_t nanoseconds = 9;
   b.option(if_tsresol, std::span<const uint8_t>(&nanoseconds, 1));
   b.end_options();
-  write_block(interface_description_block, b.bytes());
+  write_block(b);
   return interfaces_++;
 }
 
 void PcapngWriter::write_packet(uint32_t interface, int64_t t_ns, std::span<const uint8_t> data,
                                 PacketDirection direction, std::string_view comment) {
-  Body b(body_);
+  Block b(block_, enhanced_packet_block);
   const auto t = static_cast<uint64_t>(t_ns);
   b.put(interface);
   b.put(static_cast<uint32_t>(t >> 32));
@@ -118,7 +113,7 @@ void PcapngWriter::write_packet(uint32_t interface, int64_t t_ns, std::span<cons
     b.option(epb_flags, {reinterpret_cast<const uint8_t*>(&flags), 4});
   }
   b.end_options();
-  write_block(enhanced_packet_block, b.bytes());
+  write_block(b);
   if (live_) flush();
 }
 

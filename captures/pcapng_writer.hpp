@@ -37,11 +37,11 @@ class PcapngWriter {
 
  private:
   void write_section_header();
-  void write_block(uint32_t type, std::span<const uint8_t> body);
+  class Block;  // one block being built
+  void write_block(Block& block);
 
   OutputFile file_;
-  std::vector<uint8_t> body_;   // the block's body being built, kept to reuse its memory
-  std::vector<uint8_t> block_;  // the block being written, likewise
+  std::vector<uint8_t> block_;  // the block being built, kept to reuse its memory
   bool live_ = false;
   uint32_t interfaces_ = 0;
 };

@@ -143,7 +143,7 @@ local function add_verdicts(tree, v, pinfo)
     local label = string.format("%04XH %s = %s", reg.addr, reg.name, reg.value)
     local item = tree:add(fields.register, label)
     item:add(fields.reg_addr, reg.addr)
-    item:add(fields.reg_name, reg.name)  -- "-" for a register the model does not know
+    item:add(fields.reg_name, reg.name)  -- "-" in files before 2026-11-24: a register unnamed
     item:add(fields.reg_value, reg.value)
   end
   for _, note in ipairs(v.notes) do

@@ -80,7 +80,7 @@ def compare(name, capture, extra):
             addrs = [int(a, 16) for a in row["modtap.register.addr"].split(",") if a]
             names = [n for n in row["modtap.register.name"].split(",") if n]
             theirs = list(zip(addrs, names))
-            ours = [(reg["addr"], reg["name"] or "-") for reg in r["registers"]]
+            ours = [(reg["addr"], reg["name"]) for reg in r["registers"] if reg["name"]]
             check(name, len(addrs) == len(names) and theirs == ours,
                   f"{where}: registers {theirs[:4]} != {ours[:4]}")
         check(name, row["modtap.role"] == r["role"], f"{where}: role {row['modtap.role']} != {r['role']}")
