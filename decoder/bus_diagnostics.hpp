@@ -56,14 +56,16 @@ class BusDiagnostics final : public RecordSink {
     uint8_t exception = 0;  // the exception of its answers in a row, and how many
     uint8_t exception_function = 0;
     uint64_t exceptions_in_a_row = 0;
-    std::optional<int64_t> last_poll_ns;  // the start of its last request (not a retry)
-    std::array<int64_t, poll_history> intervals{};
+    std::optional<int64_t> last_poll_ns;            // the start of its last request (not a retry)
+    std::array<int64_t, poll_history> intervals{};  // the last ones, in a ring
+    std::array<int64_t, poll_history> sorted{};     // the same in order, for their median
     size_t intervals_seen = 0;
   };
 
   uint32_t diagnose(const Frame& frame);
   uint32_t answered(const Frame& frame, SlaveHistory& slave);
   uint32_t polled(const Frame& frame, SlaveHistory& slave);
+  static void remember_interval(SlaveHistory& slave, int64_t interval);
 
   int64_t t35_ns_;
   bool sees_gaps_;  // only a per-byte clock times the silence between frames truly

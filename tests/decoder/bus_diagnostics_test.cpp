@@ -139,6 +139,28 @@ TEST(BusDiagnostics, APollFarFromTheSlavesUsualIntervalIsPollJitter) {
   }
 }
 
+// The usual interval is the median of the last sixteen: a master that slows its cycle for
+// good is jitter only until the new cycle is most of what the slave has seen.
+TEST(BusDiagnostics, ACycleThatChangesForGoodBecomesTheUsualOne) {
+  History bus(ClockQuality::per_byte);
+  int64_t t = 0;
+  const auto jitter_after = [&](int64_t ms) {
+    t += ms;
+    return (bus.frame(Role::request, "05 03 00 00 00 04", t) & finding_poll_jitter) != 0;
+  };
+  for (int i = 0; i < 20; ++i) jitter_after(100);
+  // 250 ms is off 100 ms until the sixteen hold as many 250s as 100s: eight polls.
+  std::vector<int> flagged;
+  for (int i = 0; i < 40; ++i)
+    if (jitter_after(250)) flagged.push_back(i);
+  EXPECT_EQ(flagged, (std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7}));
+  // Back to 100 ms: off the new usual 250 ms until the window turns again.
+  flagged.clear();
+  for (int i = 0; i < 40; ++i)
+    if (jitter_after(100)) flagged.push_back(i);
+  EXPECT_EQ(flagged, (std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7, 8}));
+}
+
 TEST(BusDiagnostics, PollJitterNeedsAClockThatCanSeeIt) {
   // A raw file's times are nominal: no jitter at all.
   History untimed(ClockQuality::none);
