@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <mutex>
 #include <string>
+#include <unordered_map>
+#include <unordered_set>
 
 #include "tools/modtap/mqtt_publisher.hpp"
 
@@ -51,6 +53,15 @@ class MosquittoBroker final : public MessageBroker {
   static void on_connect(mosquitto* client, void* self, int code);
   static void on_disconnect(mosquitto* client, void* self, int code);
   static void on_publish(mosquitto* client, void* self, int message_id);
+  // Waits (a while) until libmosquitto has written out half of what it holds.
+  bool wait_for_room();
+  bool over_bound();
+
+  // Bytes handed to libmosquitto and not yet written to the broker: bounded, so that a capture
+  // read faster than the broker takes messages cannot queue them without limit (a health
+  // summary of 247 slaves is 34 KB).
+  static constexpr size_t max_unsent_bytes = size_t{4} << 20;
+  void count_sent(int message_id);
 
   mosquitto* client_ = nullptr;
   std::string name_;  // mqtt://HOST:PORT, for messages
@@ -65,6 +76,12 @@ class MosquittoBroker final : public MessageBroker {
   bool offline_taken_ = false;
   bool stopped_ = false;
   uint64_t dropped_ = 0;
+  // Under mutex_: each unsent message's size by its id, their sum, and the ids whose
+  // on_publish came before mosquitto_publish returned them (the network thread is quick).
+  std::unordered_map<int, size_t> unsent_;
+  std::unordered_set<int> sent_early_;
+  size_t unsent_bytes_ = 0;
+  bool stalled_ = false;  // it took nothing for the last wait
 };
 
 }  // namespace modtap::tools
