@@ -391,9 +391,14 @@ TEST(Cli, ModelsCheckReportsTheFileAndLine) {
   EXPECT_NE(bad.status, 0);
   ASSERT_EQ(bad.lines.size(), 1u);
   EXPECT_EQ(bad.lines[0], path.string() + ":3: expected text");
-  const Outcome good =
-      run(std::string("models check ") + MODTAP_SOURCE + "/plugins/models/gd20.yaml");
+  const std::string gd20 = std::string(MODTAP_SOURCE) + "/plugins/models/gd20.yaml";
+  const Outcome good = run("models check " + gd20);
   EXPECT_EQ(good.status, 0);
+  // Several files: each is checked, and one bad file fails the run.
+  const Outcome both = run("models check " + gd20 + " " + path.string());
+  EXPECT_NE(both.status, 0);
+  EXPECT_THAT(both.lines, ::testing::Contains(path.string() + ":3: expected text"));
+  EXPECT_THAT(both.lines, ::testing::Contains(::testing::StartsWith(gd20 + ": model gd20")));
 }
 
 TEST(Cli, JsonCarriesRegistersOfTheSlavesModel) {

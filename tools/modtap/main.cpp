@@ -199,9 +199,9 @@ int main(int argc, char** argv) {
       "title");
   auto* models = app.add_subcommand("models", "List the device models, or check a model file");
   models->fallthrough();  // `modtap models --models-dir DIR` lists the user's models too
-  std::string check_file;
-  auto* check = models->add_subcommand("check", "Validate a model file");
-  check->add_option("FILE", check_file, "Model file (YAML)")->required();
+  std::vector<std::string> check_files;
+  auto* check = models->add_subcommand("check", "Validate model files");
+  check->add_option("FILE", check_files, "Model files (YAML)")->required();
   CLI11_PARSE(app, argc, argv);
   signal(SIGPIPE, SIG_IGN);
   if (!named_capture.empty()) o.read_file = named_capture;
@@ -211,7 +211,7 @@ int main(int argc, char** argv) {
   if (!o.follow.empty() && output->count() == 0) o.output = o.report_file.empty() ? "csv" : "text";
   if (o.quiet && o.output != "stats") o.output = "none";
   try {
-    if (check->parsed()) return tools::check_model_file(check_file);
+    if (check->parsed()) return tools::check_model_files(check_files);
     if (models->parsed()) return list_models(o);
     if (fields->parsed()) return list_fields();
     if (o.interfaces.empty() && o.read_file.empty()) {

@@ -117,17 +117,23 @@ decoder::ModelChoice ModelCatalog::choose(const std::vector<std::string>& specs)
   return choice;
 }
 
-int check_model_file(const std::string& file) {
+int check_model_files(const std::vector<std::string>& files) {
   ModelCatalog catalog;
   catalog.load_builtin();
+  int status = 0;
+  for (const auto& file : files) status |= check_model_file(catalog, file);
+  return status;
+}
+
+int check_model_file(const ModelCatalog& catalog, const std::string& file) {
   const std::string yaml = read_text(file);
   try {
-    const std::string base_name = decoder::model_base(yaml, file);
-    const DeviceModel* base = base_name.empty() ? nullptr : catalog.find(base_name);
-    if (!base_name.empty() && !base)
+    const decoder::ModelFile parsed(yaml, file);
+    const DeviceModel* base = parsed.base().empty() ? nullptr : catalog.find(parsed.base());
+    if (!parsed.base().empty() && !base)
       throw ModelError(
-          {fmt::format("{}: extends '{}', which is not a built-in model", file, base_name)});
-    const DeviceModel model = decoder::parse_model(yaml, file, base);
+          {fmt::format("{}: extends '{}', which is not a built-in model", file, parsed.base())});
+    const DeviceModel model = parsed.model(base);
     fmt::print("{}: model {} ({}{}{}): {} registers, {} exception codes{}\n", file, model.name,
                model.title, model.source.empty() ? "" : ", from ", model.source,
                model.registers.size(), model.exceptions.size(),

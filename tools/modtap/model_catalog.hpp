@@ -37,8 +37,10 @@ class ModelCatalog {
   std::deque<Entry> entries_;  // a deque: ModelChoice holds pointers into it
 };
 
-// `modtap models check FILE`: loads the file against the built-in models and prints what it
-// finds. Returns the process status.
-int check_model_file(const std::string& file);
+// `modtap models check FILE...`: loads each file against the built-in models and prints what
+// it finds: the model, or every problem with its line. Returns the process status, 1 if any
+// file has a problem.
+int check_model_files(const std::vector<std::string>& files);
+int check_model_file(const ModelCatalog& catalog, const std::string& file);
 
 }  // namespace modtap::tools
