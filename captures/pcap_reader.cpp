@@ -1,23 +1,45 @@
 #include "captures/pcap_reader.hpp"
 
-#include "captures/pcapng_format.hpp"
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
+#include <unistd.h>
 
 #include <pcap/pcap.h>
 
 #include <fmt/format.h>
 
-namespace modtap::captures {
+#include "captures/pcapng_format.hpp"
 
-PcapReader::PcapReader(const std::string& path) : path_(path) {
-  char error[PCAP_ERRBUF_SIZE] = {};
-  handle_ =
-      pcap_open_offline_with_tstamp_precision(path.c_str(), PCAP_TSTAMP_PRECISION_NANO, error);
-  if (!handle_) throw CaptureError(fmt::format("{}: offset 0: {}", path, error));
-  const int dlt = pcap_datalink(handle_);
+namespace modtap::captures {
+namespace {
+
+constexpr uint32_t magic_microseconds = 0xA1B2C3D4, magic_nanoseconds = 0xA1B23C4D;
+
+uint32_t byte_swapped(uint32_t v) {
+  return __builtin_bswap32(v);
+}
+
+}  // namespace
+
+PcapReader::PcapReader(const std::string& path)
+    : path_(path), file_(std::fopen(path.c_str(), "rbe"), &std::fclose), buffer_(1 << 16) {
+  if (!file_) fail(0, std::strerror(errno));
+  const size_t got = fill(file_header_size);
+  if (got < file_header_size)
+    fail(0, fmt::format("truncated: a pcap file begins with 24 bytes of header, {} there", got));
+  uint32_t magic;
+  std::memcpy(&magic, buffer_.data(), 4);
+  swapped_ = magic == byte_swapped(magic_microseconds) || magic == byte_swapped(magic_nanoseconds);
+  if (swapped_) magic = byte_swapped(magic);
+  if (magic != magic_microseconds && magic != magic_nanoseconds)
+    fail(0, fmt::format("not a pcap file (it begins with {:08x})", magic));
+  fraction_ns_ = magic == magic_nanoseconds ? 1 : 1000;
+  const int dlt = static_cast<int>(u32(20) & 0x03FF'FFFF);  // the top bits carry FCS lengths
+  at_ += file_header_size;
   if (dlt < pcapng::first_user_dlt || dlt > pcapng::last_user_dlt) {
     const char* name = pcap_datalink_val_to_name(dlt);
-    pcap_close(handle_);
-    handle_ = nullptr;
     throw CaptureError(fmt::format(
         "{}: link type {} ({}) does not carry serial bytes; modtap reads DLT_USER0..15 ({}..{})",
         path, dlt, name ? name : "unknown", pcapng::first_user_dlt, pcapng::last_user_dlt));
@@ -25,24 +47,58 @@ PcapReader::PcapReader(const std::string& path) : path_(path) {
   channels_.push_back({path, decoder::ChannelRole::bus});
 }
 
-PcapReader::~PcapReader() {
-  if (handle_) pcap_close(handle_);
+bool PcapReader::next(decoder::Chunk& chunk) {
+  const size_t header = fill(record_header_size);
+  if (header == 0) return false;
+  const auto cut = [&](size_t got, size_t wanted) {
+    fail_in_record(fmt::format("truncated: {} of the record's {} bytes", got, wanted));
+  };
+  if (header < record_header_size) cut(header, record_header_size);
+  const uint32_t seconds = u32(0), fraction = u32(4), caplen = u32(8);
+  if (caplen > max_packet)
+    fail_in_record(fmt::format("a packet of {} bytes, more than {}: its length is damaged", caplen,
+                               max_packet));
+  const size_t got = fill(record_header_size + caplen);
+  if (got < record_header_size + caplen) cut(got, record_header_size + caplen);
+  ++packets_;
+  offset_ += record_header_size + caplen;
+  const int64_t t_ns = int64_t{seconds} * 1'000'000'000 + int64_t{fraction} * fraction_ns_;
+  chunk = {0, t_ns, {buffer_.data() + at_ + record_header_size, caplen}};
+  at_ += record_header_size + caplen;
+  return true;
 }
 
-bool PcapReader::next(decoder::Chunk& chunk) {
-  pcap_pkthdr* header = nullptr;
-  const u_char* data = nullptr;
-  const uint64_t before = offset_;
-  const int rc = pcap_next_ex(handle_, &header, &data);
-  if (rc == PCAP_ERROR_BREAK) return false;
-  if (rc != 1)
-    throw CaptureError(fmt::format("{}: offset {}, after packet {}: {}", path_, before, packets_,
-                                   pcap_geterr(handle_)));
-  ++packets_;
-  offset_ += record_header_size + header->caplen;
-  const int64_t t_ns = static_cast<int64_t>(header->ts.tv_sec) * 1'000'000'000 + header->ts.tv_usec;
-  chunk = {0, t_ns, {data, header->caplen}};
-  return true;
+// read(2) takes what is there, up to the buffer: a file fills it, a pipe from a live capture
+// gives what has come and is not waited on for more than the record needs.
+size_t PcapReader::fill(size_t n) {
+  if (end_ - at_ >= n) return n;
+  std::memmove(buffer_.data(), buffer_.data() + at_, end_ - at_);  // the chunk handed out is done
+  end_ -= at_;
+  at_ = 0;
+  if (buffer_.size() < n) buffer_.resize(n);
+  while (end_ < n) {
+    const ssize_t got = ::read(fileno(file_.get()), buffer_.data() + end_, buffer_.size() - end_);
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) fail(offset_, fmt::format("cannot read: {}", std::strerror(errno)));
+    if (got == 0) break;
+    end_ += static_cast<size_t>(got);
+  }
+  return std::min(n, end_);
+}
+
+uint32_t PcapReader::u32(size_t at) const {
+  uint32_t v;
+  std::memcpy(&v, buffer_.data() + at_ + at, 4);
+  return swapped_ ? byte_swapped(v) : v;
+}
+
+void PcapReader::fail(uint64_t offset, const std::string& what) const {
+  throw CaptureError(fmt::format("{}: offset {}: {}", path_, offset, what));
+}
+
+void PcapReader::fail_in_record(const std::string& what) const {
+  throw CaptureError(
+      fmt::format("{}: offset {}, after packet {}: {}", path_, offset_, packets_, what));
 }
 
 }  // namespace modtap::captures

@@ -1,6 +1,6 @@
 // pcapng files, read block by block. libpcap 1.10 gives neither a packet's interface nor its
 // comment, so through it a two-channel file reads as one channel and modtap's own files lose
-// the timing they were written with. Classic pcap still goes through libpcap (pcap_reader).
+// the timing they were written with. Classic pcap has a reader of its own (pcap_reader).
 #pragma once
 
 #include <cstdint>

@@ -117,6 +117,46 @@ TEST_F(TempDir, PcapPacketsBecomeTimedChunks) {
   EXPECT_FALSE(reader.next(chunk));
 }
 
+// Written by hand: big-endian, nanosecond time stamps (magic a1b23c4d), then a record whose
+// length lies.
+TEST_F(TempDir, PcapInTheOtherByteOrderWithNanosecondsReads) {
+  std::string file;
+  const auto be32 = [&](uint32_t v) {
+    for (int shift = 24; shift >= 0; shift -= 8) file.push_back(static_cast<char>(v >> shift));
+  };
+  be32(0xA1B23C4D);
+  be32(0x00020004);  // version 2.4
+  be32(0);
+  be32(0);
+  be32(65535);
+  be32(147);  // DLT_USER0
+  be32(1700000000);
+  be32(123'456'789);  // nanoseconds
+  be32(3);
+  be32(3);
+  file += std::string("\x01\x03\x00", 3);
+  be32(1700000001);
+  be32(0);
+  be32(0x7FFF'FFFF);  // a length no packet has
+  be32(0x7FFF'FFFF);
+  const auto path = write("be.pcap", file);
+  PcapReader reader(path);
+  decoder::Chunk chunk;
+  ASSERT_TRUE(reader.next(chunk));
+  EXPECT_EQ(chunk.t_ns, 1700000000LL * 1'000'000'000 + 123'456'789);
+  EXPECT_EQ(chunk.bytes.size(), 3u);
+  EXPECT_EQ(chunk.bytes[1], 0x03);
+  try {
+    reader.next(chunk);
+    FAIL() << "no error";
+  } catch (const CaptureError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              path +
+                  ": offset 43, after packet 1: a packet of 2147483647 bytes, more than 262144: "
+                  "its length is damaged");
+  }
+}
+
 TEST_F(TempDir, PcapOfAnotherLinkTypeIsRefused) {
   const auto path = write_pcap("eth.pcap", 1, {hex("00")});
   EXPECT_NE(error_of(path).find("link type 1"), std::string::npos);

@@ -1,4 +1,4 @@
-// pcap (through libpcap) and pcapng (modtap's own block reader) as modtap opens them.
+// pcap and pcapng (modtap's own record and block readers) as modtap opens them.
 // Properties: it reads to the end or stops with a CaptureError naming the file; it never gives
 // more bytes than the file holds; every chunk is on a channel the reader announced.
 #include <string>
