@@ -8,6 +8,7 @@
 #include <fmt/compile.h>
 #include <fmt/format.h>
 
+#include "decoder/buffer_put.hpp"
 #include "decoder/bytes.hpp"
 #include "decoder/function_codes.hpp"
 
@@ -379,8 +380,7 @@ void append_number(fmt::memory_buffer& out, double value, int decimals) {
   constexpr double exact_integers = 9007199254740992.0;  // 2^53
   if (decimals == 0 && value == std::trunc(value) && std::fabs(value) < exact_integers &&
       !std::signbit(value)) {
-    const fmt::format_int digits(static_cast<int64_t>(value));
-    out.append(digits.data(), digits.data() + digits.size());
+    put_int(out, static_cast<int64_t>(value));
   } else {
     fmt::format_to(fmt::appender(out), FMT_COMPILE("{:.{}f}"), value, decimals);
   }

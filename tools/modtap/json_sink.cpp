@@ -10,9 +10,18 @@ using namespace decoder;
 JsonSink::JsonSink(Output& out, const std::vector<ChannelInfo>& channels)
     : out_(out), channels_(channels) {}
 
+// Escaped once per channel rather than for every record.
 void JsonSink::channel(uint16_t id) {
-  put(out_.buffer(), ",\"channel\":");
-  append_json_string(out_.buffer(), id < channels_.size() ? channels_[id].name : "");
+  if (id >= channel_keys_.size()) channel_keys_.resize(id + 1u);
+  ChannelKey& key = channel_keys_[id];
+  const std::string& name = id < channels_.size() ? channels_[id].name : key.name;
+  if (key.json.size() == 0 || key.name != name) {
+    key.name = name;
+    key.json.clear();
+    put(key.json, ",\"channel\":");
+    append_json_string(key.json, name);
+  }
+  put(out_.buffer(), {key.json.data(), key.json.size()});
 }
 
 void JsonSink::on_frame(const Frame& frame) {

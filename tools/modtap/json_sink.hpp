@@ -1,7 +1,10 @@
 // JSON Lines: one object per record. docs/output.md lists every key.
 #pragma once
 
+#include <string>
 #include <vector>
+
+#include <fmt/format.h>
 
 #include "decoder/pdu_fields.hpp"
 #include "decoder/record_sink.hpp"
@@ -24,7 +27,13 @@ class JsonSink final : public decoder::RecordSink {
   bool finding_names(uint32_t bits);
 
   Output& out_;
-  const std::vector<decoder::ChannelInfo>& channels_;
+  const std::vector<decoder::ChannelInfo>& channels_;  // may grow and be renamed as it goes
+  // Each channel's `,"channel":"NAME"` as last made, and the name it was made from.
+  struct ChannelKey {
+    std::string name;
+    fmt::memory_buffer json;
+  };
+  std::vector<ChannelKey> channel_keys_;
   decoder::DecodedPdu decoded_;  // the frame's fields, its capacity kept from frame to frame
 };
 

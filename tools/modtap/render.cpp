@@ -231,6 +231,10 @@ void append_register_keys(fmt::memory_buffer& out, const decoder::RegisterValue&
   } else {
     put(out, "null");
   }
+  if (reg.unit.empty() && reg.text.empty()) {  // a register the model does not know
+    put(out, ",\"unit\":null,\"text\":null");
+    return;
+  }
   put(out, ",\"unit\":");
   optional_string(reg.unit);
   put(out, ",\"text\":");
