@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <string>
 #include <string_view>
 
 #include <fmt/compile.h>
@@ -27,8 +28,37 @@ template <typename Integer>
   const char* end = fmt::format_to(out.data() + at, FMT_COMPILE("{}"), v);
   out.resize(static_cast<size_t>(end - out.data()));
 }
-inline void put_int(fmt::memory_buffer& out, int64_t v) { put_decimal(out, v); }
-inline void put_uint(fmt::memory_buffer& out, uint64_t v) { put_decimal(out, v); }
+inline void put_int(fmt::memory_buffer& out, int64_t v) {
+  put_decimal(out, v);
+}
+inline void put_uint(fmt::memory_buffer& out, uint64_t v) {
+  put_decimal(out, v);
+}
+
+// Nanoseconds since the epoch as one integer, as JSON carries times: the second's ten digits
+// are made once a second and the nine below it each time, a third of the work of nineteen.
+class NanosecondsText {
+ public:
+  void put(fmt::memory_buffer& out, int64_t ns) {
+    if (ns < second_ns) return put_int(out, ns);  // no second's digits to keep (or negative)
+    const int64_t seconds = ns / second_ns;
+    if (seconds != seconds_) {
+      seconds_ = seconds;
+      const fmt::format_int digits(seconds);
+      seconds_text_.assign(digits.data(), digits.size());
+    }
+    modtap::put(out, seconds_text_);
+    auto below = static_cast<uint32_t>(ns - seconds * second_ns);
+    char digits[9];
+    for (int i = 8; i >= 0; --i, below /= 10) digits[i] = static_cast<char>('0' + below % 10);
+    modtap::put(out, {digits, 9});
+  }
+
+ private:
+  static constexpr int64_t second_ns = 1'000'000'000;
+  int64_t seconds_ = -1;
+  std::string seconds_text_;
+};
 
 // Four uppercase hex digits: a register address as the manuals write it (2502).
 inline void put_hex4(fmt::memory_buffer& out, uint16_t v) {

@@ -30,6 +30,20 @@ TEST(Fixed, PrintsNanosecondsInALargerUnitFromTheIntegers) {
   EXPECT_EQ(fmt::to_string(out), "   0.002292-0.000002123.456789");
 }
 
+// JSON's times: the same digits as the integer, the second's part kept from call to call.
+TEST(NanosecondsText, PrintsTheIntegerWhateverItKept) {
+  NanosecondsText text;
+  fmt::memory_buffer out;
+  for (const int64_t ns : {int64_t{1'700'000'000'000'000'001}, int64_t{1'700'000'000'999'999'999},
+                           int64_t{1'700'000'001'000'000'000}, int64_t{1'700'000'000'000'000'000},
+                           int64_t{999'999'999}, int64_t{1'000'000'000}, int64_t{0},
+                           int64_t{-5'000'000'001}, INT64_MAX}) {
+    out.clear();
+    text.put(out, ns);
+    EXPECT_EQ(fmt::to_string(out), std::to_string(ns));
+  }
+}
+
 // Whole values skip fmt's float path and must print as "{:.{}f}" does.
 TEST(AppendNumber, PrintsAsFixedPointFormattingDoes) {
   for (const auto& [value, decimals] : std::initializer_list<std::pair<double, int>>{

@@ -29,9 +29,9 @@ void JsonSink::on_frame(const Frame& frame) {
   put(buf, "{\"type\":\"frame\",\"index\":");
   put_uint(buf, frame.index);
   put(buf, ",\"t_ns\":");
-  put_int(buf, frame.t_ns);
+  time_text_.put(buf, frame.t_ns);
   put(buf, ",\"end_ns\":");
-  put_int(buf, frame.end_ns);
+  time_text_.put(buf, frame.end_ns);
   channel(frame.channel);
   put(buf, ",\"offset\":");
   put_uint(buf, frame.offset);

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "decoder/buffer_put.hpp"
 #include "decoder/pdu_fields.hpp"
 #include "decoder/record_sink.hpp"
 #include "decoder/register_meaning.hpp"
@@ -34,6 +35,7 @@ class JsonSink final : public decoder::RecordSink {
     fmt::memory_buffer json;
   };
   std::vector<ChannelKey> channel_keys_;
+  NanosecondsText time_text_;
   decoder::DecodedPdu decoded_;  // the frame's fields, its capacity kept from frame to frame
 };
 
