@@ -19,11 +19,13 @@ std::map<uint8_t, int64_t> model_timeouts(const ModelChoice& choice) {
 }
 
 ModelInterpreter::ModelInterpreter(std::vector<const DeviceModel*> known, ModelChoice choice,
-                                   ClockQuality clock, RecordSink& next)
+                                   ClockQuality clock, RecordSink& next, bool list_unnamed)
     : known_(std::move(known)),
       choice_(std::move(choice)),
       exact_clock_(clock == ClockQuality::per_byte),
-      next_(next) {}
+      next_(next) {
+  meaning_.lists_unnamed = list_unnamed;
+}
 
 const DeviceModel* ModelInterpreter::model_for(uint8_t slave) const {
   if (auto it = choice_.by_slave.find(slave); it != choice_.by_slave.end()) return it->second;

@@ -23,8 +23,9 @@ class ModelInterpreter final : public RecordSink {
  public:
   // `known` are the models whose identification rule may match the traffic; `clock` is the
   // source's, which says whether a turnaround is timed well enough to hold against a manual.
+  // `list_unnamed`: see Meaning::lists_unnamed.
   ModelInterpreter(std::vector<const DeviceModel*> known, ModelChoice choice, ClockQuality clock,
-                   RecordSink& next);
+                   RecordSink& next, bool list_unnamed = true);
 
   void on_frame(const Frame& frame) override;
   void on_noise(const Noise& noise) override { next_.on_noise(noise); }

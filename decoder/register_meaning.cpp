@@ -104,6 +104,7 @@ void decode_span(const DeviceModel& model, Table table, uint16_t start,
                  std::span<const uint16_t> words, Meaning& meaning,
                  std::vector<RuleFinding>* found) {
   std::vector<RegisterValue>& out = meaning.registers;
+  if (!meaning.lists_unnamed && maps_no_register(model)) return;
   for (size_t i = 0; i < words.size(); ++i) {
     const auto address = static_cast<uint16_t>(start + i);
     const RegisterLookup lookup = find_register(model, table, address);
@@ -117,8 +118,12 @@ void decode_span(const DeviceModel& model, Table table, uint16_t start,
     v.address = address;
     v.raw = words[i];
     v.value = words[i];
-    if (!def || def->type == ValueType::raw) {
-      if (def) v.name = model_text(def->name), v.label = model_text(def->label);
+    if (!def) {
+      if (meaning.lists_unnamed) out.push_back(v);
+      continue;
+    }
+    if (def->type == ValueType::raw) {
+      v.name = model_text(def->name), v.label = model_text(def->label);
       out.push_back(v);
       continue;
     }

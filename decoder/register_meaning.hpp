@@ -41,6 +41,11 @@ struct Meaning {
   std::vector<RegisterValue> registers;
   std::vector<RuleFinding> findings;
   bool echoed = false;  // the registers repeat what the request wrote (a write's echo response)
+  // Whether words the model does not name are listed, by address and raw value: JSON, the
+  // statistics, CSV, `-V` and filters show them; a text line and a pcapng comment do not, and
+  // leaving them out is most of the model stage's work on a bus of unknown devices. Kept by
+  // clear().
+  bool lists_unnamed = true;
 
   Meaning() = default;
   Meaning(Meaning&&) = default;  // moving keeps `composed` where the registers' texts point

@@ -108,6 +108,28 @@ TEST_F(Models, Nta5000ReadOf2523HGivesTheFrequencyCommand) {
   EXPECT_THAT(m.findings, IsEmpty());
 }
 
+// A text line or a pcapng comment shows only what the model names: the stage then leaves the
+// other words out, and a model that names nothing reads nothing.
+TEST_F(Models, WordsTheModelDoesNotNameAreLeftOutWhenAsked) {
+  const auto req = rtu("01 03 25 2F 00 03");  // 252FH (reserved), 2530H (reserved), 2531H
+  const auto rsp = rtu("01 03 06 00 01 00 02 00 03");
+  for (const bool listed : {true, false}) {
+    Frame f = frame(rsp, Role::response);
+    f.request_pdu = std::span<const uint8_t>(req).subspan(1, req.size() - 3);
+    Meaning nta5000, generic;
+    nta5000.lists_unnamed = generic.lists_unnamed = listed;
+    interpret(model("nta5000"), f, nta5000);
+    interpret(model("generic"), f, generic);
+    std::vector<std::string> names;
+    for (const auto& reg : nta5000.registers) names.emplace_back(reg.name);
+    const std::vector<std::string> named = {"reserved_252F", "reserved_2530"};
+    std::vector<std::string> all = named;
+    all.emplace_back("");
+    EXPECT_EQ(names, listed ? all : named);
+    EXPECT_EQ(generic.registers.size(), listed ? 3u : 0u);
+  }
+}
+
 TEST_F(Models, Nta5000WriteOf1770HTo2502HIs60Hz) {
   const auto adu = hex("01 06 25 02 17 70 2D 12");  // 4.3, RTU
   const Meaning m = request("nta5000", adu);

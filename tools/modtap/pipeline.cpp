@@ -103,9 +103,12 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output
     if (!o.timeout_given) model_timeouts_ = decoder::model_timeouts(choice);
     if (!o.display_filter.empty()) filter(o.display_filter, channels);
     decoder::RecordSink& after = filter_ ? static_cast<decoder::RecordSink&>(*filter_) : fan_out_;
+    // Registers the model does not name show only in JSON, CSV, statistics, -V and filters.
+    const bool list_unnamed = o.output == "json" || o.output == "csv" || wants_statistics(o) ||
+                              (o.output == "text" && o.verbose) || !o.display_filter.empty();
     if (interpret)
-      interpreter_ =
-          std::make_unique<decoder::ModelInterpreter>(catalog_.all(), choice, clock, after);
+      interpreter_ = std::make_unique<decoder::ModelInterpreter>(catalog_.all(), choice, clock,
+                                                                 after, list_unnamed);
   }
   diagnostics_ = std::make_unique<decoder::BusDiagnostics>(format, clock, after_diagnostics());
   if (!o.write_file.empty()) write_pcapng(o, ring, channels, clock);
