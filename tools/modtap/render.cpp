@@ -18,6 +18,25 @@ std::string_view as_chars(std::span<const uint8_t> bytes) {
   return {reinterpret_cast<const char*>(bytes.data()), bytes.size()};
 }
 
+// [1,0,1] or [2291,17]: room for the longest is made once, and the digits written into it.
+void append_json_numbers(fmt::memory_buffer& out, const Field& f) {
+  const bool bits = f.type() == FieldType::bits;
+  const size_t at = out.size();
+  out.resize(at + 2 + f.count * (bits ? 2 : 6));  // a word has at most 5 digits, and a comma
+  char* to = out.data() + at;
+  *to++ = '[';
+  for (size_t i = 0; i < f.count; ++i) {
+    if (i) *to++ = ',';
+    if (bits) {
+      *to++ = f.bit(i) ? '1' : '0';
+    } else {
+      to = fmt::format_to(to, FMT_COMPILE("{}"), f.word(i));
+    }
+  }
+  *to++ = ']';
+  out.resize(static_cast<size_t>(to - out.data()));
+}
+
 void append_json_scalar(fmt::memory_buffer& out, const Field& f) {
   switch (f.type()) {
     case FieldType::name:
@@ -33,12 +52,7 @@ void append_json_scalar(fmt::memory_buffer& out, const Field& f) {
       break;
     case FieldType::registers:
     case FieldType::bits:
-      out.push_back('[');
-      for (size_t i = 0; i < f.count; ++i) {
-        if (i) out.push_back(',');
-        put_int(out, f.type() == FieldType::bits ? f.bit(i) : f.word(i));
-      }
-      out.push_back(']');
+      append_json_numbers(out, f);
       break;
     default:
       put_int(out, f.number);
