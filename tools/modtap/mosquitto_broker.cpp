@@ -194,7 +194,7 @@ void MosquittoBroker::publish(std::string_view topic, std::string_view payload, 
 
 bool MosquittoBroker::over_bound() {
   std::lock_guard lock(mutex_);
-  return unsent_bytes_ >= max_unsent_bytes;
+  return unsent_bytes_ >= max_unsent_bytes || unsent_.size() >= max_unsent_messages;
 }
 
 // A broker that takes messages slower than a capture file is read holds the reading back; one
@@ -203,7 +203,8 @@ bool MosquittoBroker::over_bound() {
 bool MosquittoBroker::wait_for_room() {
   std::unique_lock lock(mutex_);
   return changed_.wait_for(lock, std::chrono::seconds(5), [this] {
-    return unsent_bytes_ < max_unsent_bytes / 2 || !connected_;
+    return (unsent_bytes_ < max_unsent_bytes / 2 && unsent_.size() < max_unsent_messages / 2) ||
+           !connected_;
   }) && connected_;
 }
 

@@ -61,6 +61,9 @@ class MosquittoBroker final : public MessageBroker {
   // read faster than the broker takes messages cannot queue them without limit (a health
   // summary of 247 slaves is 34 KB).
   static constexpr size_t max_unsent_bytes = size_t{4} << 20;
+  // And in messages: libmosquitto's ids are 16 bits, so more than 65,535 in flight would reuse
+  // an id still in the table (and each queued message costs libmosquitto a packet of its own).
+  static constexpr size_t max_unsent_messages = 16384;
   void count_sent(int message_id);
 
   mosquitto* client_ = nullptr;
