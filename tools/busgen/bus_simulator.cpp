@@ -531,11 +531,16 @@ std::vector<DeliveredChunk> deliver(const BusCapture& capture, Delivery delivery
       cuts.push_back(n);
       std::sort(cuts.begin(), cuts.end());
       cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());
+      // A sniffer merges pieces only across a silence shorter than its own gap threshold (one
+      // set too long, or a USB adapter's latency timer), never across a master's time-out.
+      constexpr int64_t merge_below_ns = 20'000'000;
+      auto silence_after = [&](uint64_t b) { return b < n ? ends[b] - ends[b - 1] : INT64_MAX; };
       std::vector<uint64_t> kept{0};
       for (size_t c = 1; c < cuts.size(); ++c) {
         const uint64_t a = kept.back(), b = cuts[c];
         if (b - a > 2 && chance(change_rate)) kept.push_back(a + 1 + rng() % (b - a - 1));  // split
-        if (b == n || !chance(change_rate)) kept.push_back(b);  // or merge
+        const bool merge = silence_after(b) < merge_below_ns && chance(change_rate);
+        if (!merge) kept.push_back(b);
       }
       for (size_t c = 1; c < kept.size(); ++c) {
         const uint64_t a = kept[c - 1], b = kept[c];
