@@ -39,6 +39,10 @@ constexpr FindingInfo registry[] = {
      "bytes that are no answer where a request's answer was awaited (noise, or a frame with a "
      "bad check from another slave or function): two devices talking at once, a slave at "
      "another baud rate or parity, or an answer garbled on the way"},
+    {"ambiguous-end", Severity::note,
+     "a damaged response whose last byte could as well be the next frame's turnaround glitch: "
+     "the clock cannot see the quiet line a glitch comes after, so the frame may be one byte "
+     "longer or shorter than shown"},
     // The device model's, in RuleKind order.
     {"reserved-write", Severity::warning, "a write to a register the manual says not to write"},
     {"read-only-write", Severity::warning, "a write to a register the device only reports"},

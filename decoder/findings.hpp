@@ -34,8 +34,9 @@ enum Finding : uint32_t {
   // What the framer's clock and the matcher see:
   finding_gap_in_frame = 1u << 17,           // a silence over t1.5 between two bytes of one frame
   finding_garbage_after_request = 1u << 18,  // no answer, where a request awaits its answer
+  finding_ambiguous_end = 1u << 19,  // a damaged frame whose last byte may be a glitch, or not
 };
-inline constexpr size_t frame_finding_count = 19;
+inline constexpr size_t frame_finding_count = 20;
 
 // What a device model's rules say of a frame; entry frame_finding_count + kind of the registry.
 enum class RuleKind : uint8_t {

@@ -507,24 +507,24 @@ bool RtuFramer::too_soon_for_retry(uint64_t at) const {
 
 // A damaged response: reported as a frame with a bad check, so it stays in the slave's
 // picture. Cut short, it has no check to expect; run on, its end is where its structure says.
-void RtuFramer::emit_damaged(uint64_t begin, uint64_t end, Damage damage) {
+void RtuFramer::emit_damaged(uint64_t begin, uint64_t end, Damage damage, uint32_t findings) {
   Frame frame = frame_of(begin, end, {false, true});
   frame.damage = damage;
   if (damage != Damage::cut)
     frame.expected_check = crc16(frame.adu.first(frame.adu.size() - crc_size));
   frame.check_ok = false;
-  frame.findings |= finding_bad_check;
+  frame.findings |= finding_bad_check | findings;
   sink_.on_frame(frame);
   consume(end);
 }
 
-void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
+void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings) {
   const uint64_t size = end - begin;
   const uint8_t* p = at_ptr(begin);
   // The slave's driver turning on can put a glitch right before its damaged response.
   if (size > 1 && is_glitch_byte(p[0]) && starts_awaited(begin + 1, size - 1)) {
     emit_piece(begin, begin + 1);
-    return emit_piece(begin + 1, end);
+    return emit_piece(begin + 1, end, findings);
   }
   const auto length = awaited_length(begin, size);
   // A damaged response ending in 0x00 or 0xFF (2 in 256) right before the next frame, or one
@@ -538,14 +538,18 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
   if (cut_short && size > 3 && is_glitch_byte(last) && glitches_ * 128 > good_frames_ &&
       end < end_ && may_be_glitch(end - 1)) {
     const std::optional<bool> told = awaited_byte(begin, size - 1);
+    // Unless the request rules the byte out, only a clock that times each byte sees the quiet
+    // line a glitch comes after; with any other, both readings pass every check, so say so.
+    if (options_.clock != ClockQuality::per_byte && told != false)
+      findings |= finding_ambiguous_end;
     if (told ? !*told : !gap_at(end)) {
-      emit_piece(begin, end - 1);
+      emit_piece(begin, end - 1, findings);
       return emit_piece(end - 1, end);
     }
   }
   if (length && *length != size) {
-    if (size < *length) return emit_damaged(begin, end, Damage::cut);
-    emit_damaged(begin, begin + *length, Damage::collision);
+    if (size < *length) return emit_damaged(begin, end, Damage::cut, findings);
+    emit_damaged(begin, begin + *length, Damage::collision, findings);
     return emit_piece(begin + *length, end);
   }
   if (size >= min_adu && size <= max_rtu_adu && plausible_start(p[0], p[1])) {
@@ -555,8 +559,10 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end) {
       Frame frame = frame_of(begin, end, fit);
       frame.expected_check = crc16({p, static_cast<size_t>(size - crc_size)});
       frame.check_ok = frame.expected_check == wire_crc(frame.adu);
-      if (!frame.check_ok) frame.findings |= finding_bad_check;
-      if (!frame.check_ok) frame.damage = Damage::corrupted;
+      if (!frame.check_ok) {
+        frame.findings |= finding_bad_check | findings;
+        frame.damage = Damage::corrupted;
+      }
       sink_.on_frame(frame);
       consume(end);
       return;

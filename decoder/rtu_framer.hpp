@@ -94,14 +94,14 @@ class RtuFramer {
   bool paused_before(uint64_t offset) const;
   void emit_frame(uint64_t at, const Match& match);
   void emit_unframed(uint64_t begin, uint64_t end);
-  void emit_piece(uint64_t begin, uint64_t end);
+  void emit_piece(uint64_t begin, uint64_t end, uint32_t findings = finding_none);
   std::optional<uint16_t> awaited_length(uint64_t begin, uint64_t size) const;
   std::optional<bool> awaited_byte(uint64_t begin, uint64_t pos) const;
   bool starts_awaited(uint64_t begin, uint64_t size) const;
   bool copies_request(uint64_t at, uint64_t size) const;
   bool starts_request_copy(uint64_t at, uint64_t size) const;
   bool too_soon_for_retry(uint64_t at) const;
-  void emit_damaged(uint64_t begin, uint64_t end, Damage damage);
+  void emit_damaged(uint64_t begin, uint64_t end, Damage damage, uint32_t findings);
   void emit_noise(uint64_t begin, uint64_t end, NoiseReason reason);
   void consume(uint64_t to);
 

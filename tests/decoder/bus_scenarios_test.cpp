@@ -201,9 +201,14 @@ TEST_P(BusScenario, FindsExactlyTheFramesSentWithRolesAndPairs) {
   std::map<uint64_t, const testing::Record*> by_offset;
   for (const auto& r : out.records)
     if (r.type == testing::Record::Type::frame) by_offset[r.offset] = &r;
+  // A damaged frame that says its last byte may be a glitch is found at either length.
   auto found = [&](const busgen::TruthFrame& truth) -> const testing::Record* {
     auto it = by_offset.find(truth.offset);
-    if (it == by_offset.end() || it->second->raw.size() != truth.size) return nullptr;
+    if (it == by_offset.end()) return nullptr;
+    const size_t size = it->second->raw.size();
+    const bool either = (it->second->findings & finding_ambiguous_end) && !it->second->check_ok;
+    if (size != truth.size && !(either && size + 1 >= truth.size && size <= truth.size + 1))
+      return nullptr;
     const bool damaged = truth.damage != Damage::none;
     if (it->second->check_ok == damaged) return nullptr;
     return it->second;
@@ -335,11 +340,11 @@ INSTANTIATE_TEST_SUITE_P(
         Scenario{"per_byte", Delivery::per_byte, real_masters(21)},
         Scenario{"per_byte_coarse", Delivery::per_byte, real_masters(22), 0, Via::direct,
                  sample_clock},
-        Scenario{"bursts", Delivery::bursts, real_masters(23), 2},
-        Scenario{"bursts_coarse", Delivery::bursts, real_masters(24), 2, Via::direct, coarse_timer},
-        Scenario{"per_frame_jitter", Delivery::per_frame, real_masters(25), 1, Via::direct,
+        Scenario{"bursts", Delivery::bursts, real_masters(23), 0},
+        Scenario{"bursts_coarse", Delivery::bursts, real_masters(24), 0, Via::direct, coarse_timer},
+        Scenario{"per_frame_jitter", Delivery::per_frame, real_masters(25), 0, Via::direct,
                  usb_jitter},
-        Scenario{"pcap_per_frame_jitter", Delivery::per_frame, real_masters(26), 2, Via::pcap,
+        Scenario{"pcap_per_frame_jitter", Delivery::per_frame, real_masters(26), 1, Via::pcap,
                  usb_jitter},
         Scenario{"faulty_senders_per_byte", Delivery::per_byte, faulty_senders(31)},
         Scenario{"glitches_per_byte", Delivery::per_byte, glitch_every_turnaround(27)},

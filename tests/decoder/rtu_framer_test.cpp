@@ -102,6 +102,7 @@ TEST(RtuFramer, ACutResponseKeepsTheByteItsRequestSaysComesThere) {
   EXPECT_EQ(broken.raw, cut);
   EXPECT_EQ(broken.damage, Damage::cut);
   EXPECT_EQ(broken.role, Role::response);
+  EXPECT_TRUE(broken.findings & finding_ambiguous_end);  // a glitch could repeat the 0x00
   EXPECT_EQ(out.noise().size(), 16u);  // the glitches before the reads, none after the cut
 }
 
@@ -111,6 +112,7 @@ TEST(RtuFramer, ACutResponsesLastByteThatItsRequestRulesOutIsAGlitch) {
   const auto frames = out.frames();
   ASSERT_GE(frames.size(), 3u);
   EXPECT_EQ(frames[frames.size() - 3].raw, hex("01 10 00 05"));
+  EXPECT_FALSE(frames[frames.size() - 3].findings & finding_ambiguous_end);
   ASSERT_EQ(out.noise().size(), 17u);
   EXPECT_EQ(out.noise().back().raw, hex("ff"));
   EXPECT_EQ(out.noise().back().reason, NoiseReason::glitch);
@@ -336,6 +338,39 @@ class GapCollector : public ::testing::Test {
 };
 
 // At 9600 baud a character is 1.04 ms: t1.5 is 1.56 ms and t3.5 3.65 ms.
+
+// A read's answer cut after a data byte 0x00, the next request right behind it, on a bus of
+// 0x00 glitches: the 0x00 is the answer's own or the next driver's glitch. A clock per byte
+// sees it sent with no pause before it; a clock per read cannot, and the frame says so.
+TEST_F(GapCollector, ACutResponsesLastByteThatMayBeAGlitchIsSaidToBeEither) {
+  std::vector<Piece> pieces;
+  for (int i = 0; i < 16; ++i) {
+    pieces.push_back({20'000'000, hex("00")});
+    pieces.push_back({1'000'000, read_request});
+    pieces.push_back({2'000'000, read_response});
+  }
+  const auto cut = hex("01 03 14 00 01 00");
+  pieces.push_back({20'000'000, read_request});
+  pieces.push_back({2'000'000, concat({cut, read_request})});
+  pieces.push_back({2'000'000, read_response});
+  for (ClockQuality clock : {ClockQuality::per_byte, ClockQuality::per_chunk}) {
+    const auto out = run(pieces, clock);
+    const auto frames = out.frames();
+    ASSERT_EQ(frames.size(), 36u);
+    const auto& broken = frames[33];
+    EXPECT_EQ(broken.damage, Damage::cut);
+    EXPECT_EQ(broken.role, Role::response);
+    if (clock == ClockQuality::per_byte) {
+      EXPECT_EQ(broken.raw, cut);
+      EXPECT_FALSE(broken.findings & finding_ambiguous_end);
+    } else {
+      EXPECT_EQ(broken.raw, hex("01 03 14 00 01"));
+      EXPECT_TRUE(broken.findings & finding_ambiguous_end);
+      EXPECT_EQ(out.noise().back().raw, hex("00"));
+    }
+  }
+}
+
 TEST_F(GapCollector, APauseOverT15InsideAFrameIsAFindingNotABoundary) {
   const auto head = hex("01 03 00"), tail = hex("00 00 0a c5 cd");
   for (ClockQuality clock : {ClockQuality::per_byte, ClockQuality::per_chunk}) {
