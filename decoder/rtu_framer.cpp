@@ -538,10 +538,9 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings) {
   if (cut_short && size > 3 && is_glitch_byte(last) && glitches_ * 128 > good_frames_ &&
       end < end_ && may_be_glitch(end - 1)) {
     const std::optional<bool> told = awaited_byte(begin, size - 1);
-    // Unless the request rules the byte out, only a clock that times each byte sees the quiet
-    // line a glitch comes after; with any other, both readings pass every check, so say so.
-    if (options_.clock != ClockQuality::per_byte && told != false)
-      findings |= finding_ambiguous_end;
+    // The clock has not ruled a glitch out, nor has a silence after the byte said it ended a
+    // frame: unless the request rules the byte out, both readings pass every check, so say so.
+    if (told != false && !gap_at(end)) findings |= finding_ambiguous_end;
     if (told ? !*told : !gap_at(end)) {
       emit_piece(begin, end - 1, findings);
       return emit_piece(end - 1, end);

@@ -369,6 +369,13 @@ TEST_F(GapCollector, ACutResponsesLastByteThatMayBeAGlitchIsSaidToBeEither) {
       EXPECT_EQ(out.noise().back().raw, hex("00"));
     }
   }
+  // A clock per byte that sees the line quiet before the 0x00 cannot rule a glitch out either.
+  pieces.end()[-2] = {2'000'000, hex("01 03 14 00 01")};
+  pieces.insert(pieces.end() - 1, {3'000'000, concat({hex("00"), read_request})});
+  const auto frames = run(pieces, ClockQuality::per_byte).frames();
+  ASSERT_EQ(frames.size(), 36u);
+  EXPECT_EQ(frames[33].raw, hex("01 03 14 00 01"));
+  EXPECT_TRUE(frames[33].findings & finding_ambiguous_end);
 }
 
 TEST_F(GapCollector, APauseOverT15InsideAFrameIsAFindingNotABoundary) {

@@ -534,7 +534,9 @@ std::vector<DeliveredChunk> deliver(const BusCapture& capture, Delivery delivery
       // A sniffer merges pieces only across a silence shorter than its own gap threshold (one
       // set too long, or a USB adapter's latency timer), never across a master's time-out.
       constexpr int64_t merge_below_ns = 20'000'000;
-      auto silence_after = [&](uint64_t b) { return b < n ? ends[b] - ends[b - 1] : INT64_MAX; };
+      auto silence_after = [&](uint64_t b) {
+        return b < n ? ends[b] - ends[b - 1] - (ends[1] - ends[0]) : INT64_MAX;  // less a character
+      };
       std::vector<uint64_t> kept{0};
       for (size_t c = 1; c < cuts.size(); ++c) {
         const uint64_t a = kept.back(), b = cuts[c];
