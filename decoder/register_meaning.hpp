@@ -3,7 +3,7 @@
 #pragma once
 
 #include <cstdint>
-#include <list>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -48,24 +48,29 @@ struct Meaning {
   bool lists_unnamed = true;
 
   Meaning() = default;
-  Meaning(Meaning&&) = default;  // moving keeps `composed` where the registers' texts point
+  Meaning(Meaning&&) = default;  // moving keeps the composed texts where the registers' texts point
   Meaning& operator=(Meaning&&) = default;
   Meaning(const Meaning&) = delete;
   Meaning& operator=(const Meaning&) = delete;
 
-  // Keeps a text composed for this frame ("F01.05 (RAM)", "Run, Reverse") for as long as
-  // the Meaning, so a register can point at it.
-  std::string_view keep(std::string text) { return composed.emplace_back(std::move(text)); }
+  // Keeps a text composed for this frame ("F01.05 (RAM)", "Run, Reverse", a group rule's
+  // parameter name) for as long as the Meaning, so a register can point at it. The storage
+  // is reused from frame to frame: once warm, keeping a text allocates nothing.
+  std::string_view keep(std::string_view text) {
+    while (composed_.size() <= kept_) composed_.push_back(std::make_unique<std::string>());
+    return composed_[kept_++]->assign(text);
+  }
   void clear() {
     model = nullptr;
     registers.clear();
     findings.clear();
     echoed = false;
-    composed.clear();
+    kept_ = 0;
   }
 
  private:
-  std::list<std::string> composed;  // rare: most texts are the model's own
+  std::vector<std::unique_ptr<std::string>> composed_;  // each text stays put through moves
+  size_t kept_ = 0;                                     // how many of them this frame uses
 };
 
 Meaning interpret(const DeviceModel& model, const Frame& frame);
