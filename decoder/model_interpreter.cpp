@@ -52,11 +52,10 @@ void ModelInterpreter::check_turnaround(const DeviceModel& model, const Frame& f
   if (!exact_clock_ || !model.min_turnaround_ns || frame.role != Role::response ||
       !frame.latency_ns || *frame.latency_ns >= *model.min_turnaround_ns)
     return;
-  meaning_.findings.push_back(
-      {RuleKind::early_response, std::nullopt,
-       fmt::format("answered {:.3f} ms after the request; {} answers no sooner than {} ms",
-                   static_cast<double>(*frame.latency_ns) / 1e6, model.name,
-                   *model.min_turnaround_ns / 1'000'000)});
+  meaning_.findings.add(RuleKind::early_response, std::nullopt,
+                        "answered {:.3f} ms after the request; {} answers no sooner than {} ms",
+                        static_cast<double>(*frame.latency_ns) / 1e6, model.name,
+                        *model.min_turnaround_ns / 1'000'000);
 }
 
 // A read response that covers a model's identification register with its value names the
@@ -81,7 +80,7 @@ void ModelInterpreter::identify(const Frame& frame) {
       interpret(*model, frame, meaning_);
       text += "; decoded as such from here on";
     }
-    meaning_.findings.push_back({RuleKind::identified, id->address, std::move(text)});
+    meaning_.findings.add(RuleKind::identified, id->address, "{}", text);
     return;
   }
 }

@@ -88,21 +88,19 @@ uint32_t combine(const RegisterDef& def, uint16_t first, uint16_t second) {
                                             : (uint32_t{second} << 16 | first);
 }
 
-void check_value(const RegisterDef& def, const RegisterValue& v, std::vector<RuleFinding>* found) {
+void check_value(const RegisterDef& def, const RegisterValue& v, RuleFindings* found) {
   if (!found) return;
   if ((def.min && v.value < *def.min) || (def.max && v.value > *def.max)) {
-    found->push_back({RuleKind::out_of_range, v.address,
-                      fmt::format("{} = {:.{}f} is outside {:g}..{:g}", v.name, v.value, v.decimals,
-                                  def.min.value_or(-INFINITY), def.max.value_or(INFINITY))});
+    found->add(RuleKind::out_of_range, v.address, "{} = {:.{}f} is outside {:g}..{:g}", v.name,
+               v.value, v.decimals, def.min.value_or(-INFINITY), def.max.value_or(INFINITY));
   }
   if (def.values && !def.values->count(enum_key(def, v.raw)))
-    found->push_back({RuleKind::not_in_enum, v.address,
-                      fmt::format("{} = {} is not one of its named values", v.name, v.raw)});
+    found->add(RuleKind::not_in_enum, v.address, "{} = {} is not one of its named values", v.name,
+               v.raw);
 }
 
 void decode_span(const DeviceModel& model, Table table, uint16_t start,
-                 std::span<const uint16_t> words, Meaning& meaning,
-                 std::vector<RuleFinding>* found) {
+                 std::span<const uint16_t> words, Meaning& meaning, RuleFindings* found) {
   std::vector<RegisterValue>& out = meaning.registers;
   if (!meaning.lists_unnamed && maps_no_register(model)) return;
   for (size_t i = 0; i < words.size(); ++i) {
@@ -172,7 +170,7 @@ std::optional<uint16_t> group_end(const DeviceModel& model, Table table, uint16_
 }
 
 void check_limits(const DeviceModel& model, Mode mode, const RegisterAccess& access,
-                  std::vector<RuleFinding>& found) {
+                  RuleFindings& found) {
   if (access.table == Table::coil || access.table == Table::discrete) return;
   const WordLimits& limits = model.limits(mode);
   const uint16_t limit = access.write ? limits.write : limits.read;
@@ -180,24 +178,20 @@ void check_limits(const DeviceModel& model, Mode mode, const RegisterAccess& acc
   // of the tighter limits its device sets.
   const uint16_t standard = access.write ? WordLimits{}.write : WordLimits{}.read;
   if (access.count > limit && limit < standard)
-    found.push_back({RuleKind::too_many_words, access.start,
-                     fmt::format("{} {} registers; {} allows at most {} in {}",
-                                 access.write ? "writes" : "reads", access.count, model.name, limit,
-                                 to_string(mode))});
+    found.add(RuleKind::too_many_words, access.start, "{} {} registers; {} allows at most {} in {}",
+              access.write ? "writes" : "reads", access.count, model.name, limit, to_string(mode));
   const unsigned last = access.start + std::max<unsigned>(access.count, 1) - 1;
   if (!model.same_group_only) return;
   if ((access.start >> 8) != (last >> 8)) {
-    found.push_back(
-        {RuleKind::crosses_group, access.start,
-         fmt::format("{}..{} crosses a parameter group; {} allows one group per access",
-                     hex_address(access.start), hex_address(last & 0xFFFF), model.name)});
+    found.add(RuleKind::crosses_group, access.start,
+              "{}..{} crosses a parameter group; {} allows one group per access",
+              hex_address(access.start), hex_address(last & 0xFFFF), model.name);
   } else if (const auto end = group_end(model, access.table, access.start); end && last > *end) {
     // A group ends at its last parameter, not at the next high byte: F03.48 is NTA5000's last.
-    found.push_back({RuleKind::crosses_group, access.start,
-                     fmt::format("{}..{} runs past {}, the last of its group; {} allows one "
-                                 "group per access",
-                                 hex_address(access.start), hex_address(last & 0xFFFF),
-                                 hex_address(*end), model.name)});
+    found.add(RuleKind::crosses_group, access.start,
+              "{}..{} runs past {}, the last of its group; {} allows one "
+              "group per access",
+              hex_address(access.start), hex_address(last & 0xFFFF), hex_address(*end), model.name);
   }
 }
 
@@ -209,8 +203,7 @@ bool maps_table(const DeviceModel& model, Table table) {
   return it != model.registers.end() && it->first.first == table;
 }
 
-void check_registers(const DeviceModel& model, const RegisterAccess& access,
-                     std::vector<RuleFinding>& found) {
+void check_registers(const DeviceModel& model, const RegisterAccess& access, RuleFindings& found) {
   if (maps_no_register(model)) return;
   bool closed_reported = false;
   unsigned mapped = 0;
@@ -225,62 +218,60 @@ void check_registers(const DeviceModel& model, const RegisterAccess& access,
     if (!def) continue;
     ++mapped;
     if (lookup.closed_group && !closed_reported) {
-      found.push_back({RuleKind::closed_group, address,
-                       fmt::format("{} is in a group {} does not let a master read or write",
-                                   def->name, model.name)});
+      found.add(RuleKind::closed_group, address,
+                "{} is in a group {} does not let a master read or write", def->name, model.name);
       closed_reported = true;
     }
     if (!access.write && (lookup.via_alias || def->access == Access::write)) {
-      found.push_back(
-          {RuleKind::write_only_read, address,
-           lookup.via_alias
-               ? fmt::format("{} is the write-only RAM alias of {}; reading it is invalid",
-                             hex_address(address), def->name)
-               : fmt::format("{} ({}) is write-only", def->name, hex_address(address))});
+      if (lookup.via_alias)
+        found.add(RuleKind::write_only_read, address,
+                  "{} is the write-only RAM alias of {}; reading it is invalid",
+                  hex_address(address), def->name);
+      else
+        found.add(RuleKind::write_only_read, address, "{} ({}) is write-only", def->name,
+                  hex_address(address));
     } else if (access.write && def->reserved) {
-      found.push_back({RuleKind::reserved_write, address,
-                       fmt::format("{} is reserved: do not write", hex_address(address))});
+      found.add(RuleKind::reserved_write, address, "{} is reserved: do not write",
+                hex_address(address));
     } else if (access.write && def->access == Access::read) {
-      found.push_back({RuleKind::read_only_write, address,
-                       fmt::format("{} ({}) is read-only", def->name, hex_address(address))});
+      found.add(RuleKind::read_only_write, address, "{} ({}) is read-only", def->name,
+                hex_address(address));
     }
   }
   // Said only when the access reaches nothing the model knows (000's FC03 example at A023H):
   // a read that runs past a group's end is the group rule's to report.
   if (mapped == 0 && access.count > 0 && maps_table(model, access.table))
-    found.push_back(
-        {RuleKind::unmapped_register, access.start,
-         fmt::format("{} is in none of {}'s tables", hex_address(access.start), model.name)});
+    found.add(RuleKind::unmapped_register, access.start, "{} is in none of {}'s tables",
+              hex_address(access.start), model.name);
 }
 
 // Addresses 248-255 are reserved by Modbus over Serial Line (2.2); a model may still allow
 // them (N3: stations 1-254). Said of every frame to such an address; a station the model
 // does not allow otherwise is said of the request.
-void check_station(const DeviceModel& model, const Frame& frame, std::vector<RuleFinding>& found) {
+void check_station(const DeviceModel& model, const Frame& frame, RuleFindings& found) {
   constexpr uint8_t first_reserved = 248;
   const uint8_t slave = frame.slave();
   if (slave == 0 || (slave >= model.station_min && slave <= model.station_max)) return;
   if (slave >= first_reserved) {
-    found.push_back({RuleKind::reserved_address, std::nullopt,
-                     fmt::format("address {} is reserved by Modbus (248-255); {} allows {}..{}",
-                                 slave, model.name, model.station_min, model.station_max)});
+    found.add(RuleKind::reserved_address, std::nullopt,
+              "address {} is reserved by Modbus (248-255); {} allows {}..{}", slave, model.name,
+              model.station_min, model.station_max);
   } else if (frame.role == Role::request) {
-    found.push_back({RuleKind::station_out_of_range, std::nullopt,
-                     fmt::format("station {} is outside {}'s range {}..{}", slave, model.name,
-                                 model.station_min, model.station_max)});
+    found.add(RuleKind::station_out_of_range, std::nullopt,
+              "station {} is outside {}'s range {}..{}", slave, model.name, model.station_min,
+              model.station_max);
   }
 }
 
-void explain_exception(const DeviceModel& model, const Frame& frame,
-                       std::vector<RuleFinding>& found) {
+void explain_exception(const DeviceModel& model, const Frame& frame, RuleFindings& found) {
   const uint8_t code = frame.adu[2];
   const auto it = model.exceptions.find(code);
-  found.push_back(
-      {RuleKind::exception, std::nullopt,
-       it != model.exceptions.end()
-           ? fmt::format("{}exception {:02X}H: {} ({})", model.vendor_exceptions ? "vendor " : "",
-                         code, it->second, model.name)
-           : fmt::format("exception {:02X}H is not one {} documents", code, model.name)});
+  if (it != model.exceptions.end())
+    found.add(RuleKind::exception, std::nullopt, "{}exception {:02X}H: {} ({})",
+              model.vendor_exceptions ? "vendor " : "", code, it->second, model.name);
+  else
+    found.add(RuleKind::exception, std::nullopt, "exception {:02X}H is not one {} documents", code,
+              model.name);
 }
 
 // Coils and discrete inputs, LSB of the first byte first. Only the bits the model names are
@@ -308,7 +299,7 @@ void decode_bits(const DeviceModel& model, Table table, uint16_t start,
 
 // The values an access carries, in the model's terms: words, packed bits, or FC05's state.
 void decode_values(const DeviceModel& model, const RegisterAccess& access, Meaning& out,
-                   std::vector<RuleFinding>* found) {
+                   RuleFindings* found) {
   switch (access.data) {
     case RegisterAccess::Data::none:
       return;
@@ -332,10 +323,9 @@ void decode_values(const DeviceModel& model, const RegisterAccess& access, Meani
 
 void interpret_request(const DeviceModel& model, const Frame& frame, Meaning& meaning) {
   if (model.retries && frame.retries > *model.retries)
-    meaning.findings.push_back(
-        {RuleKind::too_many_retries, std::nullopt,
-         fmt::format("retry {} of an unanswered request; {} masters retry at most {} times",
-                     frame.retries, model.name, *model.retries)});
+    meaning.findings.add(RuleKind::too_many_retries, std::nullopt,
+                         "retry {} of an unanswered request; {} masters retry at most {} times",
+                         frame.retries, model.name, *model.retries);
   const auto pdu = frame.pdu();
   for (const RegisterAccess& access : function_code(frame.function()).request_accesses(pdu)) {
     check_limits(model, frame.mode, access, meaning.findings);

@@ -3,10 +3,12 @@
 #pragma once
 
 #include <cstdint>
+#include <iterator>
 #include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -30,16 +32,58 @@ struct RegisterValue {
   bool code = false;      // shown in hex as the manual writes it (0106H)
 };
 
+// Texts composed for one frame, in storage reused from frame to frame: once warm, composing
+// one allocates nothing. Each stays put, through moves too, until clear().
+class ComposedTexts {
+ public:
+  std::string& next() {
+    while (texts_.size() <= used_) texts_.push_back(std::make_unique<std::string>());
+    std::string& text = *texts_[used_++];
+    text.clear();
+    return text;
+  }
+  void clear() { used_ = 0; }
+
+ private:
+  std::vector<std::unique_ptr<std::string>> texts_;
+  size_t used_ = 0;  // how many of them this frame uses
+};
+
 struct RuleFinding {
   RuleKind kind = RuleKind::exception;
   std::optional<uint16_t> address;
-  std::string text;
+  std::string_view text;  // composed into the RuleFindings that hold it
+};
+
+// The model's rules a frame breaks, each with its text.
+class RuleFindings {
+ public:
+  template <typename... Args>
+  void add(RuleKind kind, std::optional<uint16_t> address, fmt::format_string<Args...> format,
+           Args&&... args) {
+    std::string& text = texts_.next();
+    fmt::format_to(std::back_inserter(text), format, std::forward<Args>(args)...);
+    items_.push_back({kind, address, text});
+  }
+  void clear() {
+    items_.clear();
+    texts_.clear();
+  }
+  auto begin() const { return items_.begin(); }
+  auto end() const { return items_.end(); }
+  size_t size() const { return items_.size(); }
+  bool empty() const { return items_.empty(); }
+  const RuleFinding& operator[](size_t i) const { return items_[i]; }
+
+ private:
+  std::vector<RuleFinding> items_;
+  ComposedTexts texts_;
 };
 
 struct Meaning {
   const DeviceModel* model = nullptr;
   std::vector<RegisterValue> registers;
-  std::vector<RuleFinding> findings;
+  RuleFindings findings;
   bool echoed = false;  // the registers repeat what the request wrote (a write's echo response)
   // Whether words the model does not name are listed, by address and raw value: JSON, the
   // statistics, CSV, `-V` and filters show them; a text line and a pcapng comment do not, and
@@ -54,23 +98,18 @@ struct Meaning {
   Meaning& operator=(const Meaning&) = delete;
 
   // Keeps a text composed for this frame ("F01.05 (RAM)", "Run, Reverse", a group rule's
-  // parameter name) for as long as the Meaning, so a register can point at it. The storage
-  // is reused from frame to frame: once warm, keeping a text allocates nothing.
-  std::string_view keep(std::string_view text) {
-    while (composed_.size() <= kept_) composed_.push_back(std::make_unique<std::string>());
-    return composed_[kept_++]->assign(text);
-  }
+  // parameter name) for as long as the Meaning, so a register can point at it.
+  std::string_view keep(std::string_view text) { return composed_.next().assign(text); }
   void clear() {
     model = nullptr;
     registers.clear();
     findings.clear();
     echoed = false;
-    kept_ = 0;
+    composed_.clear();
   }
 
  private:
-  std::vector<std::unique_ptr<std::string>> composed_;  // each text stays put through moves
-  size_t kept_ = 0;                                     // how many of them this frame uses
+  ComposedTexts composed_;
 };
 
 Meaning interpret(const DeviceModel& model, const Frame& frame);

@@ -354,7 +354,7 @@ TEST_F(Models, Nta5000ChineseExceptionTextsComeFromTheChineseChapter) {
   const auto req = rtu("01 03 03 00 00 28");
   auto text_of = [&](const char* model_name, const char* exception) {
     const Meaning m = response(model_name, req, rtu(exception));
-    return m.findings.empty() ? std::string() : m.findings[0].text;
+    return m.findings.empty() ? std::string() : std::string(m.findings[0].text);
   };
   EXPECT_THAT(text_of("nta5000-cn", "01 83 53"), HasSubstr("Check code error (校验码错误)"));
   EXPECT_THAT(text_of("nta5000-cn", "01 83 54"), HasSubstr("Data setting error (数据设定错误)"));
@@ -463,16 +463,25 @@ TEST_F(Models, GenericModelNamesNothingAndExplainsStandardExceptions) {
 
 // --- Identification ----------------------------------------------------------------------
 
+// A finding's text lives as long as its frame's callback; the recorder keeps a copy.
+struct KeptFinding {
+  RuleKind kind;
+  std::string text;
+};
+
 class Recorder final : public RecordSink {
  public:
   void on_frame(const Frame& frame) override {
     models.push_back(frame.meaning ? frame.meaning->model->name : "");
-    findings.push_back(frame.meaning ? frame.meaning->findings : std::vector<RuleFinding>{});
+    auto& kept = findings.emplace_back();
+    if (frame.meaning)
+      for (const RuleFinding& f : frame.meaning->findings)
+        kept.push_back({f.kind, std::string(f.text)});
   }
   void on_noise(const Noise&) override {}
   void on_timeout(const Timeout&) override {}
   std::vector<std::string> models;
-  std::vector<std::vector<RuleFinding>> findings;
+  std::vector<std::vector<KeptFinding>> findings;
 };
 
 TEST_F(Models, ASlaveReadingGd20sIdentifyingCodeIsDecodedAsGd20) {
@@ -524,7 +533,7 @@ TEST_F(Models, AnAnswerSoonerThanTheManualsTurnaroundIsEarly) {
     r.latency_ns = latency_ms * 1'000'000;
     interpreter.on_frame(r);
     std::vector<std::string> texts;
-    for (const RuleFinding& f : out.findings[0])
+    for (const KeptFinding& f : out.findings[0])
       if (f.kind == RuleKind::early_response) texts.push_back(f.text);
     return texts;
   };
