@@ -6,8 +6,6 @@
 
 #include <unistd.h>
 
-#include <pcap/pcap.h>
-
 #include <fmt/format.h>
 
 #include "captures/pcapng_format.hpp"
@@ -39,10 +37,9 @@ PcapReader::PcapReader(const std::string& path)
   const int dlt = static_cast<int>(u32(20) & 0x03FF'FFFF);  // the top bits carry FCS lengths
   at_ += file_header_size;
   if (dlt < pcapng::first_user_dlt || dlt > pcapng::last_user_dlt) {
-    const char* name = pcap_datalink_val_to_name(dlt);
     throw CaptureError(fmt::format(
         "{}: link type {} ({}) does not carry serial bytes; modtap reads DLT_USER0..15 ({}..{})",
-        path, dlt, name ? name : "unknown", pcapng::first_user_dlt, pcapng::last_user_dlt));
+        path, dlt, pcapng::link_type_name(dlt), pcapng::first_user_dlt, pcapng::last_user_dlt));
   }
   channels_.push_back({path, decoder::ChannelRole::bus});
 }

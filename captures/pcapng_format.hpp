@@ -28,6 +28,33 @@ inline constexpr int first_user_dlt = 147;
 inline constexpr int last_user_dlt = 162;
 inline constexpr int exported_pdu_dlt = 252;
 
+// What a capture of another link type holds, for the message that refuses it: the ones a
+// serial tap's user is likely to pick up by mistake (www.tcpdump.org/linktypes.html).
+constexpr std::string_view link_type_name(int link_type) {
+  switch (link_type) {
+    case 1:
+      return "Ethernet";
+    case 101:
+      return "raw IP";
+    case 105:
+      return "IEEE 802.11";
+    case 113:
+      return "Linux cooked";
+    case 127:
+      return "IEEE 802.11 radiotap";
+    case 189:
+      return "Linux USB";
+    case 220:
+      return "Linux USB, memory-mapped";
+    case 249:
+      return "USBPcap";
+    case 276:
+      return "Linux cooked v2";
+    default:
+      return "unknown";
+  }
+}
+
 // How modtap means the times it writes, said at the start of each interface's comment, so that
 // modtap reads its own files back to the same records.
 inline constexpr std::string_view interface_convention =

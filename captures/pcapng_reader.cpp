@@ -150,10 +150,10 @@ void PcapngReader::interface_description() {
     }
   });
   if (!serial_link(i.link_type))
-    fail(
-        fmt::format("link type {} does not carry serial bytes; modtap reads DLT_USER0..15 "
-                    "({}..{}) and exported PDUs ({})",
-                    i.link_type, first_user_dlt, last_user_dlt, exported_pdu_dlt));
+    fail(fmt::format(
+        "link type {} ({}) does not carry serial bytes; modtap reads DLT_USER0..15 "
+        "({}..{}) and exported PDUs ({})",
+        i.link_type, link_type_name(i.link_type), first_user_dlt, last_user_dlt, exported_pdu_dlt));
   i.modtap = comment.starts_with(interface_convention);
   if (i.modtap && interfaces_.empty()) {
     if (comment.find("clock=per-byte") != std::string::npos)

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "captures/chunk_writers.hpp"
+#include "captures/hexlog_writer.hpp"
 #include "captures/file_ring.hpp"
 #include "captures/pcapng_writer.hpp"
 #include "decoder/records.hpp"

@@ -7,7 +7,8 @@
 
 #include <filesystem>
 
-#include "captures/chunk_writers.hpp"
+#include "captures/hexlog_writer.hpp"
+#include "captures/pcap_chunk_writer.hpp"
 #include "captures/open_capture.hpp"
 #include "captures/pcapng_sink.hpp"
 #include "captures/pcapng_writer.hpp"

@@ -5,7 +5,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "captures/chunk_writers.hpp"
+#include "captures/hexlog_writer.hpp"
+#include "captures/pcap_chunk_writer.hpp"
 #include "tools/busgen/bus_simulator.hpp"
 
 namespace {

@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "decoder/records.hpp"
+#include "tools/modtap/shared_library.hpp"
 
 namespace modtap::tools {
 
@@ -179,14 +180,40 @@ int listen_on(const std::string& address, bool& ipv6) {
   return fd;
 }
 
+// The libmicrohttpd functions modtap calls, loaded on the first --metrics.
+struct Microhttpd {
+  decltype(&::MHD_start_daemon) start_daemon;
+  decltype(&::MHD_stop_daemon) stop_daemon;
+  decltype(&::MHD_create_response_from_buffer) create_response_from_buffer;
+  decltype(&::MHD_add_response_header) add_response_header;
+  decltype(&::MHD_queue_response) queue_response;
+  decltype(&::MHD_destroy_response) destroy_response;
+};
+
+const Microhttpd& libmicrohttpd() {
+  static const Microhttpd loaded = [] {
+    const SharedLibrary library("libmicrohttpd.so.12", "--metrics", "libmicrohttpd12");
+    return Microhttpd{
+        .start_daemon = MODTAP_SYMBOL(library, MHD_start_daemon),
+        .stop_daemon = MODTAP_SYMBOL(library, MHD_stop_daemon),
+        .create_response_from_buffer = MODTAP_SYMBOL(library, MHD_create_response_from_buffer),
+        .add_response_header = MODTAP_SYMBOL(library, MHD_add_response_header),
+        .queue_response = MODTAP_SYMBOL(library, MHD_queue_response),
+        .destroy_response = MODTAP_SYMBOL(library, MHD_destroy_response),
+    };
+  }();
+  return loaded;
+}
+
 MHD_Result respond(MHD_Connection* connection, unsigned status, std::string_view type,
                    const std::string& body) {
-  MHD_Response* response = MHD_create_response_from_buffer(
+  MHD_Response* response = libmicrohttpd().create_response_from_buffer(
       body.size(), const_cast<char*>(body.data()), MHD_RESPMEM_MUST_COPY);
   if (!response) return MHD_NO;
-  MHD_add_response_header(response, MHD_HTTP_HEADER_CONTENT_TYPE, std::string(type).c_str());
-  const MHD_Result queued = MHD_queue_response(connection, status, response);
-  MHD_destroy_response(response);
+  libmicrohttpd().add_response_header(response, MHD_HTTP_HEADER_CONTENT_TYPE,
+                                      std::string(type).c_str());
+  const MHD_Result queued = libmicrohttpd().queue_response(connection, status, response);
+  libmicrohttpd().destroy_response(response);
   return queued;
 }
 
@@ -219,7 +246,7 @@ void append_metrics(fmt::memory_buffer& out, const BusStatistics& statistics,
 struct MetricsServer::Daemon {
   MHD_Daemon* daemon = nullptr;
   ~Daemon() {
-    if (daemon) MHD_stop_daemon(daemon);  // closes the listening socket too
+    if (daemon) libmicrohttpd().stop_daemon(daemon);  // closes the listening socket too
   }
 };
 
@@ -229,8 +256,8 @@ MetricsServer::MetricsServer(const std::string& address, std::function<std::stri
   const int fd = listen_on(address, ipv6);
   unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD;
   if (ipv6) flags |= MHD_USE_IPv6;
-  daemon_->daemon = MHD_start_daemon(flags, 0, nullptr, nullptr, &answer, this,
-                                     MHD_OPTION_LISTEN_SOCKET, fd, MHD_OPTION_END);
+  daemon_->daemon = libmicrohttpd().start_daemon(flags, 0, nullptr, nullptr, &answer, this,
+                                                 MHD_OPTION_LISTEN_SOCKET, fd, MHD_OPTION_END);
   if (!daemon_->daemon) {
     close(fd);
     throw std::runtime_error(fmt::format("--metrics {}: the HTTP server did not start", address));

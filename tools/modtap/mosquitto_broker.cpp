@@ -10,6 +10,8 @@
 #include <fmt/format.h>
 #include <mosquitto.h>
 
+#include "tools/modtap/shared_library.hpp"
+
 namespace modtap::tools {
 
 namespace {
@@ -18,12 +20,46 @@ constexpr int keepalive_s = 30;
 const char* const online = "online";
 const char* const offline = "offline";
 
-void initialise_library() {
-  static const int done = [] {
-    mosquitto_lib_init();
-    return 0;
+// The libmosquitto functions modtap calls, loaded and initialised on the first --mqtt.
+struct Mosquitto {
+  decltype(&::mosquitto_new) new_client;
+  decltype(&::mosquitto_destroy) destroy;
+  decltype(&::mosquitto_username_pw_set) username_pw_set;
+  decltype(&::mosquitto_will_set) will_set;
+  decltype(&::mosquitto_reconnect_delay_set) reconnect_delay_set;
+  decltype(&::mosquitto_connect_callback_set) connect_callback_set;
+  decltype(&::mosquitto_disconnect_callback_set) disconnect_callback_set;
+  decltype(&::mosquitto_publish_callback_set) publish_callback_set;
+  decltype(&::mosquitto_connect_async) connect_async;
+  decltype(&::mosquitto_loop_start) loop_start;
+  decltype(&::mosquitto_loop_stop) loop_stop;
+  decltype(&::mosquitto_disconnect) disconnect;
+  decltype(&::mosquitto_publish) publish;
+  decltype(&::mosquitto_connack_string) connack_string;
+};
+
+const Mosquitto& libmosquitto() {
+  static const Mosquitto loaded = [] {
+    const SharedLibrary library("libmosquitto.so.1", "--mqtt", "libmosquitto1");
+    MODTAP_SYMBOL(library, mosquitto_lib_init)();
+    return Mosquitto{
+        .new_client = MODTAP_SYMBOL(library, mosquitto_new),
+        .destroy = MODTAP_SYMBOL(library, mosquitto_destroy),
+        .username_pw_set = MODTAP_SYMBOL(library, mosquitto_username_pw_set),
+        .will_set = MODTAP_SYMBOL(library, mosquitto_will_set),
+        .reconnect_delay_set = MODTAP_SYMBOL(library, mosquitto_reconnect_delay_set),
+        .connect_callback_set = MODTAP_SYMBOL(library, mosquitto_connect_callback_set),
+        .disconnect_callback_set = MODTAP_SYMBOL(library, mosquitto_disconnect_callback_set),
+        .publish_callback_set = MODTAP_SYMBOL(library, mosquitto_publish_callback_set),
+        .connect_async = MODTAP_SYMBOL(library, mosquitto_connect_async),
+        .loop_start = MODTAP_SYMBOL(library, mosquitto_loop_start),
+        .loop_stop = MODTAP_SYMBOL(library, mosquitto_loop_stop),
+        .disconnect = MODTAP_SYMBOL(library, mosquitto_disconnect),
+        .publish = MODTAP_SYMBOL(library, mosquitto_publish),
+        .connack_string = MODTAP_SYMBOL(library, mosquitto_connack_string),
+    };
   }();
-  (void)done;
+  return loaded;
 }
 
 }  // namespace
@@ -70,36 +106,36 @@ MqttUrl parse_mqtt_url(const std::string& url) {
 MosquittoBroker::MosquittoBroker(const MqttUrl& url, std::string status_topic)
     : name_(fmt::format("mqtt://{}:{}", url.host, url.port)),
       status_topic_(std::move(status_topic)) {
-  initialise_library();
+  const Mosquitto& m = libmosquitto();
   char host[256] = "";
   gethostname(host, sizeof host - 1);
   const std::string id = fmt::format("modtap-{}-{}", host, getpid());
-  client_ = mosquitto_new(id.c_str(), true, this);
+  client_ = m.new_client(id.c_str(), true, this);
   if (!client_) throw std::runtime_error(fmt::format("{}: cannot make an MQTT client", name_));
   if (!url.user.empty())
-    mosquitto_username_pw_set(client_, url.user.c_str(),
-                              url.password.empty() ? nullptr : url.password.c_str());
-  mosquitto_will_set(client_, status_topic_.c_str(), static_cast<int>(std::strlen(offline)),
-                     offline, 1, true);
-  mosquitto_reconnect_delay_set(client_, 1, 30, true);
-  mosquitto_connect_callback_set(client_, on_connect);
-  mosquitto_disconnect_callback_set(client_, on_disconnect);
-  mosquitto_publish_callback_set(client_, on_publish);
+    m.username_pw_set(client_, url.user.c_str(),
+                      url.password.empty() ? nullptr : url.password.c_str());
+  m.will_set(client_, status_topic_.c_str(), static_cast<int>(std::strlen(offline)), offline, 1,
+             true);
+  m.reconnect_delay_set(client_, 1, 30, true);
+  m.connect_callback_set(client_, on_connect);
+  m.disconnect_callback_set(client_, on_disconnect);
+  m.publish_callback_set(client_, on_publish);
   // A broker not there yet is tried again by the network thread: a service may start first.
-  if (mosquitto_connect_async(client_, url.host.c_str(), url.port, keepalive_s) == MOSQ_ERR_ERRNO)
+  if (m.connect_async(client_, url.host.c_str(), url.port, keepalive_s) == MOSQ_ERR_ERRNO)
     start_error_ = errno;
-  if (mosquitto_loop_start(client_) != MOSQ_ERR_SUCCESS) {
-    mosquitto_destroy(client_);
+  if (m.loop_start(client_) != MOSQ_ERR_SUCCESS) {
+    m.destroy(client_);
     throw std::runtime_error(fmt::format("{}: cannot start the MQTT client's thread", name_));
   }
 }
 
 MosquittoBroker::~MosquittoBroker() {
   if (!stopped_) {
-    mosquitto_disconnect(client_);
-    mosquitto_loop_stop(client_, false);
+    libmosquitto().disconnect(client_);
+    libmosquitto().loop_stop(client_, false);
   }
-  mosquitto_destroy(client_);
+  libmosquitto().destroy(client_);
 }
 
 void MosquittoBroker::on_connect(mosquitto* client, void* self, int code) {
@@ -108,8 +144,8 @@ void MosquittoBroker::on_connect(mosquitto* client, void* self, int code) {
     broker.refused_ = code;
     return;
   }
-  mosquitto_publish(client, nullptr, broker.status_topic_.c_str(),
-                    static_cast<int>(std::strlen(online)), online, 1, true);
+  libmosquitto().publish(client, nullptr, broker.status_topic_.c_str(),
+                         static_cast<int>(std::strlen(online)), online, 1, true);
   broker.reconnected_ = true;
   {
     std::lock_guard lock(broker.mutex_);
@@ -159,7 +195,7 @@ bool MosquittoBroker::wait_connected(double seconds) {
 }
 
 std::string MosquittoBroker::connect_error() const {
-  if (refused_) return mosquitto_connack_string(refused_);
+  if (refused_) return libmosquitto().connack_string(refused_);
   if (start_error_) return std::strerror(start_error_);
   return "no answer";
 }
@@ -180,8 +216,8 @@ void MosquittoBroker::publish(std::string_view topic, std::string_view payload, 
   stalled_ = false;
   const std::string name(topic);
   int id = 0;
-  if (mosquitto_publish(client_, &id, name.c_str(), static_cast<int>(payload.size()),
-                        payload.data(), 0, retain) != MOSQ_ERR_SUCCESS) {
+  if (libmosquitto().publish(client_, &id, name.c_str(), static_cast<int>(payload.size()),
+                             payload.data(), 0, retain) != MOSQ_ERR_SUCCESS) {
     ++dropped_;
     return;
   }
@@ -213,15 +249,15 @@ void MosquittoBroker::close() {
   bool taken = false;
   {
     std::unique_lock lock(mutex_);
-    if (connected_ && mosquitto_publish(client_, &offline_id_, status_topic_.c_str(),
-                                        static_cast<int>(std::strlen(offline)), offline, 1,
-                                        true) == MOSQ_ERR_SUCCESS)
+    if (connected_ && libmosquitto().publish(client_, &offline_id_, status_topic_.c_str(),
+                                             static_cast<int>(std::strlen(offline)), offline, 1,
+                                             true) == MOSQ_ERR_SUCCESS)
       taken = changed_.wait_for(lock, std::chrono::seconds(5), [this] { return offline_taken_; });
   }
-  mosquitto_disconnect(client_);
+  libmosquitto().disconnect(client_);
   // A broker that took nothing for 5 s would hold the network thread until its keep-alive
   // ran out: it is stopped instead (its last will says offline when the broker wakes).
-  mosquitto_loop_stop(client_, !taken);
+  libmosquitto().loop_stop(client_, !taken);
   stopped_ = true;
 }
 
