@@ -239,7 +239,7 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
     for (size_t i = 0; i < hit_count; ++i) {
       const uint16_t n = hits[i];
       const bool zero_appended = i > 0 && hits[i - 1] == n - 1;
-      if (zero_appended && glitch_appended(at, at + n)) {
+      if (zero_appended && glitch_appended(at, at + n, final, search - 1)) {
         open |= at + n == end_;
         continue;
       }
@@ -296,7 +296,7 @@ RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_
     const bool zero_appended = hit && previous_hit;
     previous_hit = hit;
     crc = crc16_step(crc, p[n - crc_size]);
-    if (!hit || (zero_appended && glitch_appended(at, at + n))) continue;
+    if (!hit || (zero_appended && glitch_appended(at, at + n, final, search - 1))) continue;
     if (confirmed_end(at, at + n, final, search - 1, false) && !swallows_known_frame(at, at + n))
       return {Match::Kind::found, static_cast<uint16_t>(n), fit};
   }
@@ -304,10 +304,18 @@ RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_
 }
 
 // A CRC end right after a CRC end is the shorter frame with a 0x00 appended: a glitch, unless a
-// silence right after it says that 0x00 was the frame's last CRC byte.
-bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end) const {
+// silence right after it says that 0x00 was the frame's last CRC byte, or the next driver's
+// glitch comes right after it (one driver turning on puts one glitch on the line, not two).
+bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end, bool final, int search) const {
   return !gap_at(end) &&
-         ((zero_glitches_common() && may_be_glitch(end - 1)) || !copy_follows(begin, end));
+         ((zero_glitches_common() && may_be_glitch(end - 1)) || !copy_follows(begin, end)) &&
+         !glitch_then_frame(end, final, search);
+}
+
+// A turnaround's glitch at `at` with a good frame right behind it.
+bool RtuFramer::glitch_then_frame(uint64_t at, bool final, int search) const {
+  return at + 1 < end_ && is_glitch_byte(*at_ptr(at)) &&
+         match_at(at + 1, final, search).kind == Match::Kind::found;
 }
 
 // A glitch comes as a driver turns on, after the line was quiet: where the clock times each
@@ -518,7 +526,7 @@ void RtuFramer::emit_damaged(uint64_t begin, uint64_t end, Damage damage, uint32
   consume(end);
 }
 
-void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings) {
+void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool glitch_after) {
   const uint64_t size = end - begin;
   const uint8_t* p = at_ptr(begin);
   // The slave's driver turning on can put a glitch right before its damaged response.
@@ -535,14 +543,14 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings) {
   const uint8_t last = p[size - 1];
   const bool cut_short =
       (length && size <= *length) || (!length && awaited_length(begin, size - 1));
-  if (cut_short && size > 3 && is_glitch_byte(last) && glitches_ * 128 > good_frames_ &&
-      end < end_ && may_be_glitch(end - 1)) {
+  if (cut_short && size > 3 && is_glitch_byte(last) && !glitch_after &&
+      glitches_ * 128 > good_frames_ && end < end_ && may_be_glitch(end - 1)) {
     const std::optional<bool> told = awaited_byte(begin, size - 1);
     // The clock has not ruled a glitch out, nor has a silence after the byte said it ended a
     // frame: unless the request rules the byte out, both readings pass every check, so say so.
     if (told != false && !gap_at(end)) findings |= finding_ambiguous_end;
     if (told ? !*told : !gap_at(end)) {
-      emit_piece(begin, end - 1, findings);
+      emit_piece(begin, end - 1, findings, true);
       return emit_piece(end - 1, end);
     }
   }

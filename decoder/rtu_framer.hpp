@@ -78,7 +78,8 @@ class RtuFramer {
   Match search_end(uint64_t at, size_t first, RoleFit fit, bool final, int search) const;
   Match first_confirmed_end(uint64_t at, size_t first, size_t limit, RoleFit fit, bool final,
                             int search) const;
-  bool glitch_appended(uint64_t begin, uint64_t end) const;
+  bool glitch_appended(uint64_t begin, uint64_t end, bool final, int search) const;
+  bool glitch_then_frame(uint64_t at, bool final, int search) const;
   bool zero_glitches_common() const;
   bool may_be_glitch(uint64_t offset) const;
   bool fits_role(Role role, uint64_t at, uint16_t length) const;
@@ -94,7 +95,10 @@ class RtuFramer {
   bool paused_before(uint64_t offset) const;
   void emit_frame(uint64_t at, const Match& match);
   void emit_unframed(uint64_t begin, uint64_t end);
-  void emit_piece(uint64_t begin, uint64_t end, uint32_t findings = finding_none);
+  // `glitch_after`: the byte after the piece was just taken for a turnaround's glitch, so the
+  // piece's own last byte is no glitch (one driver turning on puts one on the line).
+  void emit_piece(uint64_t begin, uint64_t end, uint32_t findings = finding_none,
+                  bool glitch_after = false);
   std::optional<uint16_t> awaited_length(uint64_t begin, uint64_t size) const;
   std::optional<bool> awaited_byte(uint64_t begin, uint64_t pos) const;
   bool starts_awaited(uint64_t begin, uint64_t size) const;

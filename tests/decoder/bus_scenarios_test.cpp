@@ -2,14 +2,15 @@
 // must find exactly the frames that were sent, with their roles and pairs, and keep every byte.
 #include <gtest/gtest.h>
 
+#include <deque>
 #include <map>
 #include <set>
 
 #include <filesystem>
 
 #include "captures/hexlog_writer.hpp"
-#include "captures/pcap_chunk_writer.hpp"
 #include "captures/open_capture.hpp"
+#include "captures/pcap_chunk_writer.hpp"
 #include "captures/pcapng_sink.hpp"
 #include "captures/pcapng_writer.hpp"
 #include "decoder/analyzer.hpp"
@@ -215,18 +216,26 @@ TEST_P(BusScenario, FindsExactlyTheFramesSentWithRolesAndPairs) {
     }
     return size == truth.size + 1 && (r.raw.back() == 0x00 || r.raw.back() == 0xFF);
   };
+  // A response cut one byte short whose missing byte the next driver's glitch repeats puts the
+  // whole response on the wire, byte for byte (1 cut in 512): found as the good frame it reads.
+  auto made_whole = [&](const testing::Record& r, const busgen::TruthFrame& truth) {
+    return truth.damage == Damage::cut && r.check_ok && r.raw.size() == truth.size + 1 &&
+           r.damage == Damage::none;
+  };
   auto found = [&](const busgen::TruthFrame& truth) -> const testing::Record* {
     auto it = by_offset.find(truth.offset);
     if (it == by_offset.end()) return nullptr;
-    if (it->second->raw.size() != truth.size && !other_reading(*it->second, truth)) return nullptr;
+    const testing::Record& r = *it->second;
+    if (made_whole(r, truth)) return &r;
+    if (r.raw.size() != truth.size && !other_reading(r, truth)) return nullptr;
     const bool damaged = truth.damage != Damage::none;
-    if (it->second->check_ok == damaged) return nullptr;
-    return it->second;
+    if (r.check_ok == damaged) return nullptr;
+    return &r;
   };
 
   std::vector<uint64_t> index_of(capture.frames.size(), 0);
   size_t wrong_role = 0, wrong_pair = 0, wrong_damage = 0, wrong_findings = 0, missing = 0;
-  std::set<uint64_t> sent_good;
+  std::set<uint64_t> sent_good, made_whole_at;
   for (size_t i = 0; i < capture.frames.size(); ++i) {
     const auto& truth = capture.frames[i];
     if (truth.damage == Damage::none) sent_good.insert(truth.offset);
@@ -241,19 +250,23 @@ TEST_P(BusScenario, FindsExactlyTheFramesSentWithRolesAndPairs) {
     }
     index_of[i] = got->index;
     wrong_role += got->role != truth.role;
-    wrong_damage += got->damage != truth.damage;
+    // A response made whole carries a whole answer's damage and findings.
+    const bool whole = made_whole(*got, truth);
+    if (whole) made_whole_at.insert(truth.offset);
+    wrong_damage += !whole && got->damage != truth.damage;
     if (truth.request && got->request != index_of[*truth.request] &&
         ++wrong_pair > missing + s.max_missing && wrong_pair <= missing + s.max_missing + 3)
       ADD_FAILURE() << "frame " << i << " at offset " << truth.offset << " paired wrongly"
                     << context(capture, out, truth.offset);
     // A retry merged into one read with its original cannot be timed; counted like a miss.
-    if ((got->findings & truth.findings) != truth.findings && ++wrong_findings > s.max_missing)
+    if (!whole && (got->findings & truth.findings) != truth.findings &&
+        ++wrong_findings > s.max_missing)
       ADD_FAILURE() << "frame " << i << " at offset " << truth.offset << " lacks findings "
                     << truth.findings << context(capture, out, truth.offset);
   }
   size_t false_frames = 0;
   for (const auto& [offset, r] : by_offset) {
-    if (!r->check_ok || sent_good.count(offset)) continue;
+    if (!r->check_ok || sent_good.count(offset) || made_whole_at.count(offset)) continue;
     if (++false_frames > s.max_missing && false_frames <= s.max_missing + 3)
       ADD_FAILURE() << "false frame at offset " << offset << context(capture, out, offset);
   }
@@ -354,7 +367,7 @@ INSTANTIATE_TEST_SUITE_P(
         Scenario{"bursts_coarse", Delivery::bursts, real_masters(24), 0, Via::direct, coarse_timer},
         Scenario{"per_frame_jitter", Delivery::per_frame, real_masters(25), 0, Via::direct,
                  usb_jitter},
-        Scenario{"pcap_per_frame_jitter", Delivery::per_frame, real_masters(26), 1, Via::pcap,
+        Scenario{"pcap_per_frame_jitter", Delivery::per_frame, real_masters(26), 0, Via::pcap,
                  usb_jitter},
         Scenario{"faulty_senders_per_byte", Delivery::per_byte, faulty_senders(31)},
         Scenario{"glitches_per_byte", Delivery::per_byte, glitch_every_turnaround(27)},
@@ -362,6 +375,24 @@ INSTANTIATE_TEST_SUITE_P(
         Scenario{"glitches_per_frame", Delivery::per_frame, glitch_every_turnaround(29)},
         Scenario{"glitches_untimed", Delivery::untimed, glitch_every_turnaround(30)}),
     [](const auto& info) { return std::string(info.param.name); });
+
+// 26 more seeds of the real-master scenario, each with its own turnarounds to mistake: at 16 ms
+// bursts and per-frame reads with jitter, no frame missed and none false (docs/framing.md).
+std::vector<Scenario> real_master_seeds() {
+  static std::deque<std::string> names;  // the scenarios point at their names
+  std::vector<Scenario> out;
+  for (uint64_t seed = 100; seed < 126; ++seed) {
+    names.push_back("bursts_" + std::to_string(seed));
+    out.push_back(Scenario{names.back().c_str(), Delivery::bursts, real_masters(seed)});
+    names.push_back("per_frame_jitter_" + std::to_string(seed));
+    out.push_back(Scenario{names.back().c_str(), Delivery::per_frame, real_masters(seed), 0,
+                           Via::direct, usb_jitter});
+  }
+  return out;
+}
+
+INSTANTIATE_TEST_SUITE_P(RealMasterSeeds, BusScenario, ::testing::ValuesIn(real_master_seeds()),
+                         [](const auto& info) { return std::string(info.param.name); });
 
 INSTANTIATE_TEST_SUITE_P(
     Generator, BusScenario,
