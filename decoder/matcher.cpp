@@ -21,6 +21,7 @@ void Matcher::set_pending(Pending* pending) {
                   pending->slave,
                   pending->pdu[0],
                   static_cast<uint16_t>(query_echo ? pending->adu_size : 0),
+                  query_echo && pending->ambiguous_end,
                   {pending->pdu.data(), pending->size},
                   options_.timed ? pending->end_ns + surely_answer_within_ns(pending->slave) : 0};
 }
@@ -127,6 +128,7 @@ void Matcher::on_request(Frame& frame) {
       options_.slave_timeout_ns[p.slave] ? options_.slave_timeout_ns[p.slave] : options_.timeout_ns;
   p.adu_size = static_cast<uint16_t>(frame.adu.size());
   p.retries = frame.retries;
+  p.ambiguous_end = frame.findings & finding_ambiguous_end;
   p.size = static_cast<uint16_t>(std::min(pdu.size(), p.pdu.size()));
   std::copy_n(pdu.begin(), p.size, p.pdu.begin());
   set_pending(&p);

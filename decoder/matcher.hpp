@@ -48,6 +48,7 @@ class Matcher {
     uint8_t slave = 0;
     uint16_t adu_size = 0;
     uint8_t retries = 0;
+    bool ambiguous_end = false;
     uint16_t size = 0;             // PDU bytes kept (enough for echo and fit checks)
     std::array<uint8_t, 256> pdu;  // left uninitialised: only `size` bytes are ever read
   };

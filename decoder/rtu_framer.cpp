@@ -207,7 +207,15 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
       if (role == Role::response && expected.echo_size && expected.slave == p[0] &&
           expected.function == p[1]) {
         if (avail < expected.echo_size) return need_more();
-        if (crc_ok(p, expected.echo_size)) return {Match::Kind::found, expected.echo_size, fit};
+        if (crc_ok(p, expected.echo_size)) {
+          // The echo of a request read one byte short of another good reading may be too: where
+          // a 0x00 follows it with no silence before it (a good frame and a 0x00 check again).
+          const uint16_t n = expected.echo_size;
+          if (!expected.echo_may_be_longer) return {Match::Kind::found, n, fit};
+          if (avail == n && !final) return need_more();
+          const bool longer = avail > n && p[n] == 0x00 && !gap_at(at + n);
+          return {Match::Kind::found, n, fit, longer};
+        }
       }
       if (search <= 0 || p[0] > max_unicast_slave) return {};
       return search_end(at, std::max<size_t>(body.bytes + crc_size, min_adu), fit, final, search);
@@ -249,7 +257,9 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       const bool may_stand_alone = !unconfirmed && p[1] == 0x08;
       if (!confirmed && !at_end && !may_stand_alone) continue;
       if (swallows_known_frame(at, at + n)) continue;
-      if (confirmed) return {Match::Kind::found, n, fit};
+      // Confirmed only by taking the next 0x00 for a glitch, where one byte more holds too.
+      const bool longer = allow_glitch && i + 1 < hit_count && hits[i + 1] == n + 1;
+      if (confirmed) return {Match::Kind::found, n, fit, longer};
       open |= at_end;
       if (may_stand_alone) unconfirmed = n;
     }
@@ -443,6 +453,7 @@ void RtuFramer::emit_frame(uint64_t at, const Match& match) {
   Frame frame = frame_of(at, at + match.length, match.fit);
   frame.check_ok = true;
   frame.expected_check = wire_crc(frame.adu);
+  if (match.ambiguous_end) frame.findings |= finding_ambiguous_end;
   sink_.on_frame(frame);
   consume(at + match.length);
 }

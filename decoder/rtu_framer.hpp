@@ -50,6 +50,8 @@ class RtuFramer {
     enum class Kind : uint8_t { found, need_more, none } kind = Kind::none;
     uint16_t length = 0;
     RoleFit fit;
+    // One byte longer reads as a good frame too, its last byte a 0x00 taken for a glitch.
+    bool ambiguous_end = false;
   };
   static Match need_more() { return {Match::Kind::need_more, 0, {}}; }
   struct CrcHits {
