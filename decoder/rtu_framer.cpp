@@ -396,10 +396,15 @@ bool RtuFramer::blocked_by_gap(uint64_t at, bool final) const {
 }
 
 uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
+  // Inside the span the awaited response's structure claims, a frame must be one a bus
+  // carries: a collision's junk has bytes that pass a CRC 1 start in 65,536, most often as a
+  // vendor code or an exception no standard names.
+  const uint64_t claimed_end = awaited_end(head_);
   uint64_t at = std::max(from, scanned_to_);
   for (; at < end_; ++at) {
     const Match m = match_at(at, final, max_search);
-    if (m.kind == Match::Kind::found) break;
+    if (m.kind == Match::Kind::found && (at >= claimed_end || standard_frame(at))) break;
+    if (m.kind == Match::Kind::found) continue;
     if (m.kind == Match::Kind::need_more && !final && !blocked_by_gap(at, final)) {
       scanned_to_ = at;
       decided = false;
@@ -409,6 +414,24 @@ uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
   scanned_to_ = at;
   decided = true;
   return at;
+}
+
+// Where the awaited response that starts at `at` ends by its structure, after the glitch of its
+// driver turning on if there is one; 0 where no awaited response starts there.
+uint64_t RtuFramer::awaited_end(uint64_t at) const {
+  if (at >= end_) return 0;
+  if (const auto length = awaited_length(at, end_ - at)) return at + *length;
+  if (at + 1 < end_ && is_glitch_byte(*at_ptr(at)))
+    if (const auto length = awaited_length(at + 1, end_ - at - 1)) return at + 1 + *length;
+  return 0;
+}
+
+// Whether the frame at `at` has a public function code and, as an exception, a standard code.
+bool RtuFramer::standard_frame(uint64_t at) const {
+  const uint8_t* p = at_ptr(at);
+  const uint8_t fc = p[1];
+  if (!(fc & 0x80)) return is_public_function(fc);
+  return is_public_function(fc & 0x7F) && !exception_name(p[2]).empty();
 }
 
 // The bytes [begin, end) as a frame with its place and time; the check is the caller's to judge.

@@ -92,6 +92,8 @@ class RtuFramer {
   bool swallows_known_frame(uint64_t begin, uint64_t end) const;
   // First position >= from that starts a good frame; `decided` false if one is still open.
   uint64_t next_start(uint64_t from, bool final, bool& decided);
+  uint64_t awaited_end(uint64_t at) const;
+  bool standard_frame(uint64_t at) const;
   Frame frame_of(uint64_t begin, uint64_t end, RoleFit fit) const;
   bool paused_inside(uint64_t begin, uint64_t end) const;
   bool paused_before(uint64_t offset) const;
