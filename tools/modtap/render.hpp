@@ -51,15 +51,23 @@ void put_function_label(fmt::memory_buffer& out, uint8_t fc);
 std::string_view function_label(uint8_t fc, char (&unnamed)[16]);
 
 // `v` and spaces after it to `width` characters.
+// `count` spaces in one piece (a push_back each checked the room every time).
+inline void put_spaces(fmt::memory_buffer& out, size_t count) {
+  const size_t at = out.size();
+  out.resize(at + count);
+  std::fill_n(out.data() + at, count, ' ');
+}
+
 inline void put_left_aligned(fmt::memory_buffer& out, uint64_t v, size_t width) {
   const size_t start = out.size();
   put_uint(out, v);
-  for (size_t n = out.size() - start; n < width; ++n) out.push_back(' ');
+  const size_t used = out.size() - start;
+  if (used < width) put_spaces(out, width - used);
 }
 
 // Spaces, then `text`, to `width` characters.
 inline void put_right_aligned(fmt::memory_buffer& out, std::string_view text, size_t width) {
-  for (size_t n = text.size(); n < width; ++n) out.push_back(' ');
+  if (text.size() < width) put_spaces(out, width - text.size());
   put(out, text);
 }
 inline void put_right_aligned(fmt::memory_buffer& out, uint64_t v, size_t width) {
