@@ -179,6 +179,21 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, uint16_t length, const Ro
       return Verdict::other_reading;
     }
   }
+  // A copy of the pending request too soon for a retry, run on into bytes no frame explains
+  // where the awaited answer is longer (FC07's status equal to the request's CRC low byte, its
+  // last byte talked over), is that answer damaged.
+  if (other && *other == Role::response && copies_request(at, length) && too_soon_for_retry(at)) {
+    const uint64_t end = at + length;
+    const auto awaited = awaited_length(at, end_ - at);
+    if (awaited && *awaited > length) {
+      if (end == end_) {
+        if (!final) return Verdict::wait;  // what follows tells
+      } else if (!gap_at(end) && match_at(end, final, 0).kind == Match::Kind::none &&
+                 !glitch_then_frame(end, final, 0)) {
+        return Verdict::refuse;
+      }
+    }
+  }
   // A reserved address is as often a turnaround's 0xFF: such a frame never swallows one whose
   // length rules and CRC agree (a glitch, a response and the next glitch can read as one).
   if (p[0] > max_unicast_slave && swallows_known_frame(at, at + length)) return Verdict::refuse;
