@@ -64,7 +64,8 @@ class YamlSyntaxError : public std::runtime_error {
 };
 
 // The first document of `text` (a null node for an empty text). Throws YamlSyntaxError, also
-// for nesting deeper than 64 levels and aliases that expand past 100,000 nodes (a model has a few thousand).
+// for nesting deeper than 64 levels and aliases that expand past 100,000 nodes (a model has a few
+// thousand).
 YamlNode parse_yaml(std::string_view text);
 
 }  // namespace modtap::decoder
