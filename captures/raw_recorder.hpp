@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "captures/hexlog_writer.hpp"
 #include "captures/file_ring.hpp"
+#include "captures/hexlog_writer.hpp"
 #include "captures/pcapng_writer.hpp"
 #include "decoder/records.hpp"
 
