@@ -13,9 +13,8 @@ struct Expectation {
   uint8_t slave = 0;
   uint8_t function = 0;
   uint16_t echo_size = 0;  // ADU size of an echo whose length its header does not tell, or 0
-  // The request was read one byte short of another good reading (`ambiguous-end`): its echo
-  // may be one byte longer too.
-  bool echo_may_be_longer = false;
+  // The request's end was in doubt (`ambiguous-end`, a byte longer or shorter): its echo's is.
+  bool echo_end_in_doubt = false;
   std::span<const uint8_t> request_pdu;  // the pending request's PDU, valid while it is pending
   // A copy of the request that starts before this is its answer, not the master's retry (a
   // master repeats only after its time-out); 0 where the source has no clock.

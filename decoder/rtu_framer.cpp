@@ -223,13 +223,14 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
           expected.function == p[1]) {
         if (avail < expected.echo_size) return need_more();
         if (crc_ok(p, expected.echo_size)) {
-          // The echo of a request read one byte short of another good reading may be too: where
-          // a 0x00 follows it with no silence before it (a good frame and a 0x00 check again).
+          // The echo of a request whose end was in doubt is in doubt alike: one byte longer where
+          // a 0x00 follows it with no silence before it (a good frame and a 0x00 check again),
+          // one byte shorter where it ends in 0x00.
           const uint16_t n = expected.echo_size;
-          if (!expected.echo_may_be_longer) return {Match::Kind::found, n, fit};
+          if (!expected.echo_end_in_doubt) return {Match::Kind::found, n, fit};
           if (avail == n && !final) return need_more();
-          const bool longer = avail > n && p[n] == 0x00 && !gap_at(at + n);
-          return {Match::Kind::found, n, fit, longer};
+          const bool doubt = p[n - 1] == 0x00 || (avail > n && p[n] == 0x00 && !gap_at(at + n));
+          return {Match::Kind::found, n, fit, doubt};
         }
       }
       if (search <= 0 || p[0] > max_unicast_slave) return {};
@@ -272,9 +273,11 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       const bool may_stand_alone = !unconfirmed && p[1] == 0x08;
       if (!confirmed && !at_end && !may_stand_alone) continue;
       if (swallows_known_frame(at, at + n)) continue;
-      // Confirmed only by taking the next 0x00 for a glitch, where one byte more holds too.
-      const bool longer = allow_glitch && i + 1 < hit_count && hits[i + 1] == n + 1;
-      if (confirmed) return {Match::Kind::found, n, fit, longer};
+      // Confirmed only by taking the next 0x00 for a glitch, where one byte more holds too; or
+      // ending in a 0x00 that could be a glitch after a good frame one byte shorter.
+      const bool doubt = (allow_glitch && i + 1 < hit_count && hits[i + 1] == n + 1) ||
+                         (zero_appended && shorter_reading_holds(at + n, final, search - 1));
+      if (confirmed) return {Match::Kind::found, n, fit, doubt};
       open |= at_end;
       if (may_stand_alone) unconfirmed = n;
     }
@@ -323,7 +326,8 @@ RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_
     crc = crc16_step(crc, p[n - crc_size]);
     if (!hit || (zero_appended && glitch_appended(at, at + n, final, search - 1))) continue;
     if (confirmed_end(at, at + n, final, search - 1, false) && !swallows_known_frame(at, at + n))
-      return {Match::Kind::found, static_cast<uint16_t>(n), fit};
+      return {Match::Kind::found, static_cast<uint16_t>(n), fit,
+              zero_appended && shorter_reading_holds(at + n, final, search - 1)};
   }
   return {};
 }
@@ -335,6 +339,13 @@ bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end, bool final, int se
   return !gap_at(end) &&
          ((zero_glitches_common() && may_be_glitch(end - 1)) || !copy_follows(begin, end)) &&
          !glitch_then_frame(end, final, search);
+}
+
+// Whether a frame ending at `end` in a 0x00, kept though one byte shorter is a good frame too,
+// could be that shorter frame and a glitch: no silence after it, no clock that saw the byte
+// sent straight on, and no second glitch that reading would need.
+bool RtuFramer::shorter_reading_holds(uint64_t end, bool final, int search) const {
+  return !gap_at(end) && may_be_glitch(end - 1) && !glitch_then_frame(end, final, search);
 }
 
 // A turnaround's glitch at `at` with a good frame right behind it.

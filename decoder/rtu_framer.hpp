@@ -50,7 +50,7 @@ class RtuFramer {
     enum class Kind : uint8_t { found, need_more, none } kind = Kind::none;
     uint16_t length = 0;
     RoleFit fit;
-    // One byte longer reads as a good frame too, its last byte a 0x00 taken for a glitch.
+    // One byte longer or shorter reads as a good frame too, a 0x00 the frame's or a glitch.
     bool ambiguous_end = false;
   };
   static Match need_more() { return {Match::Kind::need_more, 0, {}}; }
@@ -82,6 +82,7 @@ class RtuFramer {
                             int search) const;
   bool glitch_appended(uint64_t begin, uint64_t end, bool final, int search) const;
   bool glitch_then_frame(uint64_t at, bool final, int search) const;
+  bool shorter_reading_holds(uint64_t end, bool final, int search) const;
   bool zero_glitches_common() const;
   bool may_be_glitch(uint64_t offset) const;
   bool fits_role(Role role, uint64_t at, uint16_t length) const;
