@@ -458,5 +458,44 @@ TEST_F(GapCollector, ReportsATimeoutAfterSilence) {
   EXPECT_EQ(timeouts[1].timeout_reason, TimeoutReason::end_of_capture);
 }
 
+// One driver turning on puts one glitch on the line: a read's answer cut after "01 03 14 00 01
+// 00 00", the next request right behind it on a bus of 0x00 glitches, keeps the first 0x00 (the
+// second may be the next driver's glitch; both cannot be).
+TEST_F(GapCollector, ACutResponseLosesAtMostOneTrailingByteToAGlitch) {
+  std::vector<Piece> pieces;
+  for (int i = 0; i < 16; ++i) {
+    pieces.push_back({20'000'000, hex("00")});
+    pieces.push_back({1'000'000, read_request});
+    pieces.push_back({2'000'000, read_response});
+  }
+  pieces.push_back({20'000'000, read_request});
+  pieces.push_back({2'000'000, concat({hex("01 03 14 00 01 00 00"), read_request})});
+  pieces.push_back({2'000'000, read_response});
+  const auto out = run(pieces, ClockQuality::per_chunk);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 36u);
+  EXPECT_EQ(frames[33].raw, hex("01 03 14 00 01 00"));
+  EXPECT_EQ(frames[33].damage, Damage::cut);
+  EXPECT_TRUE(frames[33].findings & finding_ambiguous_end);
+  EXPECT_EQ(out.noise().back().raw, hex("00"));
+}
+
+// A collision's junk can hold bytes that pass a CRC. Inside the span the awaited answer's
+// structure claims, a vendor code's frame is not taken: the bytes are the answer, talked over.
+TEST(RtuFramer, AVendorCodeInsideACollidedAnswerIsPartOfTheAnswer) {
+  const auto write = with_crc(hex("0d 06 00 01 00 05"));
+  const auto junk = with_crc(hex("30 44 07"));  // FC 44H, no public code, and a good CRC
+  const auto next = with_crc(hex("14 03 00 00 00 01"));
+  const auto bytes = concat({write, hex("0d 06 00 01"), junk, next});
+  const auto out = analyze_untimed(bytes);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].raw, hex("0d 06 00 01 30 44 07 03"));
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].damage, Damage::collision);
+  EXPECT_EQ(frames[2].raw, next);
+  expect_same_at_every_split(bytes);
+}
+
 }  // namespace
 }  // namespace modtap::decoder
