@@ -318,6 +318,17 @@ class GapCollector : public ::testing::Test {
     int64_t silence_ns;
     std::vector<uint8_t> bytes;
   };
+  // 16 transactions, each after a 0x00 glitch: a bus where 0x00 glitches are common.
+  static std::vector<Piece> glitchy_history() {
+    std::vector<Piece> pieces;
+    for (int i = 0; i < 16; ++i) {
+      pieces.push_back({20'000'000, hex("00")});
+      pieces.push_back({1'000'000, read_request});
+      pieces.push_back({2'000'000, read_response});
+    }
+    return pieces;
+  }
+
   Collector run(const std::vector<Piece>& pieces, ClockQuality clock) {
     Collector out;
     const AnalyzerOptions options = at_9600(ModeChoice::rtu, clock);
@@ -343,12 +354,7 @@ class GapCollector : public ::testing::Test {
 // 0x00 glitches: the 0x00 is the answer's own or the next driver's glitch. A clock per byte
 // sees it sent with no pause before it; a clock per read cannot, and the frame says so.
 TEST_F(GapCollector, ACutResponsesLastByteThatMayBeAGlitchIsSaidToBeEither) {
-  std::vector<Piece> pieces;
-  for (int i = 0; i < 16; ++i) {
-    pieces.push_back({20'000'000, hex("00")});
-    pieces.push_back({1'000'000, read_request});
-    pieces.push_back({2'000'000, read_response});
-  }
+  std::vector<Piece> pieces = glitchy_history();
   const auto cut = hex("01 03 14 00 01 00");
   pieces.push_back({20'000'000, read_request});
   pieces.push_back({2'000'000, concat({cut, read_request})});
@@ -462,12 +468,7 @@ TEST_F(GapCollector, ReportsATimeoutAfterSilence) {
 // 00 00", the next request right behind it on a bus of 0x00 glitches, keeps the first 0x00 (the
 // second may be the next driver's glitch; both cannot be).
 TEST_F(GapCollector, ACutResponseLosesAtMostOneTrailingByteToAGlitch) {
-  std::vector<Piece> pieces;
-  for (int i = 0; i < 16; ++i) {
-    pieces.push_back({20'000'000, hex("00")});
-    pieces.push_back({1'000'000, read_request});
-    pieces.push_back({2'000'000, read_response});
-  }
+  std::vector<Piece> pieces = glitchy_history();
   pieces.push_back({20'000'000, read_request});
   pieces.push_back({2'000'000, concat({hex("01 03 14 00 01 00 00"), read_request})});
   pieces.push_back({2'000'000, read_response});
@@ -495,6 +496,40 @@ TEST(RtuFramer, AVendorCodeInsideACollidedAnswerIsPartOfTheAnswer) {
   EXPECT_EQ(frames[1].damage, Damage::collision);
   EXPECT_EQ(frames[2].raw, next);
   expect_same_at_every_split(bytes);
+}
+
+// A FC08 Return Query Data request whose CRC ends in 0x00, and its echo, on a bus of 0x00
+// glitches where one read holds them: each is a good frame one byte shorter with a glitch after
+// it, or itself; both say so.
+TEST_F(GapCollector, AnEchoPairWhoseCrcEndsInZeroSaysItsEndIsInDoubt) {
+  std::vector<Piece> pieces = glitchy_history();
+  const auto query = hex("11 08 00 00 00 da 63 00");
+  pieces.push_back({20'000'000, concat({query, query, read_request})});
+  pieces.push_back({2'000'000, read_response});
+  const auto out = run(pieces, ClockQuality::per_chunk);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 36u);
+  EXPECT_EQ(frames[32].role, Role::request);
+  EXPECT_TRUE(frames[32].findings & finding_ambiguous_end);
+  EXPECT_EQ(frames[33].role, Role::response);
+  EXPECT_EQ(frames[33].request, frames[32].index);
+  EXPECT_TRUE(frames[33].findings & finding_ambiguous_end);
+}
+
+// FC07's answer whose status equals the request's CRC low byte starts with a copy of the
+// request; its last byte talked over, the copy came too soon to be the master's retry and runs
+// on into a byte no frame explains: it is the answer, damaged.
+TEST_F(GapCollector, AnAnswerThatStartsAsACopyOfItsRequestIsNotARetry) {
+  const auto status = hex("07 07 42 42");  // the request; its good answer is it and a 0x00
+  std::vector<Piece> pieces{{20'000'000, status},
+                            {2'000'000, concat({status, hex("5a"), read_request})},
+                            {2'000'000, read_response}};
+  const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+  ASSERT_EQ(frames.size(), 4u);
+  EXPECT_EQ(frames[1].raw, concat({status, hex("5a")}));
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_FALSE(frames[1].check_ok);
+  EXPECT_EQ(frames[2].raw, read_request);
 }
 
 }  // namespace
