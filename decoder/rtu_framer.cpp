@@ -429,8 +429,10 @@ uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
   uint64_t at = std::max(from, scanned_to_);
   for (; at < end_; ++at) {
     const Match m = match_at(at, final, max_search);
-    if (m.kind == Match::Kind::found && (at >= claimed_end || standard_frame(at))) break;
-    if (m.kind == Match::Kind::found) continue;
+    if (m.kind == Match::Kind::found) {
+      if (at >= claimed_end || standard_frame(at)) break;
+      continue;
+    }
     if (m.kind == Match::Kind::need_more && !final && !blocked_by_gap(at, final)) {
       scanned_to_ = at;
       decided = false;
