@@ -93,6 +93,7 @@ MatcherOptions matcher_options(const AnalyzerOptions& o) {
   m.t35_ns = o.format.t35_ns();
   m.timed = o.clock != ClockQuality::none;
   m.exact_clock = o.clock == ClockQuality::per_byte;
+  m.clock_lag_ns = o.clock == ClockQuality::per_chunk ? o.chunk_jitter_ns : 0;
   return m;
 }
 

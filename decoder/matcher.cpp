@@ -86,13 +86,15 @@ Matcher::Copy Matcher::judge_copy(const Frame& frame) const {
   return turnaround_learned(pending_->slave) ? Copy::retry : Copy::ambiguous;
 }
 
-// Twice the longest turnaround seen (the slave's, else the bus's) and 20 ms; with nothing
-// learned, 50 ms, the shortest time-out masters use.
+// Twice the longest turnaround seen (the slave's, else the bus's), 20 ms, and what the clock
+// may add to one frame's time (a turnaround learned once, on a read stamped on time, says
+// nothing of how late the next read is stamped); with nothing learned, 50 ms, the shortest
+// time-out masters use.
 int64_t Matcher::surely_answer_within_ns(uint8_t slave) const {
   constexpr int64_t earliest_retry_ns = 50'000'000;
   constexpr int64_t slack_ns = 20'000'000;
   const int64_t learned = turnaround_learned(slave);
-  return learned ? 2 * learned + slack_ns : earliest_retry_ns;
+  return learned ? 2 * learned + slack_ns + options_.clock_lag_ns : earliest_retry_ns;
 }
 
 bool Matcher::pending_matches(const Frame& frame) const {

@@ -20,6 +20,9 @@ struct MatcherOptions {
   int64_t t35_ns = 0;                           // below this a response counts as a fast turnaround
   bool timed = true;         // false when the source has no clock: no latency, no silence
   bool exact_clock = false;  // latencies are exact enough to judge turnaround
+  // How late a clock that stamps reads, not bytes, may put a frame: a read that also holds the
+  // frame after it is stamped when that one ended.
+  int64_t clock_lag_ns = 0;
 };
 
 class Matcher {

@@ -71,7 +71,9 @@ class RtuFramer {
   // `search` is how many variable-length frames in a row may be found by CRC search.
   Match match_at(uint64_t at, bool final, int search) const;
   enum class Verdict : uint8_t { keep, refuse, wait, other_reading };
-  Verdict judge_found(uint64_t at, uint16_t length, const Role* other, bool final) const;
+  Verdict judge_found(uint64_t at, Role role, uint16_t length, const Role* other, bool final,
+                      int search) const;
+  std::optional<bool> cut_before_frame(uint64_t at, uint16_t length, bool final) const;
   Match match_role(Role role, uint64_t at, bool final, int search) const;
   // The lengths in [first, limit] that give the bytes from `at` a good CRC, ascending.
   size_t good_lengths(uint64_t at, size_t first, size_t limit,

@@ -109,8 +109,10 @@ struct Timed {
   int64_t t_ms;
 };
 std::vector<Frame> match_timed(std::initializer_list<Timed> frames, std::vector<Timeout>& timeouts,
-                               std::vector<std::vector<uint8_t>>& keep) {
+                               std::vector<std::vector<uint8_t>>& keep,
+                               int64_t clock_lag_ns = 0) {
   MatcherOptions options;
+  options.clock_lag_ns = clock_lag_ns;
   Matcher matcher(options, [&](const Timeout& t) { timeouts.push_back(t); });
   std::vector<Frame> out;
   uint64_t index = 0;
@@ -150,6 +152,24 @@ TEST(Matcher, AnEchoCopyLongAfterTheSlavesTurnaroundIsARetry) {
   EXPECT_EQ(frames[4].role, Role::response);  // 5 ms after the retry: the answer
   EXPECT_EQ(frames[4].request, frames[3].index);
   EXPECT_FALSE(frames[4].findings & finding_ambiguous_echo);
+}
+
+TEST(Matcher, AnEchoCopyOnAClockThatStampsReadsLateIsStillTheAnswer) {
+  // Slave 1 once answered within half a millisecond. A read stamped when the frame after it
+  // ended (a USB adapter's latency timer) puts the echo of a write 23 ms on: with reads that
+  // may be 20 ms late that is the answer; on a clock that times each byte, a retry.
+  const std::initializer_list<Timed> bus = {{"01 03 00 00 00 01 84 0a", 0},
+                                            {"01 03 02 00 05 78 47", 5},
+                                            {"01 06 00 01 00 03 98 0b", 100},
+                                            {"01 06 00 01 00 03 98 0b", 128}};
+  std::vector<Timeout> timeouts;
+  std::vector<std::vector<uint8_t>> keep;
+  const auto per_read = match_timed(bus, timeouts, keep, 20'000'000);
+  EXPECT_EQ(per_read[3].role, Role::response);
+  EXPECT_EQ(per_read[3].request, per_read[2].index);
+  const auto per_byte = match_timed(bus, timeouts, keep);
+  EXPECT_EQ(per_byte[3].role, Role::request);
+  EXPECT_TRUE(per_byte[3].findings & finding_retry);
 }
 
 TEST(Matcher, AnEchoCopyWithNothingToJudgeByIsAResponseMarkedAmbiguous) {

@@ -532,5 +532,37 @@ TEST_F(GapCollector, AnAnswerThatStartsAsACopyOfItsRequestIsNotARetry) {
   EXPECT_EQ(frames[2].raw, read_request);
 }
 
+// An FC07 answer cut one byte short, and the next request's slave address (142) is its missing
+// CRC byte: the bytes read as the whole answer and a request one byte short. What follows
+// tells: nothing starts after the longer answer, and a whole request starts at its last byte.
+// Read in one piece, in two, or with the request's first byte read apart (as modtap's pcapng
+// reader reads a packet, to time its first byte), the answer is the damaged one and the
+// request is whole.
+TEST_F(GapCollector, AResponseCutOneByteShortGivesTheNextRequestBackItsSlaveAddress) {
+  const auto request = hex("d6 07 1e 12");
+  const auto cut = hex("d6 07 f7 d3");  // its answer, without the CRC's last byte 8e
+  const auto next = hex("8e 07 25 d2");
+  const auto answer = with_crc({0x8e, 0x07, 0x55});
+  ASSERT_EQ(crc16(hex("d6 07 f7")), 0x8ed3);
+  const std::vector<std::vector<Piece>> readings{
+      {{2'000'000, concat({cut, next})}},
+      {{2'000'000, cut}, {5'000'000, next}},
+      {{2'000'000, cut}, {5'000'000, hex("8e")}, {0, hex("07 25 d2")}}};
+  for (size_t r = 0; r < readings.size(); ++r) {
+    std::vector<Piece> pieces{{20'000'000, request}};
+    pieces.insert(pieces.end(), readings[r].begin(), readings[r].end());
+    pieces.push_back({2'000'000, answer});
+    const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+    ASSERT_EQ(frames.size(), 4u) << r;
+    EXPECT_EQ(frames[1].raw, cut);
+    EXPECT_EQ(frames[1].role, Role::response);
+    EXPECT_EQ(frames[1].damage, Damage::cut);
+    EXPECT_EQ(frames[2].raw, next);
+    EXPECT_EQ(frames[2].role, Role::request);
+    EXPECT_TRUE(frames[2].check_ok);
+    EXPECT_EQ(frames[3].request, frames[2].index);
+  }
+}
+
 }  // namespace
 }  // namespace modtap::decoder
