@@ -22,6 +22,10 @@ TEST(Fixed, PrintsNanosecondsInALargerUnitFromTheIntegers) {
   EXPECT_EQ(fmt::format("{}", Fixed{0, 9, 6}), "0.000000");
   EXPECT_EQ(fmt::format("{}", Fixed{-1'500, 9, 6}), "-0.000002");  // a clock stepped back
   EXPECT_EQ(fmt::format("{:>11}", Fixed{2'291'664, 9, 6}), "   0.002292");
+  EXPECT_EQ(fmt::format("{}", Fixed{1'234'567, 6, 1}), "1.2");  // an odd count of decimals
+  EXPECT_EQ(fmt::format("{}", Fixed{99'950'000, 6, 1}), "100.0");
+  EXPECT_EQ(fmt::format("{}", Fixed{-7, 0, 0}), "-7");
+  EXPECT_EQ(fmt::format("{}", Fixed{9'223'372'036'854'775'807, 9, 6}), "9223372036.854776");
   // The same straight into a buffer, as the text lines put their columns.
   fmt::memory_buffer out;
   put_fixed(out, Fixed{2'291'664, 9, 6}, 11);
