@@ -63,7 +63,8 @@ void append_findings(fmt::memory_buffer& out, uint32_t bits) {
 // Only the registers the model names: Wireshark's Modbus dissector shows every raw value, and
 // repeating them made a packet's comment kilobytes long (a read of 125 registers).
 void append_meaning(fmt::memory_buffer& out, const Meaning& meaning) {
-  fmt::format_to(fmt::appender(out), FMT_COMPILE(" model={}"), meaning.model->name);
+  put(out, " model=");  // literal pieces through fmt's compiled formats are a call each
+  put(out, meaning.model->name);
   for (const RegisterValue& reg : meaning.registers) {
     if (reg.name.empty()) continue;
     put(out, "\nregister ");
@@ -205,7 +206,10 @@ void PcapngSink::on_frame(const Frame& frame) {
     writer_.write_packet(interface, frame.t_ns, frame.raw, direction, {});
     return;
   }
-  if (frame.request) answered(*frame.request);
+  if (frame.request) {  // the request goes out first, and this answer then need not wait
+    answered(*frame.request);
+    write_resolved();
+  }
   comment_.clear();
   append_frame_comment(comment_, frame);
   std::span<const uint8_t> data = frame.raw;

@@ -28,10 +28,14 @@ template <typename Integer>
   const char* end = fmt::format_to(out.data() + at, FMT_COMPILE("{}"), v);
   out.resize(static_cast<size_t>(end - out.data()));
 }
-inline void put_int(fmt::memory_buffer& out, int64_t v) {
+// What fits 32 bits (nearly every index, count and duration) takes 32-bit arithmetic: its
+// division by 100 per two digits is a cheaper multiply than the 64-bit one.
+inline void put_uint(fmt::memory_buffer& out, uint64_t v) {
+  if (v <= UINT32_MAX) return put_decimal(out, static_cast<uint32_t>(v));
   put_decimal(out, v);
 }
-inline void put_uint(fmt::memory_buffer& out, uint64_t v) {
+inline void put_int(fmt::memory_buffer& out, int64_t v) {
+  if (v >= 0) return put_uint(out, static_cast<uint64_t>(v));
   put_decimal(out, v);
 }
 
