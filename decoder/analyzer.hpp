@@ -35,7 +35,7 @@ struct AnalyzerOptions {
   int64_t timeout_ns = 1'000'000'000;
   std::map<uint8_t, int64_t> slave_timeout_ns;  // slaves whose model sets their own time-out
   int64_t ascii_char_timeout_ns = 1'000'000'000;
-  int64_t chunk_jitter_ns = 30'000'000;
+  int64_t chunk_jitter_ns = default_read_jitter_ns;
 };
 
 class Analyzer final : private FrameSink {

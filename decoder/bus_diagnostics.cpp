@@ -6,10 +6,11 @@
 
 namespace modtap::decoder {
 
-BusDiagnostics::BusDiagnostics(SerialFormat format, ClockQuality clock, RecordSink& next)
+BusDiagnostics::BusDiagnostics(SerialFormat format, ClockQuality clock, RecordSink& next,
+                               int64_t read_jitter_ns)
     : t35_ns_(format.t35_ns()), sees_gaps_(clock == ClockQuality::per_byte), next_(next) {
   if (clock == ClockQuality::per_byte) jitter_floor_ns_ = 0;
-  if (clock == ClockQuality::per_chunk) jitter_floor_ns_ = chunk_clock_jitter_ns;
+  if (clock == ClockQuality::per_chunk) jitter_floor_ns_ = read_jitter_ns;
 }
 
 void BusDiagnostics::on_frame(const Frame& frame) {

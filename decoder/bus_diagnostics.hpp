@@ -32,11 +32,10 @@ class BusDiagnostics final : public RecordSink {
   // A slave's usual poll interval is the median of its last `poll_history` intervals, known
   // once `poll_history_known` are seen; a request off it by half or more is poll-jitter.
   static constexpr size_t poll_history = 16, poll_history_known = 8;
-  // A clock per read may be late by an adapter's latency (FTDI: 16 ms): below this, a per-chunk
-  // clock cannot tell jitter from its own.
-  static constexpr int64_t chunk_clock_jitter_ns = 20'000'000;
-
-  BusDiagnostics(SerialFormat format, ClockQuality clock, RecordSink& next);
+  // `read_jitter_ns`: how late a clock per read may stamp a request; below it, such a clock
+  // cannot tell a master's jitter from its own.
+  BusDiagnostics(SerialFormat format, ClockQuality clock, RecordSink& next,
+                 int64_t read_jitter_ns = default_read_jitter_ns);
 
   void on_frame(const Frame& frame) override;
   void on_noise(const Noise& noise) override { next_.on_noise(noise); }

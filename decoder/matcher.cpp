@@ -23,7 +23,7 @@ void Matcher::set_pending(Pending* pending) {
                   static_cast<uint16_t>(query_echo ? pending->adu_size : 0),
                   query_echo && pending->ambiguous_end,
                   {pending->pdu.data(), pending->size},
-                  options_.timed ? pending->end_ns + surely_answer_within_ns(pending->slave) : 0};
+                  options_.timed ? pending->end_ns + retry_from_ns(pending->slave) : 0};
 }
 
 void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
@@ -76,25 +76,34 @@ bool Matcher::copies_pending(const Frame& frame) const {
 // A master that gets no answer sends the same request again after its own time-out (50 ms to
 // 1 s in practice); for the echo codes that copy is byte for byte what the response would be.
 // The slave's turnaround, learned from answers no retry could fake, tells them apart: a copy
-// much later than the slave ever answered is a retry. With no clock, or nothing learned and a
-// copy late enough to be a retry, it is taken for the response and marked ambiguous.
+// much later than the slave ever answered is a retry. With no clock, nothing learned, or a copy
+// only as late as the clock may stamp the answer late, it is taken for the response and marked
+// ambiguous.
 Matcher::Copy Matcher::judge_copy(const Frame& frame) const {
   if (!pending_ || !copies_pending(frame)) return Copy::none;
   if (!options_.timed) return Copy::ambiguous;
   const int64_t waited = frame.t_ns - pending_->end_ns;
-  if (waited < surely_answer_within_ns(pending_->slave)) return Copy::response;
-  return turnaround_learned(pending_->slave) ? Copy::retry : Copy::ambiguous;
+  const uint8_t slave = pending_->slave;
+  if (waited < answered_within_ns(slave)) return Copy::response;
+  if (!turnaround_learned(slave) || waited < retry_from_ns(slave)) return Copy::ambiguous;
+  return Copy::retry;
 }
 
-// Twice the longest turnaround seen (the slave's, else the bus's), 20 ms, and what the clock
-// may add to one frame's time (a turnaround learned once, on a read stamped on time, says
-// nothing of how late the next read is stamped); with nothing learned, 50 ms, the shortest
-// time-out masters use.
-int64_t Matcher::surely_answer_within_ns(uint8_t slave) const {
+// Twice the longest turnaround seen (the slave's, else the bus's) and 20 ms; with nothing
+// learned, 50 ms, the shortest time-out masters use.
+int64_t Matcher::answered_within_ns(uint8_t slave) const {
   constexpr int64_t earliest_retry_ns = 50'000'000;
   constexpr int64_t slack_ns = 20'000'000;
   const int64_t learned = turnaround_learned(slave);
-  return learned ? 2 * learned + slack_ns + options_.clock_lag_ns : earliest_retry_ns;
+  return learned ? 2 * learned + slack_ns : earliest_retry_ns;
+}
+
+// Past the answer's time and what the clock may add to one frame's time (a turnaround learned
+// on a read stamped on time says nothing of how late the next read is stamped); with nothing
+// learned, 50 ms on, where a copy may be either.
+int64_t Matcher::retry_from_ns(uint8_t slave) const {
+  const int64_t within = answered_within_ns(slave);
+  return turnaround_learned(slave) ? within + options_.clock_lag_ns : within;
 }
 
 bool Matcher::pending_matches(const Frame& frame) const {

@@ -61,8 +61,10 @@ class Matcher {
   enum class Copy : uint8_t { none, response, retry, ambiguous };
   Copy judge_copy(const Frame& frame) const;
   bool copies_pending(const Frame& frame) const;
-  // How soon after its request a copy of it can only be the answer.
-  int64_t surely_answer_within_ns(uint8_t slave) const;
+  // How soon after its request a copy of it can only be the answer, and from when it may be
+  // the master's retry (from when it can only be one, once a turnaround is learned).
+  int64_t answered_within_ns(uint8_t slave) const;
+  int64_t retry_from_ns(uint8_t slave) const;
   int64_t turnaround_learned(uint8_t slave) const {
     return turnaround_ns_[slave] ? turnaround_ns_[slave] : bus_turnaround_ns_;
   }

@@ -18,6 +18,11 @@ enum class ClockQuality : uint8_t {
   none,       // no time at all (raw files); times are nominal, from the byte offset
 };
 
+// How late a clock per read may stamp a byte, by default (`--chunk-jitter`): an adapter holds
+// bytes for its latency timer (FTDI: 16 ms), a read stamped when it ends may hold bytes from
+// that long before, and a scheduler's delay comes on top.
+constexpr int64_t default_read_jitter_ns = 30'000'000;
+
 // What a channel carries: both directions (a single RS-485 probe) or one side of a split tap.
 enum class ChannelRole : uint8_t { bus, master, slave };
 

@@ -194,11 +194,13 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
       }
     }
   }
-  // A response cut one byte short, whose missing CRC byte the next frame's slave address
-  // repeats, reads whole and good; the next frame, one byte short, then reads as junk. The
-  // bytes after it tell (readings nested in another's judgement do not look that far).
-  if (role == Role::response && expected_.pending && options_.role == ChannelRole::bus &&
-      search > 0) {
+  // The awaited response cut one byte short, whose missing CRC byte the next request's slave
+  // address repeats, reads whole and good; the request, one byte short, then reads as junk.
+  // The bytes after it tell. Only on a bus channel (on a split tap the request is on the
+  // other), and only for a reading that may search on (search 0: nested in another reading's
+  // judgement, or a CRC search at its depth), so that it never nests.
+  if (role == Role::response && options_.role == ChannelRole::bus && search > 0 &&
+      expected_.pending && expected_.slave == p[0] && expected_.function == (p[1] & 0x7F)) {
     const auto cut = cut_before_frame(at, length, final);
     if (!cut) return Verdict::wait;
     if (*cut) return Verdict::refuse;
@@ -215,13 +217,13 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
 // waits for them only where its last byte came in a read of its own after a read of several,
 // as the next frame's first byte does in modtap's own pcapng (its reader reads a packet's
 // first byte apart, to time it). Waiting behind every response that ends a read cost a pcap
-// 17% more to frame; behind every last byte read alone, it held a split tap's responses, read
-// a byte at a time, back from the other channel's requests.
+// 17% more to frame; behind every last byte read alone, a capture read a byte at a time held
+// each response back until its channel's next byte, behind the other channel's frames.
 std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bool final) const {
   const uint64_t end = at + length;
   if (end == end_) {
-    if (final || options_.clock != ClockQuality::per_chunk || marks_.back().first != end - 1 ||
-        marks_.size() < 2)
+    if (final || options_.clock != ClockQuality::per_chunk || marks_.size() < 2 ||
+        marks_.back().first != end - 1)
       return false;
     const TimeMark& before = marks_[marks_.size() - 2];
     return before.end - before.first > 1 ? std::nullopt : std::optional<bool>(false);

@@ -26,7 +26,7 @@ struct RtuFramerOptions {
   ChannelRole role = ChannelRole::bus;
   // With per-chunk clocks a USB adapter holds bytes back (FTDI: 16 ms latency timer), so a
   // gap is only evidence when it is longer than t3.5 plus this.
-  int64_t chunk_jitter_ns = 30'000'000;
+  int64_t chunk_jitter_ns = default_read_jitter_ns;
 };
 
 class RtuFramer {

@@ -20,8 +20,9 @@ using testing::Collector;
 // Records handed straight to the stage, as the analyzer would hand them.
 class History {
  public:
-  explicit History(ClockQuality clock = ClockQuality::per_byte)
-      : stage_(SerialFormat{}, clock, out) {}
+  explicit History(ClockQuality clock = ClockQuality::per_byte,
+                   int64_t read_jitter_ns = default_read_jitter_ns)
+      : stage_(SerialFormat{}, clock, out, read_jitter_ns) {}
 
   // A good frame from `hex` (slave, PDU; the CRC is added) at `t_ms`.
   uint32_t frame(Role role, const std::string& hex, int64_t t_ms, uint32_t findings = 0) {
@@ -173,6 +174,11 @@ TEST(BusDiagnostics, PollJitterNeedsAClockThatCanSeeIt) {
   int64_t t = 0;
   for (int i = 0; i < 12; ++i, t += 20) per_read.frame(Role::request, "05 03 00 00 00 04", t);
   EXPECT_EQ(per_read.frame(Role::request, "05 03 00 00 00 04", t + 12) & finding_poll_jitter, 0u);
+  // An adapter known to stamp within 5 ms (`--chunk-jitter 5`) shows it.
+  History prompt_reads(ClockQuality::per_chunk, 5'000'000);
+  for (t = 0; t < 240; t += 20) prompt_reads.frame(Role::request, "05 03 00 00 00 04", t);
+  EXPECT_NE(prompt_reads.frame(Role::request, "05 03 00 00 00 04", t + 12) & finding_poll_jitter,
+            0u);
 }
 
 // A simulated capture through the analyzer, each byte with its exact time.

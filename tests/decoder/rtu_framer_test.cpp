@@ -562,6 +562,13 @@ TEST_F(GapCollector, AResponseCutOneByteShortGivesTheNextRequestBackItsSlaveAddr
     EXPECT_TRUE(frames[2].check_ok);
     EXPECT_EQ(frames[3].request, frames[2].index);
   }
+  // Its last byte read alone and nothing after it: the answer, whole, once the capture ends.
+  const std::vector<Piece> last{{20'000'000, request}, {2'000'000, cut}, {5'000'000, hex("8e")}};
+  const auto whole = run(last, ClockQuality::per_chunk).frames();
+  ASSERT_EQ(whole.size(), 2u);
+  EXPECT_EQ(whole[1].raw, concat({cut, hex("8e")}));
+  EXPECT_TRUE(whole[1].check_ok);
+  EXPECT_EQ(whole[1].request, whole[0].index);
 }
 
 }  // namespace

@@ -44,7 +44,7 @@ struct RunOptions {
   double timeout_s = 1.0;
   bool timeout_given = false;  // --timeout wins over the models' own time-outs
   double ascii_timeout_s = 1.0;
-  double jitter_ms = 30.0;
+  double jitter_ms = decoder::default_read_jitter_ns / 1e6;
   std::string sigrok_channels;
   bool sigrok_invert = false;
   std::string write_file;
