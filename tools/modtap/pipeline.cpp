@@ -110,8 +110,8 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output
       interpreter_ = std::make_unique<decoder::ModelInterpreter>(catalog_.all(), choice, clock,
                                                                  after, list_unnamed);
   }
-  diagnostics_ = std::make_unique<decoder::BusDiagnostics>(
-      format, clock, after_diagnostics(), static_cast<int64_t>(o.jitter_ms * 1e6));
+  diagnostics_ = std::make_unique<decoder::BusDiagnostics>(format, clock, after_diagnostics(),
+                                                           static_cast<int64_t>(o.jitter_ms * 1e6));
   if (!o.write_file.empty()) write_pcapng(o, ring, channels, clock);
 }
 
