@@ -323,9 +323,11 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
     }
   }
   // FC08 Return Query Data followed by junk: once nothing more can confirm it, its own
-  // header (slave, 08, sub-function 0000) and CRC have to do.
-  const bool exhausted = final || (avail >= max_rtu_adu && !open);
-  if (unconfirmed && exhausted && p[1] == 0x08)
+  // header (slave, 08, sub-function 0000) and CRC have to do. A silence with a good frame after
+  // it bounds the junk as the end of the input does (a glitch, a cut answer and a glitch, then
+  // the master's next request after its time-out).
+  if (unconfirmed && p[1] == 0x08 &&
+      (final || (avail >= max_rtu_adu && !open) || blocked_by_gap(at, final)))
     return {Match::Kind::found, static_cast<uint16_t>(unconfirmed), fit};
   if (!final && (avail < max_rtu_adu || open)) return need_more();
   return {};

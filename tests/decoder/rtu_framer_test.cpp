@@ -571,5 +571,27 @@ TEST_F(GapCollector, AResponseCutOneByteShortGivesTheNextRequestBackItsSlaveAddr
   EXPECT_EQ(whole[1].request, whole[0].index);
 }
 
+// FC08 Return Query Data ends where its CRC says only if something confirms it. Here a glitch
+// and its exception, talked over, follow it, then the master's next request after its
+// time-out: that silence bounds the junk as the end of the input would, and the request's own
+// header and CRC have to do. Before, all of it up to the silence was one damaged request.
+TEST_F(GapCollector, AQueryFollowedByJunkUpToASilenceIsAFrame) {
+  const auto query = with_crc({0x5f, 0x08, 0x00, 0x00, 0x29, 0x73, 0xc1, 0xe6, 0xe9, 0x63});
+  const auto damaged = hex("5f 88 02 a6 00");  // its exception, the CRC's last byte 13 lost
+  const std::vector<Piece> pieces{{20'000'000, concat({query, hex("ff"), damaged})},
+                                  {60'000'000, read_request},
+                                  {2'000'000, read_response}};
+  const auto out = run(pieces, ClockQuality::per_chunk);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 4u);
+  EXPECT_EQ(frames[0].raw, query);
+  EXPECT_TRUE(frames[0].check_ok);
+  EXPECT_EQ(frames[0].role, Role::request);
+  EXPECT_EQ(frames[1].raw, damaged);
+  EXPECT_FALSE(frames[1].check_ok);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[2].raw, read_request);
+}
+
 }  // namespace
 }  // namespace modtap::decoder
