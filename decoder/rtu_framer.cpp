@@ -153,14 +153,16 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
   const uint8_t* p = at_ptr(at);
   const uint64_t gap = first_gap_after(at);
   if (gap < at + length) {
+    // A frame ends before the silence, and what came after it kept the CRC good (a trailing
+    // 0x00 keeps a zero residue zero: a retry of FC07, four bytes, and the 0x00 of a broadcast
+    // after the silence read as its five-byte answer): the other reading, if any, is the frame,
+    // whatever comes after the silence.
+    if (gap - at >= min_adu && crc_ok(p, gap - at)) return Verdict::other_reading;
     // A silence inside a frame, with a good frame starting right after it, means this was a
     // frame that broke off, whatever its CRC says.
     const Match after_gap = match_at(gap, final, 0);
     if (after_gap.kind == Match::Kind::found) return Verdict::refuse;
     if (after_gap.kind == Match::Kind::need_more && !final) return Verdict::wait;
-    // A frame ends before the silence, and a glitch after it kept the CRC good (a trailing
-    // 0x00 keeps a zero residue zero): the other reading, if any, is the frame.
-    if (gap - at >= min_adu && crc_ok(p, gap - at)) return Verdict::other_reading;
   }
   // A copy of the pending request with a glitch after it reads as a response of one more
   // byte (FC07: a status equal to the request's CRC low byte); on a bus of glitches, the copy

@@ -593,5 +593,24 @@ TEST_F(GapCollector, AQueryFollowedByJunkUpToASilenceIsAFrame) {
   EXPECT_EQ(frames[2].raw, read_request);
 }
 
+// A frame whose CRC is good before a silence keeps that reading, whatever the silence is
+// followed by: FC07's retry (four bytes) and the 0x00 of the broadcast after the master's
+// time-out read as the five-byte answer the pending request awaits, which the silence breaks.
+TEST_F(GapCollector, AFrameEndingBeforeASilenceIsReadThereWhateverFollows) {
+  const auto status = hex("61 07 69 e2");
+  const auto broadcast = with_crc({0x00, 0x06, 0x00, 0x01, 0x00, 0x03});
+  const std::vector<Piece> pieces{{20'000'000, read_request},
+                                  {2'000'000, read_response},
+                                  {20'000'000, status},
+                                  {230'000'000, status},
+                                  {230'000'000, broadcast}};
+  const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+  ASSERT_EQ(frames.size(), 5u);
+  EXPECT_EQ(frames[3].raw, status);
+  EXPECT_TRUE(frames[3].check_ok);
+  EXPECT_EQ(frames[3].role, Role::request);
+  EXPECT_EQ(frames[4].raw, broadcast);
+}
+
 }  // namespace
 }  // namespace modtap::decoder
