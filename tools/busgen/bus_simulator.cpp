@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <random>
+#include <utility>
 
 #include "decoder/checksum.hpp"
 #include "decoder/function_codes.hpp"
@@ -97,9 +98,10 @@ class Simulator {
     return offset;
   }
 
+  // A master that got no answer sends nothing before its time-out is over.
   int64_t idle_gap() {
     if (o_.back_to_back) return 0;
-    return std::max(o_.poll_gap_ns, t35_) + pick(0, 2'000'000);
+    return std::max(o_.poll_gap_ns, t35_) + pick(0, 2'000'000) + std::exchange(timing_out_ns_, 0);
   }
 
   // The next slave of the scan list (a broadcast goes between two polls, taking no one's turn),
@@ -139,7 +141,10 @@ class Simulator {
       capture_.timed_out.push_back(req);
       // Retries only once the bus has shown how fast slaves answer: before that, a copy of an
       // echo request is ambiguous by design (docs/framing.md, "Retries and echoes").
-      if (answered_ < 20 || !chance(o_.retry_rate)) return;
+      if (answered_ < 20 || !chance(o_.retry_rate)) {
+        timing_out_ns_ = o_.retry_after_ns;
+        return;
+      }
       req = send_request(request, request_findings | decoder::finding_retry,
                          o_.retry_after_ns + pick(0, 50'000'000));
     }
@@ -149,6 +154,7 @@ class Simulator {
     if (o_.back_to_back) turnaround = 0;
     if (chance(o_.garbled_rate)) {
       capture_.timed_out.push_back(req);
+      timing_out_ns_ = o_.retry_after_ns;  // what came was no answer
       return send_garbled(slave, turnaround);
     }
     if (chance(o_.glitch_rate)) turnaround = glitch(turnaround);
@@ -449,6 +455,7 @@ class Simulator {
     return values;
   }
   size_t answered_ = 0;
+  int64_t timing_out_ns_ = 0;  // the master's time-out, still to run before its next request
 };
 
 }  // namespace
