@@ -61,9 +61,21 @@ Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role, Copy cop
   if (frame.fit.request && !frame.fit.response) return Role::request;
   if (frame.fit.response && !frame.fit.request) return Role::response;
   // Both or neither: an echo, or a frame too damaged to tell. What the bus waits for decides,
-  // unless the frame is the pending request again, sent long after an answer was due.
-  if (pending_matches(frame)) return copy == Copy::retry ? Role::request : Role::response;
+  // unless the frame is the pending request again, or another request of its kind (a write of
+  // other values), sent long after an answer was due: the master's, after its time-out.
+  if (pending_matches(frame)) {
+    const bool another_request =
+        copy == Copy::none && frame.check_ok && frame.fit.request && long_after_answer_due(frame);
+    return copy == Copy::retry || another_request ? Role::request : Role::response;
+  }
   return frame.fit.request ? Role::request : Role::unknown;
+}
+
+// Past the pending request's time for a retry, once the slave's turnaround is known.
+bool Matcher::long_after_answer_due(const Frame& frame) const {
+  const uint8_t slave = pending_->slave;
+  return options_.timed && turnaround_learned(slave) &&
+         frame.t_ns - pending_->end_ns >= retry_from_ns(slave);
 }
 
 bool Matcher::copies_pending(const Frame& frame) const {

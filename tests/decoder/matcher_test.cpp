@@ -179,6 +179,32 @@ TEST(Matcher, AnEchoCopyOnAClockThatStampsReadsLateMayStillBeTheAnswer) {
   EXPECT_TRUE(late[3].findings & finding_retry);
 }
 
+TEST(Matcher, AnotherWriteLongAfterAnAnswerWasDueIsTheMastersNextRequest) {
+  // Slave 1 answers in 5 ms. A write of 3 goes unanswered; 220 ms on, the master writes 4:
+  // the same slave and function, read both ways, but no answer comes that late.
+  std::vector<Timeout> timeouts;
+  std::vector<std::vector<uint8_t>> keep;
+  const auto frames = match_timed({{"01 03 00 00 00 01 84 0a", 0},
+                                   {"01 03 02 00 05 78 47", 10},
+                                   {"01 06 00 01 00 03 98 0b", 100},
+                                   {"01 06 00 01 00 04 d9 c9", 320},
+                                   {"01 06 00 01 00 04 d9 c9", 330}},
+                                  timeouts, keep);
+  EXPECT_EQ(frames[3].role, Role::request);
+  ASSERT_EQ(timeouts.size(), 1u);
+  EXPECT_EQ(timeouts[0].request, frames[2].index);
+  EXPECT_EQ(frames[4].role, Role::response);
+  EXPECT_EQ(frames[4].request, frames[3].index);
+  // Within the slave's time, a reply that does not echo is still its answer, unfit.
+  const auto soon = match_timed({{"01 03 00 00 00 01 84 0a", 0},
+                                 {"01 03 02 00 05 78 47", 10},
+                                 {"01 06 00 01 00 03 98 0b", 100},
+                                 {"01 06 00 01 00 04 d9 c9", 110}},
+                                timeouts, keep);
+  EXPECT_EQ(soon[3].role, Role::response);
+  EXPECT_EQ(soon[3].request, soon[2].index);
+}
+
 TEST(Matcher, AnEchoCopyWithNothingToJudgeByIsAResponseMarkedAmbiguous) {
   std::vector<Timeout> timeouts;
   std::vector<std::vector<uint8_t>> keep;
