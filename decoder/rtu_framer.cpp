@@ -468,15 +468,16 @@ bool RtuFramer::blocked_by_gap(uint64_t at, bool final) const {
 uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
   // Inside the span the awaited response's structure claims, a frame must be one a bus
   // carries: a collision's junk has bytes that pass a CRC 1 start in 65,536, most often as a
-  // vendor code or an exception no standard names.
+  // vendor code or an exception no standard names; and such a start, whose end only a CRC
+  // search could tell, does not keep the bytes before it waiting for that search (up to 256
+  // bytes on, however many frames came meanwhile).
   const uint64_t claimed_end = awaited_end(head_);
   uint64_t at = std::max(from, scanned_to_);
   for (; at < end_; ++at) {
+    // A start too short to tell yet (an exception's code) may still stand.
+    if (at < claimed_end && at + 3 <= end_ && !standard_frame(at)) continue;
     const Match m = match_at(at, final, max_search);
-    if (m.kind == Match::Kind::found) {
-      if (at >= claimed_end || standard_frame(at)) break;
-      continue;
-    }
+    if (m.kind == Match::Kind::found) break;
     if (m.kind == Match::Kind::need_more && !final && !blocked_by_gap(at, final)) {
       scanned_to_ = at;
       decided = false;

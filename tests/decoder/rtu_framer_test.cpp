@@ -329,7 +329,8 @@ class GapCollector : public ::testing::Test {
     return pieces;
   }
 
-  Collector run(const std::vector<Piece>& pieces, ClockQuality clock) {
+  // `finish`: end the input after the pieces, or leave the analyzer holding what it holds.
+  Collector run(const std::vector<Piece>& pieces, ClockQuality clock, bool finish = true) {
     Collector out;
     const AnalyzerOptions options = at_9600(ModeChoice::rtu, clock);
     Analyzer analyzer(options, {{"bus", ChannelRole::bus}}, out);
@@ -343,7 +344,7 @@ class GapCollector : public ::testing::Test {
       }
       if (clock != ClockQuality::per_byte) analyzer.push({0, t, piece.bytes});
     }
-    analyzer.finish();
+    if (finish) analyzer.finish();
     return out;
   }
 };
@@ -610,6 +611,22 @@ TEST_F(GapCollector, AFrameEndingBeforeASilenceIsReadThereWhateverFollows) {
   EXPECT_TRUE(frames[3].check_ok);
   EXPECT_EQ(frames[3].role, Role::request);
   EXPECT_EQ(frames[4].raw, broadcast);
+}
+
+// FC07's answer whose first four bytes are its request again, its status talked over: inside
+// the answer's span, "07 12 ..." starts a vendor code whose end only a CRC search could tell.
+// It cannot stand there, so it does not hold the damaged answer and the next request back
+// until 256 bytes have come.
+TEST_F(GapCollector, AVendorStartInsideTheAwaitedAnswerHoldsNothingBack) {
+  const auto request = hex("c4 07 12 b2");
+  const std::vector<Piece> pieces{{20'000'000, request},
+                                  {2'000'000, concat({request, hex("0f"), read_request})}};
+  const auto frames = run(pieces, ClockQuality::per_chunk, false).frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].raw, concat({request, hex("0f")}));
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_FALSE(frames[1].check_ok);
+  EXPECT_EQ(frames[2].raw, read_request);
 }
 
 }  // namespace
