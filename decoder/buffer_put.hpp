@@ -28,7 +28,7 @@ template <typename Integer>
   const char* end = fmt::format_to(out.data() + at, FMT_COMPILE("{}"), v);
   out.resize(static_cast<size_t>(end - out.data()));
 }
-// What fits 32 bits (nearly every index, count and duration) takes 32-bit arithmetic: its
+// What fits 32 bits unsigned (nearly every index, count and duration) takes 32-bit arithmetic: its
 // division by 100 per two digits is a cheaper multiply than the 64-bit one.
 inline void put_uint(fmt::memory_buffer& out, uint64_t v) {
   if (v <= UINT32_MAX) return put_decimal(out, static_cast<uint32_t>(v));

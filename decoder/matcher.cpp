@@ -61,17 +61,24 @@ Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role, Copy cop
   if (frame.fit.request && !frame.fit.response) return Role::request;
   if (frame.fit.response && !frame.fit.request) return Role::response;
   // Both or neither: an echo, or a frame too damaged to tell. What the bus waits for decides,
-  // unless the frame is the pending request again, or another request of its kind (a write of
-  // other values), sent long after an answer was due: the master's, after its time-out.
+  // unless the frame is the pending request again, or another request of its kind that does
+  // not fit as the answer (a write of other values), sent long after an answer was due: the
+  // master's, after its time-out. A late answer that fits (a FC08 counter, a read of 3 bytes
+  // of coils, as long as their requests) stays the answer.
   if (pending_matches(frame)) {
-    const bool another_request =
-        copy == Copy::none && frame.check_ok && frame.fit.request && long_after_answer_due(frame);
+    const bool another_request = copy == Copy::none && frame.check_ok && frame.fit.request &&
+                                 !fits_pending(frame) && long_after_answer_due(frame);
     return copy == Copy::retry || another_request ? Role::request : Role::response;
   }
   return frame.fit.request ? Role::request : Role::unknown;
 }
 
-// Past the pending request's time for a retry, once the slave's turnaround is known.
+bool Matcher::fits_pending(const Frame& frame) const {
+  return check_response_fit({pending_->pdu.data(), pending_->size}, frame.pdu()) == finding_none;
+}
+
+// Past the pending request's time for a retry, once a turnaround is known (the slave's, else
+// the bus's).
 bool Matcher::long_after_answer_due(const Frame& frame) const {
   const uint8_t slave = pending_->slave;
   return options_.timed && turnaround_learned(slave) &&

@@ -74,6 +74,7 @@ class Matcher {
   }
 
   Role decide_role(const Frame& frame, ChannelRole channel_role, Copy copy) const;
+  bool fits_pending(const Frame& frame) const;  // as the pending request's answer
   bool long_after_answer_due(const Frame& frame) const;
   void on_request(Frame& frame);
   void on_response(Frame& frame, Copy copy);

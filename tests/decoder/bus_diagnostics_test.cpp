@@ -207,8 +207,8 @@ Collector simulated(bool back_to_back, unsigned polled_slaves = 0, bool faults =
   options.transactions = 2000;
   options.back_to_back = back_to_back;
   options.polled_slaves = polled_slaves;
-  // A silent slave is a fault too: its master's time-out stalls the cycle.
-  if (!faults) options.no_response_rate = 0;
+  // A silent slave is a fault to a scan list too: its master's time-out stalls the cycle.
+  if (polled_slaves && !faults) options.no_response_rate = 0;
   if (faults) options.noise_rate = options.truncation_rate = options.retry_rate = 0.02;
   return simulated(options);
 }

@@ -203,6 +203,15 @@ TEST(Matcher, AnotherWriteLongAfterAnAnswerWasDueIsTheMastersNextRequest) {
                                 timeouts, keep);
   EXPECT_EQ(soon[3].role, Role::response);
   EXPECT_EQ(soon[3].request, soon[2].index);
+  // A late answer that fits its request (a FC08 counter, as long as its request) stays the
+  // answer, however late.
+  const auto counter = match_timed({{"01 03 00 00 00 01 84 0a", 0},
+                                    {"01 03 02 00 05 78 47", 10},
+                                    {"01 08 00 0b 00 00 91 c9", 100},
+                                    {"01 08 00 0b 00 05 51 ca", 320}},
+                                   timeouts, keep);
+  EXPECT_EQ(counter[3].role, Role::response);
+  EXPECT_EQ(counter[3].request, counter[2].index);
 }
 
 TEST(Matcher, AnEchoCopyWithNothingToJudgeByIsAResponseMarkedAmbiguous) {

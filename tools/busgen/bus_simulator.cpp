@@ -98,10 +98,12 @@ class Simulator {
     return offset;
   }
 
-  // A master that got no answer sends nothing before its time-out is over.
+  // A master that got no answer sends nothing before its time-out is over (back to back, the
+  // bus has no silences at all).
   int64_t idle_gap() {
+    const int64_t timing_out = std::exchange(timing_out_ns_, 0);
     if (o_.back_to_back) return 0;
-    return std::max(o_.poll_gap_ns, t35_) + pick(0, 2'000'000) + std::exchange(timing_out_ns_, 0);
+    return std::max(o_.poll_gap_ns, t35_) + pick(0, 2'000'000) + timing_out;
   }
 
   // The next slave of the scan list (a broadcast goes between two polls, taking no one's turn),

@@ -19,8 +19,7 @@ struct BusOptions {
   decoder::Mode mode = decoder::Mode::rtu;
   // Rates are per transaction, between 0 and 1.
   double exception_rate = 0.05;
-  double no_response_rate =
-      0.03;  // the slave stays silent: the master moves on, after its time-out
+  double no_response_rate = 0.03;  // the slave stays silent; the master waits out its time-out
   double broadcast_rate = 0.03;
   double fast_turnaround_rate = 0.2;  // the slave answers after less than t3.5
   int64_t min_turnaround_ns = 0;  // slaves answer after this and up to 3 ms more (NTA5000: 10 ms)
@@ -32,8 +31,9 @@ struct BusOptions {
   // What real masters and buses do beyond the clean picture:
   double out_of_spec_rate = 0.0;  // a request over the standard's limits, answered by exception 03
   double retry_rate = 0.0;        // an unanswered request is sent again after the master's time-out
-  // The master's time-out: after a request no answer came to, it sends nothing before it is
-  // over, neither the retry nor its next request.
+  // The master's time-out: after a request no answer came to (silence, or bytes that are no
+  // frame), it sends nothing before it is over, neither the retry nor its next request. A cut
+  // or talked-over answer ends the wait at once: the master has its CRC error.
   int64_t retry_after_ns = 200'000'000;
   double cut_rate = 0.0;        // the response breaks off (the slave resets, a wire comes loose)
   double collision_rate = 0.0;  // another device talks over the response's last bytes
