@@ -102,10 +102,8 @@ Matcher::Copy Matcher::judge_copy(const Frame& frame) const {
   if (!pending_ || !copies_pending(frame)) return Copy::none;
   if (!options_.timed) return Copy::ambiguous;
   const int64_t waited = frame.t_ns - pending_->end_ns;
-  const uint8_t slave = pending_->slave;
-  if (waited < answered_within_ns(slave)) return Copy::response;
-  if (!turnaround_learned(slave) || waited < retry_from_ns(slave)) return Copy::ambiguous;
-  return Copy::retry;
+  if (waited < answered_within_ns(pending_->slave)) return Copy::response;
+  return long_after_answer_due(frame) ? Copy::retry : Copy::ambiguous;
 }
 
 // Twice the longest turnaround seen (the slave's, else the bus's) and 20 ms; with nothing

@@ -55,6 +55,16 @@ decoder::SerialFormat serial_format(const RunOptions& o) {
           decoder::parity_named(o.parity), static_cast<uint8_t>(o.stop_bits)};
 }
 
+namespace {
+
+// How late a clock per read may stamp a byte: the framer's silences, the matcher's retries and
+// poll jitter all allow for it.
+int64_t read_jitter_ns(const RunOptions& o) {
+  return static_cast<int64_t>(o.jitter_ms * 1e6);
+}
+
+}  // namespace
+
 decoder::AnalyzerOptions analyzer_options(const RunOptions& o, decoder::ClockQuality clock) {
   decoder::AnalyzerOptions analyzer;
   analyzer.mode = decoder::mode_named(o.mode);
@@ -62,7 +72,7 @@ decoder::AnalyzerOptions analyzer_options(const RunOptions& o, decoder::ClockQua
   analyzer.clock = clock;
   analyzer.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
   analyzer.ascii_char_timeout_ns = static_cast<int64_t>(o.ascii_timeout_s * 1e9);
-  analyzer.chunk_jitter_ns = static_cast<int64_t>(o.jitter_ms * 1e6);
+  analyzer.chunk_jitter_ns = read_jitter_ns(o);
   return analyzer;
 }
 
@@ -111,7 +121,7 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output
                                                                  after, list_unnamed);
   }
   diagnostics_ = std::make_unique<decoder::BusDiagnostics>(format, clock, after_diagnostics(),
-                                                           static_cast<int64_t>(o.jitter_ms * 1e6));
+                                                           read_jitter_ns(o));
   if (!o.write_file.empty()) write_pcapng(o, ring, channels, clock);
 }
 

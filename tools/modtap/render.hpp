@@ -50,7 +50,6 @@ void put_function_label(fmt::memory_buffer& out, uint8_t fc);
 // The same into `unnamed`'s room, for fmt's formatter.
 std::string_view function_label(uint8_t fc, char (&unnamed)[16]);
 
-// `v` and spaces after it to `width` characters.
 // `count` spaces in one piece (a push_back each checked the room every time).
 inline void put_spaces(fmt::memory_buffer& out, size_t count) {
   const size_t at = out.size();
@@ -58,6 +57,7 @@ inline void put_spaces(fmt::memory_buffer& out, size_t count) {
   std::fill_n(out.data() + at, count, ' ');
 }
 
+// `v` and spaces after it to `width` characters.
 inline void put_left_aligned(fmt::memory_buffer& out, uint64_t v, size_t width) {
   const size_t start = out.size();
   put_uint(out, v);
