@@ -8,7 +8,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace modtap;
-  const std::string path = fuzz::write_temp_file(data, size, ".log");
+  const std::string path = fuzz::write_temp_file(data, size);
   uint64_t bytes = 0;
   try {
     captures::HexlogReader reader(path, 1'000'000);
