@@ -65,6 +65,8 @@ class BusDiagnostics final : public RecordSink {
   uint32_t answered(const Frame& frame, SlaveHistory& slave);
   uint32_t polled(const Frame& frame, SlaveHistory& slave);
   static void remember_interval(SlaveHistory& slave, int64_t interval);
+  static size_t count_before(const std::array<int64_t, poll_history>& sorted, size_t n,
+                             int64_t value, bool after_equals);
 
   int64_t t35_ns_;
   bool sees_gaps_;  // only a per-byte clock times the silence between frames truly
