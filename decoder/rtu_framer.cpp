@@ -224,9 +224,9 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
 std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bool final) const {
   const uint64_t end = at + length;
   if (end == end_) {
-    if (final || options_.clock != ClockQuality::per_chunk || marks_.size() < 2 ||
-        marks_.back().first != end - 1)
-      return false;
+    if (final || options_.clock != ClockQuality::per_chunk || marks_.empty()) return false;
+    if (read_starts_inside(at)) return std::nullopt;
+    if (marks_.size() < 2 || marks_.back().first != end - 1) return false;
     const TimeMark& before = marks_[marks_.size() - 2];
     return before.end - before.first > 1 ? std::nullopt : std::optional<bool>(false);
   }
@@ -240,6 +240,16 @@ std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bo
   const Match after = match_at(end, final, 0);
   if (after.kind == Match::Kind::need_more && !final) return std::nullopt;
   return after.kind == Match::Kind::none && !glitch_then_frame(end, final, 0);
+}
+
+// Whether the read that brought byte `at` began before it: reads that do not follow the
+// frames (a timer's, every 16 ms) end wherever the bytes did, as likely right after the next
+// frame's first byte as after a frame. Reads that follow them (a packet a frame, an adapter's
+// read a frame) begin with the frame.
+bool RtuFramer::read_starts_inside(uint64_t at) const {
+  for (auto mark = marks_.rbegin(); mark != marks_.rend(); ++mark)
+    if (mark->first <= at) return mark->first < at && at < mark->end;
+  return false;
 }
 
 RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int search) const {

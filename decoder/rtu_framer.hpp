@@ -74,6 +74,7 @@ class RtuFramer {
   Verdict judge_found(uint64_t at, Role role, uint16_t length, const Role* other, bool final,
                       int search) const;
   std::optional<bool> cut_before_frame(uint64_t at, uint16_t length, bool final) const;
+  bool read_starts_inside(uint64_t at) const;
   Match match_role(Role role, uint64_t at, bool final, int search) const;
   // The lengths in [first, limit] that give the bytes from `at` a good CRC, ascending.
   size_t good_lengths(uint64_t at, size_t first, size_t limit,

@@ -548,7 +548,11 @@ TEST_F(GapCollector, AResponseCutOneByteShortGivesTheNextRequestBackItsSlaveAddr
   const std::vector<std::vector<Piece>> readings{
       {{2'000'000, concat({cut, next})}},
       {{2'000'000, cut}, {5'000'000, next}},
-      {{2'000'000, cut}, {5'000'000, hex("8e")}, {0, hex("07 25 d2")}}};
+      {{2'000'000, cut}, {5'000'000, hex("8e")}, {0, hex("07 25 d2")}},
+      // A timer's reads, which end wherever the bytes do: one that began before the response
+      // (with a turnaround's glitch) ends right after the next request's slave address.
+      {{2'000'000, concat({hex("ff"), cut, hex("8e")})}, {0, hex("07 25 d2")}},
+      {{2'000'000, hex("ff d6")}, {0, hex("07 f7 d3 8e")}, {0, hex("07 25 d2")}}};
   for (size_t r = 0; r < readings.size(); ++r) {
     std::vector<Piece> pieces{{20'000'000, request}};
     pieces.insert(pieces.end(), readings[r].begin(), readings[r].end());
