@@ -190,9 +190,11 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
     if (awaited && *awaited > length) {
       if (end == end_) {
         if (!final) return Verdict::wait;  // what follows tells
-      } else if (!gap_at(end) && match_at(end, final, 0).kind == Match::Kind::none &&
-                 !glitch_then_frame(end, final, 0)) {
-        return Verdict::refuse;
+      } else if (!gap_at(end)) {
+        const Match next = match_at(end, final, 0);
+        if (next.kind == Match::Kind::need_more && !final) return Verdict::wait;
+        if (next.kind == Match::Kind::none && !glitch_then_frame(end, final, 0))
+          return Verdict::refuse;
       }
     }
   }

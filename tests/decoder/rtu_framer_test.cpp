@@ -519,18 +519,27 @@ TEST_F(GapCollector, AnEchoPairWhoseCrcEndsInZeroSaysItsEndIsInDoubt) {
 
 // FC07's answer whose status equals the request's CRC low byte starts with a copy of the
 // request; its last byte talked over, the copy came too soon to be the master's retry and runs
-// on into a byte no frame explains: it is the answer, damaged.
+// on into a byte no frame explains: it is the answer, damaged. Read in one piece, or with the
+// answer's five bytes in a read of their own (an adapter's read a frame), so that the byte
+// after the copy is all there is of what follows when it is first judged.
 TEST_F(GapCollector, AnAnswerThatStartsAsACopyOfItsRequestIsNotARetry) {
   const auto status = hex("07 07 42 42");  // the request; its good answer is it and a 0x00
-  std::vector<Piece> pieces{{20'000'000, status},
-                            {2'000'000, concat({status, hex("5a"), read_request})},
-                            {2'000'000, read_response}};
-  const auto frames = run(pieces, ClockQuality::per_chunk).frames();
-  ASSERT_EQ(frames.size(), 4u);
-  EXPECT_EQ(frames[1].raw, concat({status, hex("5a")}));
-  EXPECT_EQ(frames[1].role, Role::response);
-  EXPECT_FALSE(frames[1].check_ok);
-  EXPECT_EQ(frames[2].raw, read_request);
+  const auto damaged = concat({status, hex("5a")});
+  const std::vector<std::vector<Piece>> readings{
+      {{2'000'000, concat({damaged, read_request})}},
+      {{2'000'000, damaged}, {0, read_request}}};
+  for (size_t r = 0; r < readings.size(); ++r) {
+    std::vector<Piece> pieces{{20'000'000, status}};
+    pieces.insert(pieces.end(), readings[r].begin(), readings[r].end());
+    pieces.push_back({2'000'000, read_response});
+    const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+    ASSERT_EQ(frames.size(), 4u) << r;
+    EXPECT_EQ(frames[1].raw, damaged) << r;
+    EXPECT_EQ(frames[1].role, Role::response) << r;
+    EXPECT_FALSE(frames[1].check_ok) << r;
+    EXPECT_EQ(frames[1].request, frames[0].index) << r;
+    EXPECT_EQ(frames[2].raw, read_request) << r;
+  }
 }
 
 // An FC07 answer cut one byte short, and the next request's slave address (142) is its missing
