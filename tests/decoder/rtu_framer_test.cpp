@@ -525,9 +525,8 @@ TEST_F(GapCollector, AnEchoPairWhoseCrcEndsInZeroSaysItsEndIsInDoubt) {
 TEST_F(GapCollector, AnAnswerThatStartsAsACopyOfItsRequestIsNotARetry) {
   const auto status = hex("07 07 42 42");  // the request; its good answer is it and a 0x00
   const auto damaged = concat({status, hex("5a")});
-  const std::vector<std::vector<Piece>> readings{
-      {{2'000'000, concat({damaged, read_request})}},
-      {{2'000'000, damaged}, {0, read_request}}};
+  const std::vector<std::vector<Piece>> readings{{{2'000'000, concat({damaged, read_request})}},
+                                                 {{2'000'000, damaged}, {0, read_request}}};
   for (size_t r = 0; r < readings.size(); ++r) {
     std::vector<Piece> pieces{{20'000'000, status}};
     pieces.insert(pieces.end(), readings[r].begin(), readings[r].end());
