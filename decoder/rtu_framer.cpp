@@ -209,9 +209,15 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
     if (!cut) return Verdict::wait;
     if (*cut) return Verdict::refuse;
   }
-  // A reserved address is as often a turnaround's 0xFF: such a frame never swallows one whose
-  // length rules and CRC agree (a glitch, a response and the next glitch can read as one).
-  if (p[0] > max_unicast_slave && swallows_known_frame(at, at + length)) return Verdict::refuse;
+  // A reserved address is as often a turnaround's 0xFF, and an answer nobody awaits (another
+  // slave's or function's while a request waits) a collision's junk that passed a CRC: such a
+  // frame never swallows one whose length rules and CRC agree (a glitch, a response and the
+  // next glitch can read as one; a talked-over exception's tail read as a 245-byte answer of a
+  // slave nobody asked, across the next request and its answer).
+  const bool unawaited = role == Role::response && expected_.pending &&
+                         (expected_.slave != p[0] || expected_.function != (p[1] & 0x7F));
+  if ((p[0] > max_unicast_slave || unawaited) && swallows_known_frame(at, at + length))
+    return Verdict::refuse;
   return Verdict::keep;
 }
 

@@ -641,5 +641,40 @@ TEST_F(GapCollector, AVendorStartInsideTheAwaitedAnswerHoldsNothingBack) {
   EXPECT_EQ(frames[2].raw, read_request);
 }
 
+// An exception talked over, "32 81 03 14 5b": from its second byte on, its bytes, the next
+// request and part of that request's answer read as a 25-byte FC03 answer of slave 129 whose
+// CRC holds (here made to, with two of the answer's data bytes; 1 start in 65,536 on a bus).
+// Nobody asked slave 129, and the reading swallows a request and answer whose length rules
+// and CRC agree: it is refused, and the exception is the damaged answer.
+TEST_F(GapCollector, AnAnswerNobodyAwaitsSwallowsNoGoodFrame) {
+  const auto request = with_crc(hex("32 01 00 00 00 10"));
+  const auto damaged = hex("32 81 03 14 5b");
+  const auto next = with_crc(hex("07 03 00 00 00 0a"));
+  std::vector<uint8_t> data(20, 0x11);
+  std::vector<uint8_t> false_frame =
+      concat({std::vector<uint8_t>(damaged.begin() + 1, damaged.end()), next, hex("07 03 14"),
+              std::vector<uint8_t>(data.begin(), data.begin() + 8)});
+  const uint16_t crc = crc16(false_frame);
+  data[8] = static_cast<uint8_t>(crc & 0xff);
+  data[9] = static_cast<uint8_t>(crc >> 8);
+  const auto answer = with_crc(concat({hex("07 03 14"), data}));
+  ASSERT_NE(crc16(hex("32 81 03")), 0x5b14);
+  ASSERT_EQ(crc16(concat({std::vector<uint8_t>(damaged.begin() + 1, damaged.end()), next,
+                          std::vector<uint8_t>(answer.begin(), answer.begin() + 13)})),
+            0);
+  const std::vector<Piece> pieces{{20'000'000, request},
+                                  {3'000'000, concat({damaged, next, answer})},
+                                  {20'000'000, read_request}};
+  const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+  ASSERT_EQ(frames.size(), 5u);
+  EXPECT_EQ(frames[1].raw, damaged);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_FALSE(frames[1].check_ok);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[2].raw, next);
+  EXPECT_EQ(frames[3].raw, answer);
+  EXPECT_EQ(frames[3].request, frames[2].index);
+}
+
 }  // namespace
 }  // namespace modtap::decoder
