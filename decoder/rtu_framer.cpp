@@ -164,6 +164,15 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
     if (after_gap.kind == Match::Kind::found) return Verdict::refuse;
     if (after_gap.kind == Match::Kind::need_more && !final) return Verdict::wait;
   }
+  // The first bytes after the request (a glitch aside), beginning as the awaited answer with
+  // every byte its request predicts in place (a read's byte count), read as a request too soon
+  // for the master's next one: a talked-over answer whose junk passed a CRC by chance
+  // (`55 01 04 69 ff c9 69 16`, a read of 0xFFC9 coils, where 4 bytes of coils were due). The
+  // answer, damaged, is the reading. (After a damaged answer, the master's next request may
+  // begin alike and come as soon.)
+  if (role == Role::request && other && first_after_request(at) && begins_as_awaited(at) &&
+      too_soon_for_retry(at) && !copies_request(at, length))
+    return Verdict::refuse;
   // A copy of the pending request with a glitch after it reads as a response of one more
   // byte (FC07: a status equal to the request's CRC low byte); on a bus of glitches, the copy
   // is the likelier (a master's retry), unless it came too soon for a retry. (Any other frame
@@ -610,6 +619,22 @@ std::optional<bool> RtuFramer::awaited_byte(uint64_t begin, uint64_t pos) const 
   std::copy(request.begin(), request.end(), adu.begin() + 1);
   const uint16_t crc = crc16({adu.data(), crc_at});
   return (pos == crc_at ? (crc & 0xFF) : (crc >> 8)) == p[pos];
+}
+
+// Whether `at` is where the bytes after the last frame begin, or a glitch after it ends: while
+// a request is pending, where its answer begins.
+bool RtuFramer::first_after_request(uint64_t at) const {
+  return at == head_ || (at == head_ + 1 && is_glitch_byte(*at_ptr(head_)));
+}
+
+// Whether the bytes at `at` are the awaited response's slave, function code and what its
+// request predicts after them (at least one byte: a byte count, an echoed address).
+bool RtuFramer::begins_as_awaited(uint64_t at) const {
+  const uint8_t* p = at_ptr(at);
+  if (!expected_.pending || p[0] != expected_.slave || p[1] != expected_.function) return false;
+  const ResponsePrefix prefix = response_prefix(expected_.request_pdu);
+  return prefix.size >= 2 && at + 1 + prefix.size <= end_ &&
+         std::equal(prefix.pdu.begin() + 1, prefix.pdu.begin() + prefix.size, p + 2);
 }
 
 // Whether these bytes start the awaited response, or do with a glitch after them.

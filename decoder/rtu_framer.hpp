@@ -75,6 +75,8 @@ class RtuFramer {
                       int search) const;
   std::optional<bool> cut_before_frame(uint64_t at, uint16_t length, bool final) const;
   bool read_starts_inside(uint64_t at) const;
+  bool begins_as_awaited(uint64_t at) const;
+  bool first_after_request(uint64_t at) const;
   Match match_role(Role role, uint64_t at, bool final, int search) const;
   // The lengths in [first, limit] that give the bytes from `at` a good CRC, ascending.
   size_t good_lengths(uint64_t at, size_t first, size_t limit,

@@ -676,5 +676,26 @@ TEST_F(GapCollector, AnAnswerNobodyAwaitsSwallowsNoGoodFrame) {
   EXPECT_EQ(frames[3].request, frames[2].index);
 }
 
+// A read of 32 coils, and its answer talked over: "37 01 04" as due, then junk whose first
+// eight bytes pass a CRC as a read of 0xFFC9 coils (here made to). Where the answer was due,
+// too soon for the master's next request, they are the answer, damaged; long after, with
+// nothing in between, the same bytes are the master's request (over the limits).
+TEST_F(GapCollector, JunkThatBeginsAsTheAwaitedAnswerIsNotARequestWhileItIsDue) {
+  const auto request = with_crc(hex("37 01 df 2f 00 20"));
+  const auto junk = concat({with_crc(hex("37 01 04 69 ff c9")), hex("06")});
+  ASSERT_NE(crc16(junk), 0);  // no good answer of 4 bytes of coils
+  for (const int64_t after_ns : {3'000'000, 300'000'000}) {
+    const std::vector<Piece> pieces{
+        {20'000'000, request}, {after_ns, junk}, {20'000'000, read_request}};
+    const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+    const bool due = after_ns < 50'000'000;
+    ASSERT_EQ(frames.size(), 3u) << after_ns;
+    EXPECT_EQ(frames[1].raw.size(), due ? junk.size() : junk.size() - 1) << after_ns;
+    EXPECT_EQ(frames[1].role, due ? Role::response : Role::request) << after_ns;
+    EXPECT_EQ(frames[1].check_ok, !due) << after_ns;
+    EXPECT_EQ(frames.back().raw, read_request) << after_ns;
+  }
+}
+
 }  // namespace
 }  // namespace modtap::decoder
