@@ -190,16 +190,19 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
       return Verdict::other_reading;
     }
   }
-  // A copy of the pending request too soon for a retry, run on into bytes no frame explains
-  // where the awaited answer is longer (FC07's status equal to the request's CRC low byte, its
-  // last byte talked over), is that answer damaged.
+  // A copy of the pending request too soon for a retry, where the awaited answer is longer, is
+  // that answer damaged: FC07's answer whose status equals the request's CRC low byte starts
+  // with the request whole (its CRC's low byte is then the request's high byte), and is the
+  // request and a 0x00. Where the answer begins (the first bytes after the request), cut or
+  // talked over after the copy, it is no retry. Further on, after a damaged answer, a master
+  // may repeat its request as soon: there only bytes no frame explains after the copy say so.
   if (other && *other == Role::response && copies_request(at, length) && too_soon_for_retry(at)) {
     const uint64_t end = at + length;
     const auto awaited = awaited_length(at, end_ - at);
     if (awaited && *awaited > length) {
-      if (end == end_) {
-        if (!final) return Verdict::wait;  // what follows tells
-      } else if (!gap_at(end)) {
+      if (end == end_ && !final) return Verdict::wait;  // what follows tells
+      if (first_after_request(at)) return Verdict::refuse;
+      if (end < end_ && !gap_at(end)) {
         const Match next = match_at(end, final, 0);
         if (next.kind == Match::Kind::need_more && !final) return Verdict::wait;
         if (next.kind == Match::Kind::none && !glitch_then_frame(end, final, 0))

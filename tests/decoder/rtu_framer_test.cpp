@@ -539,6 +539,20 @@ TEST_F(GapCollector, AnAnswerThatStartsAsACopyOfItsRequestIsNotARetry) {
     EXPECT_EQ(frames[1].request, frames[0].index) << r;
     EXPECT_EQ(frames[2].raw, read_request) << r;
   }
+  // Cut right after the copy, with a frame after it: the answer cut short while it was due, a
+  // retry only long after.
+  for (const int64_t after_ns : {3'000'000, 300'000'000}) {
+    const std::vector<Piece> pieces{{20'000'000, status},
+                                    {after_ns, concat({status, read_request})}};
+    const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+    const bool due = after_ns < 50'000'000;
+    ASSERT_EQ(frames.size(), 3u) << after_ns;
+    EXPECT_EQ(frames[1].raw, status) << after_ns;
+    EXPECT_EQ(frames[1].role, due ? Role::response : Role::request) << after_ns;
+    EXPECT_EQ(frames[1].damage, due ? Damage::cut : Damage::none) << after_ns;
+    EXPECT_EQ(frames[1].check_ok, !due) << after_ns;
+    EXPECT_EQ(frames[2].raw, read_request) << after_ns;
+  }
 }
 
 // An FC07 answer cut one byte short, and the next request's slave address (142) is its missing
