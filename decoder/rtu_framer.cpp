@@ -478,9 +478,12 @@ bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
          first_gap_after(end) >= end + size;
 }
 
+// Only a frame a bus carries counts (a public function code, a standard exception): inside a
+// long frame, bytes pass a CRC as a vendor code or an unnamed exception now and then (FC08's
+// query `ba 08 00 00 58 a9 54 52 cd d5 45 1e` holds `52 cd d5 45 1e`).
 bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end) const {
   for (uint64_t inner = begin + 1; inner + min_adu <= end; ++inner)
-    if (match_at(inner, false, 0).kind == Match::Kind::found) return true;
+    if (match_at(inner, false, 0).kind == Match::Kind::found && standard_frame(inner)) return true;
   return false;
 }
 

@@ -711,5 +711,24 @@ TEST_F(GapCollector, JunkThatBeginsAsTheAwaitedAnswerIsNotARequestWhileItIsDue) 
   }
 }
 
+// FC08 Return Query Data, whose end only its CRC tells, holds bytes that pass a CRC as a frame
+// of vendor code CDH with an exception no standard names: "52 cd d5 45 1e". A frame a bus
+// would not carry does not count against the query that holds it, nor against its echo.
+TEST_F(GapCollector, ANonStandardFrameInsideAQueryDoesNotCutIt) {
+  const auto query = hex("ba 08 00 00 58 a9 54 52 cd d5 45 1e");
+  ASSERT_EQ(crc16(query), 0);
+  ASSERT_EQ(crc16(hex("52 cd d5 45 1e")), 0);
+  const std::vector<Piece> pieces{
+      {20'000'000, query}, {3'000'000, query}, {20'000'000, read_request}};
+  const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[0].raw, query);
+  EXPECT_EQ(frames[0].role, Role::request);
+  EXPECT_EQ(frames[1].raw, query);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[2].raw, read_request);
+}
+
 }  // namespace
 }  // namespace modtap::decoder
