@@ -169,9 +169,14 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
   // for the master's next one: a talked-over answer whose junk passed a CRC by chance
   // (`55 01 04 69 ff c9 69 16`, a read of 0xFFC9 coils, where 4 bytes of coils were due). The
   // answer, damaged, is the reading. (After a damaged answer, the master's next request may
-  // begin alike and come as soon.)
-  if (role == Role::request && other && first_after_request(at) && begins_as_awaited(at) &&
-      too_soon_for_retry(at) && !copies_request(at, length))
+  // begin alike and come as soon.) So is a glitch with the awaited answer's slave and function
+  // code after it: `ff 03 0c 15 de 10 1a ec` passed a CRC as a read for slave 255, where slave
+  // 3's answer to FC0C began after its driver's 0xFF.
+  const bool glitch_then_awaited =
+      is_glitch_byte(p[0]) && awaited_length(at + 1, end_ - at - 1).has_value();
+  if (role == Role::request && other && first_after_request(at) &&
+      (begins_as_awaited(at) || glitch_then_awaited) && too_soon_for_retry(at) &&
+      !copies_request(at, length))
     return Verdict::refuse;
   // A copy of the pending request with a glitch after it reads as a response of one more
   // byte (FC07: a status equal to the request's CRC low byte); on a bus of glitches, the copy

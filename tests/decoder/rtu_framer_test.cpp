@@ -711,6 +711,33 @@ TEST_F(GapCollector, JunkThatBeginsAsTheAwaitedAnswerIsNotARequestWhileItIsDue) 
   }
 }
 
+// Slave 3's answer to FC0C after its driver's 0xFF, whose first bytes after the glitch pass a
+// CRC as a read for slave 255 (`ff 03 0c 15 de 10 1a ec`): a glitch with the awaited answer's
+// slave and function code after it, where the answer is due, starts no request.
+TEST_F(GapCollector, AGlitchBeforeTheAwaitedAnswerStartsNoRequest) {
+  const auto request = hex("03 0c 01 45");
+  const auto answer =
+      hex("03 0c 15 de 10 1a ec 41 31 c6 88 17 63 bf 1d 11 67 a0 45 dd cb a7 a3 25 c5 fe");
+  ASSERT_EQ(crc16(answer), 0);
+  ASSERT_EQ(crc16(concat({hex("ff"), std::vector<uint8_t>(answer.begin(), answer.begin() + 7)})),
+            0);
+  // With the request, in a timer's reads that end anywhere: no silence to tell by.
+  const auto bytes = concat({request, hex("ff"), answer});
+  for (size_t split = 1; split < bytes.size(); ++split) {
+    const std::vector<Piece> pieces{
+        {20'000'000, std::vector<uint8_t>(bytes.begin(), bytes.begin() + split)},
+        {0, std::vector<uint8_t>(bytes.begin() + split, bytes.end())},
+        {20'000'000, read_request}};
+    const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+    ASSERT_EQ(frames.size(), 3u) << split;
+    EXPECT_EQ(frames[1].raw, answer) << split;
+    EXPECT_EQ(frames[1].role, Role::response) << split;
+    EXPECT_TRUE(frames[1].check_ok) << split;
+    EXPECT_EQ(frames[1].request, frames[0].index) << split;
+    EXPECT_EQ(frames[2].raw, read_request) << split;
+  }
+}
+
 // FC08 Return Query Data, whose end only its CRC tells, holds bytes that pass a CRC as a frame
 // of vendor code CDH with an exception no standard names: "52 cd d5 45 1e". A frame a bus
 // would not carry does not count against the query that holds it, nor against its echo.
