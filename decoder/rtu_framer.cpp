@@ -165,19 +165,23 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
     if (after_gap.kind == Match::Kind::need_more && !final) return Verdict::wait;
   }
   // The first bytes after the request (a glitch aside), beginning as the awaited answer with
-  // every byte its request predicts in place (a read's byte count), read as a request too soon
-  // for the master's next one: a talked-over answer whose junk passed a CRC by chance
-  // (`55 01 04 69 ff c9 69 16`, a read of 0xFFC9 coils, where 4 bytes of coils were due). The
-  // answer, damaged, is the reading. (After a damaged answer, the master's next request may
-  // begin alike and come as soon.) So is a glitch with the awaited answer's slave and function
-  // code after it: `ff 03 0c 15 de 10 1a ec` passed a CRC as a read for slave 255, where slave
-  // 3's answer to FC0C began after its driver's 0xFF.
-  const bool glitch_then_awaited =
-      is_glitch_byte(p[0]) && awaited_length(at + 1, end_ - at - 1).has_value();
-  if (role == Role::request && other && first_after_request(at) &&
-      (begins_as_awaited(at) || glitch_then_awaited) && too_soon_for_retry(at) &&
-      !copies_request(at, length))
-    return Verdict::refuse;
+  // every byte its request predicts in place (a read's byte count), read as a request the
+  // standard does not allow, too soon for the master's next one: a talked-over answer whose
+  // junk passed a CRC by chance (`55 01 04 69 ff c9 69 16`, a read of 0xFFC9 coils, where 4
+  // bytes of coils were due). The answer, damaged, is the reading. So is a 0xFF glitch with the
+  // awaited answer's slave and function code after it: `ff 03 0c 15 de 10 1a ec` passed a CRC
+  // as a read for slave 255, where slave 3's answer to FC0C began after its driver's 0xFF. (A
+  // request the standard allows may be the master's, after a time-out shorter than the
+  // threshold: a write of the same block with new values begins as its echo would.)
+  if (role == Role::request && other && first_after_request(at) && too_soon_for_retry(at) &&
+      !copies_request(at, length)) {
+    const bool junk_as_request =
+        begins_as_awaited(at) &&
+        request_spec_findings({p + 1, static_cast<size_t>(length - 1 - crc_size)}) != 0;
+    const bool glitch_then_awaited =
+        p[0] == 0xFF && awaited_length(at + 1, end_ - at - 1).has_value();
+    if (junk_as_request || glitch_then_awaited) return Verdict::refuse;
+  }
   // A copy of the pending request with a glitch after it reads as a response of one more
   // byte (FC07: a status equal to the request's CRC low byte); on a bus of glitches, the copy
   // is the likelier (a master's retry), unless it came too soon for a retry. (Any other frame
@@ -198,15 +202,18 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
   // A copy of the pending request too soon for a retry, where the awaited answer is longer, is
   // that answer damaged: FC07's answer whose status equals the request's CRC low byte starts
   // with the request whole (its CRC's low byte is then the request's high byte), and is the
-  // request and a 0x00. Where the answer begins (the first bytes after the request), cut or
-  // talked over after the copy, it is no retry. Further on, after a damaged answer, a master
-  // may repeat its request as soon: there only bytes no frame explains after the copy say so.
+  // request and a 0x00. Where the answer begins (the first bytes after the request), where the
+  // answer may begin so, cut or talked over after the copy, it is no retry (a quick retry of a
+  // read at 0400H of 2 registers reads as the start of its answer, but that answer's data
+  // would all have to repeat the request). Further on, after a damaged answer, a master may
+  // repeat its request as soon: there only bytes no frame explains after the copy say so.
   if (other && *other == Role::response && copies_request(at, length) && too_soon_for_retry(at)) {
     const uint64_t end = at + length;
     const auto awaited = awaited_length(at, end_ - at);
     if (awaited && *awaited > length) {
+      if (first_after_request(at) && answer_may_copy_request(at, length, *awaited))
+        return Verdict::refuse;
       if (end == end_ && !final) return Verdict::wait;  // what follows tells
-      if (first_after_request(at)) return Verdict::refuse;
       if (end < end_ && !gap_at(end)) {
         const Match next = match_at(end, final, 0);
         if (next.kind == Match::Kind::need_more && !final) return Verdict::wait;
@@ -243,7 +250,8 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
 // after a glitch). Nothing when what follows is still to come. With no bytes after it yet, it
 // waits for them only where its last byte came in a read of its own after a read of several,
 // as the next frame's first byte does in modtap's own pcapng (its reader reads a packet's
-// first byte apart, to time it). Waiting behind every response that ends a read cost a pcap
+// first byte apart, to time it), or where the read that brought its first byte began before
+// it (a timer's reads end anywhere). Waiting behind every response that ends a read cost a pcap
 // 17% more to frame; behind every last byte read alone, a capture read a byte at a time held
 // each response back until its channel's next byte, behind the other channel's frames.
 std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bool final) const {
@@ -320,8 +328,8 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
 // A bounded CRC search for the end of a frame of no fixed length, from `first` bytes on. A CRC
 // match alone is weak evidence (a trailing 0x00 keeps a zero residue zero), so the end must
 // also be confirmed by a gap or the next frame; only when nothing confirms that way may a
-// turnaround glitch stand in between. A frame found this way never swallows a frame whose
-// length rules and CRC agree.
+// turnaround glitch stand in between. A frame found this way never swallows a standard frame
+// whose length rules and CRC agree.
 RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, bool final,
                                        int search) const {
   const uint64_t avail = end_ - at;
@@ -589,6 +597,7 @@ void RtuFramer::emit_frame(uint64_t at, const Match& match) {
   frame.expected_check = wire_crc(frame.adu);
   if (match.ambiguous_end) frame.findings |= finding_ambiguous_end;
   sink_.on_frame(frame);
+  answer_start_ = at + match.length;
   consume(at + match.length);
 }
 
@@ -632,10 +641,24 @@ std::optional<bool> RtuFramer::awaited_byte(uint64_t begin, uint64_t pos) const 
   return (pos == crc_at ? (crc & 0xFF) : (crc >> 8)) == p[pos];
 }
 
-// Whether `at` is where the bytes after the last frame begin, or a glitch after it ends: while
-// a request is pending, where its answer begins.
+// Whether `at` is where the bytes after the last frame begin, or a lone glitch after it ends:
+// while a request is pending, where its answer begins. Bytes after junk are not.
 bool RtuFramer::first_after_request(uint64_t at) const {
-  return at == head_ || (at == head_ + 1 && is_glitch_byte(*at_ptr(head_)));
+  return at == answer_start_ || (at == answer_start_ + 1 && answer_start_ >= head_ &&
+                                 answer_start_ < end_ && is_glitch_byte(*at_ptr(answer_start_)));
+}
+
+// Whether the awaited answer of `awaited` bytes may begin with the copy of its request at
+// [at, at + length) by chance a slave's answer often meets: no byte the request predicts is
+// otherwise, and the answer has at most one byte of its own before its CRC. Any good frame and
+// a 0x00 pass a CRC, so FC07's answer whose status equals the request's CRC low byte (1 in 256)
+// is its request and a 0x00; a read's answer would need all its data to repeat the request.
+bool RtuFramer::answer_may_copy_request(uint64_t at, uint16_t length, uint16_t awaited) const {
+  const ResponsePrefix prefix = response_prefix(expected_.request_pdu);
+  if (awaited > 1 + prefix.size + 1 + crc_size) return false;
+  for (uint64_t pos = 2; pos < length; ++pos)
+    if (awaited_byte(at, pos) == false) return false;
+  return true;
 }
 
 // Whether the bytes at `at` are the awaited response's slave, function code and what its
@@ -684,6 +707,7 @@ void RtuFramer::emit_damaged(uint64_t begin, uint64_t end, Damage damage, uint32
   frame.check_ok = false;
   frame.findings |= finding_bad_check | findings;
   sink_.on_frame(frame);
+  answer_start_ = end;
   consume(end);
 }
 
@@ -732,6 +756,7 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
         frame.damage = Damage::corrupted;
       }
       sink_.on_frame(frame);
+      answer_start_ = end;
       consume(end);
       return;
     }
@@ -759,6 +784,7 @@ void RtuFramer::emit_noise(uint64_t begin, uint64_t end, NoiseReason reason) {
   noise.end_ns = end_time(end - 1);
   noise.reason = reason;
   sink_.on_noise(noise);
+  if (reason == NoiseReason::glitch && begin == answer_start_) answer_start_ = end;
   consume(end);
 }
 

@@ -77,6 +77,7 @@ class RtuFramer {
   bool read_starts_inside(uint64_t at) const;
   bool begins_as_awaited(uint64_t at) const;
   bool first_after_request(uint64_t at) const;
+  bool answer_may_copy_request(uint64_t at, uint16_t length, uint16_t awaited) const;
   Match match_role(Role role, uint64_t at, bool final, int search) const;
   // The lengths in [first, limit] that give the bytes from `at` a good CRC, ascending.
   size_t good_lengths(uint64_t at, size_t first, size_t limit,
@@ -94,7 +95,8 @@ class RtuFramer {
   bool confirmed_end(uint64_t begin, uint64_t end, bool final, int search, bool allow_glitch) const;
   bool blocked_by_gap(uint64_t at, bool final) const;
   bool copy_follows(uint64_t begin, uint64_t end) const;
-  // Whether a frame of known length and good CRC starts inside [begin, end).
+  // Whether a frame a bus carries (public function code, standard exception), of known length
+  // and good CRC, starts inside [begin, end).
   bool swallows_known_frame(uint64_t begin, uint64_t end) const;
   // First position >= from that starts a good frame; `decided` false if one is still open.
   uint64_t next_start(uint64_t from, bool final, bool& decided);
@@ -136,6 +138,7 @@ class RtuFramer {
   uint64_t base_ = 0;           // stream offset of buf_[0]
   uint64_t head_ = 0;           // stream offset of the first unresolved byte
   uint64_t end_ = 0;            // stream offset one past the last byte
+  uint64_t answer_start_ = 0;   // where the last frame (and a lone glitch after it) ended
   uint64_t scanned_to_ = 0;     // positions below this are known not to start a frame
   mutable CrcIndex crc_index_;  // over the searched part of buf_
   mutable CrcHits last_hits_;

@@ -757,5 +757,31 @@ TEST_F(GapCollector, ANonStandardFrameInsideAQueryDoesNotCutIt) {
   EXPECT_EQ(frames[2].raw, read_request);
 }
 
+// A master whose time-out is shorter than modtap's retry threshold (50 ms with no turnaround
+// learned) sends its retry, or its next write of the same block, 30 ms after a silent slave.
+// A read at 0400H of 2 registers begins as its own answer would (byte count 04), and a write
+// of new values as its echo would: each stays the master's request, and the answer after it
+// answers it.
+TEST_F(GapCollector, AQuickRetryOrNextWriteAfterASilentSlaveStaysARequest) {
+  const auto read = with_crc(hex("01 03 04 00 00 02"));
+  const auto read_answer = with_crc(hex("01 03 04 00 0a 00 0b"));
+  const auto write = with_crc(hex("01 10 00 05 00 02 04 00 0a 01 02"));
+  const auto next_write = with_crc(hex("01 10 00 05 00 02 04 00 0b 01 03"));
+  const auto write_echo = with_crc(hex("01 10 00 05 00 02"));
+  const std::vector<std::array<std::vector<uint8_t>, 3>> cases{{read, read, read_answer},
+                                                               {write, next_write, write_echo}};
+  for (size_t c = 0; c < cases.size(); ++c) {
+    const auto& [first, second, answer] = cases[c];
+    const std::vector<Piece> pieces{{20'000'000, first}, {30'000'000, second}, {3'000'000, answer}};
+    const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+    ASSERT_EQ(frames.size(), 3u) << c;
+    EXPECT_EQ(frames[1].raw, second) << c;
+    EXPECT_EQ(frames[1].role, Role::request) << c;
+    EXPECT_TRUE(frames[1].check_ok) << c;
+    EXPECT_EQ(frames[2].raw, answer) << c;
+    EXPECT_EQ(frames[2].request, frames[1].index) << c;
+  }
+}
+
 }  // namespace
 }  // namespace modtap::decoder
