@@ -113,8 +113,11 @@ void BusDiagnostics::remember_interval(SlaveHistory& slave, int64_t interval) {
 size_t BusDiagnostics::count_before(const std::array<int64_t, poll_history>& sorted, size_t n,
                                     int64_t value, bool after_equals) {
   size_t count = 0;
-  for (size_t i = 0; i < poll_history; ++i)
-    count += (i < n) & ((sorted[i] < value) | (after_equals & (sorted[i] == value)));
+  if (after_equals) {
+    for (size_t i = 0; i < n; ++i) count += sorted[i] <= value;
+  } else {
+    for (size_t i = 0; i < n; ++i) count += sorted[i] < value;
+  }
   return count;
 }
 
