@@ -1,6 +1,7 @@
 #include "decoder/matcher.hpp"
 
 #include <algorithm>
+#include <utility>
 
 #include "decoder/function_codes.hpp"
 
@@ -32,8 +33,15 @@ void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
     frame.findings |= finding_garbage_after_request;
   const Copy copy = judge_copy(frame);
   frame.role = decide_role(frame, channel_role, copy);
+  // Right after an echo that may have been a retry, a frame that may answer the same request
+  // is as ambiguous as a request, and an answer only a retry leaves room for answers that.
+  const auto echo = std::exchange(ambiguous_echo_, std::nullopt);
+  const bool after_echo = echo && may_answer(frame, *echo->request);
   if (frame.role == Role::request) {
+    if (after_echo) frame.findings |= finding_ambiguous_echo;
     on_request(frame);
+  } else if (frame.role == Role::response && after_echo && !pending_matches(frame)) {
+    answers_retry(frame, *echo);
   } else if (frame.role == Role::response) {
     on_response(frame, copy);
   }
@@ -85,11 +93,18 @@ bool Matcher::long_after_answer_due(const Frame& frame) const {
          frame.t_ns - pending_->end_ns >= retry_from_ns(slave);
 }
 
-bool Matcher::copies_pending(const Frame& frame) const {
+// A copy of the request, or a frame that fits as its answer (a FC08 counter, an exception).
+bool Matcher::may_answer(const Frame& frame, const Pending& request) {
+  return frame.check_ok && frame.slave() == request.slave &&
+         (frame.function() & 0x7F) == request.pdu[0] &&
+         (frame.is_exception() || copies(frame, request) ||
+          check_response_fit({request.pdu.data(), request.size}, frame.pdu()) == finding_none);
+}
+
+bool Matcher::copies(const Frame& frame, const Pending& request) {
   const auto pdu = frame.pdu();
-  return frame.slave() == pending_->slave &&
-         std::equal(pdu.begin(), pdu.end(), pending_->pdu.begin(),
-                    pending_->pdu.begin() + pending_->size);
+  return frame.slave() == request.slave && std::equal(pdu.begin(), pdu.end(), request.pdu.begin(),
+                                                      request.pdu.begin() + request.size);
 }
 
 // A master that gets no answer sends the same request again after its own time-out (50 ms to
@@ -169,7 +184,10 @@ void Matcher::on_response(Frame& frame, Copy copy) {
   }
   frame.request = pending_->index;
   frame.request_pdu = {pending_->pdu.data(), pending_->size};
-  if (copy == Copy::ambiguous) frame.findings |= finding_ambiguous_echo;
+  if (copy == Copy::ambiguous) {
+    frame.findings |= finding_ambiguous_echo;
+    ambiguous_echo_ = AmbiguousEcho{pending_, frame.index, frame.end_ns};
+  }
   // A clock that steps back, or stamps reads later than the bytes ended, can put a response
   // before its request's end: that latency is not measured rather than negative.
   if (options_.timed && frame.t_ns >= pending_->end_ns) {
@@ -181,6 +199,14 @@ void Matcher::on_response(Frame& frame, Copy copy) {
   if (frame.check_ok)
     frame.findings |= check_response_fit({pending_->pdu.data(), pending_->size}, frame.pdu());
   set_pending(nullptr);
+}
+
+// An answer right after an ambiguous echo, that only an answer can be: no slave answers twice,
+// so the echo was the master's retry, and this answers it.
+void Matcher::answers_retry(Frame& frame, const AmbiguousEcho& echo) {
+  frame.request = echo.index;
+  frame.request_pdu = {echo.request->pdu.data(), echo.request->size};
+  if (options_.timed && frame.t_ns >= echo.end_ns) frame.latency_ns = frame.t_ns - echo.end_ns;
 }
 
 void Matcher::advance(int64_t now_ns) {

@@ -55,12 +55,21 @@ class Matcher {
     uint16_t size = 0;             // PDU bytes kept (enough for echo and fit checks)
     std::array<uint8_t, 256> pdu;  // left uninitialised: only `size` bytes are ever read
   };
+  // An echo just taken for the answer that may have been the master's retry (its request's
+  // slot stays as it was until the next request but one).
+  struct AmbiguousEcho {
+    const Pending* request;
+    uint64_t index;
+    int64_t end_ns;
+  };
 
   // What a frame that repeats the pending request byte for byte is: its (echo) response, the
   // master's retry, or either; none when it is no such copy.
   enum class Copy : uint8_t { none, response, retry, ambiguous };
   Copy judge_copy(const Frame& frame) const;
-  bool copies_pending(const Frame& frame) const;
+  bool copies_pending(const Frame& frame) const { return pending_ && copies(frame, *pending_); }
+  static bool copies(const Frame& frame, const Pending& request);
+  static bool may_answer(const Frame& frame, const Pending& request);
   // How soon after its request a copy of it can only be the answer, and from when it may be
   // the master's retry (from when it can only be one, once a turnaround is learned).
   int64_t answered_within_ns(uint8_t slave) const;
@@ -78,6 +87,7 @@ class Matcher {
   bool long_after_answer_due(const Frame& frame) const;
   void on_request(Frame& frame);
   void on_response(Frame& frame, Copy copy);
+  void answers_retry(Frame& frame, const AmbiguousEcho& echo);
   void expire(int64_t now_ns, TimeoutReason reason);
   bool pending_matches(const Frame& frame) const;
   bool awaits_answer(ChannelRole channel_role) const;
@@ -90,7 +100,8 @@ class Matcher {
   uint8_t next_slot_ = 0;
   Pending* pending_ = nullptr;     // the open transaction
   Pending* unanswered_ = nullptr;  // the request that last timed out, until another is sent
-  Expectation expectation_;        // what pending_ means to a framer, kept in step with it
+  std::optional<AmbiguousEcho> ambiguous_echo_;  // the last frame, where it was one
+  Expectation expectation_;  // what pending_ means to a framer, kept in step with it
   // The longest turnaround seen per slave, and on the bus, from pairs no retry could fake.
   std::array<int64_t, 256> turnaround_ns_{};
   int64_t bus_turnaround_ns_ = 0;

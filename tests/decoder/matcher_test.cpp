@@ -231,6 +231,27 @@ TEST(Matcher, AnEchoCopyWithNothingToJudgeByIsAResponseMarkedAmbiguous) {
   EXPECT_TRUE(out.frames()[1].findings & finding_ambiguous_echo);
 }
 
+// Right after an ambiguous echo, with no clock: a third copy may be the retry's echo or the
+// master's next request, and says so; an answer only an answer can be (an exception) shows the
+// echo was the retry, and answers it.
+TEST(Matcher, WhatFollowsAnAmbiguousEchoSaysWhatItCanOfIt) {
+  const char* write = "01 06 25 02 17 70 2d 12";
+  const auto three = analyze_untimed(join({write, write, write})).frames();
+  ASSERT_EQ(three.size(), 3u);
+  EXPECT_EQ(three[2].role, Role::request);
+  EXPECT_TRUE(three[2].findings & finding_ambiguous_echo);
+  const auto refused = analyze_untimed(join({write, write, "01 86 02 c3 a1"})).frames();
+  ASSERT_EQ(refused.size(), 3u);
+  EXPECT_EQ(refused[2].role, Role::response);
+  EXPECT_EQ(refused[2].request, refused[1].index);
+  EXPECT_FALSE(refused[2].findings & finding_unsolicited);
+  // Another write after the pair is no answer to it: the master's next request, unmarked.
+  const auto next = analyze_untimed(join({write, write, "01 06 25 02 00 05 e3 05"})).frames();
+  ASSERT_EQ(next.size(), 3u);
+  EXPECT_EQ(next[2].role, Role::request);
+  EXPECT_FALSE(next[2].findings & finding_ambiguous_echo);
+}
+
 TEST(ResponseFit, CountersOfDiagnosticsNeedNotEcho) {
   EXPECT_EQ(check_response_fit(hex("08 00 0b 00 00"), hex("08 00 0b 01 23")), finding_none);
   EXPECT_EQ(check_response_fit(hex("08 00 00 12 ab"), hex("08 00 00 12 ac")),
