@@ -373,6 +373,8 @@ INSTANTIATE_TEST_SUITE_P(
                  usb_jitter},
         Scenario{"faulty_senders_per_byte", Delivery::per_byte, faulty_senders(31)},
         Scenario{"untimed", Delivery::untimed, real_masters(32), 2},
+        Scenario{"whole_frames_pcap", Delivery::whole_frames, real_masters(33), 0, Via::pcap},
+        Scenario{"hexlog_bursts", Delivery::bursts, real_masters(34), 0, Via::hexlog},
         Scenario{"glitches_per_byte", Delivery::per_byte, glitch_every_turnaround(27)},
         Scenario{"glitches_bursts", Delivery::bursts, glitch_every_turnaround(28)},
         Scenario{"glitches_per_frame", Delivery::per_frame, glitch_every_turnaround(29)},
