@@ -518,7 +518,7 @@ constexpr std::array public_codes{
     Row{0x14, "Read File Record", reads_only, counted_at<2, 7, 245>, counted_at<2, 1>, within_spec,
         fits_anything, file_records<false>, file_read, no_access, no_values, code_only},
     Row{0x15, "Write File Record", broadcast, counted_at<2, 7, 245>, counted_at<2, 1>, within_spec,
-        fits_anything, file_records<true>, echo<file_records<true>>, no_access, no_values,
+        echoes_whole, file_records<true>, echo<file_records<true>>, no_access, no_values,
         code_only},
     Row{0x16, "Mask Write Register", broadcast, fixed<8>, fixed<8>, within_spec, echoes_whole,
         mask_write, echo<mask_write>, mask_write_access, no_values, whole_echo_prefix},

@@ -195,6 +195,17 @@ TEST(Matcher, AnotherWriteLongAfterAnAnswerWasDueIsTheMastersNextRequest) {
   EXPECT_EQ(timeouts[0].request, frames[2].index);
   EXPECT_EQ(frames[4].role, Role::response);
   EXPECT_EQ(frames[4].request, frames[3].index);
+  // The same with FC21, whose answer echoes its request whole: other file records 220 ms on
+  // are the master's next write.
+  const auto files = match_timed({{"01 03 00 00 00 01 84 0a", 0},
+                                  {"01 03 02 00 05 78 47", 10},
+                                  {"01 15 09 06 00 04 00 01 00 01 12 34 03 f5", 100},
+                                  {"01 15 09 06 00 04 00 01 00 01 56 79 f0 c0", 320},
+                                  {"01 15 09 06 00 04 00 01 00 01 56 79 f0 c0", 330}},
+                                 timeouts, keep);
+  EXPECT_EQ(files[3].role, Role::request);
+  EXPECT_EQ(files[4].role, Role::response);
+  EXPECT_EQ(files[4].request, files[3].index);
   // Within the slave's time, a reply that does not echo is still its answer, unfit.
   const auto soon = match_timed({{"01 03 00 00 00 01 84 0a", 0},
                                  {"01 03 02 00 05 78 47", 10},
@@ -250,6 +261,15 @@ TEST(Matcher, WhatFollowsAnAmbiguousEchoSaysWhatItCanOfIt) {
   ASSERT_EQ(next.size(), 3u);
   EXPECT_EQ(next[2].role, Role::request);
   EXPECT_FALSE(next[2].findings & finding_ambiguous_echo);
+}
+
+// FC21's answer is its request again (Modbus application protocol 6.15): other file records
+// are no answer to it, but a write the master sends next.
+TEST(ResponseFit, AFileRecordWriteIsAnsweredByItsEcho) {
+  const auto write = hex("15 09 06 00 04 00 01 00 01 12 34");
+  EXPECT_EQ(check_response_fit(write, write), finding_none);
+  EXPECT_EQ(check_response_fit(write, hex("15 09 06 00 04 00 01 00 01 56 79")),
+            finding_echo_mismatch);
 }
 
 TEST(ResponseFit, CountersOfDiagnosticsNeedNotEcho) {
