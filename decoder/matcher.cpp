@@ -81,8 +81,8 @@ Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role, Copy cop
   return frame.fit.request ? Role::request : Role::unknown;
 }
 
-bool Matcher::fits_pending(const Frame& frame) const {
-  return check_response_fit({pending_->pdu.data(), pending_->size}, frame.pdu()) == finding_none;
+bool Matcher::fits(const Frame& frame, const Pending& request) {
+  return check_response_fit({request.pdu.data(), request.size}, frame.pdu()) == finding_none;
 }
 
 // Past the pending request's time for a retry, once a turnaround is known (the slave's, else
@@ -97,8 +97,7 @@ bool Matcher::long_after_answer_due(const Frame& frame) const {
 bool Matcher::may_answer(const Frame& frame, const Pending& request) {
   return frame.check_ok && frame.slave() == request.slave &&
          (frame.function() & 0x7F) == request.pdu[0] &&
-         (frame.is_exception() || copies(frame, request) ||
-          check_response_fit({request.pdu.data(), request.size}, frame.pdu()) == finding_none);
+         (frame.is_exception() || copies(frame, request) || fits(frame, request));
 }
 
 bool Matcher::copies(const Frame& frame, const Pending& request) {

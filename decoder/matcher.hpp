@@ -83,7 +83,9 @@ class Matcher {
   }
 
   Role decide_role(const Frame& frame, ChannelRole channel_role, Copy copy) const;
-  bool fits_pending(const Frame& frame) const;  // as the pending request's answer
+  // Whether the frame fits as the request's answer.
+  static bool fits(const Frame& frame, const Pending& request);
+  bool fits_pending(const Frame& frame) const { return fits(frame, *pending_); }
   bool long_after_answer_due(const Frame& frame) const;
   void on_request(Frame& frame);
   void on_response(Frame& frame, Copy copy);

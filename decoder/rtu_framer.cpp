@@ -200,13 +200,12 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
     }
   }
   // A copy of the pending request too soon for a retry, where the awaited answer is longer, is
-  // that answer damaged: FC07's answer whose status equals the request's CRC low byte starts
-  // with the request whole (its CRC's low byte is then the request's high byte), and is the
-  // request and a 0x00. Where the answer begins (the first bytes after the request), where the
-  // answer may begin so, cut or talked over after the copy, it is no retry (a quick retry of a
-  // read at 0400H of 2 registers reads as the start of its answer, but that answer's data
-  // would all have to repeat the request). Further on, after a damaged answer, a master may
-  // repeat its request as soon: there only bytes no frame explains after the copy say so.
+  // that answer damaged. FC07's answer whose status equals the request's CRC low byte is the
+  // request and a 0x00, so right where the answer begins, if the answer may begin so, the copy
+  // is that answer cut or talked over (a quick retry of a read of 2 registers at 0400H also
+  // begins as its answer would, but that answer's data would all have to repeat the request).
+  // Further on, after a damaged answer, a master may repeat its request as soon: there only
+  // bytes no frame explains after the copy make it the answer.
   if (other && *other == Role::response && copies_request(at, length) && too_soon_for_retry(at)) {
     const uint64_t end = at + length;
     const auto awaited = awaited_length(at, end_ - at);
@@ -496,7 +495,7 @@ bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
 // query `ba 08 00 00 58 a9 54 52 cd d5 45 1e` holds `52 cd d5 45 1e`).
 bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end) const {
   for (uint64_t inner = begin + 1; inner + min_adu <= end; ++inner)
-    if (match_at(inner, false, 0).kind == Match::Kind::found && standard_frame(inner)) return true;
+    if (standard_frame(inner) && match_at(inner, false, 0).kind == Match::Kind::found) return true;
   return false;
 }
 
