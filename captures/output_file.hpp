@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <memory>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -46,7 +47,10 @@ class OutputFile {
  private:
   [[noreturn]] void fail();
 
+  static constexpr size_t buffer_size = 1 << 16;
+
   FILE* file_;
+  std::unique_ptr<char[]> buffer_;  // the stream's, so it outlives the stream
   uint64_t written_ = 0;
   bool owned_;
   std::string name_;
