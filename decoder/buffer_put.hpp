@@ -4,7 +4,9 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <string_view>
 
@@ -39,6 +41,28 @@ inline void put_int(fmt::memory_buffer& out, int64_t v) {
   put_decimal(out, v);
 }
 
+// "00" to "99": decimal digits two at a time, one division by 100 a pair.
+inline constexpr auto decimal_pairs = [] {
+  std::array<char, 200> pairs{};
+  for (int i = 0; i < 100; ++i) {
+    pairs[2 * i] = static_cast<char>('0' + i / 10);
+    pairs[2 * i + 1] = static_cast<char>('0' + i % 10);
+  }
+  return pairs;
+}();
+
+// Exactly `count` digits of `v`, zeros first (v < 10^count): the digits below a second.
+inline void put_zero_padded(fmt::memory_buffer& out, uint32_t v, int count) {
+  const size_t at = out.size();
+  out.resize(at + static_cast<size_t>(count));
+  char* end = out.data() + at + count;
+  for (; count >= 2; count -= 2, v /= 100) {
+    end -= 2;
+    std::memcpy(end, &decimal_pairs[2 * (v % 100)], 2);
+  }
+  if (count) end[-1] = static_cast<char>('0' + v);
+}
+
 // Nanoseconds since the epoch as one integer, as JSON carries times: the second's ten digits
 // are made once a second and the nine below it each time, a third of the work of nineteen.
 class NanosecondsText {
@@ -52,10 +76,7 @@ class NanosecondsText {
       seconds_text_.assign(digits.data(), digits.size());
     }
     modtap::put(out, seconds_text_);
-    auto below = static_cast<uint32_t>(ns - seconds * second_ns);
-    char digits[9];
-    for (int i = 8; i >= 0; --i, below /= 10) digits[i] = static_cast<char>('0' + below % 10);
-    modtap::put(out, {digits, 9});
+    put_zero_padded(out, static_cast<uint32_t>(ns - seconds * second_ns), 9);
   }
 
  private:
@@ -64,12 +85,17 @@ class NanosecondsText {
   std::string seconds_text_;
 };
 
-// Four uppercase hex digits: a register address as the manuals write it (2502).
+// `count` hex digits of `v`, uppercase (a register address as the manuals write it: 2502) or
+// lowercase (a value shown as 0xff00).
+inline void put_hex(fmt::memory_buffer& out, uint32_t v, int count, bool upper = true) {
+  const char* digits = upper ? "0123456789ABCDEF" : "0123456789abcdef";
+  const size_t at = out.size();
+  out.resize(at + static_cast<size_t>(count));
+  char* end = out.data() + at + count;
+  for (; count > 0; --count, v >>= 4) *--end = digits[v & 0xF];
+}
 inline void put_hex4(fmt::memory_buffer& out, uint16_t v) {
-  constexpr char digits[] = "0123456789ABCDEF";
-  const char text[4] = {digits[v >> 12], digits[(v >> 8) & 0xF], digits[(v >> 4) & 0xF],
-                        digits[v & 0xF]};
-  put(out, {text, 4});
+  put_hex(out, v, 4);
 }
 
 }  // namespace modtap

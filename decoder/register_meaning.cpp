@@ -102,7 +102,17 @@ void check_value(const RegisterDef& def, const RegisterValue& v, RuleFindings* f
 void decode_span(const DeviceModel& model, Table table, uint16_t start,
                  std::span<const uint16_t> words, Meaning& meaning, RuleFindings* found) {
   std::vector<RegisterValue>& out = meaning.registers;
-  if (!meaning.lists_unnamed && maps_no_register(model)) return;
+  if (maps_no_register(model)) {  // every word unnamed: nothing to look up
+    if (!meaning.lists_unnamed) return;
+    for (size_t i = 0; i < words.size(); ++i) {
+      RegisterValue& v = out.emplace_back();
+      v.table = table;
+      v.address = static_cast<uint16_t>(start + i);
+      v.raw = words[i];
+      v.value = words[i];
+    }
+    return;
+  }
   for (size_t i = 0; i < words.size(); ++i) {
     const auto address = static_cast<uint16_t>(start + i);
     const RegisterLookup lookup = find_register(model, table, address);

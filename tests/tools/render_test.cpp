@@ -76,6 +76,13 @@ TEST(Put, AppendsLabelsNumbersAndHexInPlace) {
             "x=18446744073709551615");
   EXPECT_EQ(appended([](auto& out) { put_left_aligned(out, 7, 3); }), "x=7  ");
   EXPECT_EQ(appended([](auto& out) { put_hex4(out, 0x2a0f); }), "x=2A0F");
+  EXPECT_EQ(appended([](auto& out) { put_hex(out, 0xff00, 4, false); }), "x=ff00");
+  EXPECT_EQ(appended([](auto& out) { put_hex(out, 0x7, 2); }), "x=07");
+  // Digits below a second: exactly as many as asked, zeros first, odd counts too.
+  EXPECT_EQ(appended([](auto& out) { put_zero_padded(out, 2292, 6); }), "x=002292");
+  EXPECT_EQ(appended([](auto& out) { put_zero_padded(out, 999'999'999, 9); }), "x=999999999");
+  EXPECT_EQ(appended([](auto& out) { put_zero_padded(out, 0, 9); }), "x=000000000");
+  EXPECT_EQ(appended([](auto& out) { put_zero_padded(out, 5, 1); }), "x=5");
   const uint8_t bytes[] = {0x01, 0xab, 0x00};
   EXPECT_EQ(appended([&](auto& out) { append_hex(out, bytes, false); }), "x=01ab00");
   EXPECT_EQ(appended([&](auto& out) { append_hex(out, bytes, true); }), "x=01 ab 00");

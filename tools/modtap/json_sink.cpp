@@ -122,8 +122,13 @@ bool JsonSink::finding_names(uint32_t bits) {
 // "model", "registers" and "notes": each model finding's kind, address and explanation.
 void JsonSink::meaning(const Meaning& meaning) {
   auto& buf = out_.buffer();
-  put(buf, ",\"model\":");
-  append_json_string(buf, meaning.model->name);
+  if (meaning.model != model_key_for_) {  // escaped once per model, not for every record
+    model_key_for_ = meaning.model;
+    model_key_.clear();
+    put(model_key_, ",\"model\":");
+    append_json_string(model_key_, meaning.model->name);
+  }
+  put(buf, {model_key_.data(), model_key_.size()});
   put(buf, ",\"registers\":[");
   for (size_t i = 0; i < meaning.registers.size(); ++i) {
     if (i) buf.push_back(',');

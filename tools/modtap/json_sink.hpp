@@ -35,6 +35,9 @@ class JsonSink final : public decoder::RecordSink {
     fmt::memory_buffer json;
   };
   std::vector<ChannelKey> channel_keys_;
+  // `,"model":"NAME"` of the model it was last made for (models do not change in a run).
+  const decoder::DeviceModel* model_key_for_ = nullptr;
+  fmt::memory_buffer model_key_;
   NanosecondsText time_text_;
   decoder::DecodedPdu decoded_;  // the frame's fields, its capacity kept from frame to frame
 };

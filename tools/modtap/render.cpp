@@ -1,6 +1,8 @@
 #include "tools/modtap/render.hpp"
 
+#include <array>
 #include <cmath>
+#include <cstring>
 
 #include <fmt/compile.h>
 
@@ -70,7 +72,12 @@ void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_item
   auto it = fmt::appender(out);
   switch (f.type()) {
     case FieldType::hex:
-      fmt::format_to(it, FMT_COMPILE("0x{:04x}"), f.number);
+      if (f.number >= 0 && f.number <= 0xFFFF) {
+        put(out, "0x");
+        put_hex(out, static_cast<uint32_t>(f.number), 4, false);
+      } else {
+        fmt::format_to(it, FMT_COMPILE("0x{:04x}"), f.number);
+      }
       break;
     case FieldType::address:  // as the manuals write registers (2502H), or --register-base
       if (numbering.base == decoder::RegisterBase::hex) {
@@ -83,7 +90,12 @@ void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_item
       }
       break;
     case FieldType::code:  // as vendors' tables write codes: 52H
-      fmt::format_to(it, FMT_COMPILE("{:02X}H"), f.number);
+      if (f.number >= 0 && f.number <= 0xFF) {
+        put_hex(out, static_cast<uint32_t>(f.number), 2);
+        out.push_back('H');
+      } else {
+        fmt::format_to(it, FMT_COMPILE("{:02X}H"), f.number);
+      }
       break;
     case FieldType::name:
       out.push_back('"');
@@ -128,16 +140,26 @@ void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_item
 
 }  // namespace
 
+// A byte's two hex digits in one copy, from a table of all 256.
+constexpr auto hex_pairs = [] {
+  constexpr char digits[] = "0123456789abcdef";
+  std::array<char, 512> pairs{};
+  for (int i = 0; i < 256; ++i) {
+    pairs[2 * i] = digits[i >> 4];
+    pairs[2 * i + 1] = digits[i & 15];
+  }
+  return pairs;
+}();
+
 void append_hex(fmt::memory_buffer& out, std::span<const uint8_t> bytes, bool spaced) {
-  static constexpr char digits[] = "0123456789abcdef";
   if (bytes.empty()) return;
   const size_t at = out.size();
-  out.resize(at + bytes.size() * (spaced ? 3 : 2) - (spaced ? 1 : 0));
+  const size_t step = spaced ? 3 : 2;
+  out.resize(at + bytes.size() * step - (spaced ? 1 : 0));
   char* to = out.data() + at;
-  for (size_t i = 0; i < bytes.size(); ++i) {
-    if (spaced && i) *to++ = ' ';
-    *to++ = digits[bytes[i] >> 4];
-    *to++ = digits[bytes[i] & 15];
+  for (size_t i = 0; i < bytes.size(); ++i, to += step) {
+    std::memcpy(to, &hex_pairs[2 * bytes[i]], 2);
+    if (spaced && i + 1 < bytes.size()) to[2] = ' ';
   }
 }
 

@@ -64,12 +64,10 @@ void TextSink::time_column(int64_t t_ns) {
   switch (options_.time) {
     case TimeFormat::relative:
       if (!first_ns_) first_ns_ = t_ns;
-      out_.buffer().push_back(' ');
-      put_fixed(out_.buffer(), Fixed{t_ns - *first_ns_, 9, 6}, 11);
+      seconds_column(t_ns - *first_ns_);
       return;
     case TimeFormat::delta:
-      out_.buffer().push_back(' ');
-      put_fixed(out_.buffer(), Fixed{previous_ns_ ? t_ns - *previous_ns_ : 0, 9, 6}, 11);
+      seconds_column(previous_ns_ ? t_ns - *previous_ns_ : 0);
       previous_ns_ = t_ns;
       return;
     case TimeFormat::absolute:
@@ -77,6 +75,24 @@ void TextSink::time_column(int64_t t_ns) {
       absolute_time(t_ns);
       return;
   }
+}
+
+// " %11.6f" of the seconds, as Fixed{ns, 9, 6} gives them: the whole seconds' digits are made
+// once a second, the microseconds in three digit pairs (the column is on every line).
+void TextSink::seconds_column(int64_t ns) {
+  auto& buf = out_.buffer();
+  buf.push_back(' ');
+  if (ns < 0) return put_fixed(buf, Fixed{ns, 9, 6}, 11);
+  const uint64_t us = (static_cast<uint64_t>(ns) + 500) / 1000;
+  const uint64_t second = us / 1'000'000;
+  if (second != seconds_shown_) {
+    seconds_shown_ = second;
+    const fmt::format_int digits(second);
+    seconds_text_.assign(digits.data(), digits.size());
+  }
+  put_right_aligned(buf, seconds_text_, 4);
+  buf.push_back('.');
+  put_zero_padded(buf, static_cast<uint32_t>(us - second * 1'000'000), 6);
 }
 
 // The date and time are formatted once a second; the microseconds per record.

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <optional>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -36,6 +37,7 @@ class TextSink final : public decoder::RecordSink {
 
  private:
   void time_column(int64_t t_ns);
+  void seconds_column(int64_t ns);
   void absolute_time(int64_t t_ns);
   void channel_column(uint16_t channel);
   AddressNumbering numbering_of(const decoder::Frame& frame) const;
@@ -47,9 +49,11 @@ class TextSink final : public decoder::RecordSink {
   Output& out_;
   const std::vector<decoder::ChannelInfo>& channels_;
   TextOptions options_;
-  std::optional<int64_t> first_ns_;     // relative times count from here
-  std::optional<int64_t> previous_ns_;  // delta times from here
-  int64_t shown_second_ = -1;           // the second whose date and time `shown_` holds
+  std::optional<int64_t> first_ns_;      // relative times count from here
+  std::optional<int64_t> previous_ns_;   // delta times from here
+  int64_t shown_second_ = -1;            // the second whose date and time `shown_` holds
+  uint64_t seconds_shown_ = UINT64_MAX;  // the whole seconds `seconds_text_` holds
+  std::string seconds_text_;
   fmt::memory_buffer shown_;
   decoder::DecodedPdu decoded_;  // the frame's fields, its capacity kept from frame to frame
 };
