@@ -21,14 +21,20 @@ namespace modtap {
   std::copy(text.begin(), text.end(), out.data() + at);
 }
 
+// Room for `n` more characters, made out of line: the paths that write into it then need no
+// registers for growing the buffer, which they would save and restore on every call.
+[[gnu::noinline]] inline void make_room(fmt::memory_buffer& out, size_t n) {
+  out.reserve(out.size() + n);
+}
+
 // Decimal without fmt's parsing: the hot path of every line. The digits go straight into the
-// buffer's room for the longest number, which is then cut to what they took.
+// buffer's room for the longest number; its size is then set to what they took, through the
+// buffer's base, where growing is a call it never makes here.
 template <typename Integer>
 [[gnu::always_inline]] inline void put_decimal(fmt::memory_buffer& out, Integer v) {
-  const size_t at = out.size();
-  out.resize(at + 20);
-  const char* end = fmt::format_to(out.data() + at, FMT_COMPILE("{}"), v);
-  out.resize(static_cast<size_t>(end - out.data()));
+  if (out.capacity() - out.size() < 20) make_room(out, 20);
+  const char* end = fmt::format_to(out.data() + out.size(), FMT_COMPILE("{}"), v);
+  static_cast<fmt::detail::buffer<char>&>(out).try_resize(static_cast<size_t>(end - out.data()));
 }
 // What fits 32 bits unsigned (nearly every index, count and duration) takes 32-bit arithmetic: its
 // division by 100 per two digits is a cheaper multiply than the 64-bit one.

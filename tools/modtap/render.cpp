@@ -260,9 +260,16 @@ void append_register_keys(fmt::memory_buffer& out, const decoder::RegisterValue&
   put(out, ",\"name\":");
   optional_string(reg.name);
   put(out, ",\"raw\":");
+  const size_t raw_at = out.size();
   put_int(out, reg.raw);
+  const size_t raw_end = out.size();
   put(out, ",\"value\":");
-  if (std::isfinite(reg.value)) {
+  // Unscaled, as most are: the raw digits again.
+  if (reg.value == reg.raw && reg.decimals == 0 && !std::signbit(reg.value)) {
+    const size_t at = out.size();
+    out.resize(at + (raw_end - raw_at));
+    std::memcpy(out.data() + at, out.data() + raw_at, raw_end - raw_at);
+  } else if (std::isfinite(reg.value)) {
     decoder::append_number(out, reg.value, reg.decimals);
   } else {
     put(out, "null");
