@@ -2,30 +2,36 @@
 
 #include <algorithm>
 
+#include <fmt/compile.h>
 #include <fmt/format.h>
 
 namespace modtap::decoder {
 namespace {
 
-// GGnnH: the group and the index are the two bytes of the address.
-std::optional<RegisterDef> group_parameter(const ParameterGroups& groups, uint16_t address,
-                                           bool& closed) {
+// GGnnH: the group and the index are the two bytes of the address. The parameter is made in
+// `made` itself: a lookup per word a frame carries, where a copy of the definition cost more
+// than finding it.
+void make_group_parameter(const ParameterGroups& groups, uint16_t address, bool& closed,
+                          std::optional<RegisterDef>& made) {
   const unsigned group = address >> 8;
   const unsigned index = address & 0xFF;
   if (groups.closed.count(group)) {
     closed = true;
   } else if (groups.counts.empty()) {
-    if (group > groups.max_group || index > groups.max_index) return std::nullopt;
+    if (group > groups.max_group || index > groups.max_index) return;
   } else {
     const auto it = groups.counts.find(group);
-    if (it == groups.counts.end() || index >= it->second) return std::nullopt;
+    if (it == groups.counts.end() || index >= it->second) return;
   }
-  RegisterDef def;
+  RegisterDef& def = made.emplace();
   def.address = address;
   def.table = groups.table;
   def.access = groups.access;
-  def.name = fmt::format("{}{:02}.{:02}", groups.prefix, group, index);
-  return def;
+  // PREFIX GG.nn, each number at least two digits.
+  char number[16];
+  char* end = fmt::format_to(number, FMT_COMPILE("{:02}.{:02}"), group, index);
+  def.name.reserve(groups.prefix.size() + static_cast<size_t>(end - number));
+  def.name.append(groups.prefix).append(number, end);
 }
 
 }  // namespace
@@ -43,7 +49,7 @@ RegisterLookup find_register(const DeviceModel& model, Table table, uint16_t add
     return found;
   }
   if (model.groups && model.groups->table == table)
-    found.made = group_parameter(*model.groups, address, found.closed_group);
+    make_group_parameter(*model.groups, address, found.closed_group, found.made);
   return found;
 }
 
