@@ -27,6 +27,13 @@ namespace modtap {
   out.reserve(out.size() + n);
 }
 
+// What the buffer already holds at [from, to), appended again: a number printed twice is copied.
+inline void put_again(fmt::memory_buffer& out, size_t from, size_t to) {
+  const size_t at = out.size();
+  out.resize(at + (to - from));
+  std::memcpy(out.data() + at, out.data() + from, to - from);
+}
+
 // Decimal without fmt's parsing: the hot path of every line. The digits go straight into the
 // buffer's room for the longest number; its size is then set to what they took, through the
 // buffer's base, where growing is a call it never makes here.

@@ -83,6 +83,13 @@ TEST(Put, AppendsLabelsNumbersAndHexInPlace) {
   EXPECT_EQ(appended([](auto& out) { put_zero_padded(out, 999'999'999, 9); }), "x=999999999");
   EXPECT_EQ(appended([](auto& out) { put_zero_padded(out, 0, 9); }), "x=000000000");
   EXPECT_EQ(appended([](auto& out) { put_zero_padded(out, 5, 1); }), "x=5");
+  // A number printed twice is copied from where it stands, however the buffer grows between.
+  EXPECT_EQ(appended([](auto& out) {
+              put_uint(out, 42442);
+              put(out, std::string(600, ','));
+              put_again(out, 2, 7);
+            }),
+            "x=42442" + std::string(600, ',') + "42442");
   const uint8_t bytes[] = {0x01, 0xab, 0x00};
   EXPECT_EQ(appended([&](auto& out) { append_hex(out, bytes, false); }), "x=01ab00");
   EXPECT_EQ(appended([&](auto& out) { append_hex(out, bytes, true); }), "x=01 ab 00");

@@ -3,6 +3,8 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <string>
+#include <vector>
 
 #include <fmt/compile.h>
 
@@ -61,10 +63,18 @@ void append_json_scalar(fmt::memory_buffer& out, const Field& f) {
   }
 }
 
+// Each field's `"name":`, made once from the registry: keys are most of a JSON line's pieces.
 void append_json_key(fmt::memory_buffer& out, const Field& f) {
-  out.push_back('"');
-  put(out, f.name());
-  put(out, "\":");
+  static const std::vector<std::string> keys = [] {
+    std::vector<std::string> made;
+    for (const decoder::FieldInfo& info : decoder::field_registry()) {
+      const auto slot = static_cast<size_t>(info.id);
+      if (made.size() <= slot) made.resize(slot + 1);
+      made[slot] = fmt::format("\"{}\":", info.name);
+    }
+    return made;
+  }();
+  put(out, keys[static_cast<size_t>(f.id)]);
 }
 
 void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_items,
@@ -266,9 +276,7 @@ void append_register_keys(fmt::memory_buffer& out, const decoder::RegisterValue&
   put(out, ",\"value\":");
   // Unscaled, as most are: the raw digits again.
   if (reg.value == reg.raw && reg.decimals == 0 && !std::signbit(reg.value)) {
-    const size_t at = out.size();
-    out.resize(at + (raw_end - raw_at));
-    std::memcpy(out.data() + at, out.data() + raw_at, raw_end - raw_at);
+    put_again(out, raw_at, raw_end);
   } else if (std::isfinite(reg.value)) {
     decoder::append_number(out, reg.value, reg.decimals);
   } else {
