@@ -21,8 +21,8 @@ OutputFile::OutputFile(const std::string& path)
       name_(output_name(path)) {
   if (!file_) throw WriteError(fmt::format("{}: cannot create", name_), errno);
   // The C library's own buffer is a disk block (4 KiB): a pcapng writer hands it a block of
-  // about 200 bytes at a time, and it made a system call every twenty of them.
-  // glibc takes a size only with a buffer it is given.
+  // about 200 bytes at a time, and it made a system call every twenty of them. glibc takes a
+  // size only with a buffer it is given.
   if (owned_) {
     buffer_ = std::make_unique<char[]>(buffer_size);
     std::setvbuf(file_, buffer_.get(), _IOFBF, buffer_size);

@@ -76,6 +76,23 @@ inline void put_zero_padded(fmt::memory_buffer& out, uint32_t v, int count) {
   if (count) end[-1] = static_cast<char>('0' + v);
 }
 
+// The digits of a number that changes seldom (a time's whole seconds), made only when it does.
+class KeptDecimal {
+ public:
+  std::string_view of(uint64_t v) {
+    if (v != value_ || text_.empty()) {
+      value_ = v;
+      const fmt::format_int digits(v);
+      text_.assign(digits.data(), digits.size());
+    }
+    return text_;
+  }
+
+ private:
+  uint64_t value_ = 0;
+  std::string text_;
+};
+
 // Nanoseconds since the epoch as one integer, as JSON carries times: the second's ten digits
 // are made once a second and the nine below it each time, a third of the work of nineteen.
 class NanosecondsText {
@@ -83,19 +100,13 @@ class NanosecondsText {
   void put(fmt::memory_buffer& out, int64_t ns) {
     if (ns < second_ns) return put_int(out, ns);  // no second's digits to keep (or negative)
     const int64_t seconds = ns / second_ns;
-    if (seconds != seconds_) {
-      seconds_ = seconds;
-      const fmt::format_int digits(seconds);
-      seconds_text_.assign(digits.data(), digits.size());
-    }
-    modtap::put(out, seconds_text_);
+    modtap::put(out, seconds_.of(static_cast<uint64_t>(seconds)));
     put_zero_padded(out, static_cast<uint32_t>(ns - seconds * second_ns), 9);
   }
 
  private:
   static constexpr int64_t second_ns = 1'000'000'000;
-  int64_t seconds_ = -1;
-  std::string seconds_text_;
+  KeptDecimal seconds_;
 };
 
 // `count` hex digits of `v`, uppercase (a register address as the manuals write it: 2502) or

@@ -85,12 +85,7 @@ void TextSink::seconds_column(int64_t ns) {
   if (ns < 0) return put_fixed(buf, Fixed{ns, 9, 6}, 11);
   const uint64_t us = (static_cast<uint64_t>(ns) + 500) / 1000;
   const uint64_t second = us / 1'000'000;
-  if (second != seconds_shown_) {
-    seconds_shown_ = second;
-    const fmt::format_int digits(second);
-    seconds_text_.assign(digits.data(), digits.size());
-  }
-  put_right_aligned(buf, seconds_text_, 4);
+  put_right_aligned(buf, seconds_.of(second), 4);
   buf.push_back('.');
   put_zero_padded(buf, static_cast<uint32_t>(us - second * 1'000'000), 6);
 }

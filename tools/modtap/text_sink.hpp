@@ -2,7 +2,6 @@
 #pragma once
 
 #include <optional>
-#include <string>
 #include <string_view>
 #include <vector>
 
@@ -49,11 +48,10 @@ class TextSink final : public decoder::RecordSink {
   Output& out_;
   const std::vector<decoder::ChannelInfo>& channels_;
   TextOptions options_;
-  std::optional<int64_t> first_ns_;      // relative times count from here
-  std::optional<int64_t> previous_ns_;   // delta times from here
-  int64_t shown_second_ = -1;            // the second whose date and time `shown_` holds
-  uint64_t seconds_shown_ = UINT64_MAX;  // the whole seconds `seconds_text_` holds
-  std::string seconds_text_;
+  std::optional<int64_t> first_ns_;     // relative times count from here
+  std::optional<int64_t> previous_ns_;  // delta times from here
+  int64_t shown_second_ = -1;           // the second whose date and time `shown_` holds
+  KeptDecimal seconds_;                 // relative and delta times' whole seconds
   fmt::memory_buffer shown_;
   decoder::DecodedPdu decoded_;  // the frame's fields, its capacity kept from frame to frame
 };
