@@ -182,6 +182,19 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
         p[0] == 0xFF && awaited_length(at + 1, end_ - at - 1).has_value();
     if (junk_as_request || glitch_then_awaited) return Verdict::refuse;
   }
+  // A request inside the span the awaited answer's structure claims is a collision's junk
+  // that passed a CRC unless its own answer follows it (after a cut answer, the master's next
+  // request and its answer): a FC0C poll of slave 113, then junk, inside a talked-over answer
+  // of 51 bytes (seed 896); a FC06 write of slave 3 from the last bytes of a talked-over FC14
+  // answer on, then another slave's request (1008); a read of 10,773 inputs of slave 131 from
+  // the second byte of a cut exception `ae 83 02` on (946). A silence after it may be its slave's;
+  // with no clock, where the master's time-out after a silent slave cannot show, no rule.
+  if (role == Role::request && p[0] != 0 && options_.clock != ClockQuality::none && at > head_ &&
+      at < awaited_end(head_)) {
+    const auto answered = answer_follows(at, at + length, final);
+    if (!answered) return Verdict::wait;
+    if (!*answered) return Verdict::refuse;
+  }
   // A copy of the pending request with a glitch after it reads as a response of one more
   // byte (FC07: a status equal to the request's CRC low byte); on a bus of glitches, the copy
   // is the likelier (a master's retry), unless it came too soon for a retry. (Any other frame
@@ -205,7 +218,9 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
   // is that answer cut or talked over (a quick retry of a read of 2 registers at 0400H also
   // begins as its answer would, but that answer's data would all have to repeat the request).
   // Further on, after a damaged answer, a master may repeat its request as soon: there only
-  // bytes no frame explains after the copy make it the answer.
+  // bytes no frame explains after the copy make it the answer, unless they begin as the
+  // answer to it would (a FC07 poll `c7 07 12 42` again after a talked-over answer, then its
+  // own answer talked over, `c7 07 31 c1 cd`; seed 1021).
   if (other && *other == Role::response && copies_request(at, length) && too_soon_for_retry(at)) {
     const uint64_t end = at + length;
     const auto awaited = awaited_length(at, end_ - at);
@@ -216,7 +231,8 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
       if (end < end_ && !gap_at(end)) {
         const Match next = match_at(end, final, 0);
         if (next.kind == Match::Kind::need_more && !final) return Verdict::wait;
-        if (next.kind == Match::Kind::none && !glitch_then_frame(end, final, 0))
+        if (next.kind == Match::Kind::none && !glitch_then_frame(end, final, 0) &&
+            !starts_awaited(end, end_ - end))
           return Verdict::refuse;
       }
     }
@@ -241,7 +257,50 @@ RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t lengt
                          (expected_.slave != p[0] || expected_.function != (p[1] & 0x7F));
   if ((p[0] > max_unicast_slave || unawaited) && swallows_known_frame(at, at + length))
     return Verdict::refuse;
+  // Nor does any frame whose CRC holds by chance across a whole exchange: junk after it, and
+  // inside it a request with its own answer's first bytes after it. A cut FC0C answer
+  // `a5 0c 08 fb e1 58`, a glitch, the next request `10 0b 4d b7`, a glitch and its answer's
+  // slave address passed a CRC as the 13 bytes the answer claimed (seed 1073); a FC0F request
+  // of 255 bytes from inside a talked-over answer on, across the two exchanges after it (1020).
+  if (search > 0 && swallows_exchange(at, at + length, final)) return Verdict::refuse;
   return Verdict::keep;
+}
+
+// Whether what follows the request [at, end), after a glitch if one comes, may be its answer:
+// its slave and function code (an exception's too), a silence, or the end of the input.
+// Nothing while the bytes that tell are still to come.
+std::optional<bool> RtuFramer::answer_follows(uint64_t at, uint64_t end, bool final) const {
+  const uint64_t answer = end + (end < end_ && is_glitch_byte(*at_ptr(end)) ? 1 : 0);
+  if (answer + 2 > end_) return final ? std::optional(true) : std::nullopt;
+  if (gap_at(end) || gap_at(answer)) return true;
+  const uint8_t* request = at_ptr(at);
+  const uint8_t* p = at_ptr(answer);
+  return p[0] == request[0] && (p[1] & 0x7F) == request[1];
+}
+
+// Whether junk follows [begin, end) and a request starts inside it with a frame of its slave
+// and function code (its answer) right after it, or after a glitch. Junk first, and a public
+// function code right after (or after a glitch) is taken to begin a frame without looking
+// further: a frame follows almost every frame, and the search inside is rare.
+bool RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) const {
+  if (end + 3 > end_) return false;
+  const uint8_t* after = at_ptr(end);
+  if (is_public_function(after[1] & 0x7F) ||
+      (is_glitch_byte(after[0]) && is_public_function(after[2] & 0x7F)) || gap_at(end) ||
+      match_at(end, final, 0).kind != Match::Kind::none || glitch_then_frame(end, final, 0))
+    return false;
+  for (uint64_t inner = begin + 1; inner < end && inner + 3 <= end_; ++inner) {
+    if (!standard_frame(inner)) continue;
+    const Match request = match_at(inner, final, 0);
+    if (request.kind != Match::Kind::found || !request.fit.request) continue;
+    const uint64_t after = inner + request.length;
+    const bool glitch = after < end_ && is_glitch_byte(*at_ptr(after));
+    for (uint64_t answer = after; answer <= after + (glitch ? 1 : 0); ++answer)
+      if (answer + 2 <= end_ && std::equal(at_ptr(inner), at_ptr(inner + 2), at_ptr(answer)) &&
+          match_at(answer, final, 0).kind != Match::Kind::none)
+        return true;
+  }
+  return false;
 }
 
 // Whether the response [at, at + length) is one cut a byte short with the next request right
@@ -492,9 +551,12 @@ bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
 
 // Only a frame a bus carries counts (a public function code, a standard exception): inside a
 // long frame, bytes pass a CRC as a vendor code or an unnamed exception now and then (FC08's
-// query `ba 08 00 00 58 a9 54 52 cd d5 45 1e` holds `52 cd d5 45 1e`).
+// query `ba 08 00 00 58 a9 54 52 cd d5 45 1e` holds `52 cd d5 45 1e`). One that starts in the
+// last bytes and runs on past them is swallowed too: a collision's junk `c0 f1 a0`, then the
+// next request `34 14 0e ...`, passed a CRC as an answer of slave 192 ending in `34 14`
+// (seed 1045).
 bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end) const {
-  for (uint64_t inner = begin + 1; inner + min_adu <= end; ++inner)
+  for (uint64_t inner = begin + 1; inner < end && inner + 3 <= end_; ++inner)
     if (standard_frame(inner) && match_at(inner, false, 0).kind == Match::Kind::found) return true;
   return false;
 }

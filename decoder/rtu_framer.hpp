@@ -96,8 +96,10 @@ class RtuFramer {
   bool blocked_by_gap(uint64_t at, bool final) const;
   bool copy_follows(uint64_t begin, uint64_t end) const;
   // Whether a frame a bus carries (public function code, standard exception), of known length
-  // and good CRC, starts inside [begin, end).
+  // and good CRC, starts inside [begin, end), wherever it ends.
   bool swallows_known_frame(uint64_t begin, uint64_t end) const;
+  bool swallows_exchange(uint64_t begin, uint64_t end, bool final) const;
+  std::optional<bool> answer_follows(uint64_t at, uint64_t end, bool final) const;
   // First position >= from that starts a good frame; `decided` false if one is still open.
   uint64_t next_start(uint64_t from, bool final, bool& decided);
   uint64_t awaited_end(uint64_t at) const;
