@@ -428,10 +428,15 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
   // FC08 Return Query Data followed by junk: once nothing more can confirm it, its own
   // header (slave, 08, sub-function 0000) and CRC have to do. A silence with a good frame after
   // it bounds the junk as the end of the input does (a glitch, a cut answer and a glitch, then
-  // the master's next request after its time-out).
+  // the master's next request after its time-out). Where a 0x00 after it makes one byte more
+  // good too, that reading stands as well (a query whose CRC ends in 0x00, answered by a cut
+  // exception; seed 1690).
   if (unconfirmed && p[1] == 0x08 &&
-      (final || (avail >= max_rtu_adu && !open) || blocked_by_gap(at, final)))
-    return {Match::Kind::found, static_cast<uint16_t>(unconfirmed), fit};
+      (final || (avail >= max_rtu_adu && !open) || blocked_by_gap(at, final))) {
+    const bool longer_holds = std::find(hits.begin(), hits.begin() + hit_count, unconfirmed + 1) !=
+                              hits.begin() + hit_count;
+    return {Match::Kind::found, static_cast<uint16_t>(unconfirmed), fit, longer_holds};
+  }
   if (!final && (avail < max_rtu_adu || open)) return need_more();
   return {};
 }
