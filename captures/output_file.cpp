@@ -15,7 +15,7 @@ std::string output_name(const std::string& path) {
   return path == "-" ? "standard output" : path;
 }
 
-OutputFile::OutputFile(const std::string& path)
+OutputFile::OutputFile(const std::string& path, bool buffered)
     : file_(path == "-" ? stdout : std::fopen(path.c_str(), "wb")),
       owned_(path != "-"),
       name_(output_name(path)) {
@@ -23,7 +23,9 @@ OutputFile::OutputFile(const std::string& path)
   // The C library's own buffer is a disk block (4 KiB): a pcapng writer hands it a block of
   // about 200 bytes at a time, and it made a system call every twenty of them. glibc takes a
   // size only with a buffer it is given.
-  if (owned_) {
+  if (owned_ && !buffered) {
+    std::setvbuf(file_, nullptr, _IONBF, 0);
+  } else if (owned_) {
     buffer_ = std::make_unique<char[]>(buffer_size);
     std::setvbuf(file_, buffer_.get(), _IOFBF, buffer_size);
   }

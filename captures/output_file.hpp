@@ -26,7 +26,9 @@ class WriteError : public std::runtime_error {
 class OutputFile {
  public:
   // "-" is standard output. Throws WriteError when the file cannot be created.
-  explicit OutputFile(const std::string& path);
+  // `buffered`: small writes are gathered in a buffer; a caller that writes large pieces
+  // itself (the pcapng writer) has each go to the system as it is, not copied again.
+  explicit OutputFile(const std::string& path, bool buffered = true);
   // A stream someone else opened (an extcap FIFO); it is flushed, never closed, here.
   OutputFile(FILE* stream, std::string name);
   ~OutputFile();  // closes without reporting: call close() to learn of a failure

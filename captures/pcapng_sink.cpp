@@ -1,7 +1,6 @@
 #include "captures/pcapng_sink.hpp"
 
 #include <algorithm>
-#include <iterator>
 #include <stdexcept>
 
 #include <fmt/compile.h>
@@ -206,10 +205,7 @@ void PcapngSink::on_frame(const Frame& frame) {
     writer_.write_packet(interface, frame.t_ns, frame.raw, direction, {});
     return;
   }
-  if (frame.request) {  // the request goes out first, and this answer then need not wait
-    answered(*frame.request);
-    write_resolved();
-  }
+  if (frame.request) writer_.release(*frame.request);  // its outcome is known now
   comment_.clear();
   append_frame_comment(comment_, frame);
   std::span<const uint8_t> data = frame.raw;
@@ -222,7 +218,8 @@ void PcapngSink::on_frame(const Frame& frame) {
   // time-out comes, so that a request that timed out says so in its own comment.
   const bool awaits =
       frame.role == Role::request && frame.check_ok && frame.slave() != 0 && frame.index != 0;
-  emit(interface, frame.t_ns, data, direction, awaits ? frame.index : 0);
+  writer_.write_packet(interface, frame.t_ns, data, direction, {comment_.data(), comment_.size()},
+                       awaits ? frame.index : 0);
 }
 
 void PcapngSink::on_noise(const Noise& noise) {
@@ -232,65 +229,22 @@ void PcapngSink::on_noise(const Noise& noise) {
   if (options_.link == PcapngLink::exported_pdu) data = exported_pdu("data", true, noise.raw);
   comment_.clear();
   append_noise_comment(comment_, noise);
-  emit(interface, noise.t_ns, data, PacketDirection::unknown, 0);
+  writer_.write_packet(interface, noise.t_ns, data, PacketDirection::unknown,
+                       {comment_.data(), comment_.size()});
 }
 
 void PcapngSink::on_timeout(const Timeout& timeout) {
-  for (size_t i = 0; i < held_count_; ++i) {
-    Held& h = held_[i];
-    if (h.awaits != timeout.request) continue;
-    h.awaits = 0;
-    if (timeout.timed_out())  // not when the capture merely ended first
-      fmt::format_to(std::back_inserter(h.comment), FMT_COMPILE(" timeout={} waited_us={}.{:03}"),
-                     to_string(timeout.reason), timeout.waited_ns / 1000, timeout.waited_ns % 1000);
+  if (timeout.timed_out()) {  // not when the capture merely ended first
+    comment_.clear();
+    fmt::format_to(fmt::appender(comment_), FMT_COMPILE(" timeout={} waited_us={}.{:03}"),
+                   to_string(timeout.reason), timeout.waited_ns / 1000, timeout.waited_ns % 1000);
+    writer_.extend_comment(timeout.request, {comment_.data(), comment_.size()});
   }
-  write_resolved();
+  writer_.release(timeout.request);
 }
 
 void PcapngSink::finish() {
-  for (size_t i = 0; i < held_count_; ++i) held_[i].awaits = 0;
-  write_resolved();
-}
-
-void PcapngSink::emit(uint32_t interface, int64_t t_ns, std::span<const uint8_t> data,
-                      PacketDirection direction, uint64_t awaits) {
-  const std::string_view comment(comment_.data(), comment_.size());
-  if (held_count_ == 0 && awaits == 0) {
-    writer_.write_packet(interface, t_ns, data, direction, comment);
-    return;
-  }
-  // Bounded: past this many, the oldest go out as they are.
-  if (held_count_ == max_held) {
-    held_[0].awaits = 0;
-    write_resolved();
-  }
-  if (held_count_ == held_.size()) held_.emplace_back();
-  Held& h = held_[held_count_++];
-  h.interface = interface;
-  h.t_ns = t_ns;
-  h.direction = direction;
-  h.data.assign(data.begin(), data.end());
-  h.comment.assign(comment);
-  h.awaits = awaits;
-  write_resolved();
-}
-
-void PcapngSink::answered(uint64_t request) {
-  for (size_t i = 0; i < held_count_; ++i)
-    if (held_[i].awaits == request) held_[i].awaits = 0;
-}
-
-// Writes the held packets up to the first request still waiting; their storage is kept.
-void PcapngSink::write_resolved() {
-  size_t done = 0;
-  while (done < held_count_ && held_[done].awaits == 0) {
-    const Held& h = held_[done++];
-    writer_.write_packet(h.interface, h.t_ns, h.data, h.direction, h.comment);
-  }
-  if (done == 0) return;
-  std::rotate(held_.begin(), held_.begin() + static_cast<ptrdiff_t>(done),
-              held_.begin() + static_cast<ptrdiff_t>(held_count_));
-  held_count_ -= done;
+  writer_.release_all();
 }
 
 }  // namespace modtap::captures

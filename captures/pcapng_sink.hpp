@@ -50,21 +50,6 @@ class PcapngSink final : public decoder::RecordSink {
   void finish();
 
  private:
-  // A packet written later: it is, or follows, a request whose outcome is not known yet.
-  struct Held {
-    uint32_t interface = 0;
-    int64_t t_ns = 0;
-    PacketDirection direction = PacketDirection::unknown;
-    std::vector<uint8_t> data;
-    std::string comment;
-    uint64_t awaits = 0;  // the index of the request it is, while that awaits its answer
-  };
-  static constexpr size_t max_held = 4096;
-
-  void emit(uint32_t interface, int64_t t_ns, std::span<const uint8_t> data,
-            PacketDirection direction, uint64_t awaits);
-  void answered(uint64_t request);
-  void write_resolved();
   uint32_t interface_for(uint16_t channel);
   std::span<const uint8_t> exported_pdu(std::string_view protocol, bool from_master,
                                         std::span<const uint8_t> payload);
@@ -75,8 +60,6 @@ class PcapngSink final : public decoder::RecordSink {
   std::vector<int64_t> interface_of_channel_;  // -1 until its interface block is written
   std::vector<uint8_t> payload_;
   fmt::memory_buffer comment_;  // the packet's comment, its storage kept from frame to frame
-  std::vector<Held> held_;      // the first held_count_ are held, in order; the rest is storage
-  size_t held_count_ = 0;
 };
 
 // -w: the pcapng file, or with -b a ring of them. Each file is whole (its own section and

@@ -2,32 +2,58 @@
 
 #include <algorithm>
 #include <cstring>
-#include <vector>
 
 #include "captures/pcapng_format.hpp"
 
 namespace modtap::captures {
 using namespace pcapng;
 
-// Blocks are written in the machine's byte order; the byte-order magic tells readers which.
+namespace {
+
+// The file is written in pieces of at least this many bytes (and whole blocks).
+constexpr size_t write_size = 256 * 1024;
+
+constexpr size_t max_holds = 4096;
+constexpr size_t max_held_bytes = 4 << 20;
+
+constexpr size_t padded(size_t n) {
+  return (n + 3) & ~size_t{3};
+}
+
+uint32_t load32(const uint8_t* at) {
+  uint32_t v;
+  std::memcpy(&v, at, 4);
+  return v;
+}
+
+void store32(uint8_t* at, uint32_t v) {
+  std::memcpy(at, &v, 4);
+}
+
+// An enhanced packet block's fixed part: type, total length, interface, time high and low,
+// captured and original length; the data follows it.
+constexpr size_t epb_header = 28;
+constexpr size_t epb_captured_length = 20;
+
+}  // namespace
+
+// A block built in place at the end of the writer's pending bytes, in the machine's byte order
+// (the byte-order magic tells readers which).
 class PcapngWriter::Block {
  public:
-  // Writes into `storage`: a writer keeps one, so a packet allocates nothing once it has grown
-  // to the largest block, and each piece is a copy, not a vector insert.
-  Block(std::vector<uint8_t>& storage, uint32_t type) : bytes_(storage) {
+  Block(PcapngWriter& writer, uint32_t type) : writer_(writer), start_(writer.size_) {
     put(type);
     put(uint32_t{0});  // the total length, known at the end
   }
   template <typename T>
   [[gnu::always_inline]] void put(T value) {
-    std::memcpy(room(sizeof value), &value, sizeof value);
+    std::memcpy(writer_.room(sizeof value), &value, sizeof value);
   }
   // The data and zeros to the next 32-bit boundary.
   void put_bytes(std::span<const uint8_t> data) {
-    const size_t padded = (data.size() + 3) & ~size_t{3};
-    uint8_t* at = room(padded);
-    std::copy(data.begin(), data.end(), at);
-    std::fill(at + data.size(), at + padded, uint8_t{0});
+    uint8_t* at = writer_.room(padded(data.size()));
+    if (!data.empty()) std::memcpy(at, data.data(), data.size());
+    std::memset(at + data.size(), 0, padded(data.size()) - data.size());
   }
   void option(uint16_t code, std::span<const uint8_t> value) {
     put(code);
@@ -41,50 +67,92 @@ class PcapngWriter::Block {
     put(opt_endofopt);
     put(uint16_t{0});
   }
-  // The whole block, its total length at both ends.
-  std::span<const uint8_t> finish() {
-    const auto total = static_cast<uint32_t>(size_ + 4);
-    std::memcpy(bytes_.data() + 4, &total, 4);
+  // The total length at both ends.
+  void finish() {
+    const auto total = static_cast<uint32_t>(writer_.size_ - start_ + 4);
     put(total);
-    return {bytes_.data(), size_};
+    store32(writer_.pending_.get() + start_ + 4, total);
   }
 
  private:
-  [[gnu::always_inline]] uint8_t* room(size_t n) {
-    if (size_ + n > bytes_.size()) bytes_.resize(std::max(size_ + n, 2 * bytes_.size()));
-    uint8_t* at = bytes_.data() + size_;
-    size_ += n;
-    return at;
-  }
-  std::vector<uint8_t>& bytes_;
-  size_t size_ = 0;
+  PcapngWriter& writer_;
+  size_t start_;
 };
 
-PcapngWriter::PcapngWriter(const std::string& path, bool live) : file_(path), live_(live) {
+PcapngWriter::PcapngWriter(const std::string& path, bool live)
+    : file_(path, /*buffered=*/false), live_(live) {
   write_section_header();
   if (live_) flush();
 }
 
-// One write per block, so a failure leaves the file whole up to its last complete block
-// (as far as the C library's buffer allows: it writes whole buffers, never half a call).
-void PcapngWriter::write_block(Block& block) {
-  file_.write(block.finish());
+PcapngWriter::~PcapngWriter() {
+  if (closed_) return;
+  try {
+    write_out(size_);
+  } catch (const WriteError&) {  // the file's own destructor closes it
+  }
+}
+
+void PcapngWriter::grow(size_t n) {
+  const size_t capacity = std::max(size_ + n, std::max(2 * capacity_, 2 * write_size));
+  auto grown = std::make_unique<uint8_t[]>(capacity);
+  if (size_ > 0) std::memcpy(grown.get(), pending_.get(), size_);
+  pending_ = std::move(grown);
+  capacity_ = capacity;
+}
+
+inline uint8_t* PcapngWriter::room(size_t n) {
+  if (size_ + n > capacity_) [[unlikely]]
+    grow(n);
+  uint8_t* at = pending_.get() + size_;
+  size_ += n;
+  return at;
+}
+
+// Makes `n` bytes of room at `at` inside the pending bytes, moving what follows.
+void PcapngWriter::insert_room(size_t at, size_t n) {
+  const size_t tail = size_ - at;
+  room(n);
+  std::memmove(pending_.get() + at + n, pending_.get() + at, tail);
+}
+
+// The bytes before the first held packet.
+size_t PcapngWriter::writable() const {
+  if (holds_.empty()) return size_;
+  return static_cast<size_t>(holds_.front().at - file_.bytes_written());
+}
+
+// Writes the first `n` pending bytes (whole blocks), keeping the rest.
+void PcapngWriter::write_out(size_t n) {
+  if (n == 0) return;
+  file_.write({pending_.get(), n});
+  std::memmove(pending_.get(), pending_.get() + n, size_ - n);
+  size_ -= n;
+}
+
+void PcapngWriter::write_due() {
+  while (!holds_.empty() && size_ - writable() > max_held_bytes) holds_.erase(holds_.begin());
+  if (live_) {
+    flush();
+  } else if (const size_t n = writable(); n >= write_size) {
+    write_out(n);
+  }
 }
 
 void PcapngWriter::write_section_header() {
-  Block b(block_, section_header_block);
+  Block b(*this, section_header_block);
   b.put(byte_order_magic);
   b.put(uint16_t{1});
   b.put(uint16_t{0});
   b.put(int64_t{-1});  // section length not known in advance
   b.option(shb_userappl, std::string_view("modtap"));
   b.end_options();
-  write_block(b);
+  b.finish();
 }
 
 uint32_t PcapngWriter::add_interface(int link_type, std::string_view name,
                                      std::string_view comment) {
-  Block b(block_, interface_description_block);
+  Block b(*this, interface_description_block);
   b.put(static_cast<uint16_t>(link_type));
   b.put(uint16_t{0});
   b.put(uint32_t{0});  // no snap length
@@ -93,35 +161,111 @@ uint32_t PcapngWriter::add_interface(int link_type, std::string_view name,
   const uint8_t nanoseconds = 9;
   b.option(if_tsresol, std::span<const uint8_t>(&nanoseconds, 1));
   b.end_options();
-  write_block(b);
+  b.finish();
+  write_due();
   return interfaces_++;
 }
 
 void PcapngWriter::write_packet(uint32_t interface, int64_t t_ns, std::span<const uint8_t> data,
-                                PacketDirection direction, std::string_view comment) {
-  Block b(block_, enhanced_packet_block);
-  const auto t = static_cast<uint64_t>(t_ns);
-  b.put(interface);
-  b.put(static_cast<uint32_t>(t >> 32));
-  b.put(static_cast<uint32_t>(t & 0xFFFFFFFF));
-  b.put(static_cast<uint32_t>(data.size()));
-  b.put(static_cast<uint32_t>(data.size()));
-  b.put_bytes(data);
-  if (!comment.empty()) b.option(opt_comment, comment);
-  if (direction != PacketDirection::unknown) {
-    const uint32_t flags = static_cast<uint32_t>(direction);
-    b.option(epb_flags, {reinterpret_cast<const uint8_t*>(&flags), 4});
+                                PacketDirection direction, std::string_view comment,
+                                uint64_t hold) {
+  if (hold != 0) {
+    if (holds_.size() == max_holds) holds_.erase(holds_.begin());
+    holds_.push_back({hold, file_.bytes_written() + size_});
   }
-  b.end_options();
-  write_block(b);
-  if (live_) flush();
+  comment = comment.substr(0, 0xFFFF);  // an option's length has 16 bits
+  // A held packet has a comment, if an empty one, for extend_comment to grow.
+  const bool commented = !comment.empty() || hold != 0;
+  const bool flagged = direction != PacketDirection::unknown;
+  const size_t total = epb_header + padded(data.size()) +
+                       (commented ? 4 + padded(comment.size()) : 0) + (flagged ? 8 : 0) + 8;
+  // The packet's block is made in one piece of room, each field a copy: a packet a frame,
+  // this is the hottest code of a -w run.
+  uint8_t* at = room(total);
+  auto put32 = [&](uint32_t v) {
+    std::memcpy(at, &v, 4);
+    at += 4;
+  };
+  auto put_option_header = [&](uint16_t code, size_t length) {
+    const uint16_t header[2] = {code, static_cast<uint16_t>(length)};
+    std::memcpy(at, header, 4);
+    at += 4;
+  };
+  auto put_padded = [&](const void* bytes, size_t n) {
+    if (n == 0) return;
+    const uint32_t zeros = 0;  // the padding: the last word zeroed, then the bytes over it
+    std::memcpy(at + padded(n) - 4, &zeros, 4);
+    std::memcpy(at, bytes, n);
+    at += padded(n);
+  };
+  const auto t = static_cast<uint64_t>(t_ns);
+  put32(enhanced_packet_block);
+  put32(static_cast<uint32_t>(total));
+  put32(interface);
+  put32(static_cast<uint32_t>(t >> 32));
+  put32(static_cast<uint32_t>(t & 0xFFFFFFFF));
+  put32(static_cast<uint32_t>(data.size()));
+  put32(static_cast<uint32_t>(data.size()));
+  put_padded(data.data(), data.size());
+  if (commented) {
+    put_option_header(opt_comment, comment.size());
+    put_padded(comment.data(), comment.size());
+  }
+  if (flagged) {
+    put_option_header(epb_flags, 4);
+    put32(static_cast<uint32_t>(direction));
+  }
+  put_option_header(opt_endofopt, 0);
+  put32(static_cast<uint32_t>(total));
+  write_due();
+}
+
+void PcapngWriter::extend_comment(uint64_t hold, std::string_view more) {
+  const auto held =
+      std::find_if(holds_.begin(), holds_.end(), [&](const Hold& h) { return h.key == hold; });
+  if (held == holds_.end()) return;
+  const size_t block = static_cast<size_t>(held->at - file_.bytes_written());
+  const size_t option = block + epb_header + padded(load32(&pending_[block + epb_captured_length]));
+  uint16_t length;
+  std::memcpy(&length, &pending_[option + 2], 2);
+  more = more.substr(0, 0xFFFF - length);
+  const size_t text_end = option + 4 + length;
+  const size_t grown = padded(length + more.size()) - padded(length);
+  insert_room(option + 4 + padded(length), grown);
+  std::memcpy(&pending_[text_end], more.data(), more.size());
+  std::memset(&pending_[text_end + more.size()], 0,
+              padded(length + more.size()) - length - more.size());
+  length = static_cast<uint16_t>(length + more.size());
+  std::memcpy(&pending_[option + 2], &length, 2);
+  const uint32_t total = load32(&pending_[block + 4]) + static_cast<uint32_t>(grown);
+  store32(&pending_[block + 4], total);
+  store32(&pending_[block + total - 4], total);
+  for (auto later = held + 1; later != holds_.end(); ++later) later->at += grown;
+}
+
+void PcapngWriter::release(uint64_t hold) {
+  const auto held =
+      std::find_if(holds_.begin(), holds_.end(), [&](const Hold& h) { return h.key == hold; });
+  if (held == holds_.end()) return;
+  holds_.erase(held);
+  write_due();
+}
+
+void PcapngWriter::release_all() {
+  holds_.clear();
+  write_due();
 }
 
 void PcapngWriter::flush() {
+  write_out(writable());
   file_.flush();
 }
 
 void PcapngWriter::close() {
+  if (closed_) return;
+  closed_ = true;
+  holds_.clear();
+  write_out(size_);
   file_.close();
 }
 
