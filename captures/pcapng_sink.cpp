@@ -1,6 +1,7 @@
 #include "captures/pcapng_sink.hpp"
 
 #include <algorithm>
+#include <array>
 #include <stdexcept>
 
 #include <fmt/compile.h>
@@ -78,6 +79,35 @@ void append_meaning(fmt::memory_buffer& out, const Meaning& meaning) {
                    finding.text);
 }
 
+// The comment's fixed pieces, each made once so that a frame puts it in one copy: the words
+// after the index for each mode, role and check (" mode=rtu role=request check=ok
+// duration_ns="), and each function code's name (` function="Read Coils"`).
+struct CommentPieces {
+  static constexpr size_t roles = 3;
+  std::array<std::string, 2 * roles * 2> verdicts;
+  std::array<std::string, 128> functions;
+
+  CommentPieces() {
+    for (const Mode mode : {Mode::rtu, Mode::ascii})
+      for (const Role role : {Role::request, Role::response, Role::unknown})
+        for (const bool ok : {false, true})
+          verdicts[verdicts_at(mode, role, ok)] =
+              fmt::format(" mode={} role={} check={} duration_ns=", to_string(mode),
+                          to_string(role), ok ? "ok" : "bad");
+    for (size_t fc = 0; fc < functions.size(); ++fc)
+      if (const auto name = function_name(static_cast<uint8_t>(fc)); !name.empty())
+        functions[fc] = fmt::format(" function=\"{}\"", name);
+  }
+  static size_t verdicts_at(Mode mode, Role role, bool ok) {
+    return (static_cast<size_t>(mode) * roles + static_cast<size_t>(role)) * 2 + ok;
+  }
+};
+
+const CommentPieces& comment_pieces() {
+  static const CommentPieces pieces;
+  return pieces;
+}
+
 }  // namespace
 
 PcapngLink parse_link(const std::string& name) {
@@ -88,13 +118,10 @@ PcapngLink parse_link(const std::string& name) {
 }
 
 void append_frame_comment(fmt::memory_buffer& out, const Frame& f) {
+  const CommentPieces& pieces = comment_pieces();
   put(out, "modtap index=");
   put_uint(out, f.index);
-  put(out, " mode=");
-  put(out, to_string(f.mode));
-  put(out, " role=");
-  put(out, to_string(f.role));
-  put(out, f.check_ok ? " check=ok duration_ns=" : " check=bad duration_ns=");
+  put(out, pieces.verdicts[CommentPieces::verdicts_at(f.mode, f.role, f.check_ok)]);
   put_int(out, f.end_ns - f.t_ns);
   if (!f.check_ok && f.damage != Damage::cut)
     fmt::format_to(fmt::appender(out), FMT_COMPILE(" expected_check=0x{:0{}x}"), f.expected_check,
@@ -104,11 +131,7 @@ void append_frame_comment(fmt::memory_buffer& out, const Frame& f) {
     put(out, damage);
   }
   // Names from modtap's function-code table, so the plugin knows no function code itself.
-  if (const auto name = function_name(f.function() & 0x7F); !name.empty() && f.adu.size() >= 2) {
-    put(out, " function=\"");
-    put(out, name);
-    out.push_back('"');
-  }
+  if (f.adu.size() >= 2) put(out, pieces.functions[f.function() & 0x7F]);
   if (f.is_exception()) {
     put(out, " exception=");
     put_uint(out, f.adu[2]);
