@@ -8,11 +8,11 @@
 
 #include <array>
 #include <cstdint>
-#include <deque>
 #include <optional>
 #include <vector>
 
 #include "decoder/checksum.hpp"
+#include "decoder/flat_queue.hpp"
 #include "decoder/frame_sink.hpp"
 #include "decoder/function_codes.hpp"
 #include "decoder/records.hpp"
@@ -144,8 +144,8 @@ class RtuFramer {
   uint64_t scanned_to_ = 0;     // positions below this are known not to start a frame
   mutable CrcIndex crc_index_;  // over the searched part of buf_
   mutable CrcHits last_hits_;
-  std::deque<TimeMark> marks_;
-  std::deque<uint64_t> gaps_;  // stream offsets preceded by a boundary-sized silence
+  FlatQueue<TimeMark> marks_;
+  FlatQueue<uint64_t> gaps_;  // stream offsets preceded by a boundary-sized silence
   int64_t last_end_ns_ = 0;
   uint64_t good_frames_ = 0;    // emitted with a good CRC
   uint64_t zero_glitches_ = 0;  // lone 0x00 bytes between frames
