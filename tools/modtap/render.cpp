@@ -267,9 +267,13 @@ void append_register_keys(fmt::memory_buffer& out, const decoder::RegisterValue&
   };
   put(out, "\"addr\":");
   put_int(out, reg.address);
-  put(out, ",\"name\":");
-  optional_string(reg.name);
-  put(out, ",\"raw\":");
+  if (reg.name.empty()) {  // most of a bus of unknown devices: one copy, not three
+    put(out, ",\"name\":null,\"raw\":");
+  } else {
+    put(out, ",\"name\":");
+    append_json_string(out, reg.name);
+    put(out, ",\"raw\":");
+  }
   const size_t raw_at = out.size();
   put_int(out, reg.raw);
   const size_t raw_end = out.size();
