@@ -41,7 +41,7 @@ constexpr size_t epb_captured_length = 20;
 // (the byte-order magic tells readers which).
 class PcapngWriter::Block {
  public:
-  Block(PcapngWriter& writer, uint32_t type) : writer_(writer), start_(writer.size_) {
+  Block(PcapngWriter& writer, uint32_t type) : writer_(writer), start_(writer.end_) {
     put(type);
     put(uint32_t{0});  // the total length, known at the end
   }
@@ -69,7 +69,7 @@ class PcapngWriter::Block {
   }
   // The total length at both ends.
   void finish() {
-    const auto total = static_cast<uint32_t>(writer_.size_ - start_ + 4);
+    const auto total = static_cast<uint32_t>(writer_.end_ - start_ + 4);
     put(total);
     store32(writer_.pending_.get() + start_ + 4, total);
   }
@@ -88,50 +88,60 @@ PcapngWriter::PcapngWriter(const std::string& path, bool live)
 PcapngWriter::~PcapngWriter() {
   if (closed_) return;
   try {
-    write_out(size_);
+    write_out(end_ - begin_);
   } catch (const WriteError&) {  // the file's own destructor closes it
   }
 }
 
 void PcapngWriter::grow(size_t n) {
-  const size_t capacity = std::max(size_ + n, std::max(2 * capacity_, 2 * write_size));
+  const size_t capacity = std::max(end_ + n, std::max(2 * capacity_, 2 * write_size));
   auto grown = std::make_unique<uint8_t[]>(capacity);
-  if (size_ > 0) std::memcpy(grown.get(), pending_.get(), size_);
+  // The written bytes before begin_ too: a block being built holds its place by index.
+  if (end_ > 0) std::memcpy(grown.get(), pending_.get(), end_);
   pending_ = std::move(grown);
   capacity_ = capacity;
 }
 
 inline uint8_t* PcapngWriter::room(size_t n) {
-  if (size_ + n > capacity_) [[unlikely]]
+  if (end_ + n > capacity_) [[unlikely]]
     grow(n);
-  uint8_t* at = pending_.get() + size_;
-  size_ += n;
+  uint8_t* at = pending_.get() + end_;
+  end_ += n;
   return at;
 }
 
 // Makes `n` bytes of room at `at` inside the pending bytes, moving what follows.
 void PcapngWriter::insert_room(size_t at, size_t n) {
-  const size_t tail = size_ - at;
+  const size_t tail = end_ - at;
   room(n);
   std::memmove(pending_.get() + at + n, pending_.get() + at, tail);
 }
 
 // The bytes before the first held packet.
 size_t PcapngWriter::writable() const {
-  if (holds_.empty()) return size_;
+  if (holds_.empty()) return end_ - begin_;
   return static_cast<size_t>(holds_.front().at - file_.bytes_written());
 }
 
 // Writes the first `n` pending bytes (whole blocks), keeping the rest.
 void PcapngWriter::write_out(size_t n) {
   if (n == 0) return;
-  file_.write({pending_.get(), n});
-  std::memmove(pending_.get(), pending_.get() + n, size_ - n);
-  size_ -= n;
+  file_.write({pending_.get() + begin_, n});
+  begin_ += n;
+  // What is left moves to the front once it is no more than what went out: each byte moves
+  // at most about once, however long a held packet keeps the rest waiting.
+  if (begin_ == end_) {
+    begin_ = end_ = 0;
+  } else if (begin_ >= end_ - begin_) {
+    std::memmove(pending_.get(), pending_.get() + begin_, end_ - begin_);
+    end_ -= begin_;
+    begin_ = 0;
+  }
 }
 
 void PcapngWriter::write_due() {
-  while (!holds_.empty() && size_ - writable() > max_held_bytes) holds_.erase(holds_.begin());
+  while (!holds_.empty() && end_ - begin_ - writable() > max_held_bytes)
+    holds_.erase(holds_.begin());
   if (live_) {
     flush();
   } else if (const size_t n = writable(); n >= write_size) {
@@ -171,7 +181,7 @@ void PcapngWriter::write_packet(uint32_t interface, int64_t t_ns, std::span<cons
                                 uint64_t hold) {
   if (hold != 0) {
     if (holds_.size() == max_holds) holds_.erase(holds_.begin());
-    holds_.push_back({hold, file_.bytes_written() + size_});
+    holds_.push_back({hold, bytes_written()});
   }
   comment = comment.substr(0, 0xFFFF);  // an option's length has 16 bits
   // A held packet has a comment, if an empty one, for extend_comment to grow.
@@ -224,7 +234,7 @@ void PcapngWriter::extend_comment(uint64_t hold, std::string_view more) {
   const auto held =
       std::find_if(holds_.begin(), holds_.end(), [&](const Hold& h) { return h.key == hold; });
   if (held == holds_.end()) return;
-  const size_t block = static_cast<size_t>(held->at - file_.bytes_written());
+  const size_t block = static_cast<size_t>(held->at - file_.bytes_written()) + begin_;
   const size_t option = block + epb_header + padded(load32(&pending_[block + epb_captured_length]));
   uint16_t length;
   std::memcpy(&length, &pending_[option + 2], 2);
@@ -265,7 +275,7 @@ void PcapngWriter::close() {
   if (closed_) return;
   closed_ = true;
   holds_.clear();
-  write_out(size_);
+  write_out(end_ - begin_);
   file_.close();
 }
 

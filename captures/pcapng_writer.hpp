@@ -40,7 +40,7 @@ class PcapngWriter {
   void release_all();
   void flush();  // writes out all but the held packets and what follows them
   // Everything this file will hold so far: written, or still in memory.
-  uint64_t bytes_written() const { return file_.bytes_written() + size_; }
+  uint64_t bytes_written() const { return file_.bytes_written() + (end_ - begin_); }
   // Writes out everything, held or not, and closes the file, reporting any failure.
   void close();
 
@@ -55,7 +55,7 @@ class PcapngWriter {
   uint8_t* room(size_t n);  // n more pending bytes, to be written by the caller
   void grow(size_t n);
   void insert_room(size_t at, size_t n);
-  void write_out(size_t n);
+  void write_out(size_t n);  // at block boundaries only: it may move what is left
   void write_due();
   size_t writable() const;
 
@@ -63,7 +63,8 @@ class PcapngWriter {
   // The blocks not yet written, built in place: a packet is copied once, into here, and the
   // file is written in large pieces of whole blocks. Not a vector: growing it need not zero it.
   std::unique_ptr<uint8_t[]> pending_;
-  size_t size_ = 0;
+  size_t begin_ = 0;  // pending_[begin_, end_) is not written yet
+  size_t end_ = 0;
   size_t capacity_ = 0;
   std::vector<Hold> holds_;  // in file order
   bool live_ = false;

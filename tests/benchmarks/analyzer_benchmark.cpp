@@ -1,5 +1,6 @@
 // Framing, checking and matching throughput on back-to-back simulated RTU traffic and on junk;
-// the outputs (text, JSON, pcapng) on the same traffic, with the allocations they make.
+// the outputs (text, JSON, CSV, statistics, pcapng) on the same traffic, with the allocations
+// they make. Each stage on its own is in stage_benchmark.cpp.
 #include <benchmark/benchmark.h>
 
 #include <atomic>
@@ -8,9 +9,10 @@
 
 #include "captures/pcapng_sink.hpp"
 #include "decoder/analyzer.hpp"
-#include "decoder/checksum.hpp"
+#include "decoder/bus_statistics.hpp"
 #include "decoder/model_interpreter.hpp"
 #include "tools/busgen/bus_simulator.hpp"
+#include "tools/modtap/csv_sink.hpp"
 #include "tools/modtap/json_sink.hpp"
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/text_sink.hpp"
@@ -103,7 +105,7 @@ BENCHMARK_CAPTURE(BM_AnalyzeWithModel, gd20, "gd20")->Unit(benchmark::kMilliseco
 
 // What a user sees: the model stage and a sink, as `modtap -T text|json` and `-w` run them,
 // writing to /dev/null. "allocs/frame" counts every allocation made while the capture ran.
-enum class Sink { text, json, pcapng };
+enum class Sink { text, json, csv, stats, pcapng };
 
 void BM_Output(benchmark::State& state, Sink kind, const char* model) {
   tools::ModelCatalog catalog;
@@ -119,6 +121,12 @@ void BM_Output(benchmark::State& state, Sink kind, const char* model) {
     std::unique_ptr<decoder::RecordSink> sink;
     if (kind == Sink::text) sink = std::make_unique<tools::TextSink>(out, channels);
     if (kind == Sink::json) sink = std::make_unique<tools::JsonSink>(out, channels);
+    if (kind == Sink::csv)  // every register read or written a row
+      sink = std::make_unique<tools::CsvSink>(out, std::vector<tools::FollowedRegister>{},
+                                              tools::TimeFormat::relative);
+    if (kind == Sink::stats)
+      sink = std::make_unique<decoder::BusStatistics>(decoder::SerialFormat{},
+                                                      decoder::ClockQuality::none);
     if (kind == Sink::pcapng)
       sink = std::make_unique<captures::PcapngSink>(writer, channels, captures::PcapngOptions{});
     decoder::ModelInterpreter interpreter(catalog.all(), catalog.choose({model}),
@@ -135,6 +143,8 @@ void BM_Output(benchmark::State& state, Sink kind, const char* model) {
 BENCHMARK_CAPTURE(BM_Output, text, Sink::text, "generic")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_Output, text_gd20, Sink::text, "gd20")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_Output, json, Sink::json, "generic")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Output, csv, Sink::csv, "generic")->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Output, stats, Sink::stats, "generic")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_Output, pcapng, Sink::pcapng, "generic")->Unit(benchmark::kMillisecond);
 
 // Random bytes, as a capture read with the wrong settings or a noisy line gives them: every
@@ -162,13 +172,6 @@ BENCHMARK_CAPTURE(BM_AnalyzeRandomBytes, rtu, decoder::ModeChoice::rtu)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_AnalyzeRandomBytes, ascii, decoder::ModeChoice::ascii)
     ->Unit(benchmark::kMillisecond);
-
-void BM_Crc16(benchmark::State& state) {
-  const auto& c = capture();
-  for (auto _ : state) benchmark::DoNotOptimize(decoder::crc16({c.bytes.data(), 4096}));
-  state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * 4096));
-}
-BENCHMARK(BM_Crc16);
 
 }  // namespace
 
