@@ -67,61 +67,67 @@ std::vector<size_t> packet_lengths(const std::string& path) {
   return lengths;
 }
 
+// A new pcapng file with its section header and one interface written out.
+struct OneInterfaceFile {
+  explicit OneInterfaceFile(const char* name)
+      : path(temp_path(name)), writer(path), bus(writer.add_interface(147, "bus")) {
+    writer.flush();
+    header = std::filesystem::file_size(path);
+  }
+  ~OneInterfaceFile() { std::filesystem::remove(path); }
+  uint64_t packet_bytes() const { return std::filesystem::file_size(path) - header; }
+
+  std::string path;
+  PcapngWriter writer;
+  uint32_t bus;
+  uint64_t header = 0;
+};
+
 // A held packet keeps itself and all after it in memory; its comment grows in place (past its
 // padding, so that the blocks behind it move), and the file stays readable block by block.
 TEST(PcapngWriter, HeldPacketsWaitAndTheirCommentsGrowInPlace) {
-  const auto path = temp_path("modtap-held-test.pcapng");
-  {
-    PcapngWriter writer(path);
-    const uint32_t bus = writer.add_interface(147, "bus");
-    writer.flush();
-    const auto empty = std::filesystem::file_size(path);
-    writer.write_packet(bus, 1, hex("01"), PacketDirection::outbound, "held a", 1);
-    writer.write_packet(bus, 2, hex("02 02"), PacketDirection::outbound, "held b", 2);
-    writer.write_packet(bus, 3, hex("03 03 03"), PacketDirection::inbound, "after");
-    writer.flush();
-    EXPECT_EQ(std::filesystem::file_size(path), empty);  // nothing passes the first held packet
-    writer.extend_comment(1, " grown by eleven");
-    writer.extend_comment(2, "!");
-    writer.extend_comment(9, "not held");  // gone or never held: nothing to do
-    writer.release(2);
-    writer.flush();
-    EXPECT_EQ(std::filesystem::file_size(path), empty);
-    writer.release(1);
-    writer.flush();
-    EXPECT_GT(std::filesystem::file_size(path), empty);
-    writer.close();
-  }
-  EXPECT_EQ(packet_lengths(path), (std::vector<size_t>{1, 2, 3}));
-  const std::string file = file_text(path);
-  EXPECT_NE(file.find("held a grown by eleven"), std::string::npos);
-  EXPECT_NE(file.find("held b!"), std::string::npos);
-  EXPECT_EQ(file.find("not held"), std::string::npos);
-  std::filesystem::remove(path);
+  OneInterfaceFile file("modtap-held-test.pcapng");
+  PcapngWriter& writer = file.writer;
+  writer.write_packet(file.bus, 1, hex("01"), PacketDirection::outbound, "held a", 1);
+  writer.write_packet(file.bus, 2, hex("02 02"), PacketDirection::outbound, "held b", 2);
+  writer.write_packet(file.bus, 3, hex("03 03 03"), PacketDirection::inbound, "after");
+  writer.flush();
+  EXPECT_EQ(file.packet_bytes(), 0u);  // nothing passes the first held packet
+  writer.extend_comment(1, " grown by eleven");
+  writer.extend_comment(2, "!");
+  writer.extend_comment(9, "not held");  // gone or never held: nothing to do
+  writer.release(2);
+  writer.flush();
+  EXPECT_EQ(file.packet_bytes(), 0u);
+  writer.release(1);
+  writer.flush();
+  EXPECT_GT(file.packet_bytes(), 0u);
+  writer.close();
+  EXPECT_EQ(packet_lengths(file.path), (std::vector<size_t>{1, 2, 3}));
+  const std::string text = file_text(file.path);
+  EXPECT_NE(text.find("held a grown by eleven"), std::string::npos);
+  EXPECT_NE(text.find("held b!"), std::string::npos);
+  EXPECT_EQ(text.find("not held"), std::string::npos);
 }
 
 // Held packets take bounded memory: past 4,096 of them, or 4 MiB from the first on, the oldest
 // goes out as it is.
 TEST(PcapngWriter, HoldingIsBounded) {
-  const auto path = temp_path("modtap-held-bound-test.pcapng");
-  PcapngWriter writer(path);
-  const uint32_t bus = writer.add_interface(147, "bus");
-  writer.flush();
-  const auto empty = std::filesystem::file_size(path);
+  OneInterfaceFile file("modtap-held-bound-test.pcapng");
+  PcapngWriter& writer = file.writer;
   const uint64_t block = 48;  // 28 fixed, 1 byte of data and 3 of padding, "c" in 8, 8 to end
   for (uint64_t key = 1; key <= 5000; ++key)
-    writer.write_packet(bus, 0, hex("01"), PacketDirection::unknown, "c", key);
+    writer.write_packet(file.bus, 0, hex("01"), PacketDirection::unknown, "c", key);
   writer.flush();
-  EXPECT_EQ(std::filesystem::file_size(path), empty + (5000 - 4096) * block);
+  EXPECT_EQ(file.packet_bytes(), (5000 - 4096) * block);
   writer.release_all();
-  writer.write_packet(bus, 0, hex("01"), PacketDirection::unknown, "c", 1);
+  writer.write_packet(file.bus, 0, hex("01"), PacketDirection::unknown, "c", 1);
   for (int i = 0; i < 100'000; ++i)  // 4.8 MB behind the one held packet
-    writer.write_packet(bus, 0, hex("01"), PacketDirection::unknown, "c");
+    writer.write_packet(file.bus, 0, hex("01"), PacketDirection::unknown, "c");
   writer.flush();
-  EXPECT_GT(std::filesystem::file_size(path), empty + 5000 * block + 95'000 * block);
+  EXPECT_GT(file.packet_bytes(), 5000 * block + 95'000 * block);
   writer.close();
-  EXPECT_EQ(packet_lengths(path).size(), 5000u + 100'001u);
-  std::filesystem::remove(path);
+  EXPECT_EQ(packet_lengths(file.path).size(), 5000u + 100'001u);
 }
 
 TEST(PcapngSink, ExportedPduNamesMbrtuAndPutsTheSlaveOnPort502) {
