@@ -105,7 +105,9 @@ void CrcIndex::append(std::span<const uint8_t> bytes) {
 }
 
 void CrcIndex::drop_before(uint64_t offset) {
-  if (offset <= base_) return;
+  // Nothing indexed since the last restart (a frame its length rules found, as most are): the
+  // next search restarts the index where it begins, past anything forgotten here.
+  if (offset <= base_ || starts_.empty()) return;
   if (offset >= end()) return restart(offset);
   const auto count = static_cast<ptrdiff_t>(offset - base_);
   ends_.erase(ends_.begin(), ends_.begin() + count);
