@@ -42,6 +42,24 @@ std::string_view mode_and_role(Mode mode, Role role) {
   return pieces[static_cast<size_t>(mode)][static_cast<size_t>(role)];
 }
 
+// `,"fc":3,"function":"Read Holding Registers","raw":"` for each function code byte, made once.
+std::string_view function_and_raw(uint8_t function) {
+  static const auto pieces = [] {
+    std::array<std::string, 256> made;
+    for (size_t fc = 0; fc < made.size(); ++fc) {
+      fmt::memory_buffer piece;
+      put(piece, ",\"fc\":");
+      put_uint(piece, fc & 0x7F);
+      put(piece, ",\"function\":\"");
+      put_function_label(piece, static_cast<uint8_t>(fc));
+      put(piece, "\",\"raw\":\"");
+      made[fc] = fmt::to_string(piece);
+    }
+    return made;
+  }();
+  return pieces[function];
+}
+
 }  // namespace
 
 void JsonSink::on_frame(const Frame& frame) {
@@ -57,11 +75,7 @@ void JsonSink::on_frame(const Frame& frame) {
   put_uint(buf, frame.offset);
   put(buf, mode_and_role(frame.mode, frame.role));
   put_uint(buf, frame.slave());
-  put(buf, ",\"fc\":");
-  put_uint(buf, frame.function() & 0x7F);
-  put(buf, ",\"function\":\"");
-  put_function_label(buf, frame.function());
-  put(buf, "\",\"raw\":\"");
+  put(buf, function_and_raw(frame.function()));
   append_hex(buf, frame.raw, false);
   put(buf, frame.check_ok ? "\",\"check\":\"ok\",\"check_value\":"
                           : "\",\"check\":\"bad\",\"check_value\":");
