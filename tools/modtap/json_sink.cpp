@@ -91,21 +91,20 @@ void JsonSink::on_frame(const Frame& frame) {
   } else {
     put_uint(buf, frame.expected_check);
   }
-  put(buf, ",\"damage\":");
+  // The usual nulls with the keys around them, in one copy each.
   if (const char* damage = to_string(frame.damage)) {
-    buf.push_back('"');
+    put(buf, ",\"damage\":\"");
     put(buf, damage);
-    buf.push_back('"');
+    put(buf, "\",\"exception\":");
   } else {
-    put(buf, "null");
+    put(buf, ",\"damage\":null,\"exception\":");
   }
-  put(buf, ",\"exception\":");
   if (frame.is_exception() && frame.adu.size() > 2) {
     put_uint(buf, frame.adu[2]);
+    put(buf, ",\"request\":");
   } else {
-    put(buf, "null");
+    put(buf, "null,\"request\":");
   }
-  put(buf, ",\"request\":");
   if (frame.request) {
     put_uint(buf, *frame.request);
   } else {
