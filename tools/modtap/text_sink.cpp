@@ -1,5 +1,6 @@
 #include "tools/modtap/text_sink.hpp"
 
+#include <array>
 #include <ctime>
 
 #include <fmt/chrono.h>
@@ -26,6 +27,32 @@ const char* role_tag(Role role) {
       return "???";
   }
   return "?";
+}
+
+// " req slave " for each role, made once: one copy a line.
+std::string_view role_and_slave(Role role) {
+  static const auto pieces = [] {
+    std::array<std::string, 3> made;
+    for (const Role r : {Role::request, Role::response, Role::unknown})
+      made[static_cast<size_t>(r)] = fmt::format(" {} slave ", role_tag(r));
+    return made;
+  }();
+  return pieces[static_cast<size_t>(role)];
+}
+
+// " Read Holding Registers" for each function code byte, made once.
+std::string_view spaced_function_label(uint8_t function) {
+  static const auto pieces = [] {
+    std::array<std::string, 256> made;
+    for (size_t fc = 0; fc < made.size(); ++fc) {
+      fmt::memory_buffer piece;
+      piece.push_back(' ');
+      put_function_label(piece, static_cast<uint8_t>(fc));
+      made[fc] = fmt::to_string(piece);
+    }
+    return made;
+  }();
+  return pieces[function];
 }
 
 // A check as the manuals print it, in wire order: CRC 0xCC7E is sent, and written, "7E CC".
@@ -120,12 +147,9 @@ void TextSink::on_frame(const Frame& frame) {
   put_right_aligned(buf, frame.index, 6);
   time_column(frame.t_ns);
   channel_column(frame.channel);
-  buf.push_back(' ');
-  put(buf, role_tag(frame.role));
-  put(buf, " slave ");
+  put(buf, role_and_slave(frame.role));
   put_left_aligned(buf, frame.slave(), 3);
-  buf.push_back(' ');
-  put_function_label(buf, frame.function());
+  put(buf, spaced_function_label(frame.function()));
   const DecodedPdu& pdu = fields_of(frame, decoded_);
   const AddressNumbering numbering = numbering_of(frame);
   // Where the model gives exceptions the vendor's meanings, the standard's name would mislead
