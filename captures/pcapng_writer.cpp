@@ -38,23 +38,34 @@ constexpr size_t epb_captured_length = 20;
 }  // namespace
 
 // A block built in place at the end of the writer's pending bytes, in the machine's byte order
-// (the byte-order magic tells readers which).
+// (the byte-order magic tells readers which). Its size is known before anything is written, so
+// that its room is made once and each field is a copy: a block a frame, this is the hottest
+// code of a -w run.
 class PcapngWriter::Block {
  public:
-  Block(PcapngWriter& writer, uint32_t type) : writer_(writer), start_(writer.end_) {
+  // `body`: the bytes between the block's length at its start and the same length at its end.
+  Block(PcapngWriter& writer, uint32_t type, size_t body)
+      : total_(static_cast<uint32_t>(body + 12)), at_(writer.room(total_)) {
     put(type);
-    put(uint32_t{0});  // the total length, known at the end
+    put(total_);
   }
+  // What an option of `n` bytes takes: code, length, the value padded to 32 bits.
+  static constexpr size_t option_size(size_t n) { return 4 + padded(n); }
+  static constexpr size_t end_of_options = 4;
+
   template <typename T>
-  [[gnu::always_inline]] void put(T value) {
-    std::memcpy(writer_.room(sizeof value), &value, sizeof value);
+  void put(T value) {
+    std::memcpy(at_, &value, sizeof value);
+    at_ += sizeof value;
   }
-  // The data and zeros to the next 32-bit boundary.
+  // The data and zeros to the next 32-bit boundary: the last word zeroed, the data over it.
   void put_bytes(std::span<const uint8_t> data) {
-    uint8_t* at = writer_.room(padded(data.size()));
-    if (!data.empty()) std::memcpy(at, data.data(), data.size());
-    std::memset(at + data.size(), 0, padded(data.size()) - data.size());
+    if (data.empty()) return;
+    store32(at_ + padded(data.size()) - 4, 0);
+    std::memcpy(at_, data.data(), data.size());
+    at_ += padded(data.size());
   }
+  // The caller keeps `value` to 65,535 bytes, an option length's 16 bits.
   void option(uint16_t code, std::span<const uint8_t> value) {
     put(code);
     put(static_cast<uint16_t>(value.size()));
@@ -63,20 +74,16 @@ class PcapngWriter::Block {
   void option(uint16_t code, std::string_view text) {
     option(code, {reinterpret_cast<const uint8_t*>(text.data()), text.size()});
   }
-  void end_options() {
+  // The end of the options and the block's closing length.
+  void finish() {
     put(opt_endofopt);
     put(uint16_t{0});
-  }
-  // The total length at both ends.
-  void finish() {
-    const auto total = static_cast<uint32_t>(writer_.end_ - start_ + 4);
-    put(total);
-    store32(writer_.pending_.get() + start_ + 4, total);
+    put(total_);
   }
 
  private:
-  PcapngWriter& writer_;
-  size_t start_;
+  uint32_t total_;
+  uint8_t* at_;
 };
 
 PcapngWriter::PcapngWriter(const std::string& path, bool live)
@@ -150,27 +157,31 @@ void PcapngWriter::write_due() {
 }
 
 void PcapngWriter::write_section_header() {
-  Block b(*this, section_header_block);
+  constexpr std::string_view application = "modtap";
+  Block b(*this, section_header_block,
+          16 + Block::option_size(application.size()) + Block::end_of_options);
   b.put(byte_order_magic);
   b.put(uint16_t{1});
   b.put(uint16_t{0});
   b.put(int64_t{-1});  // section length not known in advance
-  b.option(shb_userappl, std::string_view("modtap"));
-  b.end_options();
+  b.option(shb_userappl, application);
   b.finish();
 }
 
 uint32_t PcapngWriter::add_interface(int link_type, std::string_view name,
                                      std::string_view comment) {
-  Block b(*this, interface_description_block);
+  name = name.substr(0, 0xFFFF);
+  comment = comment.substr(0, 0xFFFF);
+  const uint8_t nanoseconds = 9;
+  Block b(*this, interface_description_block,
+          8 + (comment.empty() ? 0 : Block::option_size(comment.size())) +
+              Block::option_size(name.size()) + Block::option_size(1) + Block::end_of_options);
   b.put(static_cast<uint16_t>(link_type));
   b.put(uint16_t{0});
   b.put(uint32_t{0});  // no snap length
   if (!comment.empty()) b.option(opt_comment, comment);
   b.option(if_name, name);
-  const uint8_t nanoseconds = 9;
   b.option(if_tsresol, std::span<const uint8_t>(&nanoseconds, 1));
-  b.end_options();
   b.finish();
   write_due();
   return interfaces_++;
@@ -183,50 +194,26 @@ void PcapngWriter::write_packet(uint32_t interface, int64_t t_ns, std::span<cons
     if (holds_.size() == max_holds) holds_.erase(holds_.begin());
     holds_.push_back({hold, bytes_written()});
   }
-  comment = comment.substr(0, 0xFFFF);  // an option's length has 16 bits
+  comment = comment.substr(0, 0xFFFF);
   // A held packet has a comment, if an empty one, for extend_comment to grow.
   const bool commented = !comment.empty() || hold != 0;
   const bool flagged = direction != PacketDirection::unknown;
-  const size_t total = epb_header + padded(data.size()) +
-                       (commented ? 4 + padded(comment.size()) : 0) + (flagged ? 8 : 0) + 8;
-  // The packet's block is made in one piece of room, each field a copy: a packet a frame,
-  // this is the hottest code of a -w run.
-  uint8_t* at = room(total);
-  auto put32 = [&](uint32_t v) {
-    std::memcpy(at, &v, 4);
-    at += 4;
-  };
-  auto put_option_header = [&](uint16_t code, size_t length) {
-    const uint16_t header[2] = {code, static_cast<uint16_t>(length)};
-    std::memcpy(at, header, 4);
-    at += 4;
-  };
-  auto put_padded = [&](const void* bytes, size_t n) {
-    if (n == 0) return;
-    const uint32_t zeros = 0;  // the padding: the last word zeroed, then the bytes over it
-    std::memcpy(at + padded(n) - 4, &zeros, 4);
-    std::memcpy(at, bytes, n);
-    at += padded(n);
-  };
+  Block b(*this, enhanced_packet_block,
+          20 + padded(data.size()) + (commented ? Block::option_size(comment.size()) : 0) +
+              (flagged ? Block::option_size(4) : 0) + Block::end_of_options);
   const auto t = static_cast<uint64_t>(t_ns);
-  put32(enhanced_packet_block);
-  put32(static_cast<uint32_t>(total));
-  put32(interface);
-  put32(static_cast<uint32_t>(t >> 32));
-  put32(static_cast<uint32_t>(t & 0xFFFFFFFF));
-  put32(static_cast<uint32_t>(data.size()));
-  put32(static_cast<uint32_t>(data.size()));
-  put_padded(data.data(), data.size());
-  if (commented) {
-    put_option_header(opt_comment, comment.size());
-    put_padded(comment.data(), comment.size());
-  }
+  b.put(interface);
+  b.put(static_cast<uint32_t>(t >> 32));
+  b.put(static_cast<uint32_t>(t & 0xFFFFFFFF));
+  b.put(static_cast<uint32_t>(data.size()));
+  b.put(static_cast<uint32_t>(data.size()));
+  b.put_bytes(data);
+  if (commented) b.option(opt_comment, comment);
   if (flagged) {
-    put_option_header(epb_flags, 4);
-    put32(static_cast<uint32_t>(direction));
+    const uint32_t flags = static_cast<uint32_t>(direction);
+    b.option(epb_flags, {reinterpret_cast<const uint8_t*>(&flags), 4});
   }
-  put_option_header(opt_endofopt, 0);
-  put32(static_cast<uint32_t>(total));
+  b.finish();
   write_due();
 }
 
