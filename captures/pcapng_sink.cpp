@@ -85,7 +85,7 @@ void append_meaning(fmt::memory_buffer& out, const Meaning& meaning) {
 struct CommentPieces {
   static constexpr size_t roles = 3;
   std::array<std::string, 2 * roles * 2> verdicts;
-  std::array<std::string, 128> functions;
+  std::array<std::string, 256> functions;
 
   CommentPieces() {
     for (const Mode mode : {Mode::rtu, Mode::ascii})
@@ -94,9 +94,13 @@ struct CommentPieces {
           verdicts[verdicts_at(mode, role, ok)] =
               fmt::format(" mode={} role={} check={} duration_ns=", to_string(mode),
                           to_string(role), ok ? "ok" : "bad");
-    for (size_t fc = 0; fc < functions.size(); ++fc)
-      if (const auto name = function_name(static_cast<uint8_t>(fc)); !name.empty())
-        functions[fc] = fmt::format(" function=\"{}\"", name);
+    functions = texts_per_byte([](fmt::memory_buffer& out, uint8_t fc) {
+      if (const auto name = function_name(fc & 0x7F); !name.empty()) {
+        put(out, " function=\"");
+        put(out, name);
+        out.push_back('"');
+      }
+    });
   }
   static size_t verdicts_at(Mode mode, Role role, bool ok) {
     return (static_cast<size_t>(mode) * roles + static_cast<size_t>(role)) * 2 + ok;
@@ -131,7 +135,7 @@ void append_frame_comment(fmt::memory_buffer& out, const Frame& f) {
     put(out, damage);
   }
   // Names from modtap's function-code table, so the plugin knows no function code itself.
-  if (f.adu.size() >= 2) put(out, pieces.functions[f.function() & 0x7F]);
+  if (f.adu.size() >= 2) put(out, pieces.functions[f.function()]);
   if (f.is_exception()) {
     put(out, " exception=");
     put_uint(out, f.adu[2]);

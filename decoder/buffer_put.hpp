@@ -76,6 +76,20 @@ inline void put_zero_padded(fmt::memory_buffer& out, uint32_t v, int count) {
   if (count) end[-1] = static_cast<char>('0' + v);
 }
 
+// A text for each value of a byte, made once by `make(out, byte)`: a piece that every record
+// repeats (a function code's name with the keys around it) then goes in one copy.
+template <typename Make>
+std::array<std::string, 256> texts_per_byte(Make make) {
+  std::array<std::string, 256> texts;
+  fmt::memory_buffer piece;
+  for (size_t value = 0; value < texts.size(); ++value) {
+    piece.clear();
+    make(piece, static_cast<uint8_t>(value));
+    texts[value].assign(piece.data(), piece.size());
+  }
+  return texts;
+}
+
 // The digits of a number that changes seldom (a time's whole seconds), made only when it does.
 class KeptDecimal {
  public:

@@ -44,19 +44,13 @@ std::string_view mode_and_role(Mode mode, Role role) {
 
 // `,"fc":3,"function":"Read Holding Registers","raw":"` for each function code byte, made once.
 std::string_view function_and_raw(uint8_t function) {
-  static const auto pieces = [] {
-    std::array<std::string, 256> made;
-    for (size_t fc = 0; fc < made.size(); ++fc) {
-      fmt::memory_buffer piece;
-      put(piece, ",\"fc\":");
-      put_uint(piece, fc & 0x7F);
-      put(piece, ",\"function\":\"");
-      put_function_label(piece, static_cast<uint8_t>(fc));
-      put(piece, "\",\"raw\":\"");
-      made[fc] = fmt::to_string(piece);
-    }
-    return made;
-  }();
+  static const auto pieces = texts_per_byte([](fmt::memory_buffer& piece, uint8_t fc) {
+    put(piece, ",\"fc\":");
+    put_uint(piece, fc & 0x7F);
+    put(piece, ",\"function\":\"");
+    put_function_label(piece, fc);
+    put(piece, "\",\"raw\":\"");
+  });
   return pieces[function];
 }
 

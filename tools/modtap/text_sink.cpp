@@ -42,16 +42,10 @@ std::string_view role_and_slave(Role role) {
 
 // " Read Holding Registers" for each function code byte, made once.
 std::string_view spaced_function_label(uint8_t function) {
-  static const auto pieces = [] {
-    std::array<std::string, 256> made;
-    for (size_t fc = 0; fc < made.size(); ++fc) {
-      fmt::memory_buffer piece;
-      piece.push_back(' ');
-      put_function_label(piece, static_cast<uint8_t>(fc));
-      made[fc] = fmt::to_string(piece);
-    }
-    return made;
-  }();
+  static const auto pieces = texts_per_byte([](fmt::memory_buffer& piece, uint8_t fc) {
+    piece.push_back(' ');
+    put_function_label(piece, fc);
+  });
   return pieces[function];
 }
 
