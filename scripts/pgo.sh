@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# Profile-guided optimisation, its first half: builds modtap instrumented in build-pgo/, runs it
+# with every output over captures the bus simulator makes (clean, faulty, a byte a packet, 16 ms
+# bursts, ASCII, raw, and a pcap read with the wrong settings) and over the bundled logic-analyzer
+# capture of a real bus, and leaves the profile in build-pgo/profile/
+# for a Release build with -DMODTAP_PGO=use (scripts/setup.sh does both; docs/performance.md).
+# Trains again only when the instrumented modtap or this script changed.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+train=${PGO_BUILD_DIR:-build-pgo}
+profile=$PWD/$train/profile
+mkdir -p "$train"
+cmake -S . -B "$train" -DCMAKE_BUILD_TYPE=Release -DMODTAP_TESTS=OFF -DMODTAP_BENCHMARKS=OFF \
+  -DMODTAP_PGO=train -DMODTAP_PGO_DIR="$profile" >/dev/null
+cmake --build "$train" -j"$(nproc)" --target modtap modtap-busgen >"$train/build.log" 2>&1 ||
+  { tail -30 "$train/build.log"; exit 1; }
+modtap=$train/tools/modtap/modtap
+busgen=$train/tools/busgen/modtap-busgen
+stamp=$profile/trained
+if [ -f "$stamp" ] && [ "$stamp" -nt "$modtap" ] && [ "$stamp" -nt "$0" ]; then exit 0; fi
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+# Seeds other than the benchmark's (scripts/bench.sh uses 1), so that it does not measure the
+# captures the profile was made on.
+"$busgen" -n 60000 --seed 4242 --format pcap -o "$work/clean.pcap" >/dev/null 2>&1
+"$busgen" -n 30000 --seed 4243 --faults --delivery sniffer --format pcap -o "$work/faulty.pcap" >/dev/null 2>&1
+"$busgen" -n 5000 --seed 4247 --delivery bytes --format pcap -o "$work/bytes.pcap" >/dev/null 2>&1
+"$busgen" -n 20000 --seed 4244 --slaves 8 --delivery bursts --format pcap -o "$work/bursts.pcap" >/dev/null 2>&1
+"$busgen" -n 10000 --seed 4245 --faults --ascii --format hexlog -o "$work/ascii.log" >/dev/null 2>&1
+"$busgen" -n 30000 --seed 4246 --faults --format raw -o "$work/faults.raw" >/dev/null 2>&1
+rm -rf "$profile"  # the simulator's own runs counted too: only modtap's are the profile
+mkdir -p "$profile"
+
+outputs=("-T none" "-T text" "-V" "-T json" "-w $work/out.pcapng" "-q --stats $work/stats.json")
+run() {  # run CAPTURE OPTIONS...: every output
+  for output in "${outputs[@]}"; do
+    # shellcheck disable=SC2086  # each output is its options, split
+    "$modtap" -r "$@" $output >/dev/null 2>&1 || echo "pgo: modtap -r $* $output: exit $?" >&2
+  done
+}
+run "$work/clean.pcap"
+run "$work/clean.pcap" --model gd20
+run "$work/faulty.pcap"
+run "$work/bytes.pcap"
+run "$work/bursts.pcap"
+run "$work/ascii.log"
+run "$work/faults.raw" --format raw
+run "$work/faulty.pcap" --format raw --mode rtu  # a capture read with the wrong settings
+run captures/samples/brainchild-io-16do.sr --baud 19200 --parity even \
+  --sigrok-channels tx=1,rx=0 --sigrok-invert
+touch "$stamp"
