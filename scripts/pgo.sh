@@ -17,7 +17,7 @@ cmake --build "$train" -j"$(nproc)" --target modtap modtap-busgen >"$train/build
 modtap=$train/tools/modtap/modtap
 busgen=$train/tools/busgen/modtap-busgen
 stamp=$profile/trained
-if [ -f "$stamp" ] && [ "$stamp" -nt "$modtap" ] && [ "$stamp" -nt "$0" ]; then exit 0; fi
+if [ -f "$stamp" ] && [ "$stamp" -nt "$modtap" ] && [ "$stamp" -nt scripts/pgo.sh ]; then exit 0; fi
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
