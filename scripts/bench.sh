@@ -10,7 +10,9 @@
 # (its Modbus RTU dissector on DLT_USER0), and pymodbus's RTU framer and decoders
 # (scripts/pymodbus_peer.py).
 # Prints a Markdown table: seconds, frames a second, peak RSS, and modtap's text against each
-# peer. tshark's time grows faster than the frame count (143 s at 1 M frames), so the peers run
+# peer. Then modtap alone: text through GD20's model (names, scaling, rules) on the same
+# captures, and 20 MiB of random bytes read as RTU and as ASCII (a capture read with the wrong
+# settings, a noisy line). tshark's time grows faster than the frame count (143 s at 1 M frames), so the peers run
 # only up to PEER_MAX_FRAMES (default 1,100,000); set it higher to wait for them.
 #
 # Environment: BUILD (default build), WORK (default /tmp/modtap-bench), PEER_MAX_FRAMES.
@@ -64,6 +66,7 @@ cell() {
 
 ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.1fx", (b > 0 ? a / b : 0) }'; }
 
+model_rows=()
 echo "| frames | modtap -T none | modtap text | modtap -T json | modtap -w pcapng | tshark text | pymodbus | text vs tshark | text vs pymodbus |"
 echo "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
 for n in "${sizes[@]}"; do
@@ -79,6 +82,9 @@ for n in "${sizes[@]}"; do
   times=$(best_of_3 "$MODTAP" -r "$capture" -w "$WORK/out.pcapng")
   read -r pcapng_s pcapng_kb <<< "$times"
   rm -f "$WORK/out.pcapng"
+  times=$(best_of_3 "$MODTAP" -r "$capture" --model gd20 -T text)
+  read -r gd20_s gd20_kb <<< "$times"
+  model_rows+=("| $frames | $(cell "$gd20_s" "$gd20_kb" "$frames") |")
   tshark_cell="not run" pymodbus_cell="not run" vs_tshark="" vs_pymodbus=""
   if [ "$frames" -le "$PEER_MAX_FRAMES" ]; then
     times=$(measure tshark -n -o "$TSHARK_DLT" -r "$capture")
@@ -92,3 +98,24 @@ for n in "${sizes[@]}"; do
   fi
   echo "| $frames | $(cell "$none_s" "$none_kb" "$frames") | $(cell "$text_s" "$text_kb" "$frames") | $(cell "$json_s" "$json_kb" "$frames") | $(cell "$pcapng_s" "$pcapng_kb" "$frames") | $tshark_cell | $pymodbus_cell | $vs_tshark | $vs_pymodbus |"
 done
+
+echo
+echo "| frames | modtap --model gd20 -T text |"
+echo "| --- | --- |"
+printf '%s\n' "${model_rows[@]}"
+
+junk=$WORK/random-20MiB.bin
+[ -s "$junk" ] || /usr/bin/python3 -c \
+  'import random, sys; random.seed(1); sys.stdout.buffer.write(random.randbytes(20 << 20))' > "$junk"
+junk_cell() {  # "0.90 s, 23.3 MB/s, 5 MB" from SECONDS PEAK_KB
+  awk -v s="$1" -v kb="$2" -v bytes="$(stat -c %s "$junk")" \
+    'BEGIN { printf "%.3f s, %.1f MB/s, %.0f MB", s, (s > 0 ? bytes / s / 1e6 : 0), kb / 1024 }'
+}
+echo
+echo "| 20 MiB of random bytes | modtap --mode rtu -T none | modtap --mode ascii -T none |"
+echo "| --- | --- | --- |"
+times=$(best_of_3 "$MODTAP" -r "$junk" --format raw --mode rtu -T none)
+read -r rtu_s rtu_kb <<< "$times"
+times=$(best_of_3 "$MODTAP" -r "$junk" --format raw --mode ascii -T none)
+read -r ascii_s ascii_kb <<< "$times"
+echo "| $(stat -c %s "$junk") bytes | $(junk_cell "$rtu_s" "$rtu_kb") | $(junk_cell "$ascii_s" "$ascii_kb") |"
