@@ -18,10 +18,12 @@ fi
 build=${BUILD_DIR:-build}
 type=${BUILD_TYPE:-Release}
 # A Release build is laid out by a profile of modtap's own runs (scripts/pgo.sh: a fifth fewer
-# cycles a frame); PGO=off builds without one.
+# cycles a frame), trained again when modtap changed. PGO=keep uses the last profile as it is
+# (while iterating: switching the profile off and on rebuilds everything); PGO=off builds
+# without one.
 pgo=(-DMODTAP_PGO=)
-if [ "$type" = Release ] && [ "${PGO:-on}" = on ]; then
-  bash scripts/pgo.sh
+if [ "$type" = Release ] && [ "${PGO:-on}" != off ]; then
+  [ "${PGO:-on}" = keep ] && [ -f build-pgo/profile/trained ] || bash scripts/pgo.sh
   pgo=(-DMODTAP_PGO=use -DMODTAP_PGO_DIR="$PWD/build-pgo/profile")
 fi
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE="$type" "${pgo[@]}" ${CMAKE_ARGS:-} >/dev/null
