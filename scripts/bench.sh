@@ -12,8 +12,9 @@
 # Prints a Markdown table: seconds, frames a second, peak RSS, and modtap's text against each
 # peer. Then modtap alone: text through GD20's model (names, scaling, rules) on the same
 # captures, and 20 MiB of random bytes read as RTU and as ASCII (a capture read with the wrong
-# settings, a noisy line). tshark's time grows faster than the frame count (143 s at 1 M frames), so the peers run
-# only up to PEER_MAX_FRAMES (default 1,100,000); set it higher to wait for them.
+# settings, a noisy line). tshark's time grows faster than the frame count (143 s at 1 M
+# frames), so the peers run only up to PEER_MAX_FRAMES (default 1,100,000); set it higher to
+# wait for them.
 #
 # Environment: BUILD (default build), WORK (default /tmp/modtap-bench), PEER_MAX_FRAMES.
 set -euo pipefail
@@ -105,8 +106,9 @@ echo "| --- | --- |"
 printf '%s\n' "${model_rows[@]}"
 
 junk=$WORK/random-20MiB.bin
-[ -s "$junk" ] || /usr/bin/python3 -c \
-  'import random, sys; random.seed(1); sys.stdout.buffer.write(random.randbytes(20 << 20))' > "$junk"
+[ -s "$junk" ] || /usr/bin/python3 -c 'import random, sys
+random.seed(1)
+sys.stdout.buffer.write(random.randbytes(20 << 20))' > "$junk"
 junk_cell() {  # "0.90 s, 23.3 MB/s, 5 MB" from SECONDS PEAK_KB
   awk -v s="$1" -v kb="$2" -v bytes="$(stat -c %s "$junk")" \
     'BEGIN { printf "%.3f s, %.1f MB/s, %.0f MB", s, (s > 0 ? bytes / s / 1e6 : 0), kb / 1024 }'
@@ -118,4 +120,5 @@ times=$(best_of_3 "$MODTAP" -r "$junk" --format raw --mode rtu -T none)
 read -r rtu_s rtu_kb <<< "$times"
 times=$(best_of_3 "$MODTAP" -r "$junk" --format raw --mode ascii -T none)
 read -r ascii_s ascii_kb <<< "$times"
-echo "| $(stat -c %s "$junk") bytes | $(junk_cell "$rtu_s" "$rtu_kb") | $(junk_cell "$ascii_s" "$ascii_kb") |"
+echo "| $(stat -c %s "$junk") bytes | $(junk_cell "$rtu_s" "$rtu_kb") |" \
+  "$(junk_cell "$ascii_s" "$ascii_kb") |"

@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
 # Profile-guided optimisation, its first half: builds modtap instrumented in build-pgo/, runs it
 # with every output over captures the bus simulator makes (clean, faulty, a byte a packet, 16 ms
-# bursts, ASCII, raw, and a pcap read with the wrong settings) and over the bundled logic-analyzer
-# capture of a real bus, and leaves the profile in build-pgo/profile/
-# for a Release build with -DMODTAP_PGO=use (scripts/setup.sh does both; docs/performance.md).
+# bursts, ASCII, raw, and a pcap read with the wrong settings) and over the bundled
+# logic-analyzer capture of a real bus, and leaves the profile in build-pgo/profile/ for a
+# Release build with -DMODTAP_PGO=use (scripts/setup.sh does both; docs/performance.md).
 # Trains again only when the instrumented modtap or this script changed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-train=${PGO_BUILD_DIR:-build-pgo}
+train=build-pgo
 profile=$PWD/$train/profile
 mkdir -p "$train"
 cmake -S . -B "$train" -DCMAKE_BUILD_TYPE=Release -DMODTAP_TESTS=OFF -DMODTAP_BENCHMARKS=OFF \
@@ -21,14 +21,15 @@ if [ -f "$stamp" ] && [ "$stamp" -nt "$modtap" ] && [ "$stamp" -nt scripts/pgo.s
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+simulate() { "$busgen" "$@" >/dev/null 2>&1; }
 # Seeds other than the benchmark's (scripts/bench.sh uses 1), so that it does not measure the
 # captures the profile was made on.
-"$busgen" -n 60000 --seed 4242 --format pcap -o "$work/clean.pcap" >/dev/null 2>&1
-"$busgen" -n 30000 --seed 4243 --faults --delivery sniffer --format pcap -o "$work/faulty.pcap" >/dev/null 2>&1
-"$busgen" -n 5000 --seed 4247 --delivery bytes --format pcap -o "$work/bytes.pcap" >/dev/null 2>&1
-"$busgen" -n 20000 --seed 4244 --slaves 8 --delivery bursts --format pcap -o "$work/bursts.pcap" >/dev/null 2>&1
-"$busgen" -n 10000 --seed 4245 --faults --ascii --format hexlog -o "$work/ascii.log" >/dev/null 2>&1
-"$busgen" -n 30000 --seed 4246 --faults --format raw -o "$work/faults.raw" >/dev/null 2>&1
+simulate -n 60000 --seed 4242 --format pcap -o "$work/clean.pcap"
+simulate -n 30000 --seed 4243 --faults --delivery sniffer --format pcap -o "$work/faulty.pcap"
+simulate -n 5000 --seed 4247 --delivery bytes --format pcap -o "$work/bytes.pcap"
+simulate -n 20000 --seed 4244 --slaves 8 --delivery bursts --format pcap -o "$work/bursts.pcap"
+simulate -n 10000 --seed 4245 --faults --ascii --format hexlog -o "$work/ascii.log"
+simulate -n 30000 --seed 4246 --faults --format raw -o "$work/faults.raw"
 rm -rf "$profile"  # the simulator's own runs counted too: only modtap's are the profile
 mkdir -p "$profile"
 
