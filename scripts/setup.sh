@@ -17,10 +17,10 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 build=${BUILD_DIR:-build}
 type=${BUILD_TYPE:-Release}
-# A Release build is laid out by a profile of modtap's own runs (scripts/pgo.sh: a fifth fewer
-# cycles a frame), trained again when modtap changed. PGO=keep uses the last profile as it is
-# (while iterating: switching the profile off and on rebuilds everything); PGO=off builds
-# without one.
+# A Release build is laid out by a profile of modtap's own runs (scripts/pgo.sh: a sixth fewer
+# instructions a frame), trained again when modtap changed. PGO=keep uses the last profile as
+# it is (while iterating: switching the profile off and on rebuilds everything); PGO=off
+# builds without one.
 pgo=(-DMODTAP_PGO=)
 if [ "$type" = Release ] && [ "${PGO:-on}" != off ]; then
   if [ "${PGO:-on}" != keep ] || [ ! -f build-pgo/profile/trained ]; then bash scripts/pgo.sh; fi
