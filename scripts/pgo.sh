@@ -4,11 +4,14 @@
 # bursts, ASCII, raw, and a pcap read with the wrong settings) and over the bundled
 # logic-analyzer capture of a real bus, and leaves the profile in build-pgo/profile/ for a
 # Release build with -DMODTAP_PGO=use (scripts/setup.sh does both; docs/performance.md).
-# Trains again only when the instrumented modtap or this script changed.
+# Trains again only when the instrumented modtap or this script changed; with --keep, not at
+# all once a profile is there (while iterating, an edited function is built without one).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 train=build-pgo
 profile=$PWD/$train/profile
+stamp=$profile/trained
+if [ "${1:-}" = --keep ] && [ -f "$stamp" ]; then exit 0; fi
 mkdir -p "$train"
 cmake -S . -B "$train" -DCMAKE_BUILD_TYPE=Release -DMODTAP_TESTS=OFF -DMODTAP_BENCHMARKS=OFF \
   -DMODTAP_PGO=train -DMODTAP_PGO_DIR="$profile" >/dev/null
@@ -16,7 +19,6 @@ cmake --build "$train" -j"$(nproc)" --target modtap modtap-busgen >"$train/build
   { tail -30 "$train/build.log"; exit 1; }
 modtap=$train/tools/modtap/modtap
 busgen=$train/tools/busgen/modtap-busgen
-stamp=$profile/trained
 if [ -f "$stamp" ] && [ "$stamp" -nt "$modtap" ] && [ "$stamp" -nt scripts/pgo.sh ]; then exit 0; fi
 
 work=$(mktemp -d)

@@ -23,7 +23,7 @@ type=${BUILD_TYPE:-Release}
 # builds without one.
 pgo=(-DMODTAP_PGO=)
 if [ "$type" = Release ] && [ "${PGO:-on}" != off ]; then
-  if [ "${PGO:-on}" != keep ] || [ ! -f build-pgo/profile/trained ]; then bash scripts/pgo.sh; fi
+  if [ "${PGO:-on}" = keep ]; then bash scripts/pgo.sh --keep; else bash scripts/pgo.sh; fi
   pgo=(-DMODTAP_PGO=use -DMODTAP_PGO_DIR="$PWD/build-pgo/profile")
 fi
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE="$type" "${pgo[@]}" ${CMAKE_ARGS:-} >/dev/null
