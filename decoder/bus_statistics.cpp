@@ -78,10 +78,10 @@ void BusStatistics::count_exchange(const Frame& frame, SlaveStatistics& s) {
   last = frame.t_ns;
 }
 
-// What a read's response or a write's request carried; an echo repeats its request.
+// What the device holds, as its good responses say (states_values).
 void BusStatistics::keep_values(const Frame& frame) {
   const Meaning* meaning = frame.meaning;
-  if (!meaning || meaning->echoed || !frame.check_ok) return;
+  if (!states_values(frame)) return;
   for (const RegisterValue& reg : meaning->registers) {
     const RegisterKey key{frame.slave(), reg.table, reg.address};
     auto it = registers.find(key);

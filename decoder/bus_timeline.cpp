@@ -91,10 +91,10 @@ void BusTimeline::on_frame(const Frame& frame) {
   if (follow_) follow_values(frame, at);
 }
 
-// As the statistics keep last values: what a read's response or a write's request carried.
+// As the statistics keep last values: what a good response says the device holds.
 void BusTimeline::follow_values(const Frame& frame, size_t bin) {
   const Meaning* meaning = frame.meaning;
-  if (!meaning || meaning->echoed || !frame.check_ok) return;
+  if (!states_values(frame)) return;
   for (const RegisterValue& reg : meaning->registers) {
     if (!follow_(reg)) continue;
     const RegisterKey key{frame.slave(), reg.table, reg.address};

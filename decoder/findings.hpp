@@ -37,6 +37,8 @@ enum Finding : uint32_t {
   finding_ambiguous_end = 1u << 19,  // a damaged frame whose last byte may be a glitch, or not
 };
 inline constexpr size_t frame_finding_count = 20;
+// A response whose content is not what its request asked for.
+inline constexpr uint32_t response_misfit = finding_length_mismatch | finding_echo_mismatch;
 
 // What a device model's rules say of a frame; entry frame_finding_count + kind of the registry.
 enum class RuleKind : uint8_t {

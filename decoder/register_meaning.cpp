@@ -344,14 +344,19 @@ void interpret_request(const DeviceModel& model, const Frame& frame, Meaning& me
   }
 }
 
+// A write's good answer confirms what its request wrote: an echo says it again, other answers
+// (FC15, FC16, FC17's write) only acknowledge, so the values are read from the request. They were
+// checked against the model there; a read's values are checked here.
 void interpret_response(const DeviceModel& model, const Frame& frame, Meaning& meaning) {
   const auto pdu = frame.pdu();
   if (pdu.empty()) return;
   const auto values = function_code(pdu[0]).response_values(pdu, frame.request_pdu);
-  // A read's values are checked against the model; an echo's were checked in its request.
-  if (!values) return;
-  meaning.echoed = values->write;
-  decode_values(model, *values, meaning, values->write ? nullptr : &meaning.findings);
+  if (values && values->write) return decode_values(model, *values, meaning, nullptr);
+  if (!frame.request_pdu.empty() && !(frame.findings & response_misfit))
+    for (const RegisterAccess& access :
+         function_code(frame.request_pdu[0]).request_accesses(frame.request_pdu))
+      if (access.write) decode_values(model, access, meaning, nullptr);
+  if (values) decode_values(model, *values, meaning, &meaning.findings);
 }
 
 }  // namespace

@@ -84,7 +84,6 @@ struct Meaning {
   const DeviceModel* model = nullptr;
   std::vector<RegisterValue> registers;
   RuleFindings findings;
-  bool echoed = false;  // the registers repeat what the request wrote (a write's echo response)
   // Whether words the model does not name are listed, by address and raw value: JSON, the
   // statistics, CSV, `-V` and filters show them; a text line and a pcapng comment do not, and
   // leaving them out is most of the model stage's work on a bus of unknown devices. Kept by
@@ -104,13 +103,19 @@ struct Meaning {
     model = nullptr;
     registers.clear();
     findings.clear();
-    echoed = false;
     composed_.clear();
   }
 
  private:
   ComposedTexts composed_;
 };
+
+// Whether a frame's registers are the device's state: a good answer, to a read (what the
+// registers hold) or to a write (what the device took, its request's values). A request only
+// asks; a write refused or never answered changed nothing.
+inline bool states_values(const Frame& frame) {
+  return frame.meaning && frame.check_ok && frame.role == Role::response;
+}
 
 Meaning interpret(const DeviceModel& model, const Frame& frame);
 // The same into `out`, whose storage is reused from frame to frame.

@@ -102,15 +102,39 @@ TEST(Cli, StatsCountTheModelsFindingsByKind) {
   const Outcome r = run("-r " + capture + " --format raw --mode rtu --model nta5000 -T stats");
   ASSERT_EQ(r.status, 0);
   ASSERT_GE(r.lines.size(), 4u);
-  // The registers' last values, as text shows a register.
-  EXPECT_THAT(r.lines,
-              ::testing::Contains("  slave 1   2520H status                       Run, Forward, "
-                                  "Unready (1)"));
   const std::vector<std::string> tail(r.lines.end() - 4, r.lines.end());
   EXPECT_EQ(tail, (std::vector<std::string>{"findings                 count  first records",
                                             "  reserved-write             1  #3",
                                             "  read-only-write            1  #1",
                                             "  exception                  1  #2"}));
+}
+
+// A register's last value is what the device's good answers say: a write it refused, or never
+// answered, changed nothing; a write it acknowledged (FC16: no echo of the values) did.
+TEST(Cli, LastValuesAreWhatTheDeviceConfirmed) {
+  const std::string capture =
+      raw_capture("modtap-confirmed-values.raw",
+                  {{0x01, 0x03, 0x25, 0x20, 0x00, 0x01},
+                   {0x01, 0x03, 0x02, 0x00, 0x07},  // status 7
+                   {0x01, 0x06, 0x25, 0x20, 0x00, 0x01},
+                   {0x01, 0x86, 0x52},  // refused
+                   {0x01, 0x10, 0x25, 0x01, 0x00, 0x02, 0x04, 0x00, 0x01, 0x17, 0x70},
+                   {0x01, 0x10, 0x25, 0x01, 0x00, 0x02},    // acknowledged
+                   {0x01, 0x06, 0x25, 0x03, 0x00, 0x01}});  // never answered
+  const std::string options = "-r " + capture + " --format raw --mode rtu --model nta5000";
+  const Outcome stats = run(options + " -T stats");
+  ASSERT_EQ(stats.status, 0);
+  EXPECT_THAT(stats.lines,
+              ::testing::Contains("  slave 1   2520H status                       Run, Reverse, "
+                                  "Ready (7)"));
+  EXPECT_THAT(stats.lines,
+              ::testing::Contains("  slave 1   2502H frequency_command            60.00 Hz"));
+  EXPECT_THAT(stats.lines, ::testing::Not(::testing::Contains(::testing::HasSubstr("2503H"))));
+  const Outcome csv = run(options + " -T csv");
+  ASSERT_EQ(csv.status, 0);
+  ASSERT_EQ(csv.lines.size(), 4u);  // the header, status, and the two registers FC16 wrote
+  EXPECT_THAT(csv.lines[1], ::testing::HasSubstr(",1,2520H,status,7,"));
+  EXPECT_THAT(csv.lines[3], ::testing::HasSubstr(",1,2502H,frequency_command,60.00,"));
 }
 
 // --stats writes the statistics as JSON beside any output; a pipe reader would get text.
@@ -184,8 +208,8 @@ TEST(Cli, TsharkHabitsCountQuietTimeAndVersion) {
   EXPECT_EQ(version.lines[0].rfind("modtap ", 0), 0u);
 }
 
-// --follow: the values of chosen registers over time, by name or address, as the master wrote
-// and read them; the echo of a write adds no second row.
+// --follow: the values of chosen registers over time, by name or address, as the device's
+// answers to reads and writes give them: a row a good response.
 TEST(Cli, FollowWritesRegisterValuesOverTimeAsCsv) {
   const std::string drives = std::string("-r ") + MODTAP_SAMPLES +
                              "/drives-manual-examples.log --model 1=nta5000 --model 2=n3";
@@ -193,8 +217,8 @@ TEST(Cli, FollowWritesRegisterValuesOverTimeAsCsv) {
   ASSERT_EQ(r.status, 0);
   EXPECT_EQ(r.lines, (std::vector<std::string>{"t,slave,address,name,value,unit,raw",
                                                "0.000000,1,2502H,frequency_command,60.00,Hz,6000",
-                                               "0.053166,1,2502H,frequency_command,60.00,Hz,6000",
-                                               "0.117780,1,2524H,output_frequency,60.00,Hz,6000"}));
+                                               "0.056031,1,2502H,frequency_command,60.00,Hz,6000",
+                                               "0.109197,1,2524H,output_frequency,60.00,Hz,6000"}));
   const Outcome all = run(drives + " -T csv");
   EXPECT_GT(all.lines.size(), r.lines.size());
   EXPECT_EQ(run(drives + " --follow ,x").lines,
@@ -205,12 +229,12 @@ TEST(Cli, FollowWritesRegisterValuesOverTimeAsCsv) {
 // text lines, -V trees, CSV and --follow alike; JSON keeps the wire's address.
 TEST(Cli, RegisterBaseNumbersRegistersAsThePlcManualDoes) {
   const std::string drives =
-      std::string("-r ") + MODTAP_SAMPLES + "/drives-manual-examples.log --model 1=nta5000 -c 3";
+      std::string("-r ") + MODTAP_SAMPLES + "/drives-manual-examples.log --model 1=nta5000 -c 4";
   const std::vector<std::pair<std::string, std::string>> bases{
       {"hex", "2502H"}, {"0", "9474"}, {"1", "9475"}, {"4xxxx", "49475"}};
   for (const auto& [base, written] : bases) {
     const Outcome text = run(drives + " --register-base " + base);
-    ASSERT_EQ(text.lines.size(), 3u) << base;
+    ASSERT_EQ(text.lines.size(), 4u) << base;
     EXPECT_NE(text.lines[2].find("Write Single Register address=" + written + " value=6000"),
               std::string::npos)
         << text.lines[2];

@@ -62,11 +62,18 @@ class Bus {
         publisher_(broker, statistics_, std::move(options)) {}
 
   void read(RegisterValue reg, double t_s, uint8_t slave = 1) {
+    see(reg, t_s, slave, decoder::Role::response);
+  }
+  // A write request carrying `reg`: what the master asks, not yet what the device holds.
+  void ask(RegisterValue reg, double t_s, uint8_t slave = 1) {
+    see(reg, t_s, slave, decoder::Role::request);
+  }
+  void see(RegisterValue reg, double t_s, uint8_t slave, decoder::Role role) {
     Meaning meaning;
     meaning.registers.push_back(reg);
     const uint8_t adu[] = {slave, 3, 2, 0, 0, 0, 0};
     Frame frame;
-    frame.role = decoder::Role::response;
+    frame.role = role;
     frame.adu = adu;
     frame.raw = adu;
     frame.check_ok = true;
@@ -114,6 +121,17 @@ TEST(MqttPublisher, PublishesEachChangeWithTheModelsNameUnitAndScaledValue) {
   EXPECT_EQ(broker.on(topic)[0],
             "{\"addr\":9508,\"name\":\"output_frequency\",\"raw\":6000,\"value\":60.00,"
             "\"unit\":\"Hz\",\"text\":null,\"time\":\"1970-01-01T00:00:01.000Z\"}");
+}
+
+// A write's request is published only once the device's answer confirms it: a refused or
+// unanswered write leaves no retained topic behind.
+TEST(MqttPublisher, AWriteRequestIsNoValue) {
+  RecordingBroker broker;
+  Bus bus(broker, options(0));
+  bus.ask(frequency(6000), 1.0);
+  EXPECT_TRUE(broker.on(topic).empty());
+  bus.read(frequency(5000), 1.1);
+  EXPECT_THAT(broker.raws(topic), ElementsAre(5000));
 }
 
 TEST(MqttPublisher, AValueChangingFasterThanTheIntervalGoesOutOncePerIntervalAndLastAtTheEnd) {

@@ -67,7 +67,7 @@ void CsvSink::time(int64_t t_ns) {
 
 void CsvSink::on_frame(const Frame& frame) {
   const Meaning* meaning = frame.meaning;
-  if (!meaning || meaning->echoed || !frame.check_ok) return;
+  if (!states_values(frame)) return;
   auto& buf = out_.buffer();
   for (const RegisterValue& reg : meaning->registers) {
     if (!follows(follow_, reg)) continue;

@@ -46,8 +46,7 @@ std::string status_topic(const MqttOptions& options) {
 
 void MqttPublisher::on_frame(const Frame& frame) {
   const Meaning* meaning = frame.meaning;
-  // A write's echo repeats what its request wrote, which was published then.
-  if (meaning && !meaning->echoed && frame.check_ok) {
+  if (states_values(frame)) {
     for (const RegisterValue& reg : meaning->registers)
       if (follows(options_.follow, reg))
         see({frame.slave(), reg.table, reg.address}, reg, meaning->model, frame.t_ns);
