@@ -46,7 +46,7 @@ void AsciiFramer::push(const Chunk& chunk) {
     int64_t end_ns = options_.clock == ClockQuality::none
                          ? static_cast<int64_t>(offset_ + 1) * char_ns_
                          : chunk.t_ns - (n - 1 - i) * char_ns_;
-    on_byte(chunk.bytes[static_cast<size_t>(i)], end_ns);
+    on_byte(chunk.bytes[static_cast<size_t>(i)], end_ns, i == 0);
   }
 }
 
@@ -60,7 +60,7 @@ void AsciiFramer::finish() {
   if (!pending_.empty()) emit_pending(in_frame_ ? NoiseReason::truncated : NoiseReason::junk);
 }
 
-void AsciiFramer::on_byte(uint8_t byte, int64_t end_ns) {
+void AsciiFramer::on_byte(uint8_t byte, int64_t end_ns, bool starts_read) {
   const int64_t start_ns = end_ns - char_ns_;
   if (in_frame_ && options_.clock != ClockQuality::none &&
       start_ns - pending_end_ns_ >= options_.char_timeout_ns)
@@ -71,7 +71,7 @@ void AsciiFramer::on_byte(uint8_t byte, int64_t end_ns) {
     if (!pending_.empty()) emit_pending(in_frame_ ? NoiseReason::truncated : NoiseReason::junk);
     in_frame_ = true;
   }
-  if (pending_.empty()) reset(offset_, start_ns);
+  if (pending_.empty()) reset(offset_, start_ns, starts_read);
   pending_.push_back(byte);
   pending_end_ns_ = end_ns;
   last_end_ns_ = end_ns;
@@ -109,6 +109,7 @@ void AsciiFramer::emit_frame() {
   frame.adu = decoded_;
   frame.t_ns = pending_start_ns_;
   frame.end_ns = pending_end_ns_;
+  frame.untimed_start = pending_untimed_start_;
   frame.expected_check = lrc(frame.adu.first(decoded_.size() - 1));
   frame.check_ok = frame.expected_check == decoded_.back();
   if (!frame.check_ok) {
@@ -136,9 +137,10 @@ void AsciiFramer::emit_noise(NoiseReason reason) {
   pending_.clear();
 }
 
-void AsciiFramer::reset(uint64_t offset, int64_t start_ns) {
+void AsciiFramer::reset(uint64_t offset, int64_t start_ns, bool starts_read) {
   pending_offset_ = offset;
   pending_start_ns_ = start_ns;
+  pending_untimed_start_ = options_.clock == ClockQuality::per_chunk && !starts_read && offset > 0;
 }
 
 }  // namespace modtap::decoder

@@ -34,11 +34,11 @@ class AsciiFramer {
   static constexpr size_t max_frame_chars = 513;
 
  private:
-  void on_byte(uint8_t byte, int64_t end_ns);
+  void on_byte(uint8_t byte, int64_t end_ns, bool starts_read);
   void emit_pending(NoiseReason reason);
   void emit_frame();
   void emit_noise(NoiseReason reason);
-  void reset(uint64_t offset, int64_t start_ns);
+  void reset(uint64_t offset, int64_t start_ns, bool starts_read);
 
   uint16_t channel_;
   AsciiFramerOptions options_;
@@ -50,6 +50,7 @@ class AsciiFramer {
   bool in_frame_ = false;
   uint64_t pending_offset_ = 0;
   int64_t pending_start_ns_ = 0;
+  bool pending_untimed_start_ = false;  // Frame::untimed_start
   int64_t pending_end_ns_ = 0;
   uint64_t offset_ = 0;  // stream offset of the next byte
   int64_t last_end_ns_ = 0;

@@ -187,9 +187,7 @@ void Matcher::on_response(Frame& frame, Copy copy) {
     frame.findings |= finding_ambiguous_echo;
     ambiguous_echo_ = AmbiguousEcho{pending_, frame.index, frame.end_ns};
   }
-  // A clock that steps back, or stamps reads later than the bytes ended, can put a response
-  // before its request's end: that latency is not measured rather than negative.
-  if (options_.timed && frame.t_ns >= pending_->end_ns) {
+  if (sees_turnaround(frame, *pending_)) {
     frame.latency_ns = frame.t_ns - pending_->end_ns;
     if (options_.exact_clock && *frame.latency_ns < options_.t35_ns)
       frame.findings |= finding_fast_turnaround;
@@ -205,7 +203,17 @@ void Matcher::on_response(Frame& frame, Copy copy) {
 void Matcher::answers_retry(Frame& frame, const AmbiguousEcho& echo) {
   frame.request = echo.index;
   frame.request_pdu = {echo.request->pdu.data(), echo.request->size};
-  if (options_.timed && frame.t_ns >= echo.end_ns) frame.latency_ns = frame.t_ns - echo.end_ns;
+  if (options_.timed && frame.t_ns >= echo.end_ns && !frame.untimed_start)
+    frame.latency_ns = frame.t_ns - echo.end_ns;
+}
+
+// Whether the clock saw the silence between the request and this answer. A clock that steps
+// back, or stamps reads later than the bytes ended, can put a response before its request's
+// end: that latency is not measured rather than negative. An answer that came in the read of
+// the request's last bytes has no time of its own (a sniffer's packet, a hex log's block).
+bool Matcher::sees_turnaround(const Frame& frame, const Pending& request) const {
+  const bool one_read = frame.untimed_start && frame.channel == request.channel;
+  return options_.timed && frame.t_ns >= request.end_ns && !one_read;
 }
 
 void Matcher::advance(int64_t now_ns) {

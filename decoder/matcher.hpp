@@ -87,6 +87,7 @@ class Matcher {
   static bool fits(const Frame& frame, const Pending& request);
   bool fits_pending(const Frame& frame) const { return fits(frame, *pending_); }
   bool long_after_answer_due(const Frame& frame) const;
+  bool sees_turnaround(const Frame& frame, const Pending& request) const;
   void on_request(Frame& frame);
   void on_response(Frame& frame, Copy copy);
   void answers_retry(Frame& frame, const AmbiguousEcho& echo);

@@ -74,6 +74,9 @@ struct Frame {
   Damage damage = Damage::none;
   uint32_t findings = finding_none;
   uint8_t retries = 0;  // a request: how often it went out unanswered just before (saturates)
+  // A clock per read: the frame's first byte came in the read of the byte before it, so the
+  // silence before the frame is unknown (its time is placed back to back with that byte's).
+  bool untimed_start = false;
   std::optional<uint64_t> request;       // index of the matched request
   std::optional<int64_t> latency_ns;     // end of request to start of response
   std::span<const uint8_t> request_pdu;  // the matched request's PDU, during the callback

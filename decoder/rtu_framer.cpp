@@ -632,8 +632,16 @@ Frame RtuFramer::frame_of(uint64_t begin, uint64_t end, RoleFit fit) const {
   frame.raw = frame.adu = {at_ptr(begin), static_cast<size_t>(end - begin)};
   frame.t_ns = end_time(begin) - char_ns_;
   frame.end_ns = end_time(end - 1);
+  frame.untimed_start = options_.clock == ClockQuality::per_chunk && shares_read(begin);
   if (paused_inside(begin, end)) frame.findings = finding_gap_in_frame;
   return frame;
+}
+
+// Whether the byte at `offset` came in one read with the byte before it.
+bool RtuFramer::shares_read(uint64_t offset) const {
+  auto it = std::upper_bound(marks_.begin(), marks_.end(), offset,
+                             [](uint64_t o, const TimeMark& m) { return o < m.end; });
+  return it != marks_.end() && it->first < offset;
 }
 
 // Whether a clock per byte saw a silence over t1.5 before the byte at `offset`: no frame goes on

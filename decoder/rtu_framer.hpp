@@ -106,6 +106,7 @@ class RtuFramer {
   bool standard_frame(uint64_t at) const;
   Frame frame_of(uint64_t begin, uint64_t end, RoleFit fit) const;
   bool paused_inside(uint64_t begin, uint64_t end) const;
+  bool shares_read(uint64_t offset) const;
   bool paused_before(uint64_t offset) const;
   void emit_frame(uint64_t at, const Match& match);
   void emit_unframed(uint64_t begin, uint64_t end);

@@ -8,7 +8,12 @@ namespace modtap::decoder {
 namespace {
 
 using testing::analyze_untimed;
+using testing::Collector;
 using testing::hex;
+
+std::vector<uint8_t> text_bytes(std::string_view text) {
+  return {text.begin(), text.end()};
+}
 
 std::vector<uint8_t> join(std::initializer_list<const char*> frames) {
   std::vector<uint8_t> out;
@@ -17,6 +22,43 @@ std::vector<uint8_t> join(std::initializer_list<const char*> frames) {
     out.insert(out.end(), b.begin(), b.end());
   }
   return out;
+}
+
+// Reads stamped with their time, `reads` of them at 10 ms apart.
+Collector analyze_reads(const std::vector<std::vector<uint8_t>>& reads, ModeChoice mode) {
+  Collector out;
+  AnalyzerOptions options;
+  options.mode = mode;
+  options.clock = ClockQuality::per_chunk;
+  Analyzer analyzer(options, {{"test", ChannelRole::bus}}, out);
+  int64_t t = 1'000'000'000;
+  for (const auto& read : reads) analyzer.push({0, t += 10'000'000, {read.data(), read.size()}});
+  analyzer.finish();
+  return out;
+}
+
+// A request and its answer in one read (a sniffer's packet, a hex log's block) are placed back
+// to back: the turnaround between them is unknown, not zero. In reads of their own it is timed.
+TEST(Matcher, AnAnswerInTheRequestsReadHasNoLatency) {
+  const auto request = hex("01 03 00 00 00 01 84 0a"), answer = hex("01 03 02 00 07 f9 86");
+  const auto ascii_request = text_bytes(":010300000001FB\r\n");
+  const auto ascii_answer = text_bytes(":0103020007F3\r\n");
+  struct Case {
+    ModeChoice mode;
+    std::vector<uint8_t> request, answer;
+  };
+  for (const Case& c : {Case{ModeChoice::rtu, request, answer},
+                        Case{ModeChoice::ascii, ascii_request, ascii_answer}}) {
+    std::vector<uint8_t> both = c.request;
+    both.insert(both.end(), c.answer.begin(), c.answer.end());
+    const auto one_read = analyze_reads({both}, c.mode).frames();
+    ASSERT_EQ(one_read.size(), 2u);
+    EXPECT_EQ(one_read[1].request, one_read[0].index);
+    EXPECT_FALSE(one_read[1].latency_ns.has_value()) << *one_read[1].latency_ns;
+    const auto two_reads = analyze_reads({c.request, c.answer}, c.mode).frames();
+    ASSERT_EQ(two_reads.size(), 2u);
+    EXPECT_TRUE(two_reads[1].latency_ns.has_value());
+  }
 }
 
 TEST(Matcher, TellsAnEchoRequestFromItsResponseByOrder) {
