@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "decoder/checksum.hpp"
@@ -39,7 +42,11 @@ namespace {
 class Simulator {
  public:
   explicit Simulator(const BusOptions& o)
-      : o_(o), rng_(o.seed), char_ns_(o.format.char_time_ns()), t35_(o.format.t35_ns()) {}
+      : o_(o), rng_(o.seed), char_ns_(o.format.char_time_ns()), t35_(o.format.t35_ns()) {
+    // A slave whose faults are all off is a healthy slave, to the last random number.
+    for (const auto& [slave, faults] : o_.slave_faults)
+      if (slave >= 1 && slave <= 247 && faults != SlaveFaults{}) faults_[slave] = &faults;
+  }
 
   BusCapture run() {
     for (size_t i = 0; i < o_.transactions; ++i) transaction();
@@ -71,20 +78,92 @@ class Simulator {
     return offset;
   }
 
-  size_t send_frame(const Bytes& body, Role role, int64_t gap_ns, std::optional<size_t> request) {
-    Bytes wire;
-    encode_frame(o_.mode, body, wire);
+  // `corruption_rate` is the sender's own, on top of the line's.
+  size_t send_frame(const Bytes& body, Role role, int64_t gap_ns, std::optional<size_t> request,
+                    double corruption_rate = 0.0) {
+    Bytes adu = adu_of(body);
     uint32_t findings = 0;
+    auto damage = decoder::Damage::none;
+    if ((chance(corruption_rate) || chance(o_.corruption_rate)) && corrupt(adu, role)) {
+      findings = decoder::finding_bad_check;
+      damage = decoder::Damage::corrupted;
+    }
+    const Bytes wire = wire_of(adu);
     uint64_t offset;
     if (o_.mode == Mode::rtu && chance(o_.pause_rate)) {
       offset = send_with_pause(wire, gap_ns);
-      findings = decoder::finding_gap_in_frame;
+      findings |= decoder::finding_gap_in_frame;
     } else {
       offset = send(wire, gap_ns);
     }
     capture_.frames.push_back(
-        {offset, static_cast<uint32_t>(wire.size()), role, request, findings});
+        {offset, static_cast<uint32_t>(wire.size()), role, request, findings, damage, body[0]});
     return capture_.frames.size() - 1;
+  }
+
+  size_t check_size() const { return o_.mode == Mode::rtu ? 2 : 1; }
+
+  // Slave, PDU and check, in binary.
+  Bytes adu_of(const Bytes& body) const {
+    Bytes adu = body;
+    if (o_.mode == Mode::ascii) {
+      adu.push_back(decoder::lrc(body));
+      return adu;
+    }
+    const uint16_t crc = decoder::crc16(body);
+    adu.push_back(static_cast<uint8_t>(crc & 0xFF));
+    adu.push_back(static_cast<uint8_t>(crc >> 8));
+    return adu;
+  }
+
+  Bytes wire_of(const Bytes& adu) const {
+    if (o_.mode == Mode::rtu) return adu;
+    static constexpr char hex[] = "0123456789ABCDEF";
+    Bytes wire{':'};
+    for (uint8_t b : adu) {
+      wire.push_back(static_cast<uint8_t>(hex[b >> 4]));
+      wire.push_back(static_cast<uint8_t>(hex[b & 15]));
+    }
+    wire.push_back('\r');
+    wire.push_back('\n');
+    return wire;
+  }
+
+  bool check_ok(const Bytes& adu) const {
+    const std::span<const uint8_t> body(adu.data(), adu.size() - check_size());
+    if (o_.mode == Mode::ascii) return decoder::lrc(body) == adu.back();
+    return decoder::crc16(body) == (adu[adu.size() - 2] | adu.back() << 8);
+  }
+
+  // A bit flipped in 1 to 3 bytes on the way. Never in a byte the frame's length is told by (the
+  // function code, a byte count), and the address stays one (1-247): the frame arrives whole,
+  // its check bad, still its slave's. False, and nothing changed, where an RTU frame's length
+  // is no header's to tell (only a search for its CRC finds its end).
+  bool corrupt(Bytes& adu, Role role) {
+    const size_t body_size = adu.size() - check_size();
+    auto length_of = [&] { return decoder::body_length(role, {adu.data(), body_size}); };
+    using Kind = decoder::BodyLength::Kind;
+    const auto length = length_of();
+    if (length.kind == Kind::invalid || (o_.mode == Mode::rtu && length.kind != Kind::known))
+      return false;
+    auto keeps_structure = [&](size_t at) {
+      if (at == 0) return adu[0] >= 1 && adu[0] <= 247;
+      if (at == 1) return false;
+      if (at >= body_size) return true;
+      const auto now = length_of();
+      return now.kind == length.kind && now.bytes == length.bytes;
+    };
+    for (unsigned hits = pick(1, 3); hits > 0; --hits) {
+      for (;;) {
+        const size_t at = pick(0, static_cast<unsigned>(adu.size() - 1));
+        const auto bit = static_cast<uint8_t>(1u << pick(0, 7));
+        adu[at] ^= bit;
+        if (keeps_structure(at)) break;
+        adu[at] ^= bit;
+      }
+    }
+    if (check_ok(adu)) adu.back() ^= 1;  // the hits cancelled out, or kept the check
+    return true;
   }
 
   // The sender stalls once between two of the frame's bytes, longer than t1.5 but short of the
@@ -107,18 +186,29 @@ class Simulator {
   }
 
   // The next slave of the scan list (a broadcast goes between two polls, taking no one's turn),
-  // or any slave.
+  // or any slave. A slave with a missing block is read twice a cycle: its first registers, then
+  // the block (`block_read_`).
   uint8_t next_slave() {
     if (o_.polled_slaves == 0) return static_cast<uint8_t>(pick(1, 247));
-    return static_cast<uint8_t>(polls_++ % o_.polled_slaves + 1);
+    if (block_due_) {
+      block_read_ = true;
+      return std::exchange(block_due_, 0);
+    }
+    const auto slave = static_cast<uint8_t>(polls_++ % o_.polled_slaves + 1);
+    if (faults_[slave] && faults_[slave]->missing_block) block_due_ = slave;
+    return slave;
   }
 
   void transaction() {
     const bool broadcast = chance(o_.broadcast_rate);
+    block_read_ = false;
     const uint8_t slave = broadcast ? 0 : next_slave();
+    const SlaveFaults* faults = faults_[slave];
     Bytes request{slave}, response{slave};
     uint32_t request_findings = 0;
-    if (!broadcast && chance(o_.out_of_spec_rate)) {
+    if (block_read_) {
+      read_missing_block(*faults->missing_block, request, response);
+    } else if (!broadcast && chance(o_.out_of_spec_rate)) {
       request_findings = out_of_spec(request, response);
     } else if (o_.polled_slaves) {
       scan_step(slave, request, response);
@@ -139,38 +229,76 @@ class Simulator {
     }
     size_t req = send_request(request, request_findings, idle_gap());
     if (broadcast) return;
-    while (chance(o_.no_response_rate)) {
-      capture_.timed_out.push_back(req);
+    // A corrupted request no slave takes; a retry is one only after a copy the analyzer saw.
+    bool unanswered_copy = false;
+    for (unsigned retries = 0;; ++retries) {
+      const bool corrupted = capture_.frames[req].damage != decoder::Damage::none;
+      if (!corrupted && !silent(faults) && !chance(o_.no_response_rate)) break;
+      if (!corrupted) capture_.timed_out.push_back(req);
+      unanswered_copy |= !corrupted;
       // Retries only once the bus has shown how fast slaves answer: before that, a copy of an
-      // echo request is ambiguous by design (docs/framing.md, "Retries and echoes").
-      if (answered_ < 20 || !chance(o_.retry_rate)) {
+      // echo request is ambiguous by design (docs/framing.md, "Retries and echoes"). A master
+      // gives a faulty slave up after its usual three retries (it may never answer).
+      if (answered_ < 20 || (faults && retries == 3) || !chance(o_.retry_rate)) {
         timing_out_ns_ = o_.retry_after_ns;
         return;
       }
-      req = send_request(request, request_findings | decoder::finding_retry,
-                         o_.retry_after_ns + pick(0, 50'000'000));
+      req = send_request(
+          request, request_findings | (unanswered_copy ? uint32_t{decoder::finding_retry} : 0u),
+          o_.retry_after_ns + pick(0, 50'000'000));
     }
     int64_t turnaround =
         chance(o_.fast_turnaround_rate) ? char_ns_ * pick(15, 30) / 10 : t35_ + pick(0, 3'000'000);
     if (o_.min_turnaround_ns) turnaround = o_.min_turnaround_ns + pick(0, 3'000'000);
     if (o_.back_to_back) turnaround = 0;
+    if (faults) turnaround = slave_turnaround(*faults, turnaround);
+    // An answer after the master's time-out: the master has given up on it, and sends its next
+    // request its usual idle time after the answer ends (it does not talk over a frame).
+    const bool late = faults && turnaround >= o_.retry_after_ns;
     if (chance(o_.garbled_rate)) {
       capture_.timed_out.push_back(req);
-      timing_out_ns_ = o_.retry_after_ns;  // what came was no answer
+      timing_out_ns_ = late ? 0 : o_.retry_after_ns;  // what came was no answer
       return send_garbled(slave, turnaround);
     }
-    if (chance(o_.glitch_rate)) turnaround = glitch(turnaround);
-    ++answered_;
+    if (late) capture_.timed_out.push_back(req);
+    if ((faults && faults->turnaround_glitch) || chance(o_.glitch_rate))
+      turnaround = glitch(turnaround);
+    if (!late) ++answered_;
+    const size_t first = capture_.frames.size();
+    answer(response, turnaround, req, faults, late);
+    for (size_t i = first; i < capture_.frames.size(); ++i) capture_.frames[i].late = late;
+  }
+
+  void answer(const Bytes& response, int64_t turnaround, size_t req, const SlaveFaults* faults,
+              bool late) {
+    if (faults && faults->duplicate_address) return send_clash(response, turnaround, req, late);
     if (damageable(response) && chance(o_.cut_rate)) return send_cut(response, turnaround, req);
     if (damageable(response) && chance(o_.collision_rate))
       return send_collided(response, turnaround, req);
-    send_frame(response, Role::response, turnaround, req);
+    send_frame(response, Role::response, turnaround, req, faults ? faults->corruption_rate : 0.0);
   }
 
+  // Whether a faulty slave lets this request go unanswered: it is not there, or no longer, or
+  // it missed it.
+  bool silent(const SlaveFaults* faults) {
+    if (!faults) return false;
+    if (faults->absent) return true;
+    if (faults->stops_after_ns && capture_.end_ns.back() >= *faults->stops_after_ns) return true;
+    return chance(faults->drop_rate);
+  }
+
+  int64_t slave_turnaround(const SlaveFaults& faults, int64_t turnaround) {
+    if (faults.answers_after_timeout) return o_.retry_after_ns + t35_ + pick(0, 3'000'000);
+    if (faults.turnaround_ns) return *faults.turnaround_ns + pick(0, 3'000'000);
+    return turnaround;
+  }
+
+  // The master's spec findings and retry hold only for a request the slaves could read.
   size_t send_request(const Bytes& request, uint32_t findings, int64_t gap_ns) {
     if (chance(o_.request_glitch_rate)) gap_ns = glitch(gap_ns);
     const size_t req = send_frame(request, Role::request, gap_ns, std::nullopt);
-    capture_.frames[req].findings |= findings;
+    if (capture_.frames[req].damage == decoder::Damage::none)
+      capture_.frames[req].findings |= findings;
     return req;
   }
 
@@ -193,7 +321,7 @@ class Simulator {
     Bytes wire;
     encode_frame(o_.mode, response, wire);
     wire.resize(pick(3, static_cast<unsigned>(wire.size() - 1)));
-    send_damaged(wire, gap_ns, req, decoder::Damage::cut);
+    send_damaged(wire, gap_ns, req, decoder::Damage::cut, response[0]);
   }
 
   // Another device starts while the response's last bytes are on the wire: they arrive garbled
@@ -204,7 +332,7 @@ class Simulator {
     const size_t garbled = pick(1, 3);
     for (size_t i = wire.size() - garbled; i < wire.size(); ++i)
       wire[i] ^= static_cast<uint8_t>(pick(1, 255));
-    send_damaged(wire, gap_ns, req, decoder::Damage::collision);
+    send_damaged(wire, gap_ns, req, decoder::Damage::collision, response[0]);
     Bytes other;
     random_bytes(other, pick(1, 6));
     send(other, 0);
@@ -219,10 +347,63 @@ class Simulator {
     capture_.garbled.push_back(send(junk, gap_ns));
   }
 
-  void send_damaged(const Bytes& wire, int64_t gap_ns, size_t req, decoder::Damage damage) {
+  void send_damaged(const Bytes& wire, int64_t gap_ns, size_t req, decoder::Damage damage,
+                    uint8_t slave) {
     const uint64_t offset = send(wire, gap_ns);
     capture_.frames.push_back({offset, static_cast<uint32_t>(wire.size()), Role::response, req,
-                               decoder::finding_bad_check, damage});
+                               decoder::finding_bad_check, damage, slave});
+  }
+
+  // Two devices with the slave's address answer together, the second 0 to 1.9 characters after
+  // the first, in steps of about a bit. Begun within the same bit, the bytes they agree on come
+  // through and the rest is garbage: a frame whole but for its check, unless they said the same.
+  // Begun apart, the receiver never finds the characters' starts again: junk from the first
+  // byte both drove, as long as both answers together. Nothing after a whole first byte (the
+  // address) is this answer's function code, so the junk never reads as the slave's damaged
+  // answer; in ASCII it holds no ':' to start a frame.
+  void send_clash(const Bytes& response, int64_t gap_ns, size_t req, bool late) {
+    const Bytes mine = adu_of(response), theirs = adu_of(twin_answer(response));
+    const unsigned delay = pick(0, 19);  // in tenths of a character
+    if (delay == 0) {
+      Bytes adu(mine.size());
+      do {
+        for (size_t i = 0; i < adu.size(); ++i)
+          adu[i] = mine[i] == theirs[i] ? mine[i] : static_cast<uint8_t>(pick(0, 255));
+      } while (adu != mine && check_ok(adu));
+      const bool whole = adu == mine;
+      const Bytes wire = wire_of(adu);
+      const uint64_t offset = send(wire, gap_ns);
+      const auto size = static_cast<uint32_t>(wire.size());
+      capture_.frames.push_back(
+          {offset, size, Role::response, req, whole ? 0u : uint32_t{decoder::finding_bad_check},
+           whole ? decoder::Damage::none : decoder::Damage::corrupted, response[0]});
+      capture_.clashes.push_back({req, offset, size});
+      return;
+    }
+    const Bytes first = wire_of(mine);
+    const size_t whole = o_.mode == Mode::rtu ? delay / 10 : 0;
+    Bytes junk(first.begin(), first.begin() + static_cast<ptrdiff_t>(whole));
+    random_bytes(junk, first.size() + (delay + 9) / 10 - whole);
+    const uint8_t fc = response[1] & 0x7F;
+    for (size_t i = whole; i < junk.size(); ++i) {
+      while ((o_.mode == Mode::ascii && junk[i] == ':') || (i == 0 && junk[0] == response[0]) ||
+             (i == 1 && (junk[1] & 0x7F) == fc))
+        junk[i] = static_cast<uint8_t>(pick(0, 255));
+    }
+    const uint64_t offset = send(junk, gap_ns);
+    capture_.garbled.push_back(offset);
+    capture_.clashes.push_back({req, offset, static_cast<uint32_t>(junk.size())});
+    if (late) return;  // the master gave up already
+    capture_.timed_out.push_back(req);
+    timing_out_ns_ = o_.retry_after_ns;
+  }
+
+  // The other device's answer: the same header, and its own values where it reads them.
+  Bytes twin_answer(const Bytes& response) {
+    Bytes twin = response;
+    if (twin.size() > 3 && twin[1] >= 0x01 && twin[1] <= 0x04)
+      for (size_t i = 3; i < twin.size(); ++i) twin[i] = static_cast<uint8_t>(pick(0, 255));
+    return twin;
   }
 
   // A request over the standard's limits, as masters do send them, and the slave's exception
@@ -255,6 +436,20 @@ class Simulator {
     rsp.push_back(code);
   }
 
+  bool reads_missing(uint8_t slave, unsigned start, unsigned count) const {
+    const SlaveFaults* faults = faults_[slave];
+    if (!faults || !faults->missing_block) return false;
+    const RegisterBlock& block = *faults->missing_block;
+    return start < block.start + block.count && block.start < start + count;
+  }
+
+  void read_missing_block(const RegisterBlock& block, Bytes& req, Bytes& rsp) {
+    req.push_back(0x03);
+    u16(req, block.start);
+    u16(req, block.count);
+    exception(rsp, 0x03, 0x02);
+  }
+
   // A scan list's step: a read of the slave's first registers, whose values drift as a drive's
   // frequency and current do (so a register followed over time draws a line), or between polls
   // a setpoint broadcast to all.
@@ -269,6 +464,7 @@ class Simulator {
     req.push_back(0x03);
     u16(req, 0x0000);
     u16(req, values.size());
+    if (reads_missing(slave, 0x0000, values.size())) return exception(rsp, 0x03, 0x02);
     if (chance(o_.exception_rate)) return exception(rsp, 0x03, chance(0.5) ? 0x02 : 0x04);
     rsp.push_back(0x03);
     rsp.push_back(static_cast<uint8_t>(values.size() * 2));
@@ -293,8 +489,10 @@ class Simulator {
       rsp.resize(1);
       static constexpr uint8_t codes[] = {0x01, 0x02, 0x03, 0x04, 0x06};
       exception(rsp, fc, codes[pick(0, 4)]);
+    } else if (fc == 0x03 && reads_missing(slave, req[2] << 8 | req[3], req[4] << 8 | req[5])) {
+      rsp.resize(1);
+      exception(rsp, fc, 0x02);
     }
-    (void)slave;
   }
 
   void fill(uint8_t fc, Bytes& req, Bytes& rsp) {
@@ -458,12 +656,137 @@ class Simulator {
   }
   size_t answered_ = 0;
   int64_t timing_out_ns_ = 0;  // the master's time-out, still to run before its next request
+  std::array<const SlaveFaults*, 248> faults_{};  // by address; none for a healthy slave
+  uint8_t block_due_ = 0;    // the slave whose missing block the scan list reads next
+  bool block_read_ = false;  // this transaction reads it
 };
 
 }  // namespace
 
 BusCapture simulate(const BusOptions& options) {
   return Simulator(options).run();
+}
+
+namespace {
+
+std::optional<double> number(std::string_view text) {
+  double value = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc() || end != text.data() + text.size() || text.empty()) return {};
+  return value;
+}
+
+std::optional<int64_t> time_ns(std::string_view text) {
+  static constexpr std::pair<std::string_view, double> units[] = {
+      {"ns", 1}, {"us", 1e3}, {"ms", 1e6}, {"s", 1e9}};
+  for (const auto& [unit, ns] : units) {
+    if (!text.ends_with(unit)) continue;
+    const auto value = number(text.substr(0, text.size() - unit.size()));
+    if (!value || *value < 0 || *value * ns > 1e18) return {};
+    return static_cast<int64_t>(*value * ns + 0.5);
+  }
+  return {};
+}
+
+std::optional<unsigned> whole_number(std::string_view text, int base) {
+  unsigned value = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value, base);
+  if (error != std::errc() || end != text.data() + text.size() || text.empty()) return {};
+  return value;
+}
+
+// 0400H, 0x400 or 1024.
+std::optional<unsigned> register_address(std::string_view text) {
+  if (text.ends_with('H') || text.ends_with('h'))
+    return whole_number(text.substr(0, text.size() - 1), 16);
+  if (text.starts_with("0x") || text.starts_with("0X")) return whole_number(text.substr(2), 16);
+  return whole_number(text, 10);
+}
+
+constexpr std::string_view fault_names =
+    "absent, stops=TIME, drop=RATE, slow=TIME, late, bit-errors=RATE, missing-block=START+COUNT, "
+    "duplicate, glitch";
+
+void add_fault(SlaveFaults& faults, std::string_view name, std::optional<std::string_view> value) {
+  const std::string what(name);
+  auto no_value = [&] {
+    if (value) throw std::invalid_argument(what + " takes no value");
+  };
+  auto text = [&] {
+    if (!value) throw std::invalid_argument(what + " needs a value: " + what + "=...");
+    return *value;
+  };
+  auto time = [&] {
+    const auto ns = time_ns(text());
+    if (!ns)
+      throw std::invalid_argument(what + " wants a time with its unit, as 131ms, 60s, 500us");
+    return *ns;
+  };
+  auto rate = [&] {
+    const auto r = number(text());
+    if (!r || *r < 0 || *r > 1) throw std::invalid_argument(what + " wants a rate from 0 to 1");
+    return *r;
+  };
+  if (name == "absent") {
+    no_value();
+    faults.absent = true;
+  } else if (name == "late") {
+    no_value();
+    faults.answers_after_timeout = true;
+  } else if (name == "duplicate") {
+    no_value();
+    faults.duplicate_address = true;
+  } else if (name == "glitch") {
+    no_value();
+    faults.turnaround_glitch = true;
+  } else if (name == "stops") {
+    faults.stops_after_ns = time();
+  } else if (name == "slow") {
+    faults.turnaround_ns = time();
+  } else if (name == "drop") {
+    faults.drop_rate = rate();
+  } else if (name == "bit-errors") {
+    faults.corruption_rate = rate();
+  } else if (name == "missing-block") {
+    const std::string_view block = text();
+    const size_t plus = block.find('+');
+    const auto start = register_address(block.substr(0, plus));
+    const auto count =
+        plus == std::string_view::npos ? std::nullopt : whole_number(block.substr(plus + 1), 10);
+    if (!start || !count || *count < 1 || *count > 125 || *start + *count > 0x10000)
+      throw std::invalid_argument(what +
+                                  " wants START+COUNT, as 0400H+4 (COUNT 1-125, a FC03 read's)");
+    faults.missing_block =
+        RegisterBlock{static_cast<uint16_t>(*start), static_cast<uint16_t>(*count)};
+  } else {
+    throw std::invalid_argument("no fault '" + what + "'; the faults: " + std::string(fault_names));
+  }
+}
+
+}  // namespace
+
+void add_slave_faults(BusOptions& options, std::string_view spec) {
+  try {
+    const size_t colon = spec.find(':');
+    const auto slave =
+        colon == std::string_view::npos ? std::nullopt : whole_number(spec.substr(0, colon), 10);
+    if (!slave || *slave < 1 || *slave > 247)
+      throw std::invalid_argument("not ADDR:FAULT[,FAULT...] with ADDR a slave from 1 to 247");
+    SlaveFaults& faults = options.slave_faults[static_cast<uint8_t>(*slave)];
+    std::string_view rest = spec.substr(colon + 1);
+    for (;;) {
+      const size_t comma = rest.find(',');
+      const std::string_view fault = rest.substr(0, comma);
+      const size_t equals = fault.find('=');
+      add_fault(faults, fault.substr(0, equals),
+                equals == std::string_view::npos ? std::nullopt
+                                                 : std::optional(fault.substr(equals + 1)));
+      if (comma == std::string_view::npos) break;
+      rest.remove_prefix(comma + 1);
+    }
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(spec) + ": " + e.what());
+  }
 }
 
 decoder::ClockQuality clock_of(Delivery delivery) {

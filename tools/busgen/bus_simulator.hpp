@@ -1,16 +1,51 @@
 // A Modbus serial bus simulator for tests and benchmarks: a master polling slaves with every
 // public function code, slaves answering (or not), with character timing, fast turnarounds,
-// turnaround glitches, line noise and truncated frames, and the exact ground truth of it all.
+// turnaround glitches, line noise and truncated frames, faulty slaves, and the exact ground
+// truth of it all.
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <optional>
+#include <string_view>
 #include <vector>
 
 #include "decoder/records.hpp"
 #include "decoder/serial_format.hpp"
 
 namespace modtap::busgen {
+
+// Holding registers start to start + count - 1.
+struct RegisterBlock {
+  uint16_t start = 0;
+  uint16_t count = 0;
+  friend bool operator==(const RegisterBlock&, const RegisterBlock&) = default;
+};
+
+// What one slave does wrong, for a diagnosis to find. All off by default; a fault that is off
+// draws nothing from the simulator's random numbers, so the rest of the bus stays as it was.
+struct SlaveFaults {
+  bool absent = false;  // never answers: a dead device, or a polled address with nothing behind it
+  // Answers until this bus time (from the capture's start), never after: it died or lost power.
+  std::optional<int64_t> stops_after_ns;
+  double drop_rate = 0.0;  // misses this share of requests (a busy CPU, a marginal receiver)
+  // A slow device: answers after this and up to 3 ms more instead of the bus's turnaround. At
+  // the master's time-out (retry_after_ns) or beyond, it answers late, as below.
+  std::optional<int64_t> turnaround_ns;
+  // Answers only after the master gave up: its turnaround is beyond the master's time-out, so
+  // it answers t3.5 to t3.5 + 3 ms after the time-out ran out (this wins over turnaround_ns).
+  bool answers_after_timeout = false;
+  // This share of its answers arrive with a bit flipped in 1 to 3 bytes (a weak driver, a bad
+  // stub), their structure whole: Damage::corrupted. The address byte may be hit.
+  double corruption_rate = 0.0;
+  // Registers it does not have: a FC03 read touching them gets exception 02, Illegal Data
+  // Address. With a scan list, the master reads the block from this slave every cycle, right
+  // after its usual read (a master configured for another firmware).
+  std::optional<RegisterBlock> missing_block;
+  bool duplicate_address = false;  // a second device has its address: both answer, over each other
+  bool turnaround_glitch = false;  // its driver puts a 0x00 or 0xFF on the line before every answer
+  friend bool operator==(const SlaveFaults&, const SlaveFaults&) = default;
+};
 
 struct BusOptions {
   uint64_t seed = 1;
@@ -40,30 +75,64 @@ struct BusOptions {
   double pause_rate = 0.0;      // a sender pauses inside a frame, longer than t1.5 (RTU)
   double garbled_rate = 0.0;    // the answer comes as bytes that are no frame (a slave at another
                                 // baud rate), and the master times out
+  // Line noise (a bad termination): this share of every frame, requests and answers alike,
+  // arrives with a bit flipped in 1 to 3 bytes, as SlaveFaults::corruption_rate. A slave ignores
+  // a corrupted request, so the master waits out its time-out.
+  double corruption_rate = 0.0;
   int64_t poll_gap_ns = 5'000'000;  // master's idle time between transactions (at least)
   bool back_to_back = false;        // no idle time at all: the densest file for benchmarks
   // 0: each request goes to a slave picked at random from 1-247 (every address exercised);
   // N: the master polls slaves 1 to N in turn with the same read, as a PLC's scan list does.
   unsigned polled_slaves = 0;
+  std::map<uint8_t, SlaveFaults> slave_faults;  // by address, 1-247; slave 0 has none
 };
 
-// A frame the master or a slave really sent, whole and with a good check.
+// Adds faults written as on busgen's command line, "ADDR:FAULT[,FAULT...]": absent, stops=TIME,
+// drop=RATE, slow=TIME, late, bit-errors=RATE, missing-block=START+COUNT (START as 0400H,
+// 0x400 or 1024), duplicate, glitch; TIME as 131ms, 60s, 500us or 2.5s. Throws
+// std::invalid_argument saying what is wrong.
+void add_slave_faults(BusOptions& options, std::string_view spec);
+
+// A frame the master or a slave really sent.
 struct TruthFrame {
   uint64_t offset = 0;  // in the byte stream
   uint32_t size = 0;
   decoder::Role role = decoder::Role::request;
   std::optional<size_t> request;  // for a response: its request's position in `frames`
   uint32_t findings = 0;          // what the analyzer must say of it (decoder::finding_*)
-  // A response damaged on the wire: its bytes as sent, its check bad, and how it broke.
+  // A frame damaged on the wire: its bytes as they arrived, its check bad, and how it broke. A
+  // corrupted request opens no transaction (no slave takes it): it is never in `timed_out`.
   decoder::Damage damage = decoder::Damage::none;
+  // The slave it is to or from, as sent: a bit error may have changed the address on the wire.
+  uint8_t slave = 0;
+  // A response that came after the master's time-out (retry_after_ns) ran out; its request is
+  // in `timed_out`. An analyzer whose time-out is the master's sees it as an unsolicited answer.
+  bool late = false;
+  friend bool operator==(const TruthFrame&, const TruthFrame&) = default;
+};
+
+// Two devices of one address answered a request at once (SlaveFaults::duplicate_address), the
+// second 0 to 1.9 characters after the first: the bytes that were on the wire. Begun within
+// the same bit, they read as one answer, in `frames`: good where both said the same, else
+// corrupted where they differed (the master has its CRC error). Otherwise they are junk, in
+// `garbled`, and the master times out.
+struct Clash {
+  size_t request = 0;  // its position in `frames`
+  uint64_t offset = 0;
+  uint32_t size = 0;
+  friend bool operator==(const Clash&, const Clash&) = default;
 };
 
 struct BusCapture {
   std::vector<uint8_t> bytes;
   std::vector<int64_t> end_ns;  // when each byte's stop bit ended
   std::vector<TruthFrame> frames;
-  std::vector<size_t> timed_out;  // positions in `frames` of requests left unanswered
+  // Positions in `frames` of good requests the master's time-out ran out on: unanswered, or
+  // answered by junk, or late.
+  std::vector<size_t> timed_out;
   std::vector<uint64_t> garbled;  // where each garbled answer begins in the byte stream
+  std::vector<Clash> clashes;
+  friend bool operator==(const BusCapture&, const BusCapture&) = default;
 };
 
 BusCapture simulate(const BusOptions& options);

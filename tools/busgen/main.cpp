@@ -1,7 +1,9 @@
 // modtap-busgen: writes simulated bus traffic as a capture file, for benchmarks and demos.
 #include <cstdio>
 #include <map>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -62,8 +64,30 @@ int main(int argc, char** argv) {
                "What real buses add: glitches, line noise, requests broken off and sent again, "
                "retries, responses cut or collided with or garbled, pauses inside frames, "
                "out-of-spec requests, vendor codes");
+  app.add_option("--bit-errors", o.corruption_rate,
+                 "Line noise: this share of all frames, requests and answers, arrives with bits "
+                 "flipped (a bad CRC)")
+      ->check(CLI::Range(0.0, 1.0));
+  std::vector<std::string> slave_faults;
+  app.add_option("--slave-fault", slave_faults,
+                 "A slave's faults, as ADDR:FAULT[,FAULT...], repeatable: absent, stops=TIME "
+                 "(silent from then on), drop=RATE (misses requests), slow=TIME (its turnaround), "
+                 "late (answers after the master's time-out), bit-errors=RATE (of its answers), "
+                 "missing-block=START+COUNT (read every cycle, answered by exception 02), "
+                 "duplicate (two devices answer at once), glitch (before every answer); "
+                 "e.g. 2:slow=131ms 6:missing-block=0400H+4");
   app.add_flag("--ascii", ascii, "Modbus ASCII instead of RTU (7E1)");
   CLI11_PARSE(app, argc, argv);
+  try {
+    for (const auto& spec : slave_faults) busgen::add_slave_faults(o, spec);
+    for (const auto& [slave, unused] : o.slave_faults) {
+      if (o.polled_slaves && slave > o.polled_slaves)
+        throw std::invalid_argument("slave " + std::to_string(slave) + " is not polled (--slaves " +
+                                    std::to_string(o.polled_slaves) + ")");
+    }
+  } catch (const std::invalid_argument& e) {
+    return app.exit(CLI::ValidationError("--slave-fault", e.what()));
+  }
   if (faults) {
     o.glitch_rate = o.request_glitch_rate = 0.01;
     o.noise_rate = o.truncation_rate = o.retry_rate = o.cut_rate = o.collision_rate = 0.01;
