@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <vector>
 
 #include "decoder/records.hpp"
@@ -36,31 +37,79 @@ class FanOut final : public RecordSink {
   std::vector<RecordSink*> sinks_;
 };
 
-// Passes records on until `max_frames` frames have gone through (-c N), then none: records the
-// analyzer still holds when the run stops (pending time-outs) stay out too.
-class FrameLimit final : public RecordSink {
+// Passes records on until `max_records` frames and noise records have gone through (-c N, as
+// tshark counts packets: junk read as noise counts too, so a limit is reached on any input),
+// then none. A time-out is not a record of the line but modtap's own: it does not count, and
+// after the limit passes only if it was known before the last record counted; the others the
+// analyzer still holds when the run stops stay out.
+class RecordLimit final : public RecordSink {
  public:
-  // `on_reached` runs once, after the last frame went through: a live run stops there.
-  FrameLimit(uint64_t max_frames, RecordSink& next, std::function<void()> on_reached = {})
-      : left_(max_frames), next_(next), on_reached_(std::move(on_reached)) {}
+  // `on_reached` runs once, after the last record went through: a live run stops there.
+  RecordLimit(uint64_t max_records, RecordSink& next, std::function<void()> on_reached = {})
+      : left_(max_records), next_(next), on_reached_(std::move(on_reached)) {}
   bool reached() const { return left_ == 0; }
   void on_frame(const Frame& f) override {
     if (reached()) return;
-    --left_;
     next_.on_frame(f);
-    if (reached() && on_reached_) on_reached_();
+    count(f.t_ns);
   }
   void on_noise(const Noise& n) override {
-    if (!reached()) next_.on_noise(n);
+    if (reached()) return;
+    next_.on_noise(n);
+    count(n.t_ns);
   }
   void on_timeout(const Timeout& t) override {
-    if (!reached()) next_.on_timeout(t);
+    if (!reached() || t.t_ns <= last_ns_) next_.on_timeout(t);
   }
 
  private:
+  void count(int64_t t_ns) {
+    last_ns_ = t_ns;
+    if (--left_ == 0 && on_reached_) on_reached_();
+  }
+
   uint64_t left_;
+  int64_t last_ns_ = 0;
   RecordSink& next_;
   std::function<void()> on_reached_;
+};
+
+// The times of the records seen so far: the first one's, the latest's and the one's before it.
+struct RecordClock {
+  std::optional<int64_t> first_ns;
+  std::optional<int64_t> previous_ns;
+  std::optional<int64_t> latest_ns;
+
+  void see(int64_t t_ns) {
+    if (!first_ns) first_ns = t_ns;
+    previous_ns = latest_ns;
+    latest_ns = t_ns;
+  }
+};
+
+// Keeps `clock` of every record going through, then hands it on. Set before the filter, it lets
+// the sinks behind count time over the whole capture as tshark does (-t r from the first
+// packet, -t d from the packet before, shown or not): a filter picks lines, it does not move
+// them in time.
+class ClockStage final : public RecordSink {
+ public:
+  ClockStage(RecordClock& clock, RecordSink& next) : clock_(clock), next_(next) {}
+  void on_frame(const Frame& f) override {
+    clock_.see(f.t_ns);
+    next_.on_frame(f);
+  }
+  void on_noise(const Noise& n) override {
+    clock_.see(n.t_ns);
+    next_.on_noise(n);
+  }
+  void on_timeout(const Timeout& t) override {
+    clock_.see(t.t_ns);
+    next_.on_timeout(t);
+  }
+
+ private:
+  RecordClock& clock_;
+  RecordSink& next_;
 };
 
 // Takes records and keeps nothing: -T none measures the pipeline alone.

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -35,6 +36,8 @@ Outcome run_shell(const std::string& command) {
 Outcome run(const std::string& args) {
   return run_shell(std::string(MODTAP_BINARY) + " " + args + " 2>&1");
 }
+
+std::string hexlog(const std::string& name, const std::vector<std::string>& timed_frames);
 
 const std::string brainchild = std::string("-r ") + MODTAP_SAMPLES +
                                "/brainchild-io-16do.sr --baud 19200 --parity even "
@@ -208,6 +211,54 @@ TEST(Cli, TsharkHabitsCountQuietTimeAndVersion) {
   EXPECT_EQ(version.lines[0].rfind("modtap ", 0), 0u);
 }
 
+// -Y picks lines, it does not move them in time: each line shown reads as it does without the
+// filter, with -t r (since the capture's first record) and -t d (since the record before, shown
+// or not, as tshark's -t d); -t dd counts from the line shown before, as tshark's.
+TEST(Cli, FilterLeavesTheTimeColumnAsWithoutIt) {
+  for (const std::string format : {"r", "d"}) {
+    const Outcome all = run(brainchild + " -t " + format);
+    const Outcome picked = run(brainchild + " -t " + format + " -Y 'fc == 3'");
+    ASSERT_EQ(picked.lines.size(), 4u) << format;
+    for (const std::string& line : picked.lines)
+      EXPECT_THAT(all.lines, ::testing::Contains(line)) << "-t " << format;
+  }
+  const Outcome shown = run(brainchild + " -t dd -Y 'fc == 3'");
+  ASSERT_EQ(shown.lines.size(), 4u);
+  std::vector<std::string> times;
+  for (const std::string& line : shown.lines) times.push_back(line.substr(6, 12));
+  EXPECT_EQ(times, (std::vector<std::string>{"    0.000000", "    0.006695", "    0.162314",
+                                             "    0.006678"}));
+}
+
+// -c N counts records as tshark counts packets: noise too (random bytes read as RTU are nearly
+// all noise), time-outs not (modtap makes them; the one before the limit is shown). Reading
+// stops at the limit: an endless pipe ends.
+TEST(Cli, CountStopsAfterNRecordsNoiseIncluded) {
+  const auto random_file = (std::filesystem::temp_directory_path() / "modtap-random.raw").string();
+  {
+    std::mt19937 random(7);
+    std::ofstream out(random_file, std::ios::binary);
+    for (int i = 0; i < 2'000'000; ++i) out.put(static_cast<char>(random() & 0xFF));
+  }
+  const std::string modtap = MODTAP_BINARY;
+  const Outcome two =
+      run_shell(modtap + " -r " + random_file + " --format raw --mode rtu -c 2 2>/dev/null");
+  EXPECT_EQ(two.status, 0);
+  ASSERT_EQ(two.lines.size(), 2u);
+  EXPECT_THAT(two.lines[0], ::testing::HasSubstr("noise"));
+  const Outcome endless = run_shell("timeout 30 sh -c 'cat /dev/urandom | " + modtap +
+                                    " -r - --format raw --mode rtu -c 2' 2>/dev/null");
+  EXPECT_EQ(endless.status, 0);
+  EXPECT_EQ(endless.lines.size(), 2u);
+
+  std::vector<std::string> asked;  // a request timed out, its retry, the retry's time-out
+  for (const char* t : {"00.000000", "00.450000"})
+    asked.insert(asked.end(), {t, "02 03 01 20 00 01 84 0F"});
+  const Outcome retried = run("-r " + hexlog("modtap-limit.log", asked) + " --model 2=n3 -c 2");
+  ASSERT_EQ(retried.lines.size(), 3u);
+  EXPECT_THAT(retried.lines[1], ::testing::HasSubstr("TIMEOUT request #1"));
+}
+
 // --follow: the values of chosen registers over time, by name or address, as the device's
 // answers to reads and writes give them: a row a good response.
 TEST(Cli, FollowWritesRegisterValuesOverTimeAsCsv) {
@@ -223,6 +274,30 @@ TEST(Cli, FollowWritesRegisterValuesOverTimeAsCsv) {
   EXPECT_GT(all.lines.size(), r.lines.size());
   EXPECT_EQ(run(drives + " --follow ,x").lines,
             std::vector<std::string>{"modtap: --follow: an empty name in \",x\""});
+}
+
+// --follow names registers a loaded model knows (any of them without --model: a slave may
+// identify itself) or addresses: another name is an error with the closest known name, and a
+// register no frame read or wrote is said at the end.
+TEST(Cli, FollowRefusesUnknownNamesAndSaysWhatNoFrameTouched) {
+  const std::string log = std::string("-r ") + MODTAP_SAMPLES + "/drives-manual-examples.log";
+  const Outcome typo = run(log + " --model 1=nta5000 --follow output_frequncy");
+  EXPECT_EQ(typo.status >> 8, 2);
+  EXPECT_EQ(typo.lines, std::vector<std::string>{
+                            "modtap: --follow: no model names a register \"output_frequncy\"; "
+                            "did you mean output_frequency?"});
+  EXPECT_EQ(run(log + " --follow zzzz").lines,
+            std::vector<std::string>{"modtap: --follow: no model names a register \"zzzz\""});
+  const Outcome any_model = run(log + " --follow frequency_setting");  // GD20's, slave 3 says
+  EXPECT_EQ(any_model.status, 0);
+  EXPECT_EQ(any_model.lines.size(), 2u);
+  EXPECT_THAT(any_model.lines[1], ::testing::EndsWith(",3,2001H,frequency_setting,50.00,Hz,5000"));
+  const Outcome unseen = run(log + " --model 1=nta5000 --follow output_frequency,2200H,P00.04");
+  EXPECT_EQ(unseen.status, 0);
+  ASSERT_GE(unseen.lines.size(), 2u);
+  EXPECT_EQ(std::vector<std::string>(unseen.lines.end() - 2, unseen.lines.end()),
+            (std::vector<std::string>{"modtap: --follow 2200H: no frame read or wrote it",
+                                      "modtap: --follow P00.04: no frame read or wrote it"}));
 }
 
 // --register-base: registers numbered as mbpoll (1-based) or Modicon (40001) number them, in

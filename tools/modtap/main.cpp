@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -16,6 +17,7 @@
 #include "decoder/display_filter.hpp"
 #include "decoder/field_registry.hpp"
 #include "tools/modtap/capture_conditions.hpp"
+#include "tools/modtap/csv_sink.hpp"
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/run.hpp"
 
@@ -89,10 +91,58 @@ int list_models(const RunOptions& o) {
   return 0;
 }
 
+// How many single-character edits turn `a` into `b` (Levenshtein's distance).
+size_t edits(std::string_view a, std::string_view b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t above = row[j];
+      row[j] = std::min({above + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1])});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+// "; did you mean NAME?" for the models' register name nearest `name`, if one is near.
+std::string nearest_register(const std::vector<const decoder::DeviceModel*>& models,
+                             std::string_view name) {
+  std::string best;
+  size_t best_edits = std::max<size_t>(2, name.size() / 3) + 1;  // farther is no typo
+  for (const decoder::DeviceModel* model : models)
+    for (const auto& [key, def] : model->registers)
+      if (const size_t n = edits(name, def.name); n < best_edits) {
+        best = def.name;
+        best_edits = n;
+      }
+  return best.empty() ? "" : fmt::format("; did you mean {}?", best);
+}
+
+// --follow names a register of a loaded model (any of them, as -Y does: a slave may identify
+// itself as a model --model did not name) or gives an address; any other name is a mistake
+// that would follow nothing.
+std::optional<std::string> refuse_follow(const RunOptions& o) {
+  if (o.follow.empty()) return std::nullopt;
+  const tools::ModelCatalog catalog = tools::load_models(o);
+  const auto models = catalog.all();
+  for (const auto& item :
+       tools::parse_follow(o.follow, decoder::register_base_named(o.register_base))) {
+    if (item.number || std::any_of(models.begin(), models.end(),
+                                   [&](const auto* m) { return names_register(*m, item.name); }))
+      continue;
+    return fmt::format("--follow: no model names a register \"{}\"{}", item.name,
+                       nearest_register(models, item.name));
+  }
+  return std::nullopt;
+}
+
 // -c N and -a frames:N: whichever stops first (0: no limit).
-uint64_t frame_limit(const RunOptions& o, const Autostop& autostop) {
-  if (!autostop.frames) return o.max_frames;
-  return o.max_frames ? std::min(o.max_frames, *autostop.frames) : *autostop.frames;
+uint64_t record_limit(const RunOptions& o, const Autostop& autostop) {
+  if (!autostop.frames) return o.max_records;
+  return o.max_records ? std::min(o.max_records, *autostop.frames) : *autostop.frames;
 }
 
 }  // namespace
@@ -160,13 +210,16 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(147, 162));
   app.add_flag("-V,--verbose", o.verbose, "Print each frame's field tree");
   app.add_option("-t", o.time_format,
-                 "Text time column: r (since the first record), a (local time of day), ad "
-                 "(local date and time), d (since the record before)")
-      ->check(CLI::IsMember({"r", "a", "ad", "d"}));
+                 "Text time column: r (since the capture's first record), a (local time of "
+                 "day), ad (local date and time), d (since the record before, shown or not), "
+                 "dd (since the line shown before)")
+      ->check(CLI::IsMember({"r", "a", "ad", "d", "dd"}));
   app.add_option("-Y,--display-filter", o.display_filter,
                  "Only records that match, in every output: 'slave == 3 && fc == 6', "
                  "'latency_us > 50000', 'finding', 'register.name == \"fault\"' (docs/output.md)");
-  app.add_option("-c", o.max_frames, "Stop after this many frames")->check(CLI::PositiveNumber);
+  app.add_option("-c", o.max_records,
+                 "Stop after this many records read: frames and noise (time-outs do not count)")
+      ->check(CLI::PositiveNumber);
   app.add_option("-a,--autostop", o.autostop,
                  "Stop after duration:SECONDS (capture time of a file, wall time on a port), "
                  "filesize:KB (the -w files), or frames:N; repeatable, the first reached wins");
@@ -225,7 +278,7 @@ int main(int argc, char** argv) {
     // The conditions' errors come before any work.
     const Autostop autostop = tools::parse_autostop(o.autostop);
     const captures::RingLimits ring = tools::parse_ring_buffer(o.ring_buffer);
-    o.max_frames = frame_limit(o, autostop);
+    o.max_records = record_limit(o, autostop);
     if (autostop.filesize_bytes && o.write_file.empty()) {
       fmt::print(stderr, "modtap: -a filesize stops on the size of the -w file: give -w\n");
       return 2;
@@ -235,6 +288,10 @@ int main(int argc, char** argv) {
       return 2;
     }
     if (auto refusal = refuse_outputs(o)) {
+      fmt::print(stderr, "modtap: {}\n", *refusal);
+      return 2;
+    }
+    if (auto refusal = refuse_follow(o)) {
       fmt::print(stderr, "modtap: {}\n", *refusal);
       return 2;
     }

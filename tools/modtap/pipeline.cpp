@@ -11,7 +11,8 @@ namespace modtap::tools {
 namespace {
 
 std::unique_ptr<decoder::RecordSink> make_sink(const RunOptions& o, Output& out,
-                                               const std::vector<decoder::ChannelInfo>& channels) {
+                                               const std::vector<decoder::ChannelInfo>& channels,
+                                               const decoder::RecordClock& clock) {
   if (o.output == "json") return std::make_unique<JsonSink>(out, channels);
   if (o.output == "csv")
     return std::make_unique<CsvSink>(
@@ -20,7 +21,8 @@ std::unique_ptr<decoder::RecordSink> make_sink(const RunOptions& o, Output& out,
   if (o.output == "text")
     return std::make_unique<TextSink>(out, channels,
                                       TextOptions{o.verbose, time_format_named(o.time_format),
-                                                  decoder::register_base_named(o.register_base)});
+                                                  decoder::register_base_named(o.register_base),
+                                                  o.display_filter.empty() ? nullptr : &clock});
   return std::make_unique<decoder::NullSink>();  // stats: the statistics print at the end
 }
 
@@ -86,7 +88,7 @@ ModelCatalog load_models(const RunOptions& o) {
 Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output& out,
                    const std::vector<decoder::ChannelInfo>& channels,
                    const decoder::SerialFormat& format, decoder::ClockQuality clock)
-    : terminal_(make_sink(o, out, channels)) {
+    : terminal_(make_sink(o, out, channels, clock_)) {
   fan_out_.add(*terminal_);
   if (wants_statistics(o)) {
     statistics_ = std::make_unique<decoder::BusStatistics>(format, clock);
@@ -107,18 +109,24 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output
   const bool interpret = o.output == "text" || o.output == "json" || o.output == "csv" ||
                          wants_statistics(o) ||  // the registers' last values
                          (!o.write_file.empty() && o.link != "bare") || !o.display_filter.empty();
+  decoder::ModelChoice choice;
   if (interpret || !o.models.empty() || !o.models_dir.empty()) {
     catalog_ = load_models(o);
-    auto choice = catalog_.choose(o.models);
+    choice = catalog_.choose(o.models);
     if (!o.timeout_given) model_timeouts_ = decoder::model_timeouts(choice);
     if (!o.display_filter.empty()) filter(o.display_filter, channels);
-    decoder::RecordSink& after = filter_ ? static_cast<decoder::RecordSink&>(*filter_) : fan_out_;
-    // Registers the model does not name show only in JSON, CSV, statistics, -V and filters.
+  }
+  // Every record's time is kept before the filter picks some: the time column counts over the
+  // whole capture, as without the filter.
+  if (filter_) clock_stage_ = std::make_unique<decoder::ClockStage>(clock_, *filter_);
+  if (interpret) {
+    // Registers the model does not name show only in JSON, CSV, statistics, -V and filters,
+    // and are watched for --follow.
     const bool list_unnamed = o.output == "json" || o.output == "csv" || wants_statistics(o) ||
-                              (o.output == "text" && o.verbose) || !o.display_filter.empty();
-    if (interpret)
-      interpreter_ = std::make_unique<decoder::ModelInterpreter>(catalog_.all(), choice, clock,
-                                                                 after, list_unnamed);
+                              (o.output == "text" && o.verbose) || !o.display_filter.empty() ||
+                              !o.follow.empty();
+    interpreter_ = std::make_unique<decoder::ModelInterpreter>(
+        catalog_.all(), choice, clock, watch_follow(o, before_filter()), list_unnamed);
   }
   diagnostics_ = std::make_unique<decoder::BusDiagnostics>(format, clock, after_diagnostics(),
                                                            read_jitter_ns(o));
@@ -139,10 +147,10 @@ void Pipeline::write_pcapng(const RunOptions& o, const captures::RingLimits& rin
   fan_out_.add(*pcapng_);
 }
 
-void Pipeline::limit_frames(uint64_t max_frames, std::function<void()> on_reached) {
-  if (max_frames == 0) return;
+void Pipeline::limit_records(uint64_t max_records, std::function<void()> on_reached) {
+  if (max_records == 0) return;
   decoder::RecordSink& next = all();
-  limit_ = std::make_unique<decoder::FrameLimit>(max_frames, next, std::move(on_reached));
+  limit_ = std::make_unique<decoder::RecordLimit>(max_records, next, std::move(on_reached));
 }
 
 MqttPublisher& Pipeline::publish(MessageBroker& broker, MqttOptions options) {
@@ -153,8 +161,38 @@ MqttPublisher& Pipeline::publish(MessageBroker& broker, MqttOptions options) {
 
 decoder::RecordSink& Pipeline::after_diagnostics() {
   if (interpreter_) return *interpreter_;
-  if (filter_) return *filter_;
+  return before_filter();
+}
+
+decoder::RecordSink& Pipeline::before_filter() {
+  if (clock_stage_) return *clock_stage_;
   return fan_out_;
+}
+
+// Behind the model stage, whose registers it looks at; before the filter, which may hide them.
+decoder::RecordSink& Pipeline::watch_follow(const RunOptions& o, decoder::RecordSink& next) {
+  if (o.follow.empty()) return next;
+  const auto base = decoder::register_base_named(o.register_base);
+  follow_watch_ = std::make_unique<FollowWatch>(parse_follow(o.follow, base), next);
+  return *follow_watch_;
+}
+
+FollowWatch::FollowWatch(const std::vector<FollowedRegister>& follow, decoder::RecordSink& next)
+    : next_(next) {
+  for (const FollowedRegister& item : follow) unseen_.push_back({item});
+}
+
+void FollowWatch::on_frame(const decoder::Frame& frame) {
+  if (frame.meaning && !unseen_.empty())
+    for (const decoder::RegisterValue& reg : frame.meaning->registers)
+      std::erase_if(unseen_, [&](const auto& item) { return follows(item, reg); });
+  next_.on_frame(frame);
+}
+
+std::vector<std::string> FollowWatch::unseen() const {
+  std::vector<std::string> names;
+  for (const auto& item : unseen_) names.push_back(item.front().name);
+  return names;
 }
 
 // -Y: every output (text, JSON, statistics, pcapng) sees only the records it matches.

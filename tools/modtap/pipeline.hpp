@@ -20,6 +20,7 @@
 #include "decoder/display_filter.hpp"
 #include "decoder/model_interpreter.hpp"
 #include "decoder/record_sink.hpp"
+#include "tools/modtap/csv_sink.hpp"
 #include "tools/modtap/metrics.hpp"
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/mqtt_publisher.hpp"
@@ -57,7 +58,7 @@ struct RunOptions {
   std::string stats_file;
   std::string report_file;
   std::string time_format = "r";
-  uint64_t max_frames = 0;  // 0: no limit
+  uint64_t max_records = 0;  // -c: frames and noise; 0: no limit
   bool quiet = false;
   std::string display_filter;
   std::string follow;
@@ -80,9 +81,25 @@ decoder::SerialFormat serial_format(const RunOptions& o);
 decoder::AnalyzerOptions analyzer_options(const RunOptions& o, decoder::ClockQuality clock);
 ModelCatalog load_models(const RunOptions& o);
 
-// The stages and sinks a run writes to: in front, the frame limit, the bus's history, the
-// stage that reads frames through the device models and the filter; then the terminal's
-// output, the statistics, the report's timeline, MQTT and the pcapng files of -w.
+// --follow: which followed registers some frame read or wrote, so that the end of the run can
+// name those none did (a mistyped address, a register the master never touches).
+class FollowWatch final : public decoder::RecordSink {
+ public:
+  FollowWatch(const std::vector<FollowedRegister>& follow, decoder::RecordSink& next);
+  void on_frame(const decoder::Frame& frame) override;
+  void on_noise(const decoder::Noise& noise) override { next_.on_noise(noise); }
+  void on_timeout(const decoder::Timeout& timeout) override { next_.on_timeout(timeout); }
+  std::vector<std::string> unseen() const;  // as --follow wrote them
+
+ private:
+  std::vector<std::vector<FollowedRegister>> unseen_;  // one item each, as follows() takes them
+  decoder::RecordSink& next_;
+};
+
+// The stages and sinks a run writes to: in front, the record limit, the bus's history, the
+// stage that reads frames through the device models, the --follow watch, the clock of every
+// record and the filter; then the terminal's output, the statistics, the report's timeline,
+// MQTT and the pcapng files of -w.
 class Pipeline {
  public:
   Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output& out,
@@ -94,8 +111,8 @@ class Pipeline {
     return *diagnostics_;
   }
   const decoder::BusDiagnostics& diagnostics() const { return *diagnostics_; }
-  // -c N: stop after N frames; `on_reached` stops a live run.
-  void limit_frames(uint64_t max_frames, std::function<void()> on_reached = {});
+  // -c N: stop after N frames and noise records; `on_reached` stops a live run.
+  void limit_records(uint64_t max_records, std::function<void()> on_reached = {});
   bool limit_reached() const { return limit_ && limit_->reached(); }
   // --mqtt: the register values and the statistics' summary, to `broker`.
   MqttPublisher& publish(MessageBroker& broker, MqttOptions options);
@@ -104,6 +121,10 @@ class Pipeline {
   const decoder::BusStatistics* statistics() const { return statistics_.get(); }
   SharedStatistics* shared_statistics() { return shared_statistics_.get(); }
   const decoder::BusTimeline* timeline() const { return timeline_.get(); }
+  // The --follow items no frame read or wrote, so far.
+  std::vector<std::string> unseen_follow() const {
+    return follow_watch_ ? follow_watch_->unseen() : std::vector<std::string>{};
+  }
   // The slaves whose model sets a response time-out, unless --timeout was given.
   const std::map<uint8_t, int64_t>& model_timeouts() const { return model_timeouts_; }
   // The end of a run: the pcapng file is complete, or its failure is reported.
@@ -113,10 +134,13 @@ class Pipeline {
 
  private:
   decoder::RecordSink& after_diagnostics();
+  decoder::RecordSink& before_filter();  // the clock stage in front of the filter, or the sinks
+  decoder::RecordSink& watch_follow(const RunOptions& o, decoder::RecordSink& next);
   void filter(const std::string& text, const std::vector<decoder::ChannelInfo>& channels);
   void write_pcapng(const RunOptions& o, const captures::RingLimits& ring,
                     const std::vector<decoder::ChannelInfo>& channels, decoder::ClockQuality clock);
 
+  decoder::RecordClock clock_;  // of every record, before the filter: the text's time column
   decoder::FanOut fan_out_;
   std::unique_ptr<decoder::RecordSink> terminal_;
   std::unique_ptr<decoder::BusStatistics> statistics_;
@@ -124,11 +148,13 @@ class Pipeline {
   std::unique_ptr<decoder::BusTimeline> timeline_;
   ModelCatalog catalog_;
   std::unique_ptr<decoder::FilterStage> filter_;
+  std::unique_ptr<decoder::ClockStage> clock_stage_;
+  std::unique_ptr<FollowWatch> follow_watch_;
   std::unique_ptr<decoder::BusDiagnostics> diagnostics_;
   std::unique_ptr<decoder::ModelInterpreter> interpreter_;
   std::map<uint8_t, int64_t> model_timeouts_;
   std::unique_ptr<captures::PcapngFiles> pcapng_;
-  std::unique_ptr<decoder::FrameLimit> limit_;
+  std::unique_ptr<decoder::RecordLimit> limit_;
   std::unique_ptr<MqttPublisher> mqtt_;
 };
 

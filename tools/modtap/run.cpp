@@ -51,6 +51,12 @@ void summarise(const RunOptions& o, Output& out, const Pipeline& pipeline, bool 
   }
 }
 
+// --follow items no frame carried: a mistyped address, or a register the master never touched.
+void say_unseen(const Pipeline& pipeline) {
+  for (const std::string& item : pipeline.unseen_follow())
+    fmt::print(stderr, "modtap: --follow {}: no frame read or wrote it\n", item);
+}
+
 // Whether the terminal is free for a status or progress line: standard error is one, and
 // frame lines are not printed on that same terminal.
 bool terminal_free_for_status(const RunOptions& o) {
@@ -188,7 +194,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   captures::OutputFile standard_output(stdout, "standard output");
   Output out(standard_output);
   Pipeline pipeline(o, ring, out, source->channels(), open.serial, source->clock());
-  pipeline.limit_frames(o.max_frames);
+  pipeline.limit_records(o.max_records);
   decoder::LineHealth health(&pipeline.all());
   decoder::AnalyzerOptions options = analyzer_options(o, source->clock());
   options.format = open.serial;
@@ -224,6 +230,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   if (mqtt) mqtt->finish();
   summarise(o, out, pipeline, !broken);
   out.flush();
+  say_unseen(pipeline);
   pipeline.close();
   if (raw) raw->close();
   if (bus.clock_steps_back())
@@ -261,7 +268,7 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
   }
   Pipeline pipeline(o, ring, out, channels, options.analyzer.format,
                     decoder::ClockQuality::per_chunk);
-  pipeline.limit_frames(o.max_frames, live::request_stop);
+  pipeline.limit_records(o.max_records, live::request_stop);
   const int64_t started_ns = live::wall_clock_ns();
   options.done = [&](int64_t now_ns) {
     return (autostop.duration_ns && now_ns - started_ns >= *autostop.duration_ns) ||
@@ -287,8 +294,10 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
   const int status = live::run_live(ports, options, pipeline.all(), stop);
   metrics.reset();
   if (mqtt) mqtt->finish();
-  summarise(o, out, pipeline, true);  // Ctrl-C is how a live run ends
+  // Ctrl-C, -c and -a end a live run whole; a port gone (status 1) breaks it off.
+  summarise(o, out, pipeline, status == 0);
   out.flush();
+  say_unseen(pipeline);
   pipeline.close();
   if (raw) raw->close();
   return status;

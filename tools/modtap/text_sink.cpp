@@ -75,21 +75,26 @@ TimeFormat time_format_named(std::string_view name) {
   if (name == "a") return TimeFormat::absolute;
   if (name == "ad") return TimeFormat::absolute_date;
   if (name == "d") return TimeFormat::delta;
+  if (name == "dd") return TimeFormat::delta_displayed;
   return TimeFormat::relative;
 }
 
 TextSink::TextSink(Output& out, const std::vector<ChannelInfo>& channels, TextOptions options)
     : out_(out), channels_(channels), options_(options) {}
 
+// The clock has seen this record already (kept before the filter), or sees it now.
 void TextSink::time_column(int64_t t_ns) {
+  if (!options_.clock) own_clock_.see(t_ns);
   switch (options_.time) {
     case TimeFormat::relative:
-      if (!first_ns_) first_ns_ = t_ns;
-      seconds_column(t_ns - *first_ns_);
+      seconds_column(t_ns - clock().first_ns.value_or(t_ns));
       return;
     case TimeFormat::delta:
-      seconds_column(previous_ns_ ? t_ns - *previous_ns_ : 0);
-      previous_ns_ = t_ns;
+      seconds_column(t_ns - clock().previous_ns.value_or(t_ns));
+      return;
+    case TimeFormat::delta_displayed:
+      seconds_column(t_ns - previous_shown_ns_.value_or(t_ns));
+      previous_shown_ns_ = t_ns;
       return;
     case TimeFormat::absolute:
     case TimeFormat::absolute_date:

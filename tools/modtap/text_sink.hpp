@@ -14,15 +14,19 @@
 
 namespace modtap::tools {
 
-// How the time column reads, as tshark's -t: since the first record (r), the time of day (a),
-// date and time (ad), since the record before (d). Absolute times are local, as tshark's.
-enum class TimeFormat : uint8_t { relative, absolute, absolute_date, delta };
-TimeFormat time_format_named(std::string_view name);  // "r", "a", "ad", "d"
+// How the time column reads, as tshark's -t: since the capture's first record (r), the time of
+// day (a), date and time (ad), since the record before, shown or not (d), since the line shown
+// before (dd). Absolute times are local, as tshark's.
+enum class TimeFormat : uint8_t { relative, absolute, absolute_date, delta, delta_displayed };
+TimeFormat time_format_named(std::string_view name);  // "r", "a", "ad", "d", "dd"
 
 struct TextOptions {
   bool verbose = false;  // -V: each frame's field tree
   TimeFormat time = TimeFormat::relative;
   decoder::RegisterBase register_base = decoder::RegisterBase::hex;
+  // The clock of every record, kept before a filter (decoder::ClockStage): -t r and -t d count
+  // over the whole capture. None: the sink keeps its own, of the records it is given.
+  const decoder::RecordClock* clock = nullptr;
 };
 
 class TextSink final : public decoder::RecordSink {
@@ -36,6 +40,9 @@ class TextSink final : public decoder::RecordSink {
 
  private:
   void time_column(int64_t t_ns);
+  const decoder::RecordClock& clock() const {
+    return options_.clock ? *options_.clock : own_clock_;
+  }
   void seconds_column(int64_t ns);
   void absolute_time(int64_t t_ns);
   void channel_column(uint16_t channel);
@@ -48,10 +55,10 @@ class TextSink final : public decoder::RecordSink {
   Output& out_;
   const std::vector<decoder::ChannelInfo>& channels_;
   TextOptions options_;
-  std::optional<int64_t> first_ns_;     // relative times count from here
-  std::optional<int64_t> previous_ns_;  // delta times from here
-  int64_t shown_second_ = -1;           // the second whose date and time `shown_` holds
-  KeptDecimal seconds_;                 // relative and delta times' whole seconds
+  decoder::RecordClock own_clock_;            // without options_.clock
+  std::optional<int64_t> previous_shown_ns_;  // -t dd counts from here
+  int64_t shown_second_ = -1;                 // the second whose date and time `shown_` holds
+  KeptDecimal seconds_;                       // relative and delta times' whole seconds
   fmt::memory_buffer shown_;
   decoder::DecodedPdu decoded_;  // the frame's fields, its capacity kept from frame to frame
 };

@@ -1,0 +1,112 @@
+#!/usr/bin/python3
+"""How a live run ends, on a pseudo-terminal: the port going away (the process holding its
+other end killed, as an unplugged adapter or a killed socat) marks the statistics and the
+report incomplete; -c N stops after N records, noise counted, however much more comes.
+
+Usage: live_ends.py MODTAP WORK_DIR
+"""
+import json
+import os
+import random
+import subprocess
+import sys
+import time
+import tty
+
+MODTAP, WORK = sys.argv[1:3]
+failures = []
+
+
+def check(name, condition, message):
+    if not condition:
+        failures.append(f"{name}: {message}")
+    return condition
+
+
+def wait_until_open(process, path, timeout=20):
+    """Until `process` holds `path` open: bytes written before it listens would be lost."""
+    deadline = time.time() + timeout
+    fds = f"/proc/{process.pid}/fd"
+    while time.time() < deadline and process.poll() is None:
+        try:
+            if any(os.readlink(os.path.join(fds, fd)) == path for fd in os.listdir(fds)):
+                return True
+        except OSError:
+            pass
+        time.sleep(0.01)
+    return False
+
+
+def port_holder():
+    """A process that makes a pty pair and holds its master end until killed, as socat does
+    (socat is not among the test machines' packages). Returns the process and the port."""
+    holder = subprocess.Popen(
+        [sys.executable, "-c",
+         "import os, sys, time, tty\n"
+         "m, s = os.openpty(); tty.setraw(m); tty.setraw(s)\n"
+         "print(os.ttyname(s), flush=True); os.close(s)\n"
+         "while True: time.sleep(1)\n"],
+        stdout=subprocess.PIPE, text=True)
+    return holder, holder.stdout.readline().strip()
+
+
+def port_goes_away():
+    holder, port = port_holder()
+    stats, report = os.path.join(WORK, "gone.json"), os.path.join(WORK, "gone.html")
+    modtap = subprocess.Popen([MODTAP, "-i", port, "--baud", "19200", "-q", "--stats", stats,
+                               "--report", report],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    check("port gone", wait_until_open(modtap, port), "the port never opened")
+    time.sleep(0.3)
+    holder.kill()
+    holder.wait()
+    try:
+        _, err = modtap.communicate(timeout=15)
+    except subprocess.TimeoutExpired:
+        modtap.kill()
+        _, err = modtap.communicate()
+    ok = check("port gone", modtap.returncode == 1, f"exit status {modtap.returncode}: {err!r}")
+    with open(stats) as f:
+        complete = json.load(f)["complete"]
+    ok &= check("port gone", complete is False, f'--stats says "complete": {complete}')
+    with open(report) as f:
+        ok &= check("port gone", "broke off" in f.read(), "the report does not say it broke off")
+    print(f"port gone without --reconnect: {'ok' if ok else 'FAILED'}")
+
+
+def count_stops_on_noise():
+    master, slave = os.openpty()
+    tty.setraw(master)
+    tty.setraw(slave)
+    port = os.ttyname(slave)
+    os.set_blocking(master, False)
+    modtap = subprocess.Popen([MODTAP, "-i", port, "--baud", "115200", "--mode", "rtu", "-c", "2"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    check("-c on a port", wait_until_open(modtap, port), "the port never opened")
+    rng = random.Random(7)
+    deadline = time.time() + 15
+    while modtap.poll() is None and time.time() < deadline:  # junk until it stops
+        try:
+            os.write(master, bytes(rng.randrange(256) for _ in range(256)))
+        except BlockingIOError:
+            pass
+        time.sleep(0.002)
+    if modtap.poll() is None:
+        modtap.kill()
+    out, err = modtap.communicate()
+    lines = out.splitlines()
+    ok = check("-c on a port", modtap.returncode == 0 and len(lines) == 2,
+               f"exit {modtap.returncode}, {len(lines)} lines: {lines[:3]} {err!r}")
+    for fd in (master, slave):
+        os.close(fd)
+    print(f"-c 2 on a port of junk: {'ok' if ok else 'FAILED'}")
+
+
+os.makedirs(WORK, exist_ok=True)
+port_goes_away()
+count_stops_on_noise()
+for f in failures:
+    print("FAIL", f)
+print(f"{2 - len({f.split(':')[0] for f in failures})} passed, "
+      f"{len({f.split(':')[0] for f in failures})} failed")
+sys.exit(1 if failures else 0)
