@@ -155,8 +155,7 @@ class Simulator {
     if (o_.min_turnaround_ns) turnaround = o_.min_turnaround_ns + pick(0, 3'000'000);
     if (o_.back_to_back) turnaround = 0;
     if (chance(o_.garbled_rate)) {
-      capture_.timed_out.push_back(req);
-      timing_out_ns_ = o_.retry_after_ns;  // what came was no answer
+      timing_out_ns_ = o_.retry_after_ns;  // what came was no answer it could read
       return send_garbled(slave, turnaround);
     }
     if (chance(o_.glitch_rate)) turnaround = glitch(turnaround);
