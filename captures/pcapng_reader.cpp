@@ -240,7 +240,8 @@ bool PcapngReader::packet(uint32_t type, decoder::Chunk& chunk) {
   if (i.modtap && duration_at != std::string::npos) {
     const int64_t duration = std::strtoll(comment.c_str() + duration_at + 13, nullptr, 10);
     first_end_ns_ = t_ns + char_time_ns_;
-    chunk = {i.channel, first_end_ns_, std::span<const uint8_t>(bytes_).first(1)};
+    chunk = {i.channel, first_end_ns_, std::span<const uint8_t>(bytes_).first(1),
+             comment.find(" untimed_start=1") != std::string::npos};
     if (bytes_.size() > 1) {
       rest_at_ = 1;
       rest_end_ns_ = t_ns + duration;

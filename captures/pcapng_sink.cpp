@@ -127,6 +127,7 @@ void append_frame_comment(fmt::memory_buffer& out, const Frame& f) {
   put_uint(out, f.index);
   put(out, pieces.verdicts[CommentPieces::verdicts_at(f.mode, f.role, f.check_ok)]);
   put_int(out, f.end_ns - f.t_ns);
+  if (f.untimed_start) put(out, " untimed_start=1");
   if (!f.check_ok && f.damage != Damage::cut)
     fmt::format_to(fmt::appender(out), FMT_COMPILE(" expected_check=0x{:0{}x}"), f.expected_check,
                    f.mode == Mode::rtu ? 4 : 2);
@@ -171,6 +172,7 @@ std::string frame_comment(const Frame& f) {
 void append_noise_comment(fmt::memory_buffer& out, const Noise& n) {
   fmt::format_to(fmt::appender(out), FMT_COMPILE("modtap index={} mode={} noise={} duration_ns={}"),
                  n.index, to_string(n.mode), to_string(n.reason), n.end_ns - n.t_ns);
+  if (n.untimed_start) put(out, " untimed_start=1");
   if (n.request) fmt::format_to(fmt::appender(out), FMT_COMPILE(" request={}"), *n.request);
   append_findings(out, n.findings);
 }

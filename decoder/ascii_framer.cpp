@@ -41,12 +41,13 @@ AsciiFramer::AsciiFramer(uint16_t channel, const AsciiFramerOptions& options, Fr
 }
 
 void AsciiFramer::push(const Chunk& chunk) {
+  if (!chunk.continues_read || reads_ == 0) ++reads_;
   const auto n = static_cast<int64_t>(chunk.bytes.size());
   for (int64_t i = 0; i < n; ++i) {
     int64_t end_ns = options_.clock == ClockQuality::none
                          ? static_cast<int64_t>(offset_ + 1) * char_ns_
                          : chunk.t_ns - (n - 1 - i) * char_ns_;
-    on_byte(chunk.bytes[static_cast<size_t>(i)], end_ns, i == 0);
+    on_byte(chunk.bytes[static_cast<size_t>(i)], end_ns, i == 0 && !chunk.continues_read);
   }
 }
 
@@ -110,6 +111,8 @@ void AsciiFramer::emit_frame() {
   frame.t_ns = pending_start_ns_;
   frame.end_ns = pending_end_ns_;
   frame.untimed_start = pending_untimed_start_;
+  frame.start_read = pending_start_read_;
+  frame.end_read = reads_;
   frame.expected_check = lrc(frame.adu.first(decoded_.size() - 1));
   frame.check_ok = frame.expected_check == decoded_.back();
   if (!frame.check_ok) {
@@ -132,6 +135,7 @@ void AsciiFramer::emit_noise(NoiseReason reason) {
   noise.raw = pending_;
   noise.t_ns = pending_start_ns_;
   noise.end_ns = pending_end_ns_;
+  noise.untimed_start = pending_untimed_start_;
   noise.reason = reason;
   sink_.on_noise(noise);
   pending_.clear();
@@ -141,6 +145,7 @@ void AsciiFramer::reset(uint64_t offset, int64_t start_ns, bool starts_read) {
   pending_offset_ = offset;
   pending_start_ns_ = start_ns;
   pending_untimed_start_ = options_.clock == ClockQuality::per_chunk && !starts_read && offset > 0;
+  pending_start_read_ = reads_;
 }
 
 }  // namespace modtap::decoder

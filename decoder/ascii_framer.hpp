@@ -51,6 +51,8 @@ class AsciiFramer {
   uint64_t pending_offset_ = 0;
   int64_t pending_start_ns_ = 0;
   bool pending_untimed_start_ = false;  // Frame::untimed_start
+  uint64_t pending_start_read_ = 0;     // Frame::start_read
+  uint64_t reads_ = 0;                  // chunks pushed, those that continue a read aside
   int64_t pending_end_ns_ = 0;
   uint64_t offset_ = 0;  // stream offset of the next byte
   int64_t last_end_ns_ = 0;

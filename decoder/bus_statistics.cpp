@@ -55,9 +55,9 @@ void BusStatistics::on_frame(const Frame& frame) {
   // Latency of good responses only; a negative one (a clock that stepped back) never counts.
   if (frame.check_ok && frame.latency_ns && *frame.latency_ns >= 0)
     latency_ns.add(static_cast<uint64_t>(*frame.latency_ns));
-  if (frame.adu.empty() || frame.slave() == 0) return;
+  if (frame.adu.empty() || frame.device() == 0) return;
   keep_values(frame);
-  SlaveStatistics& s = slave(frame.slave());
+  SlaveStatistics& s = slave(frame.device());
   s.good = s.good || frame.check_ok;
   count_exchange(frame, s);
 }
@@ -72,7 +72,7 @@ void BusStatistics::count_exchange(const Frame& frame, SlaveStatistics& s) {
   if (frame.latency_ns && *frame.latency_ns >= 0)
     s.latency_ns.add(static_cast<uint64_t>(*frame.latency_ns));
   if (frame.role != Role::request) return;
-  auto& last = last_request_ns_[frame.slave()];
+  auto& last = last_request_ns_[frame.device()];
   if (last && frame.t_ns >= *last)
     s.poll_interval_ns.add(static_cast<uint64_t>(frame.t_ns - *last));
   last = frame.t_ns;
@@ -83,7 +83,7 @@ void BusStatistics::keep_values(const Frame& frame) {
   const Meaning* meaning = frame.meaning;
   if (!states_values(frame)) return;
   for (const RegisterValue& reg : meaning->registers) {
-    const RegisterKey key{frame.slave(), reg.table, reg.address};
+    const RegisterKey key{frame.device(), reg.table, reg.address};
     auto it = registers.find(key);
     if (it == registers.end()) {
       if (registers.size() >= kept_registers) {
@@ -125,6 +125,7 @@ void BusStatistics::on_noise(const Noise& noise) {
   ++noise_by_reason[static_cast<size_t>(noise.reason)];
   for_each_frame_finding(noise.findings, [&](size_t slot) { count_finding(slot, noise.index); });
   see_time(noise.t_ns, noise.end_ns);
+  if (noise.damaged_answer) ++slave(noise.request_slave).counts.garbled;
 }
 
 void BusStatistics::on_timeout(const Timeout& timeout) {

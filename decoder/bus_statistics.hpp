@@ -28,6 +28,7 @@ struct ExchangeCounts {
   uint64_t exceptions = 0;
   uint64_t bad_checks = 0;
   uint64_t retries = 0;
+  uint64_t garbled = 0;  // answers that came as noise, past reading (Noise::damaged_answer)
 
   double timeout_rate() const {
     return requests ? static_cast<double>(timeouts) / static_cast<double>(requests) : 0.0;

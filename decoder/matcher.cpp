@@ -29,8 +29,9 @@ void Matcher::set_pending(Pending* pending) {
 
 void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
   advance(frame.t_ns);
-  if (!frame.check_ok && awaits_answer(channel_role) && !pending_matches(frame))
-    frame.findings |= finding_garbage_after_request;
+  const bool garbage = !frame.check_ok && awaits_answer(channel_role) && !pending_matches(frame);
+  if (garbage) frame.findings |= finding_garbage_after_request;
+  if (garbage && in_answer_time(frame.t_ns, channel_role)) return garbled_answer(frame);
   const Copy copy = judge_copy(frame);
   frame.role = decide_role(frame, channel_role, copy);
   // Right after an echo that may have been a retry, a frame that may answer the same request
@@ -47,12 +48,35 @@ void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
   }
 }
 
-// A glitch is a driver turning on, so it says nothing of the answer.
+// A glitch is a driver turning on, so it says nothing of the answer. Other noise in the answer's
+// time is the answer, garbled past reading (a slave at another baud rate, a bad line).
 void Matcher::on_noise(Noise& noise, ChannelRole channel_role) {
   advance(noise.t_ns);
   if (!awaits_answer(channel_role) || noise.reason == NoiseReason::glitch) return;
   noise.findings |= finding_garbage_after_request;
   noise.request = pending_->index;
+  noise.request_slave = pending_->slave;
+  noise.damaged_answer = in_answer_time(noise.t_ns, channel_role);
+  pending_->garbled_answer |= noise.damaged_answer;
+}
+
+// A frame with a bad check in the answer's time is the answer, whatever its damaged address or
+// function code says. The wait goes on: junk may come before the answer itself (a vendor code
+// of no length rule, a device starting at the wrong moment). If nothing readable follows, the
+// slave did answer, garbled: no time-out.
+void Matcher::garbled_answer(Frame& frame) {
+  frame.role = Role::response;
+  frame.request = pending_->index;
+  frame.request_slave = pending_->slave;
+  pending_->garbled_answer = true;
+}
+
+// Whether something starting at `t_ns` on this channel comes where the pending request's answer
+// belongs: before the master would send again. Without a clock nothing tells junk that came
+// after the master gave up from a garbled answer.
+bool Matcher::in_answer_time(int64_t t_ns, ChannelRole channel_role) const {
+  return awaits_answer(channel_role) && options_.timed &&
+         t_ns - pending_->end_ns < retry_from_ns(pending_->slave);
 }
 
 // Whether what comes on this channel now is where the pending request's answer belongs: on a
@@ -117,7 +141,24 @@ Matcher::Copy Matcher::judge_copy(const Frame& frame) const {
   if (!options_.timed) return Copy::ambiguous;
   const int64_t waited = frame.t_ns - pending_->end_ns;
   if (waited < answered_within_ns(pending_->slave)) return Copy::response;
-  return long_after_answer_due(frame) ? Copy::retry : Copy::ambiguous;
+  return long_after_answer_due(frame) || as_late_as_a_retry(waited) ? Copy::retry : Copy::ambiguous;
+}
+
+// How soon the master sends a request again, from retries no echo could fake: a copy of a
+// request whose answer is no copy of it (a read), or one sent after the wait ran out in silence.
+void Matcher::learn_retry_interval(const Frame& retry, const Pending& first) {
+  const auto pdu = std::span<const uint8_t>(first.pdu.data(), first.size);
+  const bool echo_could_fake = check_response_fit(pdu, pdu) == finding_none;
+  if (!options_.timed || (echo_could_fake && !first.timed_out_in_silence)) return;
+  const int64_t interval = retry.t_ns - first.end_ns;
+  if (interval > 0 && (!retry_interval_ns_ || interval < retry_interval_ns_))
+    retry_interval_ns_ = interval;
+}
+
+// Whether a copy this long after its request is as late as the master's retries come, allowing
+// for how late the clock may stamp it.
+bool Matcher::as_late_as_a_retry(int64_t waited_ns) const {
+  return retry_interval_ns_ && waited_ns + options_.clock_lag_ns >= retry_interval_ns_;
 }
 
 // Twice the longest turnaround seen (the slave's, else the bus's) and 20 ms; with nothing
@@ -158,6 +199,7 @@ void Matcher::on_request(Frame& frame) {
                  unanswered_->pdu.begin() + unanswered_->size)) {
     frame.findings |= finding_retry;
     frame.retries = static_cast<uint8_t>(std::min(unanswered_->retries + 1, 255));
+    learn_retry_interval(frame, *unanswered_);
   }
   unanswered_ = nullptr;
   Pending& p = slots_[next_slot_];
@@ -170,7 +212,10 @@ void Matcher::on_request(Frame& frame) {
       options_.slave_timeout_ns[p.slave] ? options_.slave_timeout_ns[p.slave] : options_.timeout_ns;
   p.adu_size = static_cast<uint16_t>(frame.adu.size());
   p.retries = frame.retries;
+  p.end_read = frame.end_read;
   p.ambiguous_end = frame.findings & finding_ambiguous_end;
+  p.garbled_answer = false;
+  p.timed_out_in_silence = false;
   p.size = static_cast<uint16_t>(std::min(pdu.size(), p.pdu.size()));
   std::copy_n(pdu.begin(), p.size, p.pdu.begin());
   set_pending(&p);
@@ -182,16 +227,20 @@ void Matcher::on_response(Frame& frame, Copy copy) {
     return;
   }
   frame.request = pending_->index;
+  frame.request_slave = pending_->slave;
   frame.request_pdu = {pending_->pdu.data(), pending_->size};
   if (copy == Copy::ambiguous) {
     frame.findings |= finding_ambiguous_echo;
-    ambiguous_echo_ = AmbiguousEcho{pending_, frame.index, frame.end_ns};
+    ambiguous_echo_ = AmbiguousEcho{pending_, frame.index, frame.end_ns, frame.end_read};
   }
-  if (sees_turnaround(frame, *pending_)) {
+  // An answer in its request's read has no latency to show, but its placed one still bounds
+  // the slave's turnaround for telling a retry from an echo.
+  if (options_.timed && frame.t_ns >= pending_->end_ns && copy == Copy::none && frame.check_ok)
+    learn_turnaround(pending_->slave, frame.t_ns - pending_->end_ns);
+  if (sees_turnaround(frame, pending_->end_ns, pending_->end_read)) {
     frame.latency_ns = frame.t_ns - pending_->end_ns;
     if (options_.exact_clock && *frame.latency_ns < options_.t35_ns)
       frame.findings |= finding_fast_turnaround;
-    if (copy == Copy::none && frame.check_ok) learn_turnaround(pending_->slave, *frame.latency_ns);
   }
   if (frame.check_ok)
     frame.findings |= check_response_fit({pending_->pdu.data(), pending_->size}, frame.pdu());
@@ -202,8 +251,9 @@ void Matcher::on_response(Frame& frame, Copy copy) {
 // so the echo was the master's retry, and this answers it.
 void Matcher::answers_retry(Frame& frame, const AmbiguousEcho& echo) {
   frame.request = echo.index;
+  frame.request_slave = echo.request->slave;
   frame.request_pdu = {echo.request->pdu.data(), echo.request->size};
-  if (options_.timed && frame.t_ns >= echo.end_ns && !frame.untimed_start)
+  if (sees_turnaround(frame, echo.end_ns, echo.end_read))
     frame.latency_ns = frame.t_ns - echo.end_ns;
 }
 
@@ -211,9 +261,10 @@ void Matcher::answers_retry(Frame& frame, const AmbiguousEcho& echo) {
 // back, or stamps reads later than the bytes ended, can put a response before its request's
 // end: that latency is not measured rather than negative. An answer that came in the read of
 // the request's last bytes has no time of its own (a sniffer's packet, a hex log's block).
-bool Matcher::sees_turnaround(const Frame& frame, const Pending& request) const {
-  const bool one_read = frame.untimed_start && frame.channel == request.channel;
-  return options_.timed && frame.t_ns >= request.end_ns && !one_read;
+bool Matcher::sees_turnaround(const Frame& frame, int64_t request_end_ns,
+                              uint64_t request_end_read) const {
+  const bool one_read = frame.start_read != 0 && frame.start_read == request_end_read;
+  return options_.timed && frame.t_ns >= request_end_ns && !one_read;
 }
 
 void Matcher::advance(int64_t now_ns) {
@@ -227,6 +278,7 @@ void Matcher::finish(int64_t end_ns) {
 }
 
 void Matcher::expire(int64_t now_ns, TimeoutReason reason) {
+  if (pending_->garbled_answer) return set_pending(nullptr);  // it answered, garbled
   Timeout t;
   t.request = pending_->index;
   t.channel = pending_->channel;
@@ -236,6 +288,7 @@ void Matcher::expire(int64_t now_ns, TimeoutReason reason) {
   t.t_ns = std::max(now_ns, pending_->end_ns);
   t.waited_ns = t.t_ns - pending_->end_ns;
   t.reason = reason;
+  pending_->timed_out_in_silence = reason == TimeoutReason::silence;
   unanswered_ = pending_;
   set_pending(nullptr);
   on_timeout_(t);

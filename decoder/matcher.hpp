@@ -52,8 +52,11 @@ class Matcher {
     uint16_t adu_size = 0;
     uint8_t retries = 0;
     bool ambiguous_end = false;
-    uint16_t size = 0;             // PDU bytes kept (enough for echo and fit checks)
-    std::array<uint8_t, 256> pdu;  // left uninitialised: only `size` bytes are ever read
+    uint64_t end_read = 0;  // Frame::end_read
+    bool garbled_answer = false;
+    bool timed_out_in_silence = false;  // noise or a bad-check frame came in its answer's time
+    uint16_t size = 0;                  // PDU bytes kept (enough for echo and fit checks)
+    std::array<uint8_t, 256> pdu;       // left uninitialised: only `size` bytes are ever read
   };
   // An echo just taken for the answer that may have been the master's retry (its request's
   // slot stays as it was until the next request but one).
@@ -61,6 +64,7 @@ class Matcher {
     const Pending* request;
     uint64_t index;
     int64_t end_ns;
+    uint64_t end_read;
   };
 
   // What a frame that repeats the pending request byte for byte is: its (echo) response, the
@@ -77,6 +81,8 @@ class Matcher {
   int64_t turnaround_learned(uint8_t slave) const {
     return turnaround_ns_[slave] ? turnaround_ns_[slave] : bus_turnaround_ns_;
   }
+  void learn_retry_interval(const Frame& retry, const Pending& first);
+  bool as_late_as_a_retry(int64_t waited_ns) const;
   void learn_turnaround(uint8_t slave, int64_t latency_ns) {
     turnaround_ns_[slave] = std::max(turnaround_ns_[slave], latency_ns);
     bus_turnaround_ns_ = std::max(bus_turnaround_ns_, latency_ns);
@@ -87,13 +93,15 @@ class Matcher {
   static bool fits(const Frame& frame, const Pending& request);
   bool fits_pending(const Frame& frame) const { return fits(frame, *pending_); }
   bool long_after_answer_due(const Frame& frame) const;
-  bool sees_turnaround(const Frame& frame, const Pending& request) const;
+  bool sees_turnaround(const Frame& frame, int64_t request_end_ns, uint64_t request_end_read) const;
   void on_request(Frame& frame);
   void on_response(Frame& frame, Copy copy);
+  void garbled_answer(Frame& frame);
   void answers_retry(Frame& frame, const AmbiguousEcho& echo);
   void expire(int64_t now_ns, TimeoutReason reason);
   bool pending_matches(const Frame& frame) const;
   bool awaits_answer(ChannelRole channel_role) const;
+  bool in_answer_time(int64_t t_ns, ChannelRole channel_role) const;
 
   MatcherOptions options_;
   TimeoutHandler on_timeout_;
@@ -108,6 +116,7 @@ class Matcher {
   // The longest turnaround seen per slave, and on the bus, from pairs no retry could fake.
   std::array<int64_t, 256> turnaround_ns_{};
   int64_t bus_turnaround_ns_ = 0;
+  int64_t retry_interval_ns_ = 0;  // the shortest seen from a request's end to its retry
 
   void set_pending(Pending* pending);
 };

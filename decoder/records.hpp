@@ -36,6 +36,9 @@ struct Chunk {
   uint16_t channel = 0;
   int64_t t_ns = 0;
   std::span<const uint8_t> bytes;
+  // Its first byte came in the read before's, so the silence before it is unknown: a frame
+  // whose start a first run's clock did not see (Frame::untimed_start), read back from pcapng.
+  bool continues_read = false;
 };
 
 enum class Mode : uint8_t { rtu, ascii };
@@ -77,13 +80,21 @@ struct Frame {
   // A clock per read: the frame's first byte came in the read of the byte before it, so the
   // silence before the frame is unknown (its time is placed back to back with that byte's).
   bool untimed_start = false;
+  // The numbers of the reads (chunks) that held its first and last bytes, counted per channel
+  // from 1 (0: not known): a response that starts in the read its request ended in has no
+  // latency the clock saw.
+  uint64_t start_read = 0, end_read = 0;
   std::optional<uint64_t> request;       // index of the matched request
+  uint8_t request_slave = 0;             // its slave: a damaged answer's own address may be wrong
   std::optional<int64_t> latency_ns;     // end of request to start of response
   std::span<const uint8_t> request_pdu;  // the matched request's PDU, during the callback
   const Meaning* meaning = nullptr;      // the device model's reading, when one is applied
   const DecodedPdu* decoded = nullptr;   // its fields, when a stage before the sinks decoded them
 
   uint8_t slave() const { return adu.empty() ? 0 : adu[0]; }
+  // The slave the frame is to or from: a response's request tells, where the frame's own
+  // address byte may be damaged.
+  uint8_t device() const { return request ? request_slave : slave(); }
   uint8_t function() const { return adu.size() < 2 ? 0 : adu[1]; }
   bool is_exception() const { return adu.size() >= 3 && (function() & 0x80) != 0; }
   size_t check_size() const { return mode == Mode::rtu ? 2 : 1; }
@@ -112,8 +123,12 @@ struct Noise {
   uint64_t offset = 0;
   std::span<const uint8_t> raw;
   NoiseReason reason = NoiseReason::junk;
+  bool untimed_start = false;  // as a frame's
   uint32_t findings = finding_none;
   std::optional<uint64_t> request;  // the request whose answer was awaited when it came
+  uint8_t request_slave = 0;        // that request's slave
+  // It came in the answer's time and ended the wait: the slave's answer, garbled past reading.
+  bool damaged_answer = false;
 };
 
 // Why a request's wait ended without a response. end_of_capture is no time-out: the input

@@ -375,7 +375,9 @@ Meaning interpret(const DeviceModel& model, const Frame& frame) {
 void interpret(const DeviceModel& model, const Frame& frame, Meaning& meaning) {
   meaning.clear();
   meaning.model = &model;
-  if (frame.adu.size() < 2 + frame.check_size()) return;
+  // A frame with a bad check may carry any byte changed: its values, exception code and
+  // address are no evidence against the model's rules.
+  if (frame.adu.size() < 2 + frame.check_size() || !frame.check_ok) return;
   check_station(model, frame, meaning.findings);
   if (frame.is_exception()) {
     if (frame.role != Role::request) explain_exception(model, frame, meaning.findings);

@@ -60,7 +60,8 @@ void RtuFramer::push(const Chunk& chunk) {
   }
   have_time_ = true;
   last_end_ns_ = std::max(last_end_ns_, t_end);
-  marks_.push_back({end_, end_ + chunk.bytes.size(), t_end});
+  if (!chunk.continues_read || marks_.empty()) ++reads_;
+  marks_.push_back({end_, end_ + chunk.bytes.size(), t_end, chunk.continues_read, reads_});
   buf_.insert(buf_.end(), chunk.bytes.begin(), chunk.bytes.end());
   end_ += chunk.bytes.size();
   resolve(false);
@@ -632,16 +633,24 @@ Frame RtuFramer::frame_of(uint64_t begin, uint64_t end, RoleFit fit) const {
   frame.raw = frame.adu = {at_ptr(begin), static_cast<size_t>(end - begin)};
   frame.t_ns = end_time(begin) - char_ns_;
   frame.end_ns = end_time(end - 1);
-  frame.untimed_start = options_.clock == ClockQuality::per_chunk && shares_read(begin);
+  frame.untimed_start = starts_untimed(begin);
+  frame.start_read = mark_of(begin).read;
+  frame.end_read = mark_of(end - 1).read;
   if (paused_inside(begin, end)) frame.findings = finding_gap_in_frame;
   return frame;
 }
 
-// Whether the byte at `offset` came in one read with the byte before it.
-bool RtuFramer::shares_read(uint64_t offset) const {
+// Whether the byte at `offset` came in one read with the byte before it (Frame::untimed_start).
+bool RtuFramer::starts_untimed(uint64_t offset) const {
+  const TimeMark& mark = mark_of(offset);
+  return options_.clock == ClockQuality::per_chunk && (mark.first < offset || mark.continues_read);
+}
+
+// The chunk that held the byte at `offset`, one not yet consumed.
+const RtuFramer::TimeMark& RtuFramer::mark_of(uint64_t offset) const {
   auto it = std::upper_bound(marks_.begin(), marks_.end(), offset,
                              [](uint64_t o, const TimeMark& m) { return o < m.end; });
-  return it != marks_.end() && it->first < offset;
+  return it == marks_.end() ? marks_.back() : *it;
 }
 
 // Whether a clock per byte saw a silence over t1.5 before the byte at `offset`: no frame goes on
@@ -864,6 +873,7 @@ void RtuFramer::emit_noise(uint64_t begin, uint64_t end, NoiseReason reason) {
   noise.raw = {at_ptr(begin), static_cast<size_t>(end - begin)};
   noise.t_ns = end_time(begin) - char_ns_;
   noise.end_ns = end_time(end - 1);
+  noise.untimed_start = starts_untimed(begin);
   noise.reason = reason;
   sink_.on_noise(noise);
   if (reason == NoiseReason::glitch && begin == answer_start_) answer_start_ = end;

@@ -65,6 +65,8 @@ class RtuFramer {
     uint64_t first;
     uint64_t end;
     int64_t end_ns;
+    bool continues_read;  // Chunk::continues_read
+    uint64_t read;        // its number (Frame::start_read)
   };
 
   void resolve(bool final);
@@ -106,7 +108,8 @@ class RtuFramer {
   bool standard_frame(uint64_t at) const;
   Frame frame_of(uint64_t begin, uint64_t end, RoleFit fit) const;
   bool paused_inside(uint64_t begin, uint64_t end) const;
-  bool shares_read(uint64_t offset) const;
+  const TimeMark& mark_of(uint64_t offset) const;
+  bool starts_untimed(uint64_t offset) const;
   bool paused_before(uint64_t offset) const;
   void emit_frame(uint64_t at, const Match& match);
   void emit_unframed(uint64_t begin, uint64_t end);
@@ -152,6 +155,7 @@ class RtuFramer {
   uint64_t zero_glitches_ = 0;  // lone 0x00 bytes between frames
   uint64_t glitches_ = 0;       // lone 0x00 or 0xFF bytes between frames
   bool have_time_ = false;
+  uint64_t reads_ = 0;  // chunks pushed, those that continue a read aside
 };
 
 }  // namespace modtap::decoder

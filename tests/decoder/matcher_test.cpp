@@ -24,15 +24,24 @@ std::vector<uint8_t> join(std::initializer_list<const char*> frames) {
   return out;
 }
 
-// Reads stamped with their time, `reads` of them at 10 ms apart.
-Collector analyze_reads(const std::vector<std::vector<uint8_t>>& reads, ModeChoice mode) {
+// Reads stamped with their time (a clock per read, 30 ms late at most), each `at_ms` after the
+// capture's start, or 10 ms after the one before.
+struct Read {
+  std::vector<uint8_t> bytes;
+  int64_t at_ms = -1;
+};
+Collector analyze_reads(const std::vector<Read>& reads, ModeChoice mode = ModeChoice::rtu) {
   Collector out;
   AnalyzerOptions options;
   options.mode = mode;
   options.clock = ClockQuality::per_chunk;
   Analyzer analyzer(options, {{"test", ChannelRole::bus}}, out);
-  int64_t t = 1'000'000'000;
-  for (const auto& read : reads) analyzer.push({0, t += 10'000'000, {read.data(), read.size()}});
+  constexpr int64_t start = 1'000'000'000;
+  int64_t t = start;
+  for (const auto& read : reads) {
+    t = read.at_ms < 0 ? t + 10'000'000 : start + read.at_ms * 1'000'000;
+    analyzer.push({0, t, {read.bytes.data(), read.bytes.size()}});
+  }
   analyzer.finish();
   return out;
 }
@@ -51,11 +60,11 @@ TEST(Matcher, AnAnswerInTheRequestsReadHasNoLatency) {
                         Case{ModeChoice::ascii, ascii_request, ascii_answer}}) {
     std::vector<uint8_t> both = c.request;
     both.insert(both.end(), c.answer.begin(), c.answer.end());
-    const auto one_read = analyze_reads({both}, c.mode).frames();
+    const auto one_read = analyze_reads({{both}}, c.mode).frames();
     ASSERT_EQ(one_read.size(), 2u);
     EXPECT_EQ(one_read[1].request, one_read[0].index);
     EXPECT_FALSE(one_read[1].latency_ns.has_value()) << *one_read[1].latency_ns;
-    const auto two_reads = analyze_reads({c.request, c.answer}, c.mode).frames();
+    const auto two_reads = analyze_reads({{c.request}, {c.answer}}, c.mode).frames();
     ASSERT_EQ(two_reads.size(), 2u);
     EXPECT_TRUE(two_reads[1].latency_ns.has_value());
   }
@@ -69,6 +78,36 @@ TEST(Matcher, TellsAnEchoRequestFromItsResponseByOrder) {
   EXPECT_EQ(frames[0].role, Role::request);
   EXPECT_EQ(frames[1].role, Role::response);
   EXPECT_EQ(frames[1].request, frames[0].index);
+}
+
+// Where the awaited answer belongs, a frame with a bad check is that answer even when the
+// damage hit its address (D5H for 03H), and bytes past reading are the answer garbled: the
+// slave answered, so no time-out, and both count for the slave that was asked. Both are still
+// garbage after the request: nothing in them reads as its answer. Without a clock nothing
+// tells them from junk after the master gave up.
+TEST(Matcher, ADamagedAnswerIsTheAwaitedSlavesAnswerNotATimeout) {
+  const auto request = hex("03 03 00 00 00 01 85 e8"), next = hex("04 03 00 00 00 01 84 5f");
+  const auto bad_address = analyze_reads({{request}, {hex("d5 03 02 00 07 80 46")}, {next}});
+  EXPECT_EQ(bad_address.timeouts().size(), 1u);  // the last request, at the capture's end
+  const auto frames = bad_address.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_FALSE(frames[1].check_ok);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[1].device, 3);
+  EXPECT_NE(frames[1].findings & finding_garbage_after_request, 0u);
+
+  const auto garbled = analyze_reads({{request}, {hex("9f 41")}, {next}});
+  EXPECT_EQ(garbled.timeouts().size(), 1u);
+  ASSERT_EQ(garbled.noise().size(), 1u);
+  EXPECT_TRUE(garbled.noise()[0].damaged_answer);
+  EXPECT_EQ(garbled.noise()[0].device, 3);
+  EXPECT_EQ(garbled.noise()[0].request, garbled.frames()[0].index);
+
+  std::vector<uint8_t> untimed = request;
+  for (const auto& part : {hex("9f 41"), next})
+    untimed.insert(untimed.end(), part.begin(), part.end());
+  EXPECT_EQ(analyze_untimed(untimed).timeouts().size(), 2u);
 }
 
 TEST(Matcher, ReportsATimeoutWhenTheMasterMovesOn) {
@@ -171,6 +210,30 @@ std::vector<Frame> match_timed(std::initializer_list<Timed> frames, std::vector<
   }
   matcher.finish(out.back().end_ns);
   return out;
+}
+
+// A slave that answers in 41 ms on a clock 30 ms late at most: a copy of an echo request
+// 106 ms after it may be the answer or the master's retry, as far as its turnaround tells. The
+// master's retry of a read, which no echo can fake, showed it retries 107 ms after a request:
+// the copy is that retry, and the echo after it its answer.
+TEST(Matcher, TheMastersRetryIntervalFromReadsTellsAnEchoFromARetry) {
+  const auto read = hex("01 03 00 00 00 01 84 0a"), write = hex("01 06 00 01 00 03 98 0b");
+  const auto frames = analyze_reads({{read, 0},
+                                     {hex("01 03 02 00 05 78 47"), 45},
+                                     {read, 300},
+                                     {read, 412},  // its retry
+                                     {hex("01 03 02 00 05 78 47"), 420},
+                                     {write, 600},
+                                     {write, 711},  // its retry, or its echo?
+                                     {write, 720}})
+                          .frames();
+  ASSERT_EQ(frames.size(), 8u);
+  EXPECT_TRUE(frames[3].findings & finding_retry);
+  EXPECT_EQ(frames[6].role, Role::request);
+  EXPECT_TRUE(frames[6].findings & finding_retry);
+  EXPECT_FALSE(frames[6].findings & finding_ambiguous_echo);
+  EXPECT_EQ(frames[7].role, Role::response);
+  EXPECT_EQ(frames[7].request, frames[6].index);
 }
 
 TEST(Matcher, AnEchoCopyLongAfterTheSlavesTurnaroundIsARetry) {

@@ -28,6 +28,8 @@ struct Record {
   int64_t t_ns = 0;
   decoder::NoiseReason reason = decoder::NoiseReason::junk;
   decoder::TimeoutReason timeout_reason = decoder::TimeoutReason::silence;
+  uint8_t device = 0;           // a frame's device(); a noise record's request_slave
+  bool damaged_answer = false;  // a noise record's
 };
 
 class Collector final : public decoder::RecordSink {
@@ -47,6 +49,7 @@ class Collector final : public decoder::RecordSink {
     r.request = f.request;
     r.latency_ns = f.latency_ns;
     r.t_ns = f.t_ns;
+    r.device = f.device();
     records.push_back(std::move(r));
   }
   void on_noise(const decoder::Noise& n) override {
@@ -56,6 +59,8 @@ class Collector final : public decoder::RecordSink {
     r.channel = n.channel;
     r.offset = n.offset;
     r.raw.assign(n.raw.begin(), n.raw.end());
+    r.device = n.request_slave;
+    r.damaged_answer = n.damaged_answer;
     r.reason = n.reason;
     r.findings = n.findings;
     r.request = n.request;

@@ -435,7 +435,7 @@ TEST(SlaveFaults, TwoDevicesWithOneAddressAnswerOverEachOther) {
     const Bytes w = wire(c, clash.offset, clash.size);
     if (garbled.count(clash.offset)) {
       ++as_junk;
-      EXPECT_TRUE(unanswered.count(clash.request));
+      EXPECT_FALSE(unanswered.count(clash.request));  // answered, garbled
       EXPECT_FALSE(answered.count(clash.request));
       EXPECT_GE(w.size(), 14u);  // both answers, the second 0.1 to 1.9 characters late
       EXPECT_LE(w.size(), 15u);
@@ -454,7 +454,7 @@ TEST(SlaveFaults, TwoDevicesWithOneAddressAnswerOverEachOther) {
   }
   EXPECT_GT(as_junk, 8 * as_frame);
   EXPECT_GT(as_frame, 5u);
-  EXPECT_EQ(unanswered.size(), as_junk);  // everyone else answered
+  EXPECT_TRUE(unanswered.empty());  // everyone answered, slave 4 at times garbled
 }
 
 TEST(SlaveFaults, AGlitchingSlavePutsAGlitchBeforeEveryAnswer) {

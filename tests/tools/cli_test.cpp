@@ -588,15 +588,15 @@ TEST(Cli, TheDrivesSampleReadsInEachDrivesTerms) {
 }
 
 TEST(Cli, N3sErrorExampleIsAResponseWithItsExpectedCrcInWireOrder) {
-  // 002, 3.Error code: slave 02, 83H, 52H, CRC printed C0H CDH (that of 01 83 52).
+  // 002, 3.Error code: slave 02, 83H, 52H, CRC printed C0H CDH (that of 01 83 52). A frame
+  // whose check fails may have any byte changed, so the model does not read its exception code.
   const std::string log = hexlog("modtap-n3-error.log", {"00.000000", "02 83 52 C0 CD"});
   const Outcome r = run("-r " + log + " --model 2=n3 -V");
   ASSERT_EQ(r.status, 0);
   ASSERT_GE(r.lines.size(), 8u);
   EXPECT_NE(r.lines[0].find("rsp slave 2"), std::string::npos) << r.lines[0];
   EXPECT_NE(r.lines[0].find("crc BAD (expected 30 CD)"), std::string::npos) << r.lines[0];
-  EXPECT_NE(r.lines[0].find("!! vendor exception 52H: Address error (n3)"), std::string::npos)
-      << r.lines[0];
+  EXPECT_EQ(r.lines[0].find("!!"), std::string::npos) << r.lines[0];
   EXPECT_THAT(r.lines, ::testing::Contains("    CRC: C0 CD (bad), expected 30 CD"));
 }
 

@@ -256,8 +256,9 @@ class Simulator {
     // request its usual idle time after the answer ends (it does not talk over a frame).
     const bool late = faults && turnaround >= o_.retry_after_ns;
     if (chance(o_.garbled_rate)) {
-      capture_.timed_out.push_back(req);
-      timing_out_ns_ = late ? 0 : o_.retry_after_ns;  // what came was no answer
+      // Junk in the answer's time is the answer, garbled; after the time-out, too late.
+      if (late) capture_.timed_out.push_back(req);
+      timing_out_ns_ = late ? 0 : o_.retry_after_ns;  // what came was no answer it could read
       return send_garbled(slave, turnaround);
     }
     if (late) capture_.timed_out.push_back(req);
@@ -393,8 +394,9 @@ class Simulator {
     const uint64_t offset = send(junk, gap_ns);
     capture_.garbled.push_back(offset);
     capture_.clashes.push_back({req, offset, static_cast<uint32_t>(junk.size())});
+    // In the answer's time the junk is the answer, garbled: no time-out, but the master waits
+    // its time-out out, as it cannot tell where the junk ends.
     if (late) return;  // the master gave up already
-    capture_.timed_out.push_back(req);
     timing_out_ns_ = o_.retry_after_ns;
   }
 

@@ -74,7 +74,7 @@ struct BusOptions {
   double collision_rate = 0.0;  // another device talks over the response's last bytes
   double pause_rate = 0.0;      // a sender pauses inside a frame, longer than t1.5 (RTU)
   double garbled_rate = 0.0;    // the answer comes as bytes that are no frame (a slave at another
-                                // baud rate), and the master times out
+                                // baud rate): its answer, garbled
   // Line noise (a bad termination): this share of every frame, requests and answers alike,
   // arrives with a bit flipped in 1 to 3 bytes, as SlaveFaults::corruption_rate. A slave ignores
   // a corrupted request, so the master waits out its time-out.
@@ -115,7 +115,7 @@ struct TruthFrame {
 // second 0 to 1.9 characters after the first: the bytes that were on the wire. Begun within
 // the same bit, they read as one answer, in `frames`: good where both said the same, else
 // corrupted where they differed (the master has its CRC error). Otherwise they are junk, in
-// `garbled`, and the master times out.
+// `garbled`: the answer, garbled.
 struct Clash {
   size_t request = 0;  // its position in `frames`
   uint64_t offset = 0;
@@ -128,7 +128,7 @@ struct BusCapture {
   std::vector<int64_t> end_ns;  // when each byte's stop bit ended
   std::vector<TruthFrame> frames;
   // Positions in `frames` of good requests the master's time-out ran out on: unanswered, or
-  // answered by junk, or late.
+  // answered late. Junk in the answer's time is the answer, garbled (`garbled`), no time-out.
   std::vector<size_t> timed_out;
   std::vector<uint64_t> garbled;  // where each garbled answer begins in the byte stream
   std::vector<Clash> clashes;

@@ -194,6 +194,7 @@ void JsonSink::on_noise(const Noise& noise) {
   } else {
     out_.print(FMT_COMPILE(",\"request\":null"));
   }
+  out_.print(FMT_COMPILE(",\"damaged_answer\":{}"), noise.damaged_answer);
   out_.print(FMT_COMPILE(",\"findings\":["));
   finding_names(noise.findings);
   out_.print(FMT_COMPILE("]}}\n"));

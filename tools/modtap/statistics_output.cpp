@@ -178,8 +178,9 @@ namespace {
 void append_counts(fmt::memory_buffer& out, const ExchangeCounts& c) {
   fmt::format_to(fmt::appender(out),
                  "\"requests\":{},\"responses\":{},\"timeouts\":{},\"exceptions\":{},"
-                 "\"bad_checks\":{},\"retries\":{}",
-                 c.requests, c.responses, c.timeouts, c.exceptions, c.bad_checks, c.retries);
+                 "\"bad_checks\":{},\"garbled\":{},\"retries\":{}",
+                 c.requests, c.responses, c.timeouts, c.exceptions, c.bad_checks, c.garbled,
+                 c.retries);
 }
 
 void append_latency(fmt::memory_buffer& out, const Histogram& h) {

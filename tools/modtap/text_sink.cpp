@@ -273,6 +273,8 @@ void TextSink::on_noise(const Noise& noise) {
   channel_column(noise.channel);
   out_.print(FMT_COMPILE(" noise {} bytes ({})"), noise.raw.size(), to_string(noise.reason));
   if (noise.request) out_.print(FMT_COMPILE(" after request #{}"), *noise.request);
+  if (noise.damaged_answer)
+    out_.print(FMT_COMPILE(", slave {}'s answer garbled"), noise.request_slave);
   for_each_frame_finding(noise.findings, [&](size_t slot) {
     out_.print(FMT_COMPILE(" [{}]"), frame_findings()[slot].name);
   });
