@@ -93,17 +93,28 @@ def expected(records):
     return e
 
 
+def device(record, slave_of):
+    """The slave a record is to or from: a response's or a damaged answer's request says."""
+    if record.get("request") is not None and record["request"] in slave_of:
+        return slave_of[record["request"]]
+    return record.get("slave")
+
+
 def expected_slaves(records):
-    frames = [r for r in records if r["type"] == "frame" and r["slave"] != 0]
-    good = {f["slave"] for f in frames if f["check"] == "ok"}
+    slave_of = {r["index"]: r["slave"] for r in records
+                if r["type"] == "frame" and r["role"] == "request"}
+    frames = [r for r in records if r["type"] == "frame" and device(r, slave_of) != 0]
+    good = {device(f, slave_of) for f in frames if f["check"] == "ok"}
     slaves = {}
     for s in sorted(good):
-        mine = [f for f in frames if f["slave"] == s]
+        mine = [f for f in frames if device(f, slave_of) == s]
         ok = [f for f in mine if f["check"] == "ok"]
         timeouts = [r for r in records if r["type"] == "timeout" and r["slave"] == s]
+        garbled = [r for r in records if r["type"] == "noise" and r["damaged_answer"]
+                   and device(r, slave_of) == s]
 
-        def counts(frames_of, timeouts_of):
-            return {
+        def counts(frames_of, timeouts_of, garbled_of=None):
+            c = {
                 "requests": sum(f["role"] == "request" for f in frames_of),
                 "responses": sum(f["role"] == "response" for f in frames_of),
                 "timeouts": len(timeouts_of),
@@ -112,6 +123,9 @@ def expected_slaves(records):
                 "bad_checks": sum(f["check"] == "bad" for f in frames_of),
                 "retries": sum("retry" in f["findings"] for f in frames_of),
             }
+            if garbled_of is not None:
+                c["garbled"] = len(garbled_of)
+            return c
 
         by_fc = {}
         for fc in sorted({f["fc"] for f in ok} | {t["fc"] & 0x7F for t in timeouts}):
@@ -119,26 +133,25 @@ def expected_slaves(records):
                                     [t for t in timeouts if t["fc"] & 0x7F == fc])
         requests = [f["t_ns"] for f in ok if f["role"] == "request"]
         slaves[s] = {
-            **counts(mine, timeouts),
+            **counts(mine, timeouts, garbled),
             "exceptions_by_code": dict(collections.Counter(
                 str(f["exception"]) for f in ok if f["role"] == "response" and f["exception"] is not None)),
             "by_fc": by_fc,
             "latency": [f["latency_us"] for f in ok if f["latency_us"] is not None and f["latency_us"] >= 0],
             "poll": [(b - a) / 1e6 for a, b in zip(requests, requests[1:]) if b >= a],
         }
-    stray = {f["slave"] for f in frames} - good
-    stray_bad = sum(f["check"] == "bad" for f in frames if f["slave"] in stray)
+    stray = {device(f, slave_of) for f in frames} - good
+    stray_bad = sum(f["check"] == "bad" for f in frames if device(f, slave_of) in stray)
     return slaves, len(stray), stray_bad
 
 
 def check_registers(name, stats, records):
-    """The last value of each register: what reads' responses and writes' requests carried."""
-    echo_codes = {5, 6, 15, 16}
+    """The last value of each register: what good responses, to reads and to writes, carried."""
     last = {}
     for r in records:
         if r["type"] != "frame" or r["check"] != "ok" or r["slave"] == 0:
             continue
-        if r["role"] == "response" and r["fc"] in echo_codes:
+        if r["role"] != "response":
             continue
         for g in r.get("registers", []):
             last[(r["slave"], g["addr"], g["name"])] = (g["raw"], r["t_ns"])
@@ -174,8 +187,8 @@ def compare(name, stats, records):
         if want is None:
             continue
         what = f"{name} slave {got['slave']}"
-        for key in ("requests", "responses", "timeouts", "exceptions", "bad_checks", "retries",
-                    "exceptions_by_code", "by_fc"):
+        for key in ("requests", "responses", "timeouts", "exceptions", "bad_checks", "garbled",
+                    "retries", "exceptions_by_code", "by_fc"):
             check(f"{what} {key}", got[key], want[key])
         check_percentiles(f"{what} latency_us", got["latency_us"], want["latency"], 1000)
         check_percentiles(f"{what} poll_interval_ms", got["poll_interval_ms"], want["poll"], 1000)

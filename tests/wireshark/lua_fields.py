@@ -25,6 +25,7 @@ PLUGIN_OWN = {
 }
 COMMENT_OWN = {
     "duration_ns": "a packet keeps one time; the record's end is its start plus this",
+    "untimed_start": "the record began in the read of the byte before it: no latency before it",
 }
 
 failures = []

@@ -178,9 +178,8 @@ namespace {
 void append_counts(fmt::memory_buffer& out, const ExchangeCounts& c) {
   fmt::format_to(fmt::appender(out),
                  "\"requests\":{},\"responses\":{},\"timeouts\":{},\"exceptions\":{},"
-                 "\"bad_checks\":{},\"garbled\":{},\"retries\":{}",
-                 c.requests, c.responses, c.timeouts, c.exceptions, c.bad_checks, c.garbled,
-                 c.retries);
+                 "\"bad_checks\":{},\"retries\":{}",
+                 c.requests, c.responses, c.timeouts, c.exceptions, c.bad_checks, c.retries);
 }
 
 void append_latency(fmt::memory_buffer& out, const Histogram& h) {
@@ -210,8 +209,8 @@ void append_slave(fmt::memory_buffer& out, uint8_t address, const SlaveStatistic
   auto put = fmt::appender(out);
   fmt::format_to(put, "{{\"slave\":{},", address);
   append_counts(out, slave.counts);
-  fmt::format_to(put, ",\"timeout_rate\":{},\"exceptions_by_code\":{{",
-                 slave.counts.timeout_rate());
+  fmt::format_to(put, ",\"garbled\":{},\"timeout_rate\":{},\"exceptions_by_code\":{{",
+                 slave.counts.garbled, slave.counts.timeout_rate());
   bool first = true;
   for (const auto& [code, count] : slave.exceptions_by_code) {
     fmt::format_to(put, "{}\"{}\":{}", first ? "" : ",", code, count);
