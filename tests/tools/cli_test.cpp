@@ -10,7 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "captures/pcap_chunk_writer.hpp"
 #include "decoder/checksum.hpp"
+#include "tools/busgen/bus_simulator.hpp"
 
 namespace {
 
@@ -83,8 +85,10 @@ TEST(Cli, StatsSummariseTheCapture) {
   const Outcome r = run(brainchild + " -T stats");
   ASSERT_EQ(r.status, 0);
   ASSERT_GE(r.lines.size(), 3u);
-  EXPECT_EQ(r.lines[0], "capture         0.267 s, 19200 8E1, clock per-byte");
-  EXPECT_EQ(r.lines[1], "frames          30 (112.5 a second), bus load 50.5%");
+  // The conclusions first: a real bus with nothing wrong.
+  EXPECT_EQ(r.lines[0], "problems        none found");
+  EXPECT_EQ(r.lines[2], "capture         0.267 s, 19200 8E1, clock per-byte");
+  EXPECT_EQ(r.lines[3], "frames          30 (112.5 a second), bus load 50.5%");
   EXPECT_THAT(
       r.lines,
       ::testing::Contains(
@@ -140,6 +144,49 @@ TEST(Cli, LastValuesAreWhatTheDeviceConfirmed) {
   EXPECT_THAT(csv.lines[3], ::testing::HasSubstr(",1,2502H,frequency_command,60.00,"));
 }
 
+// A simulated scan of six slaves, one packet a frame, with `faults` (busgen's syntax).
+std::string faulty_bus(const std::string& name, const std::vector<std::string>& faults) {
+  modtap::busgen::BusOptions o;
+  o.transactions = 1200;
+  o.polled_slaves = 6;
+  for (const auto& fault : faults) modtap::busgen::add_slave_faults(o, fault);
+  const auto capture = modtap::busgen::simulate(o);
+  const auto path = (std::filesystem::temp_directory_path() / name).string();
+  modtap::captures::PcapChunkWriter writer(path, 147);
+  for (const auto& c : modtap::busgen::deliver(capture, modtap::busgen::Delivery::whole_frames, 1))
+    writer.write(
+        {0, 1'700'000'000'000'000'000 + c.t_ns, {capture.bytes.data() + c.offset, c.size}});
+  return path;
+}
+
+// The statistics lead with what is wrong, by device, with what to check; --stats has the same
+// problems first, each with its evidence.
+TEST(Cli, StatsLeadWithTheProblemsEachFaultyDeviceNamed) {
+  const std::string capture =
+      faulty_bus("modtap-problems.pcap", {"3:absent", "4:missing-block=0400H+4"});
+  const Outcome r = run("-r " + capture + " -T stats");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_GE(r.lines.size(), 8u);
+  EXPECT_EQ(r.lines[0], "problems");
+  EXPECT_THAT(r.lines[1], ::testing::MatchesRegex(
+                              "  error   Slave 3 never answers: [0-9]+ requests, all timed out"));
+  EXPECT_THAT(r.lines[2], ::testing::StartsWith("          advice: check that a device"));
+  EXPECT_THAT(r.lines, ::testing::Contains(::testing::HasSubstr(
+                           "warning Slave 4 answers nearly every read of 0400H (4 registers) "
+                           "with exception 02H")));
+  const auto path = (std::filesystem::temp_directory_path() / "modtap-problems.json").string();
+  ASSERT_EQ(run("-r " + capture + " -q --stats " + path).status, 0);
+  std::ifstream file(path);
+  std::stringstream json;
+  json << file.rdbuf();
+  EXPECT_NE(json.str().find("\"problems\":[{\"problem\":\"no-response\",\"slave\":3,"
+                            "\"severity\":\"error\",\"since_ns\":"),
+            std::string::npos)
+      << json.str().substr(0, 400);
+  EXPECT_NE(json.str().find(",\"evidence\":{\"requests\":"), std::string::npos);
+  EXPECT_NE(json.str().find("{\"problem\":\"rejected-requests\",\"slave\":4,"), std::string::npos);
+}
+
 // --stats writes the statistics as JSON beside any output; a pipe reader would get text.
 TEST(Cli, StatsFileIsJsonBesideTheTextOutput) {
   const auto path = (std::filesystem::temp_directory_path() / "modtap-cli-stats.json").string();
@@ -193,8 +240,8 @@ TEST(Cli, TsharkHabitsCountQuietTimeAndVersion) {
   const Outcome three = run(brainchild + " -c 3");
   EXPECT_EQ(three.lines.size(), 3u);
   const Outcome counted = run(brainchild + " -c 4 -q -T stats");
-  ASSERT_GE(counted.lines.size(), 2u);
-  EXPECT_EQ(counted.lines[1].rfind("frames          4 ", 0), 0u) << counted.lines[1];
+  ASSERT_GE(counted.lines.size(), 4u);
+  EXPECT_EQ(counted.lines[3].rfind("frames          4 ", 0), 0u) << counted.lines[3];
   EXPECT_TRUE(run(brainchild + " -q").lines.empty());
 
   const Outcome pcap = run_shell("TZ=UTC " + std::string(MODTAP_BINARY) + " -r " + MODTAP_SAMPLES +

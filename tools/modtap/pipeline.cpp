@@ -92,6 +92,9 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output
   fan_out_.add(*terminal_);
   if (wants_statistics(o)) {
     statistics_ = std::make_unique<decoder::BusStatistics>(format, clock);
+    evidence_ = std::make_unique<decoder::ProblemEvidence>();
+    problem_options_.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
+    fan_out_.add(*evidence_);
     if (o.metrics_address.empty()) {
       fan_out_.add(*statistics_);
     } else {  // read by the metrics server's thread while records come in
@@ -145,6 +148,11 @@ void Pipeline::write_pcapng(const RunOptions& o, const captures::RingLimits& rin
   options.live = !o.interfaces.empty();
   pcapng_ = std::make_unique<captures::PcapngFiles>(o.write_file, ring, channels, options);
   fan_out_.add(*pcapng_);
+}
+
+std::vector<decoder::Problem> Pipeline::problems() const {
+  if (!statistics_) return {};
+  return decoder::find_problems(*statistics_, *evidence_, problem_options_);
 }
 
 void Pipeline::limit_records(uint64_t max_records, std::function<void()> on_reached) {

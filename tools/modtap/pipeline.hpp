@@ -15,6 +15,7 @@
 #include "captures/pcapng_sink.hpp"
 #include "decoder/analyzer.hpp"
 #include "decoder/bus_diagnostics.hpp"
+#include "decoder/bus_problems.hpp"
 #include "decoder/bus_statistics.hpp"
 #include "decoder/bus_timeline.hpp"
 #include "decoder/display_filter.hpp"
@@ -119,6 +120,8 @@ class Pipeline {
   // How much the -w files hold so far (0 without -w).
   uint64_t pcapng_bytes() const { return pcapng_ ? pcapng_->bytes_written() : 0; }
   const decoder::BusStatistics* statistics() const { return statistics_.get(); }
+  // The problems the statistics and the evidence beside them show (none without statistics).
+  std::vector<decoder::Problem> problems() const;
   SharedStatistics* shared_statistics() { return shared_statistics_.get(); }
   const decoder::BusTimeline* timeline() const { return timeline_.get(); }
   // The --follow items no frame read or wrote, so far.
@@ -144,6 +147,8 @@ class Pipeline {
   decoder::FanOut fan_out_;
   std::unique_ptr<decoder::RecordSink> terminal_;
   std::unique_ptr<decoder::BusStatistics> statistics_;
+  std::unique_ptr<decoder::ProblemEvidence> evidence_;
+  decoder::ProblemOptions problem_options_;
   std::unique_ptr<SharedStatistics> shared_statistics_;
   std::unique_ptr<decoder::BusTimeline> timeline_;
   ModelCatalog catalog_;

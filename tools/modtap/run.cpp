@@ -33,10 +33,12 @@ void summarise(const RunOptions& o, Output& out, const Pipeline& pipeline, bool 
   const decoder::BusStatistics* statistics = pipeline.statistics();
   if (!statistics) return;
   const auto base = decoder::register_base_named(o.register_base);
-  if (o.output == "stats") print_statistics(out, *statistics, pipeline.diagnostics(), base);
+  const auto problems = pipeline.problems();
+  if (o.output == "stats")
+    print_statistics(out, *statistics, pipeline.diagnostics(), problems, base);
   if (!o.stats_file.empty()) {
     fmt::memory_buffer json;
-    append_statistics_json(json, *statistics, pipeline.diagnostics(), complete);
+    append_statistics_json(json, *statistics, pipeline.diagnostics(), problems, complete);
     write_whole(o.stats_file, json);
   }
   if (!o.report_file.empty()) {

@@ -138,10 +138,48 @@ void print_registers(Output& out, const BusStatistics& s, RegisterBase base) {
   if (named > shown) out.print("  ... more in --stats\n");
 }
 
+// `text` broken into lines of at most `width` after `indent` spaces, the first line's indent
+// already printed.
+void print_wrapped(Output& out, std::string_view text, size_t indent, size_t width) {
+  size_t column = 0;
+  while (!text.empty()) {
+    const size_t space = text.find(' ');
+    const std::string_view word = text.substr(0, space);
+    if (column && column + 1 + word.size() > width) {
+      out.print("\n{:{}}", "", indent);
+      column = 0;
+    } else if (column) {
+      out.print(" ");
+      ++column;
+    }
+    out.print("{}", word);
+    column += word.size();
+    text = space == std::string_view::npos ? std::string_view{} : text.substr(space + 1);
+  }
+  out.print("\n");
+}
+
+// The conclusions first: each problem's sentence, then what to check.
+void print_problems(Output& out, std::span<const Problem> problems) {
+  if (problems.empty()) {
+    out.print("{:<16}none found\n\n", "problems");
+    return;
+  }
+  out.print("problems\n");
+  for (const Problem& p : problems) {
+    out.print("  {:<8}", to_string(p.severity));
+    print_wrapped(out, p.text, 10, 90);
+    out.print("{:10}advice: ", "");
+    print_wrapped(out, p.advice, 18, 82);
+  }
+  out.print("\n");
+}
+
 }  // namespace
 
 void print_statistics(Output& out, const BusStatistics& s, const BusDiagnostics& d,
-                      RegisterBase base) {
+                      std::span<const Problem> problems, RegisterBase base) {
+  print_problems(out, problems);
   print_span(out, s);
   out.print("{:<16}{}", "frames", s.frames);
   if (s.duration_s() > 0)
@@ -301,11 +339,39 @@ void append_outages(fmt::memory_buffer& out, const BusDiagnostics& d) {
 
 }  // namespace
 
-void append_statistics_json(fmt::memory_buffer& out, const BusStatistics& s,
-                            const BusDiagnostics& d, bool complete) {
+void append_problems_json(fmt::memory_buffer& out, std::span<const Problem> problems) {
   auto put = fmt::appender(out);
-  fmt::format_to(put, "{{\"complete\":{},\"clock\":\"{}\",\"serial\":\"{}\"", complete,
+  out.push_back('[');
+  for (const Problem& p : problems) {
+    if (&p != problems.data()) out.push_back(',');
+    fmt::format_to(put, "{{\"problem\":\"{}\",\"slave\":", problem_info(p.kind).name);
+    if (p.slave) {
+      fmt::format_to(put, "{}", *p.slave);
+    } else {
+      fmt::format_to(put, "null");
+    }
+    fmt::format_to(put, ",\"severity\":\"{}\",\"since_ns\":{},\"evidence\":{{",
+                   to_string(p.severity), p.since_ns);
+    for (const auto& [name, value] : p.evidence)
+      fmt::format_to(put, "{}\"{}\":{}", &name == &p.evidence.front().first ? "" : ",", name,
+                     value);
+    fmt::format_to(put, "}},\"text\":");
+    append_json_string(out, p.text);
+    fmt::format_to(put, ",\"advice\":");
+    append_json_string(out, p.advice);
+    fmt::format_to(put, ",\"first\":[{}]}}", fmt::join(p.first_records, ","));
+  }
+  out.push_back(']');
+}
+
+void append_statistics_json(fmt::memory_buffer& out, const BusStatistics& s,
+                            const BusDiagnostics& d, std::span<const Problem> problems,
+                            bool complete) {
+  auto put = fmt::appender(out);
+  fmt::format_to(put,
+                 "{{\"complete\":{},\"clock\":\"{}\",\"serial\":\"{}\",\"problems\":", complete,
                  to_string(s.clock()), describe(s.format()));
+  append_problems_json(out, problems);
   if (s.first_t_ns) {
     fmt::format_to(put, ",\"first_t_ns\":{},\"last_t_ns\":{}", *s.first_t_ns, *s.last_t_ns);
   } else {
