@@ -187,6 +187,22 @@ TEST(Cli, StatsLeadWithTheProblemsEachFaultyDeviceNamed) {
   EXPECT_NE(json.str().find("{\"problem\":\"rejected-requests\",\"slave\":4,"), std::string::npos);
 }
 
+// One count, one number: an exception answer whose check fails may have its code damaged, so
+// neither the exceptions nor the model's "exception" finding count it.
+TEST(Cli, AnExceptionWithABadCheckIsNoException) {
+  std::string capture = raw_capture("modtap-bad-exception.raw",
+                                    {{0x01, 0x03, 0x00, 0x00, 0x00, 0x01}, {0x01, 0x83, 0x02}});
+  {
+    std::fstream file(capture, std::ios::in | std::ios::out | std::ios::binary);
+    file.seekp(10);  // the exception code: 02H becomes DBH, the CRC no longer holds
+    file.put(static_cast<char>(0xDB));
+  }
+  const Outcome r = run("-r " + capture + " --format raw --mode rtu --model generic -T stats");
+  ASSERT_EQ(r.status, 0);
+  EXPECT_THAT(r.lines, ::testing::Contains(::testing::HasSubstr("(exceptions 0, unsolicited 0)")));
+  EXPECT_THAT(r.lines, ::testing::Not(::testing::Contains(::testing::StartsWith("  exception "))));
+}
+
 // --stats writes the statistics as JSON beside any output; a pipe reader would get text.
 TEST(Cli, StatsFileIsJsonBesideTheTextOutput) {
   const auto path = (std::filesystem::temp_directory_path() / "modtap-cli-stats.json").string();
