@@ -22,7 +22,7 @@ import tty
 import urllib.request
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
-from modbus import with_crc  # noqa: E402
+from modbus import wait_until_open, with_crc  # noqa: E402
 
 MODTAP, LIBMODBUS_SLAVE, WORK = sys.argv[1:4]
 failures = []
@@ -510,21 +510,6 @@ def pcapng_into_a_pipe():
     port.close()
     passed += ok
     print(f"-w - on a port, read as it grows: {'ok' if ok else 'FAILED'}")
-
-
-def wait_until_open(process, path, timeout=20):
-    """Waits until `process` holds `path` open: a slow start (sanitizers, a busy machine)
-    must not turn into bytes written before anyone listened."""
-    deadline = time.time() + timeout
-    fds = f"/proc/{process.pid}/fd"
-    while time.time() < deadline and process.poll() is None:
-        try:
-            if any(os.readlink(os.path.join(fds, fd)) == path for fd in os.listdir(fds)):
-                return True
-        except OSError:
-            pass
-        time.sleep(0.01)
-    return False
 
 
 def signals_at_random_moments(runs=50):

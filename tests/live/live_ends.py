@@ -13,6 +13,9 @@ import sys
 import time
 import tty
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from modbus import wait_until_open  # noqa: E402
+
 MODTAP, WORK = sys.argv[1:3]
 failures = []
 
@@ -21,20 +24,6 @@ def check(name, condition, message):
     if not condition:
         failures.append(f"{name}: {message}")
     return condition
-
-
-def wait_until_open(process, path, timeout=20):
-    """Until `process` holds `path` open: bytes written before it listens would be lost."""
-    deadline = time.time() + timeout
-    fds = f"/proc/{process.pid}/fd"
-    while time.time() < deadline and process.poll() is None:
-        try:
-            if any(os.readlink(os.path.join(fds, fd)) == path for fd in os.listdir(fds)):
-                return True
-        except OSError:
-            pass
-        time.sleep(0.01)
-    return False
 
 
 def port_holder():
