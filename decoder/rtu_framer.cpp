@@ -633,24 +633,27 @@ Frame RtuFramer::frame_of(uint64_t begin, uint64_t end, RoleFit fit) const {
   frame.raw = frame.adu = {at_ptr(begin), static_cast<size_t>(end - begin)};
   frame.t_ns = end_time(begin) - char_ns_;
   frame.end_ns = end_time(end - 1);
-  frame.untimed_start = starts_untimed(begin);
-  frame.start_read = mark_of(begin).read;
+  const TimeMark& first = mark_of(begin);
+  frame.untimed_start = starts_untimed(first, begin);
+  frame.start_read = first.read;
   frame.end_read = mark_of(end - 1).read;
   if (paused_inside(begin, end)) frame.findings = finding_gap_in_frame;
   return frame;
 }
 
-// Whether the byte at `offset` came in one read with the byte before it (Frame::untimed_start).
-bool RtuFramer::starts_untimed(uint64_t offset) const {
-  const TimeMark& mark = mark_of(offset);
+// Whether the byte at `offset`, held by `mark`, came in one read with the byte before it
+// (Frame::untimed_start).
+bool RtuFramer::starts_untimed(const TimeMark& mark, uint64_t offset) const {
   return options_.clock == ClockQuality::per_chunk && (mark.first < offset || mark.continues_read);
 }
 
-// The chunk that held the byte at `offset`, one not yet consumed.
+// The chunk that held the byte at `offset`, one not yet consumed: most often the newest.
 const RtuFramer::TimeMark& RtuFramer::mark_of(uint64_t offset) const {
+  const TimeMark& last = marks_.back();
+  if (offset >= last.first) return last;
   auto it = std::upper_bound(marks_.begin(), marks_.end(), offset,
                              [](uint64_t o, const TimeMark& m) { return o < m.end; });
-  return it == marks_.end() ? marks_.back() : *it;
+  return it == marks_.end() ? last : *it;
 }
 
 // Whether a clock per byte saw a silence over t1.5 before the byte at `offset`: no frame goes on
@@ -873,7 +876,7 @@ void RtuFramer::emit_noise(uint64_t begin, uint64_t end, NoiseReason reason) {
   noise.raw = {at_ptr(begin), static_cast<size_t>(end - begin)};
   noise.t_ns = end_time(begin) - char_ns_;
   noise.end_ns = end_time(end - 1);
-  noise.untimed_start = starts_untimed(begin);
+  noise.untimed_start = starts_untimed(mark_of(begin), begin);
   noise.reason = reason;
   sink_.on_noise(noise);
   if (reason == NoiseReason::glitch && begin == answer_start_) answer_start_ = end;

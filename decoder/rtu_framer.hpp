@@ -109,7 +109,7 @@ class RtuFramer {
   Frame frame_of(uint64_t begin, uint64_t end, RoleFit fit) const;
   bool paused_inside(uint64_t begin, uint64_t end) const;
   const TimeMark& mark_of(uint64_t offset) const;
-  bool starts_untimed(uint64_t offset) const;
+  bool starts_untimed(const TimeMark& mark, uint64_t offset) const;
   bool paused_before(uint64_t offset) const;
   void emit_frame(uint64_t at, const Match& match);
   void emit_unframed(uint64_t begin, uint64_t end);
