@@ -52,9 +52,9 @@ class Matcher {
     uint16_t adu_size = 0;
     uint8_t retries = 0;
     bool ambiguous_end = false;
-    uint64_t end_read = 0;  // Frame::end_read
-    bool garbled_answer = false;
-    bool timed_out_in_silence = false;  // noise or a bad-check frame came in its answer's time
+    uint64_t end_read = 0;              // Frame::end_read
+    bool garbled_answer = false;        // noise or a bad-check frame came in its answer's time
+    bool timed_out_in_silence = false;  // its wait ran out with nothing on the line
     uint16_t size = 0;                  // PDU bytes kept (enough for echo and fit checks)
     std::array<uint8_t, 256> pdu;       // left uninitialised: only `size` bytes are ever read
   };

@@ -127,7 +127,8 @@ struct Noise {
   uint32_t findings = finding_none;
   std::optional<uint64_t> request;  // the request whose answer was awaited when it came
   uint8_t request_slave = 0;        // that request's slave
-  // It came in the answer's time and ended the wait: the slave's answer, garbled past reading.
+  // It came in the answer's time: the slave's answer, garbled past reading. The request does
+  // not time out, unless a readable answer follows.
   bool damaged_answer = false;
 };
 
