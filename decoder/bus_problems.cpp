@@ -1,6 +1,7 @@
 #include "decoder/bus_problems.hpp"
 
 #include <algorithm>
+#include <array>
 #include <ctime>
 
 #include <fmt/format.h>

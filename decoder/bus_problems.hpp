@@ -4,11 +4,9 @@
 // what came in its place, a glitch at whose turnaround), into problems of the kinds below.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <map>
 #include <optional>
-#include <span>
 #include <string>
 #include <string_view>
 #include <tuple>
