@@ -96,28 +96,35 @@ const ProblemInfo& problem_info(ProblemKind kind) {
   return problem_infos[static_cast<size_t>(kind)];
 }
 
-void ProblemEvidence::Events::add(int64_t t_ns, uint64_t index) {
+bool ProblemEvidence::Events::add(int64_t t_ns, uint64_t index) {
   if (!first_ns) first_ns = t_ns;
-  if (first.size() < kept_records) first.push_back(index);
   ++count;
+  if (first.size() == kept_records) return false;
+  first.push_back(index);
+  return true;
+}
+
+void ProblemEvidence::note(Events& events, int64_t t_ns, uint64_t index) {
+  if (events.add(t_ns, index)) cited_ = index;
 }
 
 void ProblemEvidence::on_frame(const Frame& frame) {
+  cited_.reset();
   after_request_ = false;
   if (frame.adu.empty()) return;
   if (frame.role == Role::request && frame.check_ok) return on_request(frame);
   const bool awaited = frame.role == Role::response && frame.request;
-  if (!frame.check_ok && !awaited) return bad_requests_.add(frame.t_ns, frame.index);
+  if (!frame.check_ok && !awaited) return note(bad_requests_, frame.t_ns, frame.index);
   if (frame.role != Role::response) return;
   if (!awaited) {  // an answer after its request timed out: late, if the history says so
     if (frame.findings & finding_late_response)
-      slaves_[frame.slave()].late.add(frame.t_ns, frame.index);
+      note(slaves_[frame.slave()].late, frame.t_ns, frame.index);
     return;
   }
   Slave& slave = slaves_[frame.device()];
   if (frame.check_ok) return on_answer(frame, slave);
-  if (frame.damage == Damage::collision) return slave.overlapping.add(frame.t_ns, frame.index);
-  slave.damaged.add(frame.t_ns, frame.index);
+  if (frame.damage == Damage::collision) return note(slave.overlapping, frame.t_ns, frame.index);
+  note(slave.damaged, frame.t_ns, frame.index);
   slave.silent_timeouts = 0;
 }
 
@@ -144,7 +151,7 @@ void ProblemEvidence::on_answer(const Frame& frame, Slave& slave) {
   slave.silent_timeouts = 0;
   if (frame.meaning && frame.meaning->model) slave.model = frame.meaning->model;
   if (frame.is_exception() && awaited_ && std::get<0>(*awaited_) == frame.device())
-    requests_[*awaited_].by_exception[frame.adu[2]].add(frame.t_ns, frame.index);
+    note(requests_[*awaited_].by_exception[frame.adu[2]], frame.t_ns, frame.index);
   awaited_.reset();
 }
 
@@ -154,21 +161,22 @@ void ProblemEvidence::on_answer(const Frame& frame, Slave& slave) {
 void ProblemEvidence::on_damaged_answer(uint64_t index, int64_t t_ns, size_t size, Slave& slave) {
   const uint16_t expected = slave.expected_answer_size;
   if (expected && size > expected && size <= expected + 2u) {
-    slave.overlapping.add(t_ns, index);
+    note(slave.overlapping, t_ns, index);
   } else {
-    slave.damaged.add(t_ns, index);
+    note(slave.damaged, t_ns, index);
   }
   slave.silent_timeouts = 0;
 }
 
 void ProblemEvidence::on_noise(const Noise& noise) {
+  cited_.reset();
   const bool after_request = std::exchange(after_request_, false);
   if (noise.reason == NoiseReason::glitch) {
     // Right after a request, the slave's driver turning on to answer; else the master's.
     if (after_request && awaited_slave_) {
-      slaves_[*awaited_slave_].glitches.add(noise.t_ns, noise.index);
+      note(slaves_[*awaited_slave_].glitches, noise.t_ns, noise.index);
     } else {
-      master_glitches_.add(noise.t_ns, noise.index);
+      note(master_glitches_, noise.t_ns, noise.index);
     }
     return;
   }
@@ -177,11 +185,12 @@ void ProblemEvidence::on_noise(const Noise& noise) {
 }
 
 void ProblemEvidence::on_timeout(const Timeout& timeout) {
+  cited_.reset();
   after_request_ = false;
   awaited_.reset();
   if (!timeout.timed_out() || timeout.slave == 0) return;
   Slave& slave = slaves_[timeout.slave];
-  slave.timeouts.add(timeout.t_ns, timeout.request);
+  note(slave.timeouts, timeout.t_ns, timeout.request);
   if (slave.silent_timeouts++ == 0) {
     slave.silent_since_ns = timeout.t_ns - timeout.waited_ns;
     slave.silent_since_request = timeout.request;

@@ -67,7 +67,7 @@ class ProblemEvidence final : public RecordSink {
     uint64_t count = 0;
     std::optional<int64_t> first_ns;
     std::vector<uint64_t> first;
-    void add(int64_t t_ns, uint64_t index);
+    bool add(int64_t t_ns, uint64_t index);  // true: the record is one of the first
   };
   struct Slave {
     const DeviceModel* model = nullptr;  // the one its frames were read with
@@ -92,11 +92,15 @@ class ProblemEvidence final : public RecordSink {
   const Events& bad_requests() const { return bad_requests_; }  // bad checks no answer explains
   const Events& master_glitches() const { return master_glitches_; }
   uint64_t requests_seen() const { return requests_seen_; }
+  // The record just given is one of the first of some trouble, which a problem may cite under
+  // this index (a time-out's under its request's): a report keeps its line.
+  std::optional<uint64_t> cited() const { return cited_; }
 
  private:
   void on_request(const Frame& frame);
   void on_answer(const Frame& frame, Slave& slave);
   void on_damaged_answer(uint64_t index, int64_t t_ns, size_t size, Slave& slave);
+  void note(Events& events, int64_t t_ns, uint64_t index);
 
   std::map<uint8_t, Slave> slaves_;
   std::map<RequestKey, Rejections> requests_;
@@ -105,6 +109,7 @@ class ProblemEvidence final : public RecordSink {
   std::optional<RequestKey> awaited_;  // the request whose answer is awaited, if watched
   std::optional<uint8_t> awaited_slave_;
   bool after_request_ = false;  // the last record was a request: a glitch now is the slave's
+  std::optional<uint64_t> cited_;
 };
 
 struct ProblemOptions {

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """--metrics as Prometheus sees it: modtap listens on a pty that carries simulator traffic,
 a real Prometheus server (Debian's package) scrapes it, and what Prometheus holds equals what
-modtap's --stats says at the end; promtool accepts the exposition.
+modtap's --stats says at the end, the problems found too (slave 4 is absent); promtool accepts
+the exposition.
 
 usage: metrics_prometheus.py MODTAP BUSGEN WORKDIR"""
 import json
@@ -107,7 +108,8 @@ def refusals():
 def main():
     os.makedirs(WORK, exist_ok=True)
     capture = os.path.join(WORK, "scan.raw")
-    subprocess.run([BUSGEN, "-n", "1500", "--slaves", "4", "--faults", "-o", capture],
+    subprocess.run([BUSGEN, "-n", "1500", "--slaves", "4", "--faults", "--slave-fault",
+                    "4:absent", "-o", capture],
                    check=True, stderr=subprocess.DEVNULL)
     with open(capture, "rb") as f:
         data = f.read()
@@ -159,7 +161,7 @@ def main():
             "modtap_frames_total", "modtap_noise_bytes_total", "modtap_broadcasts_total",
             "modtap_requests_total", "modtap_responses_total", "modtap_timeouts_total",
             "modtap_retries_total", "modtap_bad_checks_total", "modtap_exceptions_total",
-            "modtap_response_latency_seconds_count", "modtap_findings_total")}
+            "modtap_response_latency_seconds_count", "modtap_findings_total", "modtap_problem")}
         infinite = query(prometheus_port, 'modtap_response_latency_seconds_bucket{le="+Inf"}')
     finally:
         modtap.send_signal(signal.SIGTERM)
@@ -203,6 +205,19 @@ def main():
           got["modtap_response_latency_seconds_count"])
     findings = {dict(k)["finding"]: v for k, v in got["modtap_findings_total"].items() if v}
     check("findings", findings, {k: v["count"] for k, v in stats["diagnostics"].items()})
+
+    problems = {}
+    for p in stats["problems"]:
+        labels = {("kind", p["problem"]), ("severity", p["severity"])}
+        if p["slave"] is not None:
+            labels.add(("slave", str(p["slave"])))
+        problems[frozenset(labels)] = 1
+    check("problems", got["modtap_problem"], problems)
+    # Fed without the silences between frames, a stray frame or noise now and then reads as
+    # the absent slave's answer: it fails to answer all or nearly all.
+    if not any(p["slave"] == 4 and p["problem"] in ("no-response", "intermittent-response")
+               for p in stats["problems"]):
+        failures.append(f"the absent slave 4 is no problem: {stats['problems']}")
 
     for f in failures:
         print("FAIL:", f)

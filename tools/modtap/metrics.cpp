@@ -229,13 +229,33 @@ MHD_Result answer(void* server, MHD_Connection* connection, const char* url, con
   return respond(connection, MHD_HTTP_OK, "text/plain; version=0.0.4; charset=utf-8", render());
 }
 
+// One sample a problem found now: a series that appears when the diagnosis finds it and goes
+// when it no longer does, so an alert rule is `modtap_problem > 0`.
+void problems_family(Exposition& e, std::span<const decoder::Problem> problems) {
+  e.family("modtap_problem", "gauge",
+           "A problem the diagnosis finds now, per kind and slave (none: the whole bus); "
+           "1 while found (docs/output.md)");
+  for (const decoder::Problem& p : problems) {
+    const std::string_view kind = decoder::problem_info(p.kind).name;
+    const char* severity = to_string(p.severity);
+    if (p.slave) {
+      e.sample("modtap_problem",
+               fmt::format("kind=\"{}\",slave=\"{}\",severity=\"{}\"", kind, *p.slave, severity),
+               1);
+    } else {
+      e.sample("modtap_problem", fmt::format("kind=\"{}\",severity=\"{}\"", kind, severity), 1);
+    }
+  }
+}
+
 }  // namespace
 
 void append_metrics(fmt::memory_buffer& out, const BusStatistics& statistics,
-                    const PortHealth& ports) {
+                    std::span<const decoder::Problem> problems, const PortHealth& ports) {
   Exposition e(out);
   bus_wide(e, statistics);
   per_slave(e, statistics);
+  problems_family(e, problems);
   e.family("modtap_port_read_errors_total", "counter",
            "Reads from a port that failed (an adapter unplugged)");
   e.sample("modtap_port_read_errors_total", "", ports.read_errors.load());

@@ -8,10 +8,12 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <string>
 
 #include <fmt/format.h>
 
+#include "decoder/bus_problems.hpp"
 #include "decoder/bus_statistics.hpp"
 
 namespace modtap::tools {
@@ -23,35 +25,37 @@ struct PortHealth {
   std::atomic<uint64_t> reconnects{0};
 };
 
-// The exposition (version 0.0.4) of the statistics and the ports' health.
+// The exposition (version 0.0.4) of the statistics, the problems and the ports' health.
 void append_metrics(fmt::memory_buffer& out, const decoder::BusStatistics& statistics,
-                    const PortHealth& ports);
+                    std::span<const decoder::Problem> problems, const PortHealth& ports);
 
-// The statistics, fed by the pipeline and read by the server's thread, one at a time.
+// The statistics and the problems' evidence (`health`), fed by the pipeline and read by the
+// server's thread, one at a time.
 class SharedStatistics final : public decoder::RecordSink {
  public:
-  explicit SharedStatistics(decoder::BusStatistics& statistics) : statistics_(statistics) {}
+  explicit SharedStatistics(decoder::RecordSink& health) : health_(health) {}
 
   void on_frame(const decoder::Frame& frame) override {
     std::lock_guard lock(mutex_);
-    statistics_.on_frame(frame);
+    health_.on_frame(frame);
   }
   void on_noise(const decoder::Noise& noise) override {
     std::lock_guard lock(mutex_);
-    statistics_.on_noise(noise);
+    health_.on_noise(noise);
   }
   void on_timeout(const decoder::Timeout& timeout) override {
     std::lock_guard lock(mutex_);
-    statistics_.on_timeout(timeout);
+    health_.on_timeout(timeout);
   }
-  void read(const std::function<void(const decoder::BusStatistics&)>& reader) {
+  // Runs `reader` while no record comes in.
+  void read(const std::function<void()>& reader) {
     std::lock_guard lock(mutex_);
-    reader(statistics_);
+    reader();
   }
 
  private:
   std::mutex mutex_;
-  decoder::BusStatistics& statistics_;
+  decoder::RecordSink& health_;
 };
 
 // An HTTP server (libmicrohttpd, on its own thread) that answers GET /metrics with what

@@ -13,7 +13,9 @@ namespace modtap::tools {
 
 class Output {
  public:
-  explicit Output(captures::OutputFile& file) : file_(file) {}
+  explicit Output(captures::OutputFile& file) : file_(&file) {}
+  // Into memory only: the owner takes buffer()'s content and clears it.
+  Output() = default;
   ~Output() {
     try {
       flush();
@@ -37,17 +39,18 @@ class Output {
   }
   // Called after each record: writes only when enough has gathered, or always when live.
   void end_record() {
-    if (buffer_.size() >= (1 << 16) || line_buffered_) flush();
+    if (file_ && (buffer_.size() >= (1 << 16) || line_buffered_)) flush();
   }
   void flush() {
-    file_.write(std::string_view(buffer_.data(), buffer_.size()));
+    if (!file_) return;
+    file_->write(std::string_view(buffer_.data(), buffer_.size()));
     buffer_.clear();
-    file_.flush();
+    file_->flush();
   }
   void set_line_buffered(bool on) { line_buffered_ = on; }
 
  private:
-  captures::OutputFile& file_;
+  captures::OutputFile* file_ = nullptr;
   fmt::memory_buffer buffer_;
   bool line_buffered_ = false;
 };

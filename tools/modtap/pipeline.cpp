@@ -94,11 +94,19 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output
     statistics_ = std::make_unique<decoder::BusStatistics>(format, clock);
     evidence_ = std::make_unique<decoder::ProblemEvidence>();
     problem_options_.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
-    fan_out_.add(*evidence_);
+    if (!o.report_file.empty()) {  // the report shows the lines of the records problems cite
+      cited_ = std::make_unique<CitedRecords>(*evidence_, channels,
+                                              decoder::register_base_named(o.register_base),
+                                              o.display_filter.empty() ? nullptr : &clock_);
+      health_.add(*cited_);
+    } else {
+      health_.add(*evidence_);
+    }
+    health_.add(*statistics_);
     if (o.metrics_address.empty()) {
-      fan_out_.add(*statistics_);
+      fan_out_.add(health_);
     } else {  // read by the metrics server's thread while records come in
-      shared_statistics_ = std::make_unique<SharedStatistics>(*statistics_);
+      shared_statistics_ = std::make_unique<SharedStatistics>(health_);
       fan_out_.add(*shared_statistics_);
     }
   }

@@ -21,6 +21,7 @@
 #include "decoder/display_filter.hpp"
 #include "decoder/model_interpreter.hpp"
 #include "decoder/record_sink.hpp"
+#include "tools/modtap/cited_records.hpp"
 #include "tools/modtap/csv_sink.hpp"
 #include "tools/modtap/metrics.hpp"
 #include "tools/modtap/model_catalog.hpp"
@@ -121,7 +122,10 @@ class Pipeline {
   uint64_t pcapng_bytes() const { return pcapng_ ? pcapng_->bytes_written() : 0; }
   const decoder::BusStatistics* statistics() const { return statistics_.get(); }
   // The problems the statistics and the evidence beside them show (none without statistics).
+  // With --metrics, call it under shared_statistics()'s lock.
   std::vector<decoder::Problem> problems() const;
+  // With --report: the lines of the records the problems cite.
+  const CitedRecords* cited_records() const { return cited_.get(); }
   SharedStatistics* shared_statistics() { return shared_statistics_.get(); }
   const decoder::BusTimeline* timeline() const { return timeline_.get(); }
   // The --follow items no frame read or wrote, so far.
@@ -148,6 +152,8 @@ class Pipeline {
   std::unique_ptr<decoder::RecordSink> terminal_;
   std::unique_ptr<decoder::BusStatistics> statistics_;
   std::unique_ptr<decoder::ProblemEvidence> evidence_;
+  std::unique_ptr<CitedRecords> cited_;  // in front of the evidence, with --report
+  decoder::FanOut health_;               // the evidence, then the statistics
   decoder::ProblemOptions problem_options_;
   std::unique_ptr<SharedStatistics> shared_statistics_;
   std::unique_ptr<decoder::BusTimeline> timeline_;

@@ -87,9 +87,9 @@ std::unique_ptr<MetricsServer> serve_metrics(const RunOptions& o, Pipeline& pipe
                                              const PortHealth& ports) {
   if (o.metrics_address.empty()) return nullptr;
   SharedStatistics& shared = *pipeline.shared_statistics();
-  return std::make_unique<MetricsServer>(o.metrics_address, [&shared, &ports] {
+  return std::make_unique<MetricsServer>(o.metrics_address, [&shared, &pipeline, &ports] {
     fmt::memory_buffer text;
-    shared.read([&](const decoder::BusStatistics& s) { append_metrics(text, s, ports); });
+    shared.read([&] { append_metrics(text, *pipeline.statistics(), pipeline.problems(), ports); });
     return fmt::to_string(text);
   });
 }

@@ -1,0 +1,49 @@
+// The lines of the records a problem may cite, as `modtap -r` prints them: the report shows
+// them under "The records behind the problems". It passes every record to the problems'
+// evidence and renders only those the evidence keeps as the first of some trouble, so a long
+// capture costs a few hundred lines.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "decoder/bus_problems.hpp"
+#include "decoder/record_sink.hpp"
+#include "decoder/register_numbering.hpp"
+#include "tools/modtap/output.hpp"
+#include "tools/modtap/text_sink.hpp"
+
+namespace modtap::tools {
+
+class CitedRecords final : public decoder::RecordSink {
+ public:
+  static constexpr size_t max_kept = 1024;
+
+  // `clock`: every record's, kept before a filter; none: this keeps the clock of the records
+  // it is given, all of them.
+  CitedRecords(decoder::ProblemEvidence& evidence,
+               const std::vector<decoder::ChannelInfo>& channels, decoder::RegisterBase base,
+               const decoder::RecordClock* clock);
+
+  void on_frame(const decoder::Frame& frame) override;
+  void on_noise(const decoder::Noise& noise) override;
+  void on_timeout(const decoder::Timeout& timeout) override;
+
+  // By the index a problem cites: the record's line (a time-out's under its request's index).
+  const std::map<uint64_t, std::string>& lines() const { return lines_; }
+
+ private:
+  template <typename Render>
+  void keep(Render render);
+
+  decoder::ProblemEvidence& evidence_;
+  decoder::RecordClock own_clock_;
+  bool own_clock_used_;
+  Output text_out_;
+  TextSink text_;
+  std::map<uint64_t, std::string> lines_;
+};
+
+}  // namespace modtap::tools
