@@ -59,7 +59,8 @@ class Bus {
  public:
   Bus(RecordingBroker& broker, MqttOptions options)
       : statistics_({}, decoder::ClockQuality::per_chunk),
-        publisher_(broker, statistics_, std::move(options)) {}
+        publisher_(broker, statistics_, std::move(options),
+                   [this] { return decoder::find_problems(statistics_, evidence_); }) {}
 
   void read(RegisterValue reg, double t_s, uint8_t slave = 1) {
     see(reg, t_s, slave, decoder::Role::response);
@@ -81,13 +82,41 @@ class Bus {
     frame.end_ns = frame.t_ns + 1000;
     frame.meaning = &meaning;
     statistics_.on_frame(frame);
+    evidence_.on_frame(frame);
     publisher_.on_frame(frame);
+  }
+  // A read of slave `slave` that no answer follows.
+  void ask_in_vain(double t_s, uint8_t slave) {
+    const uint8_t adu[] = {slave, 3, 0, 0, 0, 1, 0, 0};
+    Frame frame;
+    frame.index = ++index_;
+    frame.role = decoder::Role::request;
+    frame.adu = adu;
+    frame.raw = adu;
+    frame.check_ok = true;
+    frame.t_ns = static_cast<int64_t>(t_s * second);
+    frame.end_ns = frame.t_ns + 1000;
+    statistics_.on_frame(frame);
+    evidence_.on_frame(frame);
+    publisher_.on_frame(frame);
+    decoder::Timeout timeout;
+    timeout.request = frame.index;
+    timeout.slave = slave;
+    timeout.function = 3;
+    timeout.t_ns = frame.end_ns + second / 2;
+    timeout.waited_ns = second / 2;
+    timeout.reason = decoder::TimeoutReason::silence;
+    statistics_.on_timeout(timeout);
+    evidence_.on_timeout(timeout);
+    publisher_.on_timeout(timeout);
   }
   MqttPublisher& publisher() { return publisher_; }
 
  private:
   decoder::BusStatistics statistics_;
+  decoder::ProblemEvidence evidence_;
   MqttPublisher publisher_;
+  uint64_t index_ = 0;
 };
 
 RegisterValue frequency(uint32_t raw) {
@@ -221,6 +250,18 @@ TEST(MqttPublisher, TheHealthSummaryCountsWhatTheStatisticsCount) {
   bus.publisher().finish();
   EXPECT_THAT(broker.on("plant/line_3/health").back(), HasSubstr("\"frames\":12,"));
   EXPECT_THAT(broker.on("plant/line_3/health").back(), HasSubstr("\"slaves\":{\"1\":{"));
+}
+
+// A dashboard reads the diagnosis with the counts: a slave that never answers is named.
+TEST(MqttPublisher, TheHealthSummaryNamesTheProblemsFound) {
+  RecordingBroker broker;
+  Bus bus(broker, options(5));
+  bus.read(frequency(6000), 0);
+  EXPECT_THAT(broker.on("plant/line_3/health").back(), HasSubstr("\"problems\":[]}"));
+  for (int i = 1; i <= 6; ++i) bus.ask_in_vain(i, 7);
+  bus.publisher().finish();
+  EXPECT_THAT(broker.on("plant/line_3/health").back(),
+              HasSubstr("\"problems\":[{\"problem\":\"no-response\",\"slave\":7,"));
 }
 
 TEST(MqttPublisher, TopicLevelsCarryNoWildcardsOrSeparators) {

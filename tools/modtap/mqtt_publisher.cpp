@@ -7,6 +7,7 @@
 
 #include "decoder/device_model.hpp"
 #include "tools/modtap/render.hpp"
+#include "tools/modtap/statistics_output.hpp"
 
 namespace modtap::tools {
 
@@ -34,8 +35,12 @@ std::string topic_level(std::string_view text) {
 }
 
 MqttPublisher::MqttPublisher(MessageBroker& broker, const BusStatistics& statistics,
-                             MqttOptions options)
-    : broker_(broker), statistics_(statistics), options_(std::move(options)) {
+                             MqttOptions options,
+                             std::function<std::vector<decoder::Problem>()> problems)
+    : broker_(broker),
+      statistics_(statistics),
+      options_(std::move(options)),
+      problems_(std::move(problems)) {
   options_.prefix = topic_level(options_.prefix);
   options_.bus = topic_level(options_.bus);
 }
@@ -163,7 +168,10 @@ void MqttPublisher::send_health(int64_t now_ns) {
     payload_.push_back('}');
     comma = ",";
   });
-  fmt::format_to(out, "}}}}");
+  // What a dashboard shows first: the problems found so far, as --stats writes them.
+  fmt::format_to(out, "}},\"problems\":");
+  append_problems_json(payload_, problems_ ? problems_() : std::vector<decoder::Problem>{});
+  payload_.push_back('}');
   publish(fmt::format("{}/{}/health", options_.prefix, options_.bus));
   health_sent_ns_ = now_ns;
 }

@@ -4,12 +4,13 @@
 //
 //   PREFIX/BUS/status             online, or offline (retained; offline is also the last will)
 //   PREFIX/BUS/SLAVE/NAME         {"addr","name","raw","value","unit","text","time"} (retained)
-//   PREFIX/BUS/health             the bus-health summary every interval (retained)
+//   PREFIX/BUS/health             the bus-health summary and problems every interval (retained)
 //   DISCOVERY/sensor/ID/config    Home Assistant discovery, once per register (retained)
 #pragma once
 
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -17,6 +18,7 @@
 
 #include <fmt/format.h>
 
+#include "decoder/bus_problems.hpp"
 #include "decoder/bus_statistics.hpp"
 #include "decoder/record_sink.hpp"
 #include "decoder/register_numbering.hpp"
@@ -55,8 +57,9 @@ std::string status_topic(const MqttOptions& options);
 class MqttPublisher final : public decoder::RecordSink {
  public:
   // `statistics` gives the health summary; it is a sink of the same pipeline, fed first.
+  // `problems` gives the problems found so far (none when empty).
   MqttPublisher(MessageBroker& broker, const decoder::BusStatistics& statistics,
-                MqttOptions options);
+                MqttOptions options, std::function<std::vector<decoder::Problem>()> problems = {});
 
   void on_frame(const decoder::Frame& frame) override;
   void on_noise(const decoder::Noise& noise) override { tick(noise.t_ns); }
@@ -94,6 +97,7 @@ class MqttPublisher final : public decoder::RecordSink {
   MessageBroker& broker_;
   const decoder::BusStatistics& statistics_;
   MqttOptions options_;
+  std::function<std::vector<decoder::Problem>()> problems_;
   std::map<decoder::RegisterKey, Published> registers_;
   std::deque<std::pair<int64_t, decoder::RegisterKey>> held_;  // (due, register), due ascending
   std::optional<int64_t> health_sent_ns_;

@@ -170,7 +170,8 @@ void Pipeline::limit_records(uint64_t max_records, std::function<void()> on_reac
 }
 
 MqttPublisher& Pipeline::publish(MessageBroker& broker, MqttOptions options) {
-  mqtt_ = std::make_unique<MqttPublisher>(broker, *statistics_, std::move(options));
+  mqtt_ = std::make_unique<MqttPublisher>(broker, *statistics_, std::move(options),
+                                          [this] { return problems(); });
   fan_out_.add(*mqtt_);
   return *mqtt_;
 }
