@@ -40,8 +40,8 @@ std::vector<FollowedRegister> parse_follow(const std::string& list, RegisterBase
 }
 
 CsvSink::CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat time_format,
-                 RegisterBase base)
-    : out_(out), follow_(std::move(follow)), time_format_(time_format), base_(base) {
+                 RegisterBase base, const decoder::RecordClock* clock)
+    : out_(out), follow_(std::move(follow)), time_format_(time_format), base_(base), clock_(clock) {
   out_.print("t,slave,address,name,value,unit,raw\n");
 }
 
@@ -54,18 +54,19 @@ bool follows(const std::vector<FollowedRegister>& follow, const RegisterValue& r
   return false;
 }
 
-// Seconds since the first row, or with -t a or ad since the Unix epoch: numbers a spreadsheet
-// or a plotting tool takes as they are.
+// Seconds since the capture's first record (the text's time column), or with -t a or ad since
+// the Unix epoch: numbers a spreadsheet or a plotting tool takes as they are.
 void CsvSink::time(int64_t t_ns) {
   if (time_format_ == TimeFormat::absolute || time_format_ == TimeFormat::absolute_date) {
     out_.print(FMT_COMPILE("{}"), Fixed{t_ns, 9, 6});
     return;
   }
-  if (!first_ns_) first_ns_ = t_ns;
-  out_.print(FMT_COMPILE("{}"), Fixed{t_ns - *first_ns_, 9, 6});
+  const decoder::RecordClock& clock = clock_ ? *clock_ : own_clock_;
+  out_.print(FMT_COMPILE("{}"), Fixed{t_ns - clock.first_ns.value_or(t_ns), 9, 6});
 }
 
 void CsvSink::on_frame(const Frame& frame) {
+  see(frame.t_ns);
   const Meaning* meaning = frame.meaning;
   if (!states_values(frame)) return;
   auto& buf = out_.buffer();

@@ -36,21 +36,28 @@ bool follows(const std::vector<FollowedRegister>& follow, const decoder::Registe
 
 class CsvSink final : public decoder::RecordSink {
  public:
+  // `clock`: every record's, kept before a filter, so `t` counts from the capture's first
+  // record as without the filter; none: the sink keeps the clock of the records it is given.
   CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat time_format,
-          decoder::RegisterBase base = decoder::RegisterBase::hex);
+          decoder::RegisterBase base = decoder::RegisterBase::hex,
+          const decoder::RecordClock* clock = nullptr);
 
   void on_frame(const decoder::Frame& frame) override;
-  void on_noise(const decoder::Noise&) override {}
-  void on_timeout(const decoder::Timeout&) override {}
+  void on_noise(const decoder::Noise& noise) override { see(noise.t_ns); }
+  void on_timeout(const decoder::Timeout& timeout) override { see(timeout.t_ns); }
 
  private:
+  void see(int64_t t_ns) {
+    if (!clock_) own_clock_.see(t_ns);
+  }
   void time(int64_t t_ns);
 
   Output& out_;
   std::vector<FollowedRegister> follow_;
   TimeFormat time_format_;
   decoder::RegisterBase base_;
-  std::optional<int64_t> first_ns_;
+  const decoder::RecordClock* clock_;
+  decoder::RecordClock own_clock_;  // without clock_
 };
 
 }  // namespace modtap::tools

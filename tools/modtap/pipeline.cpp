@@ -14,15 +14,17 @@ std::unique_ptr<decoder::RecordSink> make_sink(const RunOptions& o, Output& out,
                                                const std::vector<decoder::ChannelInfo>& channels,
                                                const decoder::RecordClock& clock) {
   if (o.output == "json") return std::make_unique<JsonSink>(out, channels);
+  const decoder::RecordClock* clock_before_filter = o.display_filter.empty() ? nullptr : &clock;
   if (o.output == "csv")
     return std::make_unique<CsvSink>(
         out, parse_follow_or_all(o.follow, decoder::register_base_named(o.register_base)),
-        time_format_named(o.time_format), decoder::register_base_named(o.register_base));
+        time_format_named(o.time_format), decoder::register_base_named(o.register_base),
+        clock_before_filter);
   if (o.output == "text")
-    return std::make_unique<TextSink>(out, channels,
-                                      TextOptions{o.verbose, time_format_named(o.time_format),
-                                                  decoder::register_base_named(o.register_base),
-                                                  o.display_filter.empty() ? nullptr : &clock});
+    return std::make_unique<TextSink>(
+        out, channels,
+        TextOptions{o.verbose, time_format_named(o.time_format),
+                    decoder::register_base_named(o.register_base), clock_before_filter});
   return std::make_unique<decoder::NullSink>();  // stats: the statistics print at the end
 }
 
