@@ -104,11 +104,25 @@ void BusTimeline::follow_values(const Frame& frame, size_t bin) {
         ++followed_not_kept_;
         continue;
       }
-      it = followed_.emplace(key, FollowedSeries{std::string(reg.name), std::string(reg.unit), {}})
-               .first;
-      it->second.bins.resize(traffic_.size());
+      FollowedSeries series;
+      series.name = reg.name;
+      series.unit = reg.unit;
+      series.bins.resize(traffic_.size());
+      it = followed_.emplace(key, std::move(series)).first;
     }
     it->second.bins[bin].add(reg.value);
+    it->second.add_state(reg.value, reg.text);
+  }
+}
+
+void FollowedSeries::add_state(double value, std::string_view text) {
+  if (!stateful) return;
+  const auto it = states.try_emplace(value, text).first;
+  // A value without a name, a name that changed (a string register), or too many values: a
+  // number line shows it better.
+  if (text.empty() || it->second != text || states.size() > max_states) {
+    stateful = false;
+    states.clear();
   }
 }
 

@@ -10,6 +10,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "decoder/bus_statistics.hpp"
@@ -38,8 +39,16 @@ struct ValueBin {
 };
 
 struct FollowedSeries {
+  static constexpr size_t max_states = 12;
+
   std::string name, unit;
   std::vector<ValueBin> bins;  // as many as the timeline's; empty ones have count 0
+  // A register whose every value has a name (an enum, a set of bits) and which took at most
+  // max_states values: each value's text, to draw as states rather than numbers.
+  std::map<double, std::string> states;
+  bool stateful = true;  // no value without a name, nor more than max_states, so far
+
+  void add_state(double value, std::string_view text);
 };
 
 class BusTimeline final : public RecordSink {

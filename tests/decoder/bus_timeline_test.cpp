@@ -1,6 +1,12 @@
 #include "decoder/bus_timeline.hpp"
 
+#include <iterator>
+#include <map>
 #include <numeric>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -107,6 +113,38 @@ TEST(BusTimeline, FollowedRegistersKeepTheirRangeAndLastValuePerStretch) {
   }
   EXPECT_EQ(values, 2000u);
   EXPECT_EQ(series.bins.back().last, 1999 % 7);
+}
+
+// A register whose values have names (a drive's state) is kept as states with their texts;
+// one value without a name, a name that changes (a string) or too many values make it a number.
+TEST(BusTimeline, ARegisterOfNamedValuesKeepsItsStates) {
+  const auto follow = [](const std::vector<std::pair<double, std::string_view>>& readings) {
+    BusTimeline timeline([](const RegisterValue&) { return true; });
+    Meaning meaning;
+    meaning.registers.push_back(holding(0x2520, "status"));
+    int64_t t = 0;
+    for (const auto& [value, text] : readings) {
+      meaning.registers[0].value = value;
+      meaning.registers[0].text = text;
+      Frame f = frame_at(t += second);
+      f.meaning = &meaning;
+      timeline.on_frame(f);
+    }
+    return timeline.followed().begin()->second;
+  };
+  const FollowedSeries drive =
+      follow({{7, "Run, Reverse, Ready"}, {0, "Stop"}, {7, "Run, Reverse, Ready"}});
+  EXPECT_TRUE(drive.stateful);
+  EXPECT_EQ(drive.states, (std::map<double, std::string>{{0, "Stop"}, {7, "Run, Reverse, Ready"}}));
+  EXPECT_FALSE(follow({{7, "Run"}, {3, ""}}).stateful);
+  EXPECT_FALSE(follow({{0, "AB"}, {0, "CD"}}).stateful);
+  std::vector<std::pair<double, std::string_view>> many;
+  const std::string_view names[] = {"a", "b", "c", "d", "e", "f", "g",
+                                    "h", "i", "j", "k", "l", "m"};
+  for (size_t i = 0; i < std::size(names); ++i) many.emplace_back(i, names[i]);
+  const FollowedSeries counter = follow(many);
+  EXPECT_FALSE(counter.stateful);
+  EXPECT_TRUE(counter.states.empty());
 }
 
 TEST(BusTimeline, FollowsAtMostSixteenRegisters) {
