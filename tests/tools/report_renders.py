@@ -1,19 +1,27 @@
 """The report (--report) as a customer's browser shows it: rendered by headless Chromium, every
 number it shows (each marked with its --stats key) equals --stats, every chart has marks in its
 colours on the screenshot, nothing is fetched from outside the file; a filtered run reports only
-what the filter kept, and a capture that breaks off says so.
+what the filter kept, and a capture that breaks off says so. The problems lead, as --stats lists
+them, each linking to the records behind it and to its slave's shaded row; a drive's status is
+a band of its named states, a register read once shows its value, and a dated capture's time
+axes read in clock time.
 
 usage: report_renders.py MODTAP BUSGEN WORKDIR
 """
+import calendar
 import html.parser
 import json
 import os
 import re
 import shutil
+import struct
 import subprocess
 import sys
 
 from PIL import Image
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from modbus import with_crc  # noqa: E402
 
 MODTAP, BUSGEN, WORK = sys.argv[1:4]
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
@@ -25,6 +33,8 @@ CHART_COLOURS = {
     "exception bars": (0x8E, 0x5B, 0xB5),
     "followed register line": (0x1B, 0x7F, 0x5F),
 }
+# The first colours of a state band (report.cpp's state-0, state-1).
+STATE_COLOURS = {"first state": (0x2F, 0x6F, 0xB0), "second state": (0xE8, 0xA3, 0x3D)}
 
 failures = []
 
@@ -99,15 +109,50 @@ def check_numbers(name, dom, stats, required):
 
 
 def check_self_contained(name, page):
-    for outside in ("<script", "src=", "href=", "url(", "@import", "http://", "https://"):
+    for outside in ("<script", "src=", "url(", "@import", "http://", "https://"):
         if outside in page:
             failures.append(f"{name}: the page refers outside itself ({outside})")
+    for target in re.findall(r'href="([^"]*)"', page):
+        if not target.startswith("#"):
+            failures.append(f"{name}: a link leads outside the page: {target}")
+        elif f'id="{target[1:]}"' not in page:
+            failures.append(f"{name}: a link leads nowhere: {target}")
 
 
-def check_charts(name, screenshot, wanted):
+def check_problems(name, dom, stats):
+    """The problems lead the page, in --stats' order, each with its sentence and advice, and the
+    first records it cites that the page holds; the slaves with a problem are shaded rows."""
+    shown = re.findall(r'<div class="problem (\w+)" id="problem-(\d+)" data-problem="([a-z-]+)" '
+                       r'data-slave="(\w+)">(.*?)</div>\n</div>', dom, re.S)
+    want = [(p["severity"], p["problem"], "bus" if p["slave"] is None else str(p["slave"]))
+            for p in stats["problems"]]
+    if [(sev, kind, slave) for sev, _, kind, slave, _ in shown] != want:
+        failures.append(f"{name}: the page's problems {shown} are not --stats' {want}")
+    if dom.find("<h2>Problems</h2>") > dom.find("<h2>Summary</h2>"):
+        failures.append(f"{name}: the problems do not lead the page")
+    for (sev, number, kind, slave, body), p in zip(shown, stats["problems"]):
+        if html_text(p["text"]) not in body or html_text(p["advice"]) not in body:
+            failures.append(f"{name}: problem {number} lacks its sentence or advice: {body}")
+        linked = [int(n) for n in re.findall(r'href="#record-(\d+)"', body)]
+        if p["first"] and not linked:
+            failures.append(f"{name}: problem {number} links to none of its records {p['first']}")
+        if not set(linked) <= set(p["first"]):
+            failures.append(f"{name}: problem {number} links to {linked}, not its {p['first']}")
+        if slave != "bus":
+            row = re.search(r'<tr class="(\w+)"><td><a href="#problem-\d+">' + slave + '</a>', dom)
+            if not row:
+                failures.append(f"{name}: slave {slave}'s row is not shaded")
+    return shown
+
+
+def html_text(text):
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
+
+
+def check_charts(name, screenshot, wanted, palette=CHART_COLOURS):
     image = Image.open(screenshot).convert("RGB")
     counts = dict.fromkeys(wanted, 0)
-    colours = {CHART_COLOURS[w]: w for w in wanted}
+    colours = {palette[w]: w for w in wanted}
     for count, colour in image.getcolors(maxcolors=1 << 24):
         if colour in colours:
             counts[colours[colour]] += count
@@ -137,6 +182,66 @@ def report(name, capture, busgen_args, modtap_args, expect_exit=0):
     return stats, text, dom, page
 
 
+def write_pcap(path, packets):
+    """A pcap of DLT_USER0 packets (modtap's raw serial bytes): [(unix time, bytes)]."""
+    with open(path, "wb") as f:
+        f.write(struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 147))
+        for t, data in packets:
+            seconds = int(t)
+            f.write(struct.pack("<IIII", seconds, round((t - seconds) * 1e6), len(data), len(data)))
+            f.write(data)
+
+
+def drive_capture(path):
+    """A minute of a master polling an NTA5000 (slave 1) for its status each second, as the drive
+    starts, reverses and stops, reading its output frequency once, and asking an absent slave 2
+    each second too."""
+    start = calendar.timegm((2026, 3, 2, 8, 0, 0))
+    states = [4] * 15 + [5] * 15 + [7] * 20 + [4] * 10  # ready; running; reversing; stopped
+    packets = []
+    for second, status in enumerate(states):
+        t = start + second
+        packets.append((t, with_crc([1, 3, 0x25, 0x20, 0, 1])))
+        packets.append((t + 0.005, with_crc([1, 3, 2, 0, status])))
+        packets.append((t + 0.3, with_crc([2, 3, 0x25, 0x20, 0, 1])))
+        if second == 20:
+            packets.append((t + 0.6, with_crc([1, 3, 0x25, 0x24, 0, 1])))
+            packets.append((t + 0.605, with_crc([1, 3, 2, 0x17, 0x70])))  # 60.00 Hz
+    write_pcap(path, packets)
+
+
+def check_drive():
+    capture = os.path.join(WORK, "drive.pcap")
+    drive_capture(capture)
+    stats, _, dom, page = report("drive", "drive.pcap", None,
+                                 ["--model", "1=nta5000", "--follow", "status,output_frequency"])
+    check_problems("drive", dom, stats)
+    if not any(p["problem"] == "no-response" and p["slave"] == 2 for p in stats["problems"]):
+        failures.append(f"drive: slave 2 is no no-response problem: {stats['problems']}")
+    status = re.search(r"<figcaption>slave 1 2520H status</figcaption>\n(.*?)</figure>", dom, re.S)
+    if not status:
+        failures.append("drive: no chart of the drive's status")
+    else:
+        bars = re.findall(r'<rect class="state-(\d)"', status.group(1))
+        # Four stretches of three states, the first one back at the end: its colour again.
+        if bars != ["0", "1", "2", "0"]:
+            failures.append(f"drive: the status band's stretches are {bars}")
+        for text in ("Stop, Forward, Ready (4)", "Run, Forward, Ready (5)",
+                     "Run, Reverse, Ready (7)"):
+            if text not in status.group(1):
+                failures.append(f"drive: the status legend lacks {text!r}")
+        ticks = re.findall(r'<text class="tick"[^>]*>(\d\d:\d\d:\d\d)</text>', status.group(1))
+        if "08:00:30" not in ticks or "time (UTC)" not in status.group(1):
+            failures.append(f"drive: the time axis is not clock time: {ticks}")
+    once = re.search(r"<figcaption>slave 1 2524H output_frequency \(Hz\): read once, 60</figcaption>"
+                     r"\n(.*?)</figure>", dom, re.S)
+    if not once or '<circle class="value-dot"' not in once.group(1):
+        failures.append("drive: the frequency read once shows no value")
+    shot = os.path.join(WORK, "drive.png")
+    chromium("--window-size=1000,4000", f"--screenshot={shot}", f"file://{page}")
+    check_charts("drive", shot, list(STATE_COLOURS), STATE_COLOURS)
+
+
 def main():
     os.makedirs(WORK, exist_ok=True)
 
@@ -161,6 +266,14 @@ def main():
     followed = re.findall(r"<figcaption>slave (\d+) (0000H|0001H)", dom)
     if len(followed) != 8:
         failures.append(f"polled: {len(followed)} followed register charts, not 8: {followed}")
+
+    check_problems("polled", dom, stats)
+    check_drive()
+
+    # A healthy bus: the page says so first.
+    stats, _, dom, _ = report("healthy", "healthy.pcap", ["-n", "2000", "--slaves", "3"], [])
+    if stats["problems"] or '<p class="healthy">No problem found' not in dom:
+        failures.append(f"healthy: problems {stats['problems']}")
 
     # A filter: the report holds what it kept, as --stats does.
     stats, _, dom, _ = report("filtered", "polled.pcap", None, ["--follow", "0000H", "-Y", "slave == 2"])

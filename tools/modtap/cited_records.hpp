@@ -1,11 +1,13 @@
 // The lines of the records a problem may cite, as `modtap -r` prints them: the report shows
 // them under "The records behind the problems". It passes every record to the problems'
-// evidence and renders only those the evidence keeps as the first of some trouble, so a long
-// capture costs a few hundred lines.
+// evidence and renders only those the evidence keeps as the first of some trouble, each after
+// the request it answers or times out (kept as bytes until the next, and shown without the
+// model's names), so a long capture costs a few hundred lines.
 #pragma once
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,12 +33,14 @@ class CitedRecords final : public decoder::RecordSink {
   void on_noise(const decoder::Noise& noise) override;
   void on_timeout(const decoder::Timeout& timeout) override;
 
-  // By the index a problem cites: the record's line (a time-out's under its request's index).
+  // By the index a problem cites: the record's line, after its request's (a time-out's under
+  // its request's index).
   const std::map<uint64_t, std::string>& lines() const { return lines_; }
 
  private:
   template <typename Render>
-  void keep(Render render);
+  void keep(std::optional<uint64_t> request, Render render);
+  void remember_request(const decoder::Frame& frame);
 
   decoder::ProblemEvidence& evidence_;
   decoder::RecordClock own_clock_;
@@ -44,6 +48,8 @@ class CitedRecords final : public decoder::RecordSink {
   Output text_out_;
   TextSink text_;
   std::map<uint64_t, std::string> lines_;
+  decoder::Frame request_;  // the last request, its spans into the bytes below
+  std::vector<uint8_t> request_raw_, request_adu_;
 };
 
 }  // namespace modtap::tools

@@ -47,8 +47,9 @@ void summarise(const RunOptions& o, Output& out, const Pipeline& pipeline, bool 
                                     ? fmt::format("{}", fmt::join(o.interfaces, " "))
                                 : o.read_file == "-" ? "standard input"
                                                      : o.read_file;
-    append_report(html, *statistics, pipeline.diagnostics(), *pipeline.timeline(),
-                  {capture, MODTAP_VERSION, complete, base});
+    append_report(html, *statistics, pipeline.diagnostics(), *pipeline.timeline(), problems,
+                  pipeline.cited_records()->lines(),
+                  {capture, MODTAP_VERSION, complete, base, pipeline.unseen_follow()});
     write_whole(o.report_file, html);
   }
 }

@@ -143,6 +143,12 @@ void SvgPlot::band(const std::vector<std::pair<double, double>>& low,
   out_.append(std::string_view("\"/>\n"));
 }
 
+void SvgPlot::dot(double x, double y, std::string_view css_class) {
+  fmt::format_to(fmt::appender(out_),
+                 "<circle class=\"{}\" cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"4\"/>\n", css_class, to_x(x),
+                 to_y(y));
+}
+
 void SvgPlot::marker(double x, std::string_view label) {
   fmt::format_to(
       fmt::appender(out_),

@@ -40,6 +40,8 @@ class SvgPlot {
   // The area between `low` and `high`, drawn over the same x values.
   void band(const std::vector<std::pair<double, double>>& low,
             const std::vector<std::pair<double, double>>& high, std::string_view css_class);
+  // A round mark at a point: a value read once, which no line joins to another.
+  void dot(double x, double y, std::string_view css_class);
   // A dashed vertical line at x, labelled at its top (a percentile on a histogram).
   void marker(double x, std::string_view label);
   void finish();
