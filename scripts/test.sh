@@ -1,10 +1,17 @@
 #!/usr/bin/env bash
 # Sets up, builds and runs every test. --sanitize builds under ASan+UBSan in build-sanitize/.
+# Beside what setup.sh installs, the tests need the peers they check modtap against (tshark,
+# Wireshark under Xvfb, mbpoll, libmodbus, pymodbus, Prometheus, mosquitto, Chromium,
+# systemd-analyze) and their own tools (GoogleTest, Google Benchmark, clang for the fuzzers).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+export EXTRA_PACKAGES="libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
+  nlohmann-json3-dev python3 python3-pil python3-pymodbus libmodbus-dev mbpoll tshark wireshark
+  xvfb chromium prometheus mosquitto mosquitto-clients strace systemd"
+export CMAKE_ARGS="-DMODTAP_TESTS=ON -DMODTAP_BENCHMARKS=ON"
 if [ "${1:-}" = "--sanitize" ]; then
   export BUILD_DIR=build-sanitize BUILD_TYPE=Debug
-  export CMAKE_ARGS="-DMODTAP_SANITIZE=ON -DMODTAP_BENCHMARKS=OFF"
+  export CMAKE_ARGS="-DMODTAP_TESTS=ON -DMODTAP_SANITIZE=ON -DMODTAP_BENCHMARKS=OFF"
   export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1
 fi
 bash scripts/setup.sh
