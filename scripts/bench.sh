@@ -17,6 +17,8 @@
 # wait for them.
 #
 # Environment: BUILD (default build), WORK (default /tmp/modtap-bench), PEER_MAX_FRAMES.
+# The figures docs/performance.md records are of the profile-guided build:
+# `PGO=on bash scripts/setup.sh` first.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
