@@ -41,22 +41,6 @@ Format parse_format(const std::string& name) {
   throw std::invalid_argument("unknown format \"" + name + "\"");
 }
 
-const char* to_string(Format format) {
-  switch (format) {
-    case Format::automatic:
-      return "auto";
-    case Format::raw:
-      return "raw";
-    case Format::hexlog:
-      return "hexlog";
-    case Format::pcap:
-      return "pcap";
-    case Format::sigrok:
-      return "sigrok";
-  }
-  return "?";
-}
-
 Format detect_format(const std::string& path) {
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) throw CaptureError(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));

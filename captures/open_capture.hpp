@@ -16,7 +16,6 @@ enum class Format { automatic, raw, hexlog, pcap, sigrok };
 
 // Throws std::invalid_argument for an unknown name.
 Format parse_format(const std::string& name);
-const char* to_string(Format format);
 
 // What the file's first bytes (or, failing that, its extension) say it is. Throws
 // CaptureError when neither tells.

@@ -131,9 +131,9 @@ void append_frame_comment(fmt::memory_buffer& out, const Frame& f) {
   if (!f.check_ok && f.damage != Damage::cut)
     fmt::format_to(fmt::appender(out), FMT_COMPILE(" expected_check=0x{:0{}x}"), f.expected_check,
                    f.mode == Mode::rtu ? 4 : 2);
-  if (const char* damage = to_string(f.damage)) {
+  if (f.damage != Damage::none) {
     put(out, " damage=");
-    put(out, damage);
+    put(out, to_string(f.damage));
   }
   // Names from modtap's function-code table, so the plugin knows no function code itself.
   if (f.adu.size() >= 2) put(out, pieces.functions[f.function()]);

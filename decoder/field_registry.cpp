@@ -120,36 +120,4 @@ std::string_view json_kind(FieldType type) {
   return "?";
 }
 
-std::string_view to_string(FieldType type) {
-  switch (type) {
-    case T::integer:
-      return "integer";
-    case T::hex:
-      return "hex";
-    case T::address:
-      return "address";
-    case T::code:
-      return "code";
-    case T::real:
-      return "real";
-    case T::name:
-      return "name";
-    case T::string:
-      return "string";
-    case T::bytes:
-      return "bytes";
-    case T::registers:
-      return "registers";
-    case T::bits:
-      return "bits";
-    case T::list:
-      return "list";
-    case T::names:
-      return "names";
-    case T::flag:
-      return "flag";
-  }
-  return "?";
-}
-
 }  // namespace modtap::decoder

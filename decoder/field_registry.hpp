@@ -7,6 +7,8 @@
 #include <span>
 #include <string_view>
 
+#include "decoder/enum_names.hpp"
+
 namespace modtap::decoder {
 
 enum class FieldType : uint8_t {
@@ -23,6 +25,12 @@ enum class FieldType : uint8_t {
   list,       // items, each a group of fields (sub-requests, objects)
   names,      // a list of names (findings)
   flag,       // present and true, or absent
+};
+template <>
+struct EnumNames<FieldType> {
+  static constexpr std::array<std::string_view, 13> names{
+      "integer", "hex",       "address", "code", "real",  "name", "string",
+      "bytes",   "registers", "bits",    "list", "names", "flag"};
 };
 
 // Record fields first, then the PDU's; the order of FieldInfo in field_registry().
@@ -118,6 +126,5 @@ const FieldInfo& field_info(FieldId id);
 
 // What JSON makes of a type: "number", "string", "array", "boolean".
 std::string_view json_kind(FieldType type);
-std::string_view to_string(FieldType type);  // "integer", "address", ...
 
 }  // namespace modtap::decoder

@@ -84,16 +84,4 @@ std::string_view to_string(RuleKind kind) {
   return finding_info(kind).name;
 }
 
-const char* to_string(Severity severity) {
-  switch (severity) {
-    case Severity::note:
-      return "note";
-    case Severity::warning:
-      return "warning";
-    case Severity::error:
-      return "error";
-  }
-  return "?";
-}
-
 }  // namespace modtap::decoder

@@ -7,6 +7,8 @@
 #include <span>
 #include <string_view>
 
+#include "decoder/enum_names.hpp"
+
 namespace modtap::decoder {
 
 // A record's findings (a frame's, or noise's), a bit set so records stay plain values. Bit i is
@@ -62,6 +64,10 @@ inline constexpr size_t rule_kind_count = 15;
 
 // How much a finding matters to someone looking for a fault (Wireshark's expert severities).
 enum class Severity : uint8_t { note, warning, error };
+template <>
+struct EnumNames<Severity> {
+  static constexpr std::array<std::string_view, 3> names{"note", "warning", "error"};
+};
 
 struct FindingInfo {
   std::string_view name;  // as text, JSON, pcapng comments and filters spell it
@@ -85,7 +91,5 @@ void for_each_frame_finding(uint32_t bits, Visit&& visit) {
   for (size_t slot = 0; bits != 0; ++slot, bits >>= 1)
     if (bits & 1) visit(slot);
 }
-
-const char* to_string(Severity severity);  // "note", "warning", "error"
 
 }  // namespace modtap::decoder

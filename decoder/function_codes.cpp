@@ -670,18 +670,4 @@ std::string_view diagnostic_name(uint16_t sub) {
   }
 }
 
-const char* to_string(Table table) {
-  switch (table) {
-    case Table::coil:
-      return "coil";
-    case Table::discrete:
-      return "discrete";
-    case Table::holding:
-      return "holding";
-    case Table::input:
-      return "input";
-  }
-  return "?";
-}
-
 }  // namespace modtap::decoder

@@ -10,6 +10,7 @@
 #include <span>
 #include <string_view>
 
+#include "decoder/enum_names.hpp"
 #include "decoder/pdu_fields.hpp"
 #include "decoder/records.hpp"
 
@@ -36,7 +37,10 @@ struct BodyLength {
 
 // The four tables of the Modbus data model.
 enum class Table : uint8_t { coil, discrete, holding, input };
-const char* to_string(Table table);  // "coil", "discrete", "holding", "input"
+template <>
+struct EnumNames<Table> {
+  static constexpr std::array<std::string_view, 4> names{"coil", "discrete", "holding", "input"};
+};
 
 // Registers or bits a PDU reads or writes, and where the values it carries are.
 struct RegisterAccess {

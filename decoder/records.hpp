@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "decoder/enum_names.hpp"
 #include "decoder/findings.hpp"
 
 namespace modtap::decoder {
@@ -17,6 +18,10 @@ enum class ClockQuality : uint8_t {
   per_chunk,  // one time per read or packet; bytes inside a chunk are untimed
   none,       // no time at all (raw files); times are nominal, from the byte offset
 };
+template <>
+struct EnumNames<ClockQuality> {
+  static constexpr std::array<std::string_view, 3> names{"per-byte", "per-chunk", "none"};
+};
 
 // How late a clock per read may stamp a byte, by default (`--chunk-jitter`): an adapter holds
 // bytes for its latency timer (FTDI: 16 ms), a read stamped when it ends may hold bytes from
@@ -25,6 +30,10 @@ constexpr int64_t default_read_jitter_ns = 30'000'000;
 
 // What a channel carries: both directions (a single RS-485 probe) or one side of a split tap.
 enum class ChannelRole : uint8_t { bus, master, slave };
+template <>
+struct EnumNames<ChannelRole> {
+  static constexpr std::array<std::string_view, 3> names{"bus", "master", "slave"};
+};
 
 struct ChannelInfo {
   std::string name;
@@ -42,9 +51,17 @@ struct Chunk {
 };
 
 enum class Mode : uint8_t { rtu, ascii };
+template <>
+struct EnumNames<Mode> {
+  static constexpr std::array<std::string_view, 2> names{"rtu", "ascii"};
+};
 struct Meaning;     // register_meaning.hpp
 struct DecodedPdu;  // pdu_fields.hpp
 enum class Role : uint8_t { request, response, unknown };
+template <>
+struct EnumNames<Role> {
+  static constexpr std::array<std::string_view, 3> names{"request", "response", "unknown"};
+};
 
 // Which roles the frame's structure allows; the matcher picks between them when both do.
 struct RoleFit {
@@ -58,6 +75,10 @@ enum class Damage : uint8_t {
   corrupted,  // as long as its structure says, with a wrong check: bytes changed on the way
   cut,        // the awaited response broke off before its structure's end (silence or a frame)
   collision,  // the awaited response ran on past its end: something else talked into it
+};
+template <>
+struct EnumNames<Damage> {
+  static constexpr std::array<std::string_view, 4> names{"none", "corrupted", "cut", "collision"};
 };
 
 // A Modbus ADU. The spans point into the framer's buffer and are valid during the callback.
@@ -113,6 +134,11 @@ enum class NoiseReason : uint8_t {
   overlong,   // longer than the largest ADU without an end
   bad_hex,    // an ASCII frame with characters that are not hex pairs
 };
+template <>
+struct EnumNames<NoiseReason> {
+  static constexpr std::array<std::string_view, 5> names{"junk", "truncated", "glitch", "overlong",
+                                                         "bad-hex"};
+};
 
 struct Noise {
   uint64_t index = 0;
@@ -135,6 +161,11 @@ struct Noise {
 // Why a request's wait ended without a response. end_of_capture is no time-out: the input
 // ended while the request still waited, so it is only unanswered.
 enum class TimeoutReason : uint8_t { next_request, silence, end_of_capture };
+template <>
+struct EnumNames<TimeoutReason> {
+  static constexpr std::array<std::string_view, 3> names{"next-request", "silence",
+                                                         "end-of-capture"};
+};
 
 struct Timeout {
   uint64_t index = 0;
@@ -148,13 +179,5 @@ struct Timeout {
 
   bool timed_out() const { return reason != TimeoutReason::end_of_capture; }
 };
-
-const char* to_string(NoiseReason reason);
-const char* to_string(TimeoutReason reason);
-const char* to_string(Role role);
-const char* to_string(Mode mode);
-const char* to_string(ChannelRole role);
-const char* to_string(Damage damage);       // "corrupted", "cut", "collision"; none: nullptr
-const char* to_string(ClockQuality clock);  // per-byte, per-chunk, none
 
 }  // namespace modtap::decoder

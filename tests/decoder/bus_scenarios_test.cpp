@@ -133,9 +133,8 @@ std::string context(const BusCapture& capture, const Collector& out, uint64_t of
   for (const auto& f : capture.frames) {
     if (f.offset + f.size + 40 < offset || f.offset > offset + 60) continue;
     text += "\n  @" + std::to_string(f.offset) + ": " + std::to_string(f.size) + " bytes, " +
-            std::string(to_string(f.role)) + ", damage " +
-            (f.damage == Damage::none ? "none" : to_string(f.damage)) + ", findings " +
-            std::to_string(f.findings) + ", ends at " +
+            std::string(to_string(f.role)) + ", damage " + std::string(to_string(f.damage)) +
+            ", findings " + std::to_string(f.findings) + ", ends at " +
             std::to_string(capture.end_ns[f.offset + f.size - 1] / 1000) + " us";
   }
   return text;

@@ -86,9 +86,9 @@ void JsonSink::on_frame(const Frame& frame) {
     put_uint(buf, frame.expected_check);
   }
   // The usual nulls with the keys around them, in one copy each.
-  if (const char* damage = to_string(frame.damage)) {
+  if (frame.damage != Damage::none) {
     put(buf, ",\"damage\":\"");
-    put(buf, damage);
+    put(buf, to_string(frame.damage));
     put(buf, "\",\"exception\":");
   } else {
     put(buf, ",\"damage\":null,\"exception\":");

@@ -237,7 +237,7 @@ void problems_family(Exposition& e, std::span<const decoder::Problem> problems) 
            "1 while found (docs/output.md)");
   for (const decoder::Problem& p : problems) {
     const std::string_view kind = decoder::problem_info(p.kind).name;
-    const char* severity = to_string(p.severity);
+    const std::string_view severity = to_string(p.severity);
     if (p.slave) {
       e.sample("modtap_problem",
                fmt::format("kind=\"{}\",slave=\"{}\",severity=\"{}\"", kind, *p.slave, severity),

@@ -203,7 +203,7 @@ void append_problems(fmt::memory_buffer& out, const BusStatistics& s,
   auto put = fmt::appender(out);
   for (size_t i = 0; i < problems.size(); ++i) {
     const Problem& p = problems[i];
-    const char* severity = to_string(p.severity);
+    const std::string_view severity = to_string(p.severity);
     fmt::format_to(put,
                    "<div class=\"problem {0}\" id=\"problem-{1}\" data-problem=\"{2}\" "
                    "data-slave=\"{3}\">\n<div class=\"sentence\"><span class=\"severity "
@@ -247,7 +247,7 @@ void append_findings(fmt::memory_buffer& out, const BusStatistics& s) {
   for (size_t slot : slots) {
     const FindingInfo& info = registry[slot];
     const FindingCount& f = s.findings[slot];
-    const char* severity = to_string(info.severity);
+    const std::string_view severity = to_string(info.severity);
     fmt::format_to(put, "<tr><td class=\"text severity {0}\">{0}</td><td class=\"text\">{1}</td>",
                    severity, info.name);
     stat_cell(out, fmt::format("diagnostics.{}.count", info.name), fmt::format("{}", f.count));
