@@ -32,15 +32,6 @@ Format by_extension(const std::string& path) {
 
 }  // namespace
 
-Format parse_format(const std::string& name) {
-  if (name == "auto") return Format::automatic;
-  if (name == "raw") return Format::raw;
-  if (name == "hexlog") return Format::hexlog;
-  if (name == "pcap" || name == "pcapng") return Format::pcap;
-  if (name == "sigrok") return Format::sigrok;
-  throw std::invalid_argument("unknown format \"" + name + "\"");
-}
-
 Format detect_format(const std::string& path) {
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) throw CaptureError(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));

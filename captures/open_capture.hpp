@@ -13,9 +13,16 @@
 namespace modtap::captures {
 
 enum class Format { automatic, raw, hexlog, pcap, sigrok };
+}  // namespace modtap::captures
 
-// Throws std::invalid_argument for an unknown name.
-Format parse_format(const std::string& name);
+namespace modtap::decoder {
+template <>
+struct EnumNames<captures::Format> {
+  static constexpr std::array<std::string_view, 5> names{"auto", "raw", "hexlog", "pcap", "sigrok"};
+};
+}  // namespace modtap::decoder
+
+namespace modtap::captures {
 
 // What the file's first bytes (or, failing that, its extension) say it is. Throws
 // CaptureError when neither tells.

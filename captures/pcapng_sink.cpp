@@ -114,13 +114,6 @@ const CommentPieces& comment_pieces() {
 
 }  // namespace
 
-PcapngLink parse_link(const std::string& name) {
-  if (name == "user") return PcapngLink::user;
-  if (name == "exported-pdu") return PcapngLink::exported_pdu;
-  if (name == "bare") return PcapngLink::bare;
-  throw std::invalid_argument("unknown link \"" + name + "\"");
-}
-
 void append_frame_comment(fmt::memory_buffer& out, const Frame& f) {
   const CommentPieces& pieces = comment_pieces();
   put(out, "modtap index=");

@@ -19,6 +19,16 @@ enum class PcapngLink {
   exported_pdu,  // link type 252: stock Wireshark's mbrtu dissector, classified by port
   bare,          // DLT_USER with frames only and no comments, as other sniffers write
 };
+}  // namespace modtap::captures
+
+namespace modtap::decoder {
+template <>
+struct EnumNames<captures::PcapngLink> {
+  static constexpr std::array<std::string_view, 3> names{"user", "exported-pdu", "bare"};
+};
+}  // namespace modtap::decoder
+
+namespace modtap::captures {
 
 struct PcapngOptions {
   PcapngLink link = PcapngLink::user;
@@ -35,7 +45,6 @@ struct PcapngOptions {
 };
 
 // Parses "user", "exported-pdu" or "bare"; throws std::invalid_argument.
-PcapngLink parse_link(const std::string& name);
 
 class PcapngSink final : public decoder::RecordSink {
  public:

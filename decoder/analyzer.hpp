@@ -20,13 +20,10 @@
 namespace modtap::decoder {
 
 enum class ModeChoice : uint8_t { automatic, rtu, ascii };
-
-// "rtu", "ascii"; anything else is automatic.
-constexpr ModeChoice mode_named(std::string_view name) {
-  return name == "rtu"     ? ModeChoice::rtu
-         : name == "ascii" ? ModeChoice::ascii
-                           : ModeChoice::automatic;
-}
+template <>
+struct EnumNames<ModeChoice> {
+  static constexpr std::array<std::string_view, 3> names{"auto", "rtu", "ascii"};
+};
 
 struct AnalyzerOptions {
   ModeChoice mode = ModeChoice::automatic;

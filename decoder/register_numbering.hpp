@@ -21,13 +21,10 @@ namespace modtap::decoder {
 
 enum class RegisterBase : uint8_t { hex, zero, one, modicon };
 
-inline RegisterBase register_base_named(std::string_view name) {
-  if (name == "hex") return RegisterBase::hex;
-  if (name == "0") return RegisterBase::zero;
-  if (name == "1") return RegisterBase::one;
-  if (name == "4xxxx") return RegisterBase::modicon;
-  throw std::invalid_argument("register base: hex, 0, 1 or 4xxxx, not " + std::string(name));
-}
+template <>
+struct EnumNames<RegisterBase> {
+  static constexpr std::array<std::string_view, 4> names{"hex", "0", "1", "4xxxx"};
+};
 
 constexpr int modicon_digit(Table table) {
   switch (table) {

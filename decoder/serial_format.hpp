@@ -4,14 +4,15 @@
 #include <cstdint>
 #include <string_view>
 
+#include "decoder/enum_names.hpp"
+
 namespace modtap::decoder {
 
 enum class Parity : uint8_t { none, even, odd };
-
-// "none", "odd"; anything else is even, the Modbus default (callers validate their input).
-constexpr Parity parity_named(std::string_view name) {
-  return name == "none" ? Parity::none : name == "odd" ? Parity::odd : Parity::even;
-}
+template <>
+struct EnumNames<Parity> {
+  static constexpr std::array<std::string_view, 3> names{"none", "even", "odd"};
+};
 
 struct SerialFormat {
   uint32_t baud = 19200;

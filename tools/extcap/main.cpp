@@ -120,7 +120,7 @@ int main(int argc, char** argv) {
   // standard error as an error.
   run.interfaces = {interface.substr(std::string(prefix).size())};
   run.write_file = fifo;
-  run.output = "none";
+  run.output = tools::OutputKind::none;
   run.announce = false;
   try {
     return tools::listen(run, {}, {});

@@ -18,6 +18,7 @@
 #include "decoder/field_registry.hpp"
 #include "tools/modtap/capture_conditions.hpp"
 #include "tools/modtap/csv_sink.hpp"
+#include "tools/modtap/enum_option.hpp"
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/run.hpp"
 
@@ -25,6 +26,7 @@ namespace {
 
 using namespace modtap;
 using tools::Autostop;
+using tools::OutputKind;
 using tools::RunOptions;
 
 bool same_file(const std::string& a, const std::string& b) {
@@ -49,12 +51,11 @@ std::optional<std::string> refuse_outputs(const RunOptions& o) {
       if (!files[j].second.empty() && same_file(path, files[j].second))
         return fmt::format("{} and {} both name {}", option, files[j].first, path);
   }
-  const bool terminal_output =
-      o.output == "text" || o.output == "json" || o.output == "stats" || o.output == "csv";
   std::vector<std::string> on_standard_output;
   for (const auto& [option, path] : files)
     if (path == "-") on_standard_output.push_back(std::string(option) + " -");
-  if (terminal_output) on_standard_output.push_back("-T " + o.output);
+  if (tools::prints_to_terminal(o.output))
+    on_standard_output.push_back(fmt::format("-T {}", o.output));
   if (on_standard_output.size() > 1)
     return fmt::format("{} and {} would both write to standard output", on_standard_output[0],
                        on_standard_output[1]);
@@ -128,8 +129,7 @@ std::optional<std::string> refuse_follow(const RunOptions& o) {
   if (o.follow.empty()) return std::nullopt;
   const tools::ModelCatalog catalog = tools::load_models(o);
   const auto models = catalog.all();
-  for (const auto& item :
-       tools::parse_follow(o.follow, decoder::register_base_named(o.register_base))) {
+  for (const auto& item : tools::parse_follow(o.follow, o.register_base)) {
     if (item.number || std::any_of(models.begin(), models.end(),
                                    [&](const auto* m) { return names_register(*m, item.name); }))
       continue;
@@ -145,26 +145,38 @@ uint64_t record_limit(const RunOptions& o, const Autostop& autostop) {
   return o.max_records ? std::min(o.max_records, *autostop.frames) : *autostop.frames;
 }
 
-}  // namespace
+// What the command line asks beyond a run's options: a subcommand, and which options were
+// given rather than left at their defaults.
+struct Command {
+  std::string named_capture;  // `modtap FILE`, as -r FILE
+  CLI::Option* output = nullptr;
+  CLI::Option* timeout = nullptr;
+  CLI::App* fields = nullptr;
+  CLI::App* models = nullptr;
+  CLI::App* check = nullptr;
+  std::vector<std::string> check_files;
+};
 
-int main(int argc, char** argv) {
-  CLI::App app{"modtap: a passive analyzer for Modbus RTU and ASCII on serial lines"};
-  RunOptions o;
+// Options are added in the order --help lists them: what to read, what to write, how to read
+// the line, then the subcommands.
+void add_input_options(CLI::App& app, RunOptions& o, Command& command) {
   auto* read = app.add_option("-r,--read", o.read_file,
                               "Capture file to read; - for standard input or a pipe");
-  std::string named_capture;
-  app.add_option("capture", named_capture, "The capture file, as with -r")->excludes(read);
+  app.add_option("capture", command.named_capture, "The capture file, as with -r")->excludes(read);
   auto* listen_on = app.add_option("-i,--interface", o.interfaces,
                                    "Serial port to listen on (read-only): PATH, or master=PATH and "
                                    "slave=PATH for a tap that splits the directions");
   read->excludes(listen_on);
   app.add_flag("--reconnect", o.reconnect, "Wait for an unplugged port to come back");
-  app.add_option("--format", o.format, "Capture format")
-      ->check(CLI::IsMember({"auto", "raw", "hexlog", "pcap", "pcapng", "sigrok"}));
-  auto* output = app.add_option("-T,--output", o.output,
-                                "Output: text, json (JSON Lines), stats, csv (register values "
-                                "over time), none (default: text, or none with -w)")
-                     ->check(CLI::IsMember({"text", "json", "stats", "csv", "none"}));
+  tools::add_enum_option(app, "--format", o.format, "Capture format",
+                         {{"pcapng", captures::Format::pcap}});
+}
+
+void add_output_options(CLI::App& app, RunOptions& o, Command& command) {
+  command.output =
+      tools::add_enum_option(app, "-T,--output", o.output,
+                             "Output: text, json (JSON Lines), stats, csv (register "
+                             "values over time), none (default: text, or none with -w)");
   app.add_option("--follow", o.follow,
                  "With -T csv (implied): the registers to follow, by name or address: "
                  "frequency_command,2503H");
@@ -178,12 +190,11 @@ int main(int argc, char** argv) {
   app.add_option("--report", o.report_file,
                  "Write a report a customer can read (one HTML file with charts; with --follow, "
                  "those registers over time) at the end of the run, as --stats");
-  app.add_option(
-         "--register-base", o.register_base,
-         "How text, CSV, statistics and the report number registers: hex (2502H, as the "
-         "drives' manuals), 0 (0-based decimal, as on the wire), 1 (1-based, as mbpoll), "
-         "4xxxx (Modicon: 40001 is holding register 0); --follow reads numbers the same way")
-      ->check(CLI::IsMember({"hex", "0", "1", "4xxxx"}));
+  tools::add_enum_option(
+      app, "--register-base", o.register_base,
+      "How text, CSV, statistics and the report number registers: hex (2502H, as the "
+      "drives' manuals), 0 (0-based decimal, as on the wire), 1 (1-based, as mbpoll), "
+      "4xxxx (Modicon: 40001 is holding register 0); --follow reads numbers the same way");
   app.add_option("--metrics", o.metrics_address,
                  "Serve bus-health metrics for Prometheus on http://ADDR:PORT/metrics while "
                  "running (ADDR:PORT, [IPV6]:PORT, or :PORT for every interface)");
@@ -204,16 +215,15 @@ int main(int argc, char** argv) {
                "Announce each register to Home Assistant (--mqtt-discovery=PREFIX for another "
                "discovery prefix than homeassistant)")
       ->needs(mqtt);
-  app.add_option("--link", o.link, "pcapng link: user (DLT_USER + modtap.lua), exported-pdu, bare")
-      ->check(CLI::IsMember({"user", "exported-pdu", "bare"}));
+  tools::add_enum_option(app, "--link", o.link,
+                         "pcapng link: user (DLT_USER + modtap.lua), exported-pdu, bare");
   app.add_option("--dlt", o.dlt, "DLT_USER link type for --link user or bare")
       ->check(CLI::Range(147, 162));
   app.add_flag("-V,--verbose", o.verbose, "Print each frame's field tree");
-  app.add_option("-t", o.time_format,
-                 "Text time column: r (since the capture's first record), a (local time of "
-                 "day), ad (local date and time), d (since the record before, shown or not), "
-                 "dd (since the line shown before)")
-      ->check(CLI::IsMember({"r", "a", "ad", "d", "dd"}));
+  tools::add_enum_option(app, "-t", o.time_format,
+                         "Text time column: r (since the capture's first record), a (local time "
+                         "of day), ad (local date and time), d (since the record before, shown "
+                         "or not), dd (since the line shown before)");
   app.add_option("-Y,--display-filter", o.display_filter,
                  "Only records that match, in every output: 'slave == 3 && fc == 6', "
                  "'latency_us > 50000', 'finding', 'register.name == \"fault\"' (docs/output.md)");
@@ -228,15 +238,18 @@ int main(int argc, char** argv) {
                  "new file after duration:SECONDS or filesize:KB, keeping the newest files:N");
   app.add_flag("-q,--quiet", o.quiet,
                "No line per frame: only what the run adds up to (-T stats, --stats)");
+}
+
+void add_analysis_options(CLI::App& app, RunOptions& o, Command& command) {
   app.set_version_flag("--version", std::string("modtap ") + MODTAP_VERSION);
   tools::add_line_options(app, o);
   app.add_option("--probe-time", o.probe_s,
                  "With --baud auto on a port: seconds to listen under each setting")
       ->check(CLI::PositiveNumber);
-  auto* timeout = app.add_option("--timeout", o.timeout_s,
-                                 "Seconds of silence before a request times out (1, or what the "
-                                 "slave's model says)")
-                      ->check(CLI::PositiveNumber);
+  command.timeout = app.add_option("--timeout", o.timeout_s,
+                                   "Seconds of silence before a request times out (1, or what the "
+                                   "slave's model says)")
+                        ->check(CLI::PositiveNumber);
   app.add_option("--ascii-timeout", o.ascii_timeout_s, "ASCII inter-character time-out, seconds")
       ->check(CLI::PositiveNumber);
   app.add_option("--chunk-jitter", o.jitter_ms,
@@ -246,52 +259,61 @@ int main(int argc, char** argv) {
                  "sigrok lines: tx=NAME,rx=NAME (the master's transmit and receive) or bus=NAME");
   app.add_flag("--sigrok-invert", o.sigrok_invert, "The sigrok lines have inverted levels");
   app.add_option("--models-dir", o.models_dir, "A folder of the user's model files (*.yaml)");
-  auto* fields = app.add_subcommand(
+}
+
+void add_subcommands(CLI::App& app, Command& command) {
+  command.fields = app.add_subcommand(
       "fields",
       "List every field: name (JSON key, -Y, Wireshark's modtap.NAME), place, JSON kind, type, "
       "title");
-  auto* models = app.add_subcommand("models", "List the device models, or check a model file");
-  models->fallthrough();  // `modtap models --models-dir DIR` lists the user's models too
-  std::vector<std::string> check_files;
-  auto* check = models->add_subcommand("check", "Validate model files");
-  check->add_option("FILE", check_files, "Model files (YAML)")->required();
-  CLI11_PARSE(app, argc, argv);
-  signal(SIGPIPE, SIG_IGN);
-  if (!named_capture.empty()) o.read_file = named_capture;
-  o.timeout_given = timeout->count() > 0;  // a closed pipe is a failed write (EPIPE), handled below
-  if (!o.write_file.empty() && output->count() == 0) o.output = "none";  // as tshark -w
-  // --follow alone asks for the values over time: as CSV, or in the report.
-  if (!o.follow.empty() && output->count() == 0) o.output = o.report_file.empty() ? "csv" : "text";
-  if (o.quiet && o.output != "stats") o.output = "none";
+  command.models = app.add_subcommand("models", "List the device models, or check a model file");
+  command.models->fallthrough();  // `modtap models --models-dir DIR` lists the user's models too
+  command.check = command.models->add_subcommand("check", "Validate model files");
+  command.check->add_option("FILE", command.check_files, "Model files (YAML)")->required();
+}
+
+// What options left at their defaults mean beside the others given: -w alone writes nothing
+// to the terminal (as tshark -w), --follow alone the values over time, -q only statistics.
+void settle_implied(RunOptions& o, const Command& command) {
+  if (!command.named_capture.empty()) o.read_file = command.named_capture;
+  o.timeout_given = command.timeout->count() > 0;
+  if (!o.write_file.empty() && command.output->count() == 0) o.output = OutputKind::none;
+  if (!o.follow.empty() && command.output->count() == 0)
+    o.output = o.report_file.empty() ? OutputKind::csv : OutputKind::text;
+  if (o.quiet && o.output != OutputKind::stats) o.output = OutputKind::none;
+}
+
+std::optional<std::string> refuse_source(const RunOptions& o) {
+  if (o.interfaces.empty() && o.read_file.empty())
+    return "give a capture with -r FILE or a port with -i PORT";
+  if (o.interfaces.size() > 2) return "at most two ports (master=PATH slave=PATH)";
+  return std::nullopt;
+}
+
+// The first of the conditions' and outputs' conflicts, checked before any work; none when they
+// fit.
+std::optional<std::string> refuse(const RunOptions& o, const Autostop& autostop,
+                                  const captures::RingLimits& ring) {
+  if (autostop.filesize_bytes && o.write_file.empty())
+    return "-a filesize stops on the size of the -w file: give -w";
+  if (auto refusal = refuse_ring(o, ring)) return refusal;
+  if (auto refusal = refuse_outputs(o)) return refusal;
+  return refuse_follow(o);
+}
+
+int run_command(RunOptions& o, const Command& command) {
   try {
-    if (check->parsed()) return tools::check_model_files(check_files);
-    if (models->parsed()) return list_models(o);
-    if (fields->parsed()) return list_fields();
-    if (o.interfaces.empty() && o.read_file.empty()) {
-      fmt::print(stderr, "modtap: give a capture with -r FILE or a port with -i PORT\n");
+    if (command.check->parsed()) return tools::check_model_files(command.check_files);
+    if (command.models->parsed()) return list_models(o);
+    if (command.fields->parsed()) return list_fields();
+    if (auto refusal = refuse_source(o)) {
+      fmt::print(stderr, "modtap: {}\n", *refusal);
       return 2;
     }
-    if (o.interfaces.size() > 2) {
-      fmt::print(stderr, "modtap: at most two ports (master=PATH slave=PATH)\n");
-      return 2;
-    }
-    // The conditions' errors come before any work.
     const Autostop autostop = tools::parse_autostop(o.autostop);
     const captures::RingLimits ring = tools::parse_ring_buffer(o.ring_buffer);
     o.max_records = record_limit(o, autostop);
-    if (autostop.filesize_bytes && o.write_file.empty()) {
-      fmt::print(stderr, "modtap: -a filesize stops on the size of the -w file: give -w\n");
-      return 2;
-    }
-    if (auto refusal = refuse_ring(o, ring)) {
-      fmt::print(stderr, "modtap: {}\n", *refusal);
-      return 2;
-    }
-    if (auto refusal = refuse_outputs(o)) {
-      fmt::print(stderr, "modtap: {}\n", *refusal);
-      return 2;
-    }
-    if (auto refusal = refuse_follow(o)) {
+    if (auto refusal = refuse(o, autostop, ring)) {
       fmt::print(stderr, "modtap: {}\n", *refusal);
       return 2;
     }
@@ -310,4 +332,20 @@ int main(int argc, char** argv) {
     fmt::print(stderr, "modtap: {}\n", e.what());
     return 2;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"modtap: a passive analyzer for Modbus RTU and ASCII on serial lines"};
+  RunOptions o;
+  Command command;
+  add_input_options(app, o, command);
+  add_output_options(app, o, command);
+  add_analysis_options(app, o, command);
+  add_subcommands(app, command);
+  CLI11_PARSE(app, argc, argv);
+  signal(SIGPIPE, SIG_IGN);  // a closed pipe is a failed write (EPIPE), handled in run_command
+  settle_implied(o, command);
+  return run_command(o, command);
 }

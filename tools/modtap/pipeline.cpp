@@ -13,30 +13,26 @@ namespace {
 std::unique_ptr<decoder::RecordSink> make_sink(const RunOptions& o, Output& out,
                                                const std::vector<decoder::ChannelInfo>& channels,
                                                const decoder::RecordClock& clock) {
-  if (o.output == "json") return std::make_unique<JsonSink>(out, channels);
+  if (o.output == OutputKind::json) return std::make_unique<JsonSink>(out, channels);
   const decoder::RecordClock* clock_before_filter = o.display_filter.empty() ? nullptr : &clock;
-  if (o.output == "csv")
-    return std::make_unique<CsvSink>(
-        out, parse_follow_or_all(o.follow, decoder::register_base_named(o.register_base)),
-        time_format_named(o.time_format), decoder::register_base_named(o.register_base),
-        clock_before_filter);
-  if (o.output == "text")
+  if (o.output == OutputKind::csv)
+    return std::make_unique<CsvSink>(out, parse_follow_or_all(o.follow, o.register_base),
+                                     o.time_format, o.register_base, clock_before_filter);
+  if (o.output == OutputKind::text)
     return std::make_unique<TextSink>(
-        out, channels,
-        TextOptions{o.verbose, time_format_named(o.time_format),
-                    decoder::register_base_named(o.register_base), clock_before_filter});
+        out, channels, TextOptions{o.verbose, o.time_format, o.register_base, clock_before_filter});
   return std::make_unique<decoder::NullSink>();  // stats: the statistics print at the end
 }
 
 bool wants_statistics(const RunOptions& o) {
-  return o.output == "stats" || !o.stats_file.empty() || !o.report_file.empty() ||
+  return o.output == OutputKind::stats || !o.stats_file.empty() || !o.report_file.empty() ||
          !o.metrics_address.empty() || !o.mqtt_url.empty();
 }
 
 // The report's registers over time: those --follow names, none without it.
 std::function<bool(const decoder::RegisterValue&)> report_follow(const RunOptions& o) {
   if (o.follow.empty()) return {};
-  const auto base = decoder::register_base_named(o.register_base);
+  const auto base = o.register_base;
   return [follow = parse_follow(o.follow, base)](const decoder::RegisterValue& reg) {
     return follows(follow, reg);
   };
@@ -44,19 +40,9 @@ std::function<bool(const decoder::RegisterValue&)> report_follow(const RunOption
 
 }  // namespace
 
-std::optional<uint32_t> fixed_baud(const RunOptions& o) {
-  if (o.baud == "auto") return std::nullopt;
-  return static_cast<uint32_t>(std::stoul(o.baud));
-}
-
-std::optional<decoder::Parity> fixed_parity(const RunOptions& o) {
-  if (o.parity == "auto") return std::nullopt;
-  return decoder::parity_named(o.parity);
-}
-
 decoder::SerialFormat serial_format(const RunOptions& o) {
-  return {fixed_baud(o).value_or(19200), static_cast<uint8_t>(o.data_bits),
-          decoder::parity_named(o.parity), static_cast<uint8_t>(o.stop_bits)};
+  return {o.baud.value_or(19200), static_cast<uint8_t>(o.data_bits),
+          o.parity.value_or(decoder::Parity::even), static_cast<uint8_t>(o.stop_bits)};
 }
 
 namespace {
@@ -71,7 +57,7 @@ int64_t read_jitter_ns(const RunOptions& o) {
 
 decoder::AnalyzerOptions analyzer_options(const RunOptions& o, decoder::ClockQuality clock) {
   decoder::AnalyzerOptions analyzer;
-  analyzer.mode = decoder::mode_named(o.mode);
+  analyzer.mode = o.mode;
   analyzer.format = serial_format(o);
   analyzer.clock = clock;
   analyzer.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
@@ -97,8 +83,7 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output
     evidence_ = std::make_unique<decoder::ProblemEvidence>();
     problem_options_.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
     if (!o.report_file.empty()) {  // the report shows the lines of the records problems cite
-      cited_ = std::make_unique<CitedRecords>(*evidence_, channels,
-                                              decoder::register_base_named(o.register_base),
+      cited_ = std::make_unique<CitedRecords>(*evidence_, channels, o.register_base,
                                               o.display_filter.empty() ? nullptr : &clock_);
       health_.add(*cited_);
     } else {
@@ -119,9 +104,11 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output
   // Only text, JSON, CSV, MQTT, pcapng comments and statistics show what the models say;
   // the other outputs skip the work, and the YAML is not read unless models are asked for.
   // A filter may name registers, so it reads frames through the models too.
-  const bool interpret = o.output == "text" || o.output == "json" || o.output == "csv" ||
-                         wants_statistics(o) ||  // the registers' last values
-                         (!o.write_file.empty() && o.link != "bare") || !o.display_filter.empty();
+  const bool lines =
+      o.output == OutputKind::text || o.output == OutputKind::json || o.output == OutputKind::csv;
+  const bool interpret = lines || wants_statistics(o) ||  // the registers' last values
+                         (!o.write_file.empty() && o.link != captures::PcapngLink::bare) ||
+                         !o.display_filter.empty();
   decoder::ModelChoice choice;
   if (interpret || !o.models.empty() || !o.models_dir.empty()) {
     catalog_ = load_models(o);
@@ -135,9 +122,9 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output
   if (interpret) {
     // Registers the model does not name show only in JSON, CSV, statistics, -V and filters,
     // and are watched for --follow.
-    const bool list_unnamed = o.output == "json" || o.output == "csv" || wants_statistics(o) ||
-                              (o.output == "text" && o.verbose) || !o.display_filter.empty() ||
-                              !o.follow.empty();
+    const bool list_unnamed = o.output == OutputKind::json || o.output == OutputKind::csv ||
+                              wants_statistics(o) || (o.output == OutputKind::text && o.verbose) ||
+                              !o.display_filter.empty() || !o.follow.empty();
     interpreter_ = std::make_unique<decoder::ModelInterpreter>(
         catalog_.all(), choice, clock, watch_follow(o, before_filter()), list_unnamed);
   }
@@ -150,7 +137,7 @@ void Pipeline::write_pcapng(const RunOptions& o, const captures::RingLimits& rin
                             const std::vector<decoder::ChannelInfo>& channels,
                             decoder::ClockQuality clock) {
   captures::PcapngOptions options;
-  options.link = captures::parse_link(o.link);
+  options.link = o.link;
   options.dlt = o.dlt;
   options.clock = clock;
   // On a port, someone may read the file as it grows (Wireshark through the extcap's FIFO,
@@ -191,7 +178,7 @@ decoder::RecordSink& Pipeline::before_filter() {
 // Behind the model stage, whose registers it looks at; before the filter, which may hide them.
 decoder::RecordSink& Pipeline::watch_follow(const RunOptions& o, decoder::RecordSink& next) {
   if (o.follow.empty()) return next;
-  const auto base = decoder::register_base_named(o.register_base);
+  const auto base = o.register_base;
   follow_watch_ = std::make_unique<FollowWatch>(parse_follow(o.follow, base), next);
   return *follow_watch_;
 }

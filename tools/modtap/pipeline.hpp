@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "captures/file_ring.hpp"
+#include "captures/open_capture.hpp"
 #include "captures/pcapng_sink.hpp"
 #include "decoder/analyzer.hpp"
 #include "decoder/bus_diagnostics.hpp"
@@ -27,21 +28,40 @@
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/mqtt_publisher.hpp"
 #include "tools/modtap/output.hpp"
+#include "tools/modtap/text_sink.hpp"
 
 namespace modtap::tools {
 
+// What prints a line per record on standard output, or nothing (-T).
+enum class OutputKind : uint8_t { text, json, stats, csv, none };
+}  // namespace modtap::tools
+
+namespace modtap::decoder {
+template <>
+struct EnumNames<tools::OutputKind> {
+  static constexpr std::array<std::string_view, 5> names{"text", "json", "stats", "csv", "none"};
+};
+}  // namespace modtap::decoder
+
+namespace modtap::tools {
+
+// Whether the output prints records (or the statistics) on standard output.
+constexpr bool prints_to_terminal(OutputKind output) {
+  return output != OutputKind::none;
+}
+
 // Everything a run is given: modtap's command line, or the extcap's translation of
-// Wireshark's.
+// Wireshark's, parsed once into the values the run compares.
 struct RunOptions {
   std::string read_file;
   std::vector<std::string> interfaces;
   bool reconnect = false;
-  std::string format = "auto";
-  std::string mode = "auto";
-  std::string output = "text";
+  captures::Format format = captures::Format::automatic;
+  decoder::ModeChoice mode = decoder::ModeChoice::automatic;
+  OutputKind output = OutputKind::text;
   bool verbose = false;
-  std::string baud = "19200";  // or "auto"
-  std::string parity = "even";
+  std::optional<uint32_t> baud = 19200;                           // none: --baud auto
+  std::optional<decoder::Parity> parity = decoder::Parity::even;  // none: --parity auto
   unsigned stop_bits = 1;
   unsigned data_bits = 8;
   double timeout_s = 1.0;
@@ -51,7 +71,7 @@ struct RunOptions {
   std::string sigrok_channels;
   bool sigrok_invert = false;
   std::string write_file;
-  std::string link = "user";
+  captures::PcapngLink link = captures::PcapngLink::user;
   int dlt = 147;
   std::vector<std::string> models;
   std::string models_dir;
@@ -59,12 +79,12 @@ struct RunOptions {
   std::string save_raw;
   std::string stats_file;
   std::string report_file;
-  std::string time_format = "r";
+  TimeFormat time_format = TimeFormat::relative;
   uint64_t max_records = 0;  // -c: frames and noise; 0: no limit
   bool quiet = false;
   std::string display_filter;
   std::string follow;
-  std::string register_base = "hex";
+  decoder::RegisterBase register_base = decoder::RegisterBase::hex;
   std::string metrics_address;
   std::string mqtt_url;
   double mqtt_interval_s = 10;
@@ -77,8 +97,6 @@ struct RunOptions {
   bool announce = true;
 };
 
-std::optional<uint32_t> fixed_baud(const RunOptions& o);  // none: --baud auto
-std::optional<decoder::Parity> fixed_parity(const RunOptions& o);
 decoder::SerialFormat serial_format(const RunOptions& o);
 decoder::AnalyzerOptions analyzer_options(const RunOptions& o, decoder::ClockQuality clock);
 ModelCatalog load_models(const RunOptions& o);

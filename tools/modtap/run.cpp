@@ -13,6 +13,7 @@
 #include "decoder/format_probe.hpp"
 #include "tools/live/live_capture.hpp"
 #include "tools/modtap/auto_format.hpp"
+#include "tools/modtap/enum_option.hpp"
 #include "tools/modtap/mosquitto_broker.hpp"
 #include "tools/modtap/progress.hpp"
 #include "tools/modtap/report.hpp"
@@ -32,9 +33,9 @@ void write_whole(const std::string& path, const fmt::memory_buffer& content) {
 void summarise(const RunOptions& o, Output& out, const Pipeline& pipeline, bool complete) {
   const decoder::BusStatistics* statistics = pipeline.statistics();
   if (!statistics) return;
-  const auto base = decoder::register_base_named(o.register_base);
+  const auto base = o.register_base;
   const auto problems = pipeline.problems();
-  if (o.output == "stats")
+  if (o.output == OutputKind::stats)
     print_statistics(out, *statistics, pipeline.diagnostics(), problems, base);
   if (!o.stats_file.empty()) {
     fmt::memory_buffer json;
@@ -63,7 +64,7 @@ void say_unseen(const Pipeline& pipeline) {
 // Whether the terminal is free for a status or progress line: standard error is one, and
 // frame lines are not printed on that same terminal.
 bool terminal_free_for_status(const RunOptions& o) {
-  const bool lines_on_stdout = o.output == "text" || o.output == "json" || o.output == "csv";
+  const bool lines_on_stdout = prints_to_terminal(o.output) && o.output != OutputKind::stats;
   return isatty(STDERR_FILENO) && (!lines_on_stdout || !isatty(STDOUT_FILENO));
 }
 
@@ -113,7 +114,7 @@ class MqttOutput {
     options.prefix = url.prefix;
     options.bus = o.mqtt_bus.empty() ? bus : o.mqtt_bus;
     options.interval_ns = static_cast<int64_t>(o.mqtt_interval_s * 1e9);
-    const auto base = decoder::register_base_named(o.register_base);
+    const auto base = o.register_base;
     options.follow = parse_follow_or_all(o.follow, base);
     options.base = base;
     if (!o.mqtt_discovery.empty()) options.discovery_prefix = o.mqtt_discovery;
@@ -176,20 +177,19 @@ void hint_settings(const decoder::SerialFormat& format, const decoder::LineHealt
 
 int read_capture(const RunOptions& o, const Autostop& autostop, const captures::RingLimits& ring) {
   captures::OpenOptions open;
-  open.format = captures::parse_format(o.format);
+  open.format = o.format;
   open.serial = serial_format(o);
   if (!o.sigrok_channels.empty())
     open.sigrok.lines = captures::parse_sigrok_channels(o.sigrok_channels);
   open.sigrok.invert = o.sigrok_invert;
   const bool piped = captures::is_piped(o.read_file);
-  if (o.baud == "auto" || o.parity == "auto") {
+  if (!o.baud || !o.parity) {
     if (piped)
       throw std::runtime_error(fmt::format(
           "{}: --baud auto and --parity auto read a capture once per setting; a pipe can be "
           "read only once: give a file",
           o.read_file == "-" ? "standard input" : o.read_file));
-    open.serial = choose_file_format(o.read_file, open, analyzer_options(o, {}), fixed_baud(o),
-                                     fixed_parity(o));
+    open.serial = choose_file_format(o.read_file, open, analyzer_options(o, {}), o.baud, o.parity);
   }
   auto source = piped ? captures::open_piped_capture(o.read_file, open)
                       : captures::open_capture(o.read_file, open);
@@ -263,8 +263,8 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
   out.set_line_buffered(true);
   live::LiveOptions options;
   options.analyzer = analyzer_options(o, decoder::ClockQuality::per_chunk);
-  if (o.baud == "auto" || o.parity == "auto") {
-    auto probed = live::probe_ports(ports, options, fixed_baud(o), fixed_parity(o),
+  if (!o.baud || !o.parity) {
+    auto probed = live::probe_ports(ports, options, o.baud, o.parity,
                                     static_cast<int64_t>(o.probe_s * 1e9), stop);
     options.analyzer.format = probed.format;
     options.replay = std::move(probed.read);  // the winning setting's bytes are analysed too
@@ -307,12 +307,16 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
 }
 
 void add_line_options(CLI::App& app, RunOptions& o) {
-  app.add_option("--mode", o.mode, "Transmission mode")
-      ->check(CLI::IsMember({"auto", "rtu", "ascii"}));
-  app.add_option("--baud", o.baud, "Baud rate, or auto to tell it from the traffic")
+  add_enum_option(app, "--mode", o.mode, "Transmission mode");
+  app.add_option_function<std::string>(
+         "--baud",
+         [&o](const std::string& text) {
+           o.baud.reset();
+           if (text != "auto") o.baud = static_cast<uint32_t>(std::stoul(text));
+         },
+         "Baud rate, or auto to tell it from the traffic")
       ->check(CLI::IsMember({"auto"}) | CLI::Range(50u, 4'000'000u));
-  app.add_option("--parity", o.parity, "Parity: none, even, odd, or auto")
-      ->check(CLI::IsMember({"none", "even", "odd", "auto"}));
+  add_enum_or_auto_option(app, "--parity", o.parity, "Parity: none, even, odd, or auto");
   app.add_option("--stop-bits", o.stop_bits, "Stop bits")->check(CLI::IsMember({1u, 2u}));
   app.add_option("--data-bits", o.data_bits, "Data bits")->check(CLI::IsMember({7u, 8u}));
   app.add_option("--model", o.models,

@@ -71,14 +71,6 @@ void append_bad_check(fmt::memory_buffer& buf, const Frame& frame) {
 
 }  // namespace
 
-TimeFormat time_format_named(std::string_view name) {
-  if (name == "a") return TimeFormat::absolute;
-  if (name == "ad") return TimeFormat::absolute_date;
-  if (name == "d") return TimeFormat::delta;
-  if (name == "dd") return TimeFormat::delta_displayed;
-  return TimeFormat::relative;
-}
-
 TextSink::TextSink(Output& out, const std::vector<ChannelInfo>& channels, TextOptions options)
     : out_(out), channels_(channels), options_(options) {}
 

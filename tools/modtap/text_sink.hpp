@@ -18,7 +18,16 @@ namespace modtap::tools {
 // day (a), date and time (ad), since the record before, shown or not (d), since the line shown
 // before (dd). Absolute times are local, as tshark's.
 enum class TimeFormat : uint8_t { relative, absolute, absolute_date, delta, delta_displayed };
-TimeFormat time_format_named(std::string_view name);  // "r", "a", "ad", "d", "dd"
+}  // namespace modtap::tools
+
+namespace modtap::decoder {
+template <>
+struct EnumNames<tools::TimeFormat> {
+  static constexpr std::array<std::string_view, 5> names{"r", "a", "ad", "d", "dd"};
+};
+}  // namespace modtap::decoder
+
+namespace modtap::tools {
 
 struct TextOptions {
   bool verbose = false;  // -V: each frame's field tree
