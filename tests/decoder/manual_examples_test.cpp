@@ -1,5 +1,11 @@
 // The RTU and ASCII examples printed in the device manuals (../shared/seeds), byte for byte,
 // including the ones the manuals got wrong: those must show as bad checks with the right value.
+#include <cctype>
+#include <ostream>
+#include <string>
+#include <string_view>
+#include <utility>
+
 #include <gtest/gtest.h>
 
 #include "decoder/function_codes.hpp"
@@ -18,6 +24,11 @@ struct Example {
   uint16_t expected_check;  // CRC register value: the low byte goes first on the wire
 };
 
+// How GoogleTest lists a parameter: the example's words, not its bytes.
+void PrintTo(const Example& example, std::ostream* out) {
+  *out << example.source;
+}
+
 class ManualExample : public ::testing::TestWithParam<Example> {};
 
 TEST_P(ManualExample, IsOneFrameWithTheRightVerdict) {
@@ -32,8 +43,31 @@ TEST_P(ManualExample, IsOneFrameWithTheRightVerdict) {
   EXPECT_EQ(frame.expected_check, e.expected_check) << e.source;
 }
 
+// "000 FC03 request, corrected (...)" -> Nta5000_FC03RequestCorrected: the manual's device, then
+// the example in words, so a failure names the example.
+std::string example_name(const ::testing::TestParamInfo<Example>& info) {
+  static const std::pair<std::string_view, std::string_view> manuals[] = {
+      {"000", "Nta5000_"}, {"002", "N3_"}, {"004", "Gd20_"}};
+  std::string_view text = info.param.source;
+  text = text.substr(0, text.find(" ("));
+  std::string name;
+  for (const auto& [file, device] : manuals)
+    if (text.starts_with(file)) name = device;
+  bool word_start = true;
+  for (char c : text.substr(text.find(' ') + 1)) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (!std::isalnum(byte)) {
+      word_start = word_start || c == ' ';
+      continue;
+    }
+    name += word_start ? static_cast<char>(std::toupper(byte)) : c;
+    word_start = false;
+  }
+  return name;
+}
+
 INSTANTIATE_TEST_SUITE_P(
-    Seeds, ManualExample,
+    Manuals, ManualExample,
     ::testing::Values(
         // 000 NTA5000 (English)
         Example{"000 FC03 request as printed (address A023 instead of 2523)",
@@ -64,7 +98,8 @@ INSTANTIATE_TEST_SUITE_P(
                 "02 10 00 04 00 02 04 13 88 00 32 c5 6e", false, 0x63F8},
         Example{"004 FC10 response as printed", "02 10 00 04 00 02 c5 6e", false, 0x3A00},
         Example{"004 FC10 request, corrected", "02 10 00 04 00 02 04 13 88 00 32 f8 63", true,
-                0x63F8}));
+                0x63F8}),
+    example_name);
 
 TEST(ManualAsciiExample, Nta5000ReadDecodesWithItsLrc) {
   // 000, 4.1 ASCII: ":010325230001B3" CR LF, and the response ":0103021770" LRC 73.
