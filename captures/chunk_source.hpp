@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "decoder/records.hpp"
+#include "protocol/records.hpp"
 
 namespace modtap::captures {
 
@@ -21,11 +21,11 @@ class ChunkSource {
  public:
   virtual ~ChunkSource() = default;
   // The next chunk, valid until the next call; false at the end. Throws CaptureError.
-  virtual bool next(decoder::Chunk& chunk) = 0;
-  virtual decoder::ClockQuality clock() const = 0;
+  virtual bool next(Chunk& chunk) = 0;
+  virtual ClockQuality clock() const = 0;
   // True when t_ns counts from the Unix epoch, false when from the start of the capture.
   virtual bool absolute_time() const = 0;
-  virtual const std::vector<decoder::ChannelInfo>& channels() const = 0;
+  virtual const std::vector<ChannelInfo>& channels() const = 0;
   // Characters whose parity bit was wrong so far, where the source sees parity bits at all
   // (a logic analyzer does; a serial port or a file of bytes does not).
   virtual uint64_t parity_errors() const { return 0; }

@@ -51,9 +51,9 @@ uint16_t HexlogReader::channel_for(const std::string& name) {
   auto [it, added] = channel_ids_.try_emplace(name, static_cast<uint16_t>(channels_.size()));
   if (added) {
     // Ports named like the two sides of a split tap say which direction they carry.
-    auto role = name == "master"  ? decoder::ChannelRole::master
-                : name == "slave" ? decoder::ChannelRole::slave
-                                  : decoder::ChannelRole::bus;
+    auto role = name == "master"  ? ChannelRole::master
+                : name == "slave" ? ChannelRole::slave
+                                  : ChannelRole::bus;
     channels_.push_back({name.empty() ? lines_.path() : name, role});
   }
   return it->second;
@@ -84,7 +84,7 @@ void HexlogReader::start_block(const std::string& s) {
   in_block_ = true;
 }
 
-bool HexlogReader::next(decoder::Chunk& chunk) {
+bool HexlogReader::next(Chunk& chunk) {
   while (lines_.next(line_)) {
     if (is_header(line_)) {
       start_block(line_);

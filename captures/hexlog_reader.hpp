@@ -15,10 +15,10 @@ class HexlogReader final : public ChunkSource {
   // `char_time_ns` places a block's bytes after its time stamp, which marks the first read.
   HexlogReader(const std::string& path, int64_t char_time_ns);
 
-  bool next(decoder::Chunk& chunk) override;
-  decoder::ClockQuality clock() const override { return decoder::ClockQuality::per_chunk; }
+  bool next(Chunk& chunk) override;
+  ClockQuality clock() const override { return ClockQuality::per_chunk; }
   bool absolute_time() const override { return true; }
-  const std::vector<decoder::ChannelInfo>& channels() const override { return channels_; }
+  const std::vector<ChannelInfo>& channels() const override { return channels_; }
   std::optional<uint64_t> file_position() const override { return lines_.bytes_read(); }
 
   // Whether a line is a jpnevulator time stamp line (used to recognise the format).
@@ -32,7 +32,7 @@ class HexlogReader final : public ChunkSource {
   int64_t char_time_ns_;
   std::string line_;
   std::vector<uint8_t> bytes_;
-  std::vector<decoder::ChannelInfo> channels_;
+  std::vector<ChannelInfo> channels_;
   std::map<std::string, uint16_t> channel_ids_;
   bool in_block_ = false;
   uint16_t channel_ = 0;

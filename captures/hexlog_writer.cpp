@@ -13,7 +13,7 @@ namespace modtap::captures {
 HexlogWriter::HexlogWriter(const std::string& path, int64_t char_time_ns)
     : file_(path), char_time_ns_(char_time_ns) {}
 
-void HexlogWriter::write(const decoder::Chunk& chunk, const std::string& tty) {
+void HexlogWriter::write(const Chunk& chunk, const std::string& tty) {
   const int64_t first_ns = chunk.t_ns - static_cast<int64_t>(chunk.bytes.size()) * char_time_ns_;
   const std::time_t seconds = static_cast<std::time_t>(first_ns / 1'000'000'000);
   std::tm tm{};

@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include "captures/output_file.hpp"
-#include "decoder/records.hpp"
+#include "protocol/records.hpp"
 
 namespace modtap::captures {
 
@@ -15,7 +15,7 @@ class HexlogWriter {
  public:
   // `char_time_ns` lets the stamp name the block's first byte, as jpnevulator's read does.
   HexlogWriter(const std::string& path, int64_t char_time_ns);
-  void write(const decoder::Chunk& chunk, const std::string& tty = {});
+  void write(const Chunk& chunk, const std::string& tty = {});
   void close() { file_.close(); }
   uint64_t bytes_written() const { return file_.bytes_written(); }
 

@@ -8,19 +8,19 @@
 
 #include "captures/chunk_source.hpp"
 #include "captures/sigrok_reader.hpp"
-#include "decoder/serial_format.hpp"
+#include "protocol/serial_format.hpp"
 
 namespace modtap::captures {
 
 enum class Format { automatic, raw, hexlog, pcap, sigrok };
 }  // namespace modtap::captures
 
-namespace modtap::decoder {
+namespace modtap {
 template <>
 struct EnumNames<captures::Format> {
   static constexpr std::array<std::string_view, 5> names{"auto", "raw", "hexlog", "pcap", "sigrok"};
 };
-}  // namespace modtap::decoder
+}  // namespace modtap
 
 namespace modtap::captures {
 
@@ -32,7 +32,7 @@ Format detect_format(std::span<const uint8_t> head, const std::string& path);
 
 struct OpenOptions {
   Format format = Format::automatic;
-  decoder::SerialFormat serial;
+  SerialFormat serial;
   SigrokOptions sigrok;
 };
 

@@ -27,7 +27,7 @@ PcapChunkWriter::~PcapChunkWriter() {
   pcap_close(dead_);
 }
 
-void PcapChunkWriter::write(const decoder::Chunk& chunk) {
+void PcapChunkWriter::write(const Chunk& chunk) {
   pcap_pkthdr header{};
   header.ts.tv_sec = static_cast<time_t>(chunk.t_ns / 1'000'000'000);
   header.ts.tv_usec = static_cast<suseconds_t>(chunk.t_ns % 1'000'000'000);  // nanoseconds

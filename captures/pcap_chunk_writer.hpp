@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "decoder/records.hpp"
+#include "protocol/records.hpp"
 
 struct pcap;
 struct pcap_dumper;
@@ -20,7 +20,7 @@ class PcapChunkWriter {
   PcapChunkWriter(const PcapChunkWriter&) = delete;
   PcapChunkWriter& operator=(const PcapChunkWriter&) = delete;
 
-  void write(const decoder::Chunk& chunk);  // t_ns: nanoseconds since the epoch
+  void write(const Chunk& chunk);  // t_ns: nanoseconds since the epoch
 
  private:
   pcap* dead_ = nullptr;

@@ -41,10 +41,10 @@ PcapReader::PcapReader(const std::string& path)
         "{}: link type {} ({}) does not carry serial bytes; modtap reads DLT_USER0..15 ({}..{})",
         path, dlt, pcapng::link_type_name(dlt), pcapng::first_user_dlt, pcapng::last_user_dlt));
   }
-  channels_.push_back({path, decoder::ChannelRole::bus});
+  channels_.push_back({path, ChannelRole::bus});
 }
 
-bool PcapReader::next(decoder::Chunk& chunk) {
+bool PcapReader::next(Chunk& chunk) {
   const size_t header = fill(record_header_size);
   if (header == 0) return false;
   const auto cut = [&](size_t got, size_t wanted) {

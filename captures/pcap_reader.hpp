@@ -22,10 +22,10 @@ class PcapReader final : public ChunkSource {
  public:
   explicit PcapReader(const std::string& path);
 
-  bool next(decoder::Chunk& chunk) override;
-  decoder::ClockQuality clock() const override { return decoder::ClockQuality::per_chunk; }
+  bool next(Chunk& chunk) override;
+  ClockQuality clock() const override { return ClockQuality::per_chunk; }
   bool absolute_time() const override { return true; }
-  const std::vector<decoder::ChannelInfo>& channels() const override { return channels_; }
+  const std::vector<ChannelInfo>& channels() const override { return channels_; }
   std::optional<uint64_t> file_position() const override { return offset_; }
 
   // The largest packet read, as libpcap's limit; beyond it a length is taken to lie.
@@ -48,7 +48,7 @@ class PcapReader final : public ChunkSource {
   // Where the next record starts, counted rather than asked of the file: a pipe cannot say.
   uint64_t offset_ = file_header_size;
   uint64_t packets_ = 0;
-  std::vector<decoder::ChannelInfo> channels_;
+  std::vector<ChannelInfo> channels_;
 };
 
 }  // namespace modtap::captures

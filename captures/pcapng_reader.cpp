@@ -53,7 +53,7 @@ PcapngReader::PcapngReader(const std::string& path, int64_t char_time_ns)
       break;
     }
   }
-  if (channels_.empty()) channels_.push_back({path_, decoder::ChannelRole::bus});
+  if (channels_.empty()) channels_.push_back({path_, ChannelRole::bus});
 }
 
 void PcapngReader::fail(const std::string& what) const {
@@ -156,24 +156,21 @@ void PcapngReader::interface_description() {
         i.link_type, link_type_name(i.link_type), first_user_dlt, last_user_dlt, exported_pdu_dlt));
   i.modtap = comment.starts_with(interface_convention);
   if (i.modtap && interfaces_.empty()) {
-    if (comment.find("clock=per-byte") != std::string::npos)
-      clock_ = decoder::ClockQuality::per_byte;
-    if (comment.find("clock=none") != std::string::npos) clock_ = decoder::ClockQuality::none;
+    if (comment.find("clock=per-byte") != std::string::npos) clock_ = ClockQuality::per_byte;
+    if (comment.find("clock=none") != std::string::npos) clock_ = ClockQuality::none;
   }
-  decoder::ChannelRole role = decoder::ChannelRole::bus;
-  if (i.modtap && comment.find("role=master") != std::string::npos)
-    role = decoder::ChannelRole::master;
-  if (i.modtap && comment.find("role=slave") != std::string::npos)
-    role = decoder::ChannelRole::slave;
+  ChannelRole role = ChannelRole::bus;
+  if (i.modtap && comment.find("role=master") != std::string::npos) role = ChannelRole::master;
+  if (i.modtap && comment.find("role=slave") != std::string::npos) role = ChannelRole::slave;
   i.channel = static_cast<uint16_t>(channels_.size());
   channels_.push_back({name.empty() ? path_ : name, role});
   interfaces_.push_back(i);
 }
 
-bool PcapngReader::next(decoder::Chunk& chunk) {
+bool PcapngReader::next(Chunk& chunk) {
   if (rest_at_) {  // the rest of a modtap packet
     const auto rest = std::span<const uint8_t>(bytes_).subspan(rest_at_);
-    if (clock_ == decoder::ClockQuality::per_byte && rest.size() > 1) {
+    if (clock_ == ClockQuality::per_byte && rest.size() > 1) {
       const auto last = static_cast<int64_t>(bytes_.size() - 1);
       const auto k = static_cast<int64_t>(rest_at_);
       chunk = {rest_channel_, first_end_ns_ + (rest_end_ns_ - first_end_ns_) * k / last,
@@ -202,7 +199,7 @@ size_t PcapngReader::read(void* into, size_t size) {
   return got;
 }
 
-bool PcapngReader::packet(uint32_t type, decoder::Chunk& chunk) {
+bool PcapngReader::packet(uint32_t type, Chunk& chunk) {
   uint32_t interface = 0, caplen = 0;
   uint64_t stamp = 0;
   size_t data_at = 0;

@@ -19,11 +19,11 @@ class PcapngReader final : public ChunkSource {
   // `char_time_ns` places the first byte of a packet modtap wrote (see pcapng_sink.hpp).
   PcapngReader(const std::string& path, int64_t char_time_ns);
 
-  bool next(decoder::Chunk& chunk) override;
+  bool next(Chunk& chunk) override;
   // What the file says of its writer's clock (modtap's own), else one time per packet.
-  decoder::ClockQuality clock() const override { return clock_; }
+  ClockQuality clock() const override { return clock_; }
   bool absolute_time() const override { return true; }
-  const std::vector<decoder::ChannelInfo>& channels() const override { return channels_; }
+  const std::vector<ChannelInfo>& channels() const override { return channels_; }
   std::optional<uint64_t> file_position() const override { return position_; }
 
   // The largest block read; beyond it a length is taken to lie, not allocated.
@@ -40,7 +40,7 @@ class PcapngReader final : public ChunkSource {
   size_t read(void* into, size_t size);  // counts what it read in position_
   bool describes(uint32_t type);
   void interface_description();
-  bool packet(uint32_t type, decoder::Chunk& chunk);
+  bool packet(uint32_t type, Chunk& chunk);
   uint16_t u16(size_t at) const;  // of body_, in the section's byte order
   uint32_t u32(size_t at) const;
   template <typename Visit>
@@ -57,9 +57,9 @@ class PcapngReader final : public ChunkSource {
   bool have_section_ = false;
   std::vector<uint8_t> body_;  // the current block's body, reused
   std::vector<Interface> interfaces_;
-  std::vector<decoder::ChannelInfo> channels_;
+  std::vector<ChannelInfo> channels_;
   std::vector<uint8_t> bytes_;  // the chunk's bytes
-  decoder::ClockQuality clock_ = decoder::ClockQuality::per_chunk;
+  ClockQuality clock_ = ClockQuality::per_chunk;
   // A packet modtap wrote goes out as its first byte at that byte's end, then the rest at the
   // record's end (per-byte clocks: each byte alone, spread evenly up to the end).
   size_t rest_at_ = 0;

@@ -8,12 +8,10 @@
 #include <fmt/format.h>
 
 #include "captures/pcapng_format.hpp"
-#include "decoder/buffer_put.hpp"
-#include "decoder/register_meaning.hpp"
+#include "models/register_meaning.hpp"
+#include "protocol/buffer_put.hpp"
 
 namespace modtap::captures {
-
-using namespace decoder;
 
 namespace {
 
@@ -274,21 +272,20 @@ void PcapngSink::finish() {
 namespace modtap::captures {
 
 PcapngFiles::PcapngFiles(const std::string& path, const RingLimits& limits,
-                         const std::vector<decoder::ChannelInfo>& channels,
-                         const PcapngOptions& options)
+                         const std::vector<ChannelInfo>& channels, const PcapngOptions& options)
     : ring_(path, limits), channels_(channels), options_(options) {
   if (!limits.rotates()) begin_file(ring_.begin(0));
 }
 
-void PcapngFiles::on_frame(const decoder::Frame& frame) {
+void PcapngFiles::on_frame(const Frame& frame) {
   sink_at(frame.t_ns).on_frame(frame);
 }
 
-void PcapngFiles::on_noise(const decoder::Noise& noise) {
+void PcapngFiles::on_noise(const Noise& noise) {
   sink_at(noise.t_ns).on_noise(noise);
 }
 
-void PcapngFiles::on_timeout(const decoder::Timeout& timeout) {
+void PcapngFiles::on_timeout(const Timeout& timeout) {
   if (sink_) sink_->on_timeout(timeout);
 }
 

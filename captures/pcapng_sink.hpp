@@ -10,7 +10,7 @@
 
 #include "captures/file_ring.hpp"
 #include "captures/pcapng_writer.hpp"
-#include "decoder/record_sink.hpp"
+#include "protocol/record_sink.hpp"
 
 namespace modtap::captures {
 
@@ -21,12 +21,12 @@ enum class PcapngLink {
 };
 }  // namespace modtap::captures
 
-namespace modtap::decoder {
+namespace modtap {
 template <>
 struct EnumNames<captures::PcapngLink> {
   static constexpr std::array<std::string_view, 3> names{"user", "exported-pdu", "bare"};
 };
-}  // namespace modtap::decoder
+}  // namespace modtap
 
 namespace modtap::captures {
 
@@ -38,7 +38,7 @@ struct PcapngOptions {
   uint32_t slave_port = 502;
   uint32_t master_port = 50200;
   // How well the source knew each byte's time: said in the file, so a reread times alike.
-  decoder::ClockQuality clock = decoder::ClockQuality::per_chunk;
+  ClockQuality clock = ClockQuality::per_chunk;
   // Someone reads the file as it grows (a port's capture into Wireshark's FIFO or a pipe):
   // every packet is flushed as it is written.
   bool live = false;
@@ -46,15 +46,15 @@ struct PcapngOptions {
 
 // Parses "user", "exported-pdu" or "bare"; throws std::invalid_argument.
 
-class PcapngSink final : public decoder::RecordSink {
+class PcapngSink final : public RecordSink {
  public:
-  PcapngSink(PcapngWriter& writer, const std::vector<decoder::ChannelInfo>& channels,
+  PcapngSink(PcapngWriter& writer, const std::vector<ChannelInfo>& channels,
              const PcapngOptions& options);
 
-  void on_frame(const decoder::Frame& frame) override;
-  void on_noise(const decoder::Noise& noise) override;
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override;
   // A request that timed out gets "timeout=REASON waited_us=N" in its comment.
-  void on_timeout(const decoder::Timeout& timeout) override;
+  void on_timeout(const Timeout& timeout) override;
   // Writes what is held (requests still waiting, and what came after them).
   void finish();
 
@@ -64,7 +64,7 @@ class PcapngSink final : public decoder::RecordSink {
                                         std::span<const uint8_t> payload);
 
   PcapngWriter& writer_;
-  const std::vector<decoder::ChannelInfo>& channels_;
+  const std::vector<ChannelInfo>& channels_;
   PcapngOptions options_;
   std::vector<int64_t> interface_of_channel_;  // -1 until its interface block is written
   std::vector<uint8_t> payload_;
@@ -73,16 +73,16 @@ class PcapngSink final : public decoder::RecordSink {
 
 // -w: the pcapng file, or with -b a ring of them. Each file is whole (its own section and
 // interfaces), and a record is never split between two.
-class PcapngFiles final : public decoder::RecordSink {
+class PcapngFiles final : public RecordSink {
  public:
   // Without rotation the file is created at once (an empty capture leaves an empty pcapng);
   // with it, each file when its first record comes.
   PcapngFiles(const std::string& path, const RingLimits& limits,
-              const std::vector<decoder::ChannelInfo>& channels, const PcapngOptions& options);
+              const std::vector<ChannelInfo>& channels, const PcapngOptions& options);
 
-  void on_frame(const decoder::Frame& frame) override;
-  void on_noise(const decoder::Noise& noise) override;
-  void on_timeout(const decoder::Timeout& timeout) override;
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override;
+  void on_timeout(const Timeout& timeout) override;
 
   uint64_t bytes_written() const;  // by all its files together
   uint64_t files_begun() const { return ring_.files_begun(); }
@@ -94,7 +94,7 @@ class PcapngFiles final : public decoder::RecordSink {
   void begin_file(const std::string& path);
 
   FileRing ring_;
-  const std::vector<decoder::ChannelInfo>& channels_;
+  const std::vector<ChannelInfo>& channels_;
   PcapngOptions options_;
   uint64_t closed_bytes_ = 0;  // what the files before the current one hold
   std::unique_ptr<PcapngWriter> writer_;
@@ -104,11 +104,11 @@ class PcapngFiles final : public decoder::RecordSink {
 // The comment modtap writes on a frame: "modtap key=value ...", parsed by modtap.lua.
 // What modtap says of each interface it writes: the time convention (pcapng_format.hpp),
 // the channel's role (a split tap) and the source's clock.
-std::string interface_comment(decoder::ChannelRole role, decoder::ClockQuality clock);
+std::string interface_comment(ChannelRole role, ClockQuality clock);
 
-std::string frame_comment(const decoder::Frame& frame);
-void append_frame_comment(fmt::memory_buffer& out, const decoder::Frame& frame);
-std::string noise_comment(const decoder::Noise& noise);
-void append_noise_comment(fmt::memory_buffer& out, const decoder::Noise& noise);
+std::string frame_comment(const Frame& frame);
+void append_frame_comment(fmt::memory_buffer& out, const Frame& frame);
+std::string noise_comment(const Noise& noise);
+void append_noise_comment(fmt::memory_buffer& out, const Noise& noise);
 
 }  // namespace modtap::captures

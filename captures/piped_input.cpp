@@ -83,7 +83,7 @@ class PipedSource final : public ChunkSource {
   }
   ~PipedSource() override { stop(); }
 
-  bool next(decoder::Chunk& chunk) override {
+  bool next(Chunk& chunk) override {
     try {
       const bool more = source_->next(chunk);
       follow_channels();
@@ -92,9 +92,9 @@ class PipedSource final : public ChunkSource {
       throw CaptureError(renamed(e.what()));
     }
   }
-  decoder::ClockQuality clock() const override { return source_->clock(); }
+  ClockQuality clock() const override { return source_->clock(); }
   bool absolute_time() const override { return source_->absolute_time(); }
-  const std::vector<decoder::ChannelInfo>& channels() const override { return channels_; }
+  const std::vector<ChannelInfo>& channels() const override { return channels_; }
   uint64_t parity_errors() const override { return source_->parity_errors(); }
 
  private:
@@ -157,7 +157,7 @@ class PipedSource final : public ChunkSource {
   std::thread pump_;
   std::atomic<bool> stopping_{false};
   std::unique_ptr<ChunkSource> source_;
-  std::vector<decoder::ChannelInfo> channels_;
+  std::vector<ChannelInfo> channels_;
 };
 
 }  // namespace

@@ -14,10 +14,10 @@ constexpr size_t block_size = 1 << 16;
 RawReader::RawReader(const std::string& path)
     : path_(path), file_(std::fopen(path.c_str(), "rb"), &std::fclose), block_(block_size) {
   if (!file_) throw CaptureError(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
-  channels_.push_back({path, decoder::ChannelRole::bus});
+  channels_.push_back({path, ChannelRole::bus});
 }
 
-bool RawReader::next(decoder::Chunk& chunk) {
+bool RawReader::next(Chunk& chunk) {
   const size_t n = std::fread(block_.data(), 1, block_.size(), file_.get());
   if (n == 0) {
     if (std::ferror(file_.get()))

@@ -13,10 +13,10 @@ class RawReader final : public ChunkSource {
  public:
   explicit RawReader(const std::string& path);
 
-  bool next(decoder::Chunk& chunk) override;
-  decoder::ClockQuality clock() const override { return decoder::ClockQuality::none; }
+  bool next(Chunk& chunk) override;
+  ClockQuality clock() const override { return ClockQuality::none; }
   bool absolute_time() const override { return false; }
-  const std::vector<decoder::ChannelInfo>& channels() const override { return channels_; }
+  const std::vector<ChannelInfo>& channels() const override { return channels_; }
   std::optional<uint64_t> file_position() const override { return offset_; }
 
  private:
@@ -24,7 +24,7 @@ class RawReader final : public ChunkSource {
   std::unique_ptr<FILE, int (*)(FILE*)> file_;
   std::vector<uint8_t> block_;
   uint64_t offset_ = 0;
-  std::vector<decoder::ChannelInfo> channels_;
+  std::vector<ChannelInfo> channels_;
 };
 
 }  // namespace modtap::captures

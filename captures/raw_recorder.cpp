@@ -12,7 +12,7 @@ constexpr int raw_dlt = 147;  // DLT_USER0: what modtap -r reads as timed chunks
 
 }  // namespace
 
-RawRecorder::RawRecorder(const std::string& path, std::vector<decoder::ChannelInfo> channels,
+RawRecorder::RawRecorder(const std::string& path, std::vector<ChannelInfo> channels,
                          int64_t char_time_ns, const RingLimits& limits)
     : channels_(std::move(channels)),
       as_pcapng_(ends_with(path, ".pcapng")),
@@ -21,7 +21,7 @@ RawRecorder::RawRecorder(const std::string& path, std::vector<decoder::ChannelIn
   if (!limits.rotates()) begin_file(ring_.begin(0));
 }
 
-void RawRecorder::write(const decoder::Chunk& chunk, bool between_frames) {
+void RawRecorder::write(const Chunk& chunk, bool between_frames) {
   const uint64_t bytes = bytes_in_file();
   if ((between_frames && ring_.due(chunk.t_ns, bytes)) || ring_.overdue(chunk.t_ns, bytes))
     begin_file(ring_.begin(chunk.t_ns));

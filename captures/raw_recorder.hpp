@@ -12,18 +12,18 @@
 #include "captures/file_ring.hpp"
 #include "captures/hexlog_writer.hpp"
 #include "captures/pcapng_writer.hpp"
-#include "decoder/records.hpp"
+#include "protocol/records.hpp"
 
 namespace modtap::captures {
 
 class RawRecorder {
  public:
   // Throws WriteError when the file cannot be created or written.
-  RawRecorder(const std::string& path, std::vector<decoder::ChannelInfo> channels,
-              int64_t char_time_ns, const RingLimits& limits = {});
+  RawRecorder(const std::string& path, std::vector<ChannelInfo> channels, int64_t char_time_ns,
+              const RingLimits& limits = {});
   // `between_frames`: the analyzer holds no byte of an unfinished frame, so a new file of the
   // ring may begin here. On a bus that never pauses, one does after twice the limits anyway.
-  void write(const decoder::Chunk& chunk, bool between_frames = true);
+  void write(const Chunk& chunk, bool between_frames = true);
   void flush();
   void close();
 
@@ -32,7 +32,7 @@ class RawRecorder {
   void close_file();
   uint64_t bytes_in_file() const;
 
-  std::vector<decoder::ChannelInfo> channels_;
+  std::vector<ChannelInfo> channels_;
   bool as_pcapng_;  // else a timed hex log
   int64_t char_time_ns_;
   FileRing ring_;

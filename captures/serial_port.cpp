@@ -52,7 +52,7 @@ speed_t speed_of(uint32_t baud) {
 
 }  // namespace
 
-SerialPort::SerialPort(const std::string& path, const decoder::SerialFormat& format) : path_(path) {
+SerialPort::SerialPort(const std::string& path, const SerialFormat& format) : path_(path) {
   // O_RDONLY: the tap cannot transmit. O_NOCTTY: the port never becomes our terminal.
   fd_ = ::open(path.c_str(), O_RDONLY | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
   if (fd_ < 0) {
@@ -86,7 +86,7 @@ SerialPort::~SerialPort() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-void SerialPort::configure(const decoder::SerialFormat& f) {
+void SerialPort::configure(const SerialFormat& f) {
   termios tio{};
   if (tcgetattr(fd_, &tio) != 0)
     throw CaptureError(
@@ -98,8 +98,8 @@ void SerialPort::configure(const decoder::SerialFormat& f) {
   cfsetospeed(&tio, speed);
   tio.c_cflag &= ~static_cast<tcflag_t>(CSIZE | PARENB | PARODD | CSTOPB | CRTSCTS | HUPCL);
   tio.c_cflag |= (f.data_bits == 7 ? CS7 : CS8) | CREAD | CLOCAL;  // CLOCAL: ignore modem lines
-  if (f.parity != decoder::Parity::none) tio.c_cflag |= PARENB;
-  if (f.parity == decoder::Parity::odd) tio.c_cflag |= PARODD;
+  if (f.parity != Parity::none) tio.c_cflag |= PARENB;
+  if (f.parity == Parity::odd) tio.c_cflag |= PARODD;
   if (f.stop_bits == 2) tio.c_cflag |= CSTOPB;
   tio.c_cc[VMIN] = 0;
   tio.c_cc[VTIME] = 0;

@@ -8,14 +8,14 @@
 #include <span>
 #include <string>
 
-#include "decoder/serial_format.hpp"
+#include "protocol/serial_format.hpp"
 
 namespace modtap::captures {
 
 class SerialPort {
  public:
   // Throws CaptureError naming the port: missing, busy (another program holds it), not a tty.
-  SerialPort(const std::string& path, const decoder::SerialFormat& format);
+  SerialPort(const std::string& path, const SerialFormat& format);
   ~SerialPort();
   SerialPort(const SerialPort&) = delete;
   SerialPort& operator=(const SerialPort&) = delete;
@@ -28,7 +28,7 @@ class SerialPort {
   const std::string& clock_note() const { return clock_note_; }
 
  private:
-  void configure(const decoder::SerialFormat& format);
+  void configure(const SerialFormat& format);
   bool is_pty() const;
   bool set_pty(termios tio);
   void lower_latency();

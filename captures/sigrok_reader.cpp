@@ -54,22 +54,22 @@ std::optional<SigrokByte> parse_sigrok_byte(const char* line) {
 
 namespace {
 
-const char* parity_name(decoder::Parity p) {
+const char* parity_name(Parity p) {
   switch (p) {
-    case decoder::Parity::none:
+    case Parity::none:
       return "none";
-    case decoder::Parity::even:
+    case Parity::even:
       return "even";
-    case decoder::Parity::odd:
+    case Parity::odd:
       return "odd";
   }
   return "none";
 }
 
-decoder::ChannelRole role_of(const std::string& role) {
-  if (role == "tx") return decoder::ChannelRole::master;
-  if (role == "rx") return decoder::ChannelRole::slave;
-  return decoder::ChannelRole::bus;
+ChannelRole role_of(const std::string& role) {
+  if (role == "tx") return ChannelRole::master;
+  if (role == "rx") return ChannelRole::slave;
+  return ChannelRole::bus;
 }
 
 }  // namespace
@@ -157,7 +157,7 @@ bool SigrokReader::refill(Stream& s) {
   return true;
 }
 
-bool SigrokReader::next(decoder::Chunk& chunk) {
+bool SigrokReader::next(Chunk& chunk) {
   Stream* earliest = nullptr;
   for (auto& s : streams_)
     if (s->has_byte && (!earliest || s->sample < earliest->sample)) earliest = s.get();

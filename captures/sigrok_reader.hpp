@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "captures/chunk_source.hpp"
-#include "decoder/serial_format.hpp"
+#include "protocol/serial_format.hpp"
 
 namespace modtap::captures {
 
@@ -20,7 +20,7 @@ struct SigrokLine {
 struct SigrokOptions {
   std::vector<SigrokLine> lines;  // empty: one "bus" line on the capture's first channel
   bool invert = false;
-  decoder::SerialFormat format;
+  SerialFormat format;
   std::string program = "sigrok-cli";
 };
 
@@ -47,10 +47,10 @@ class SigrokReader final : public ChunkSource {
   SigrokReader(const std::string& path, const SigrokOptions& options);
   ~SigrokReader() override;
 
-  bool next(decoder::Chunk& chunk) override;
-  decoder::ClockQuality clock() const override { return decoder::ClockQuality::per_byte; }
+  bool next(Chunk& chunk) override;
+  ClockQuality clock() const override { return ClockQuality::per_byte; }
   bool absolute_time() const override { return false; }
-  const std::vector<decoder::ChannelInfo>& channels() const override { return channels_; }
+  const std::vector<ChannelInfo>& channels() const override { return channels_; }
 
   uint64_t samplerate() const { return samplerate_; }
   uint64_t parity_errors() const override { return parity_errors_; }
@@ -63,7 +63,7 @@ class SigrokReader final : public ChunkSource {
   SigrokOptions options_;
   uint64_t samplerate_ = 0;
   std::vector<std::unique_ptr<Stream>> streams_;
-  std::vector<decoder::ChannelInfo> channels_;
+  std::vector<ChannelInfo> channels_;
   uint8_t byte_ = 0;
   uint64_t parity_errors_ = 0;
 };

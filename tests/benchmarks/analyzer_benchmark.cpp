@@ -7,10 +7,10 @@
 #include <cstdlib>
 #include <new>
 
+#include "analysis/bus_statistics.hpp"
 #include "captures/pcapng_sink.hpp"
-#include "decoder/analyzer.hpp"
-#include "decoder/bus_statistics.hpp"
-#include "decoder/model_interpreter.hpp"
+#include "models/model_interpreter.hpp"
+#include "protocol/analyzer.hpp"
 #include "tools/busgen/bus_simulator.hpp"
 #include "tools/modtap/csv_sink.hpp"
 #include "tools/modtap/json_sink.hpp"
@@ -41,11 +41,11 @@ namespace {
 
 using namespace modtap;
 
-class Counting final : public decoder::RecordSink {
+class Counting final : public RecordSink {
  public:
-  void on_frame(const decoder::Frame&) override { ++frames; }
-  void on_noise(const decoder::Noise&) override {}
-  void on_timeout(const decoder::Timeout&) override {}
+  void on_frame(const Frame&) override { ++frames; }
+  void on_noise(const Noise&) override {}
+  void on_timeout(const Timeout&) override {}
   uint64_t frames = 0;
 };
 
@@ -61,12 +61,12 @@ const busgen::BusCapture& capture() {
 }
 
 // Frames the whole capture, untimed, in 64 KiB chunks, into `sink`.
-void analyze(decoder::RecordSink& sink) {
+void analyze(RecordSink& sink) {
   const auto& c = capture();
-  decoder::AnalyzerOptions o;
-  o.mode = decoder::ModeChoice::rtu;
-  o.clock = decoder::ClockQuality::none;
-  decoder::Analyzer analyzer(o, {{"bench", decoder::ChannelRole::bus}}, sink);
+  AnalyzerOptions o;
+  o.mode = ModeChoice::rtu;
+  o.clock = ClockQuality::none;
+  Analyzer analyzer(o, {{"bench", ChannelRole::bus}}, sink);
   for (size_t at = 0; at < c.bytes.size(); at += 65536)
     analyzer.push({0, 0, {c.bytes.data() + at, std::min<size_t>(65536, c.bytes.size() - at)}});
   analyzer.finish();
@@ -92,8 +92,7 @@ void BM_AnalyzeWithModel(benchmark::State& state, const char* model) {
   uint64_t frames = 0;
   for (auto _ : state) {
     Counting sink;
-    decoder::ModelInterpreter interpreter(catalog.all(), catalog.choose({model}),
-                                          decoder::ClockQuality::none, sink);
+    ModelInterpreter interpreter(catalog.all(), catalog.choose({model}), ClockQuality::none, sink);
     analyze(interpreter);
     frames += sink.frames;
   }
@@ -110,7 +109,7 @@ enum class Sink { text, json, csv, stats, pcapng };
 void BM_Output(benchmark::State& state, Sink kind, const char* model) {
   tools::ModelCatalog catalog;
   catalog.load_builtin();
-  const std::vector<decoder::ChannelInfo> channels{{"bench", decoder::ChannelRole::bus}};
+  const std::vector<ChannelInfo> channels{{"bench", ChannelRole::bus}};
   capture();  // simulated once, before anything is counted
   uint64_t frames = 0;
   uint64_t allocated = 0;
@@ -118,19 +117,17 @@ void BM_Output(benchmark::State& state, Sink kind, const char* model) {
     captures::OutputFile file("/dev/null");
     tools::Output out(file);
     captures::PcapngWriter writer("/dev/null");
-    std::unique_ptr<decoder::RecordSink> sink;
+    std::unique_ptr<RecordSink> sink;
     if (kind == Sink::text) sink = std::make_unique<tools::TextSink>(out, channels);
     if (kind == Sink::json) sink = std::make_unique<tools::JsonSink>(out, channels);
     if (kind == Sink::csv)  // every register read or written a row
       sink = std::make_unique<tools::CsvSink>(out, std::vector<tools::FollowedRegister>{},
                                               tools::TimeFormat::relative);
     if (kind == Sink::stats)
-      sink = std::make_unique<decoder::BusStatistics>(decoder::SerialFormat{},
-                                                      decoder::ClockQuality::none);
+      sink = std::make_unique<BusStatistics>(SerialFormat{}, ClockQuality::none);
     if (kind == Sink::pcapng)
       sink = std::make_unique<captures::PcapngSink>(writer, channels, captures::PcapngOptions{});
-    decoder::ModelInterpreter interpreter(catalog.all(), catalog.choose({model}),
-                                          decoder::ClockQuality::none, *sink);
+    ModelInterpreter interpreter(catalog.all(), catalog.choose({model}), ClockQuality::none, *sink);
     const uint64_t before = allocations.load();
     analyze(interpreter);
     allocated += allocations.load() - before;
@@ -149,7 +146,7 @@ BENCHMARK_CAPTURE(BM_Output, pcapng, Sink::pcapng, "generic")->Unit(benchmark::k
 
 // Random bytes, as a capture read with the wrong settings or a noisy line gives them: every
 // byte starts a CRC search in RTU and nothing in ASCII, untimed, in 64 KiB chunks.
-void BM_AnalyzeRandomBytes(benchmark::State& state, decoder::ModeChoice mode) {
+void BM_AnalyzeRandomBytes(benchmark::State& state, ModeChoice mode) {
   static const std::vector<uint8_t> bytes = [] {
     std::vector<uint8_t> b(4 << 20);
     uint32_t x = 1;
@@ -158,20 +155,18 @@ void BM_AnalyzeRandomBytes(benchmark::State& state, decoder::ModeChoice mode) {
   }();
   for (auto _ : state) {
     Counting sink;
-    decoder::AnalyzerOptions o;
+    AnalyzerOptions o;
     o.mode = mode;
-    o.clock = decoder::ClockQuality::none;
-    decoder::Analyzer analyzer(o, {{"bench", decoder::ChannelRole::bus}}, sink);
+    o.clock = ClockQuality::none;
+    Analyzer analyzer(o, {{"bench", ChannelRole::bus}}, sink);
     for (size_t at = 0; at < bytes.size(); at += 65536)
       analyzer.push({0, 0, {bytes.data() + at, std::min<size_t>(65536, bytes.size() - at)}});
     analyzer.finish();
   }
   state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * bytes.size()));
 }
-BENCHMARK_CAPTURE(BM_AnalyzeRandomBytes, rtu, decoder::ModeChoice::rtu)
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_AnalyzeRandomBytes, ascii, decoder::ModeChoice::ascii)
-    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_AnalyzeRandomBytes, rtu, ModeChoice::rtu)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_AnalyzeRandomBytes, ascii, ModeChoice::ascii)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -132,16 +132,16 @@ TEST(PcapngWriter, HoldingIsBounded) {
 
 TEST(PcapngSink, ExportedPduNamesMbrtuAndPutsTheSlaveOnPort502) {
   const auto path = temp_path("modtap-exported-test.pcapng");
-  const std::vector<decoder::ChannelInfo> channels{{"bus", decoder::ChannelRole::bus}};
+  const std::vector<ChannelInfo> channels{{"bus", ChannelRole::bus}};
   {
     PcapngWriter writer(path);
     PcapngOptions options;
     options.link = PcapngLink::exported_pdu;
     PcapngSink sink(writer, channels, options);
     const auto raw = hex("01 03 02 07 d0 bb e8");
-    decoder::Frame frame;
+    Frame frame;
     frame.raw = frame.adu = raw;
-    frame.role = decoder::Role::response;
+    frame.role = Role::response;
     frame.check_ok = true;
     sink.on_frame(frame);
   }
@@ -161,16 +161,16 @@ TEST(PcapngSink, ExportedPduNamesMbrtuAndPutsTheSlaveOnPort502) {
 }
 
 TEST(PcapngSink, CommentsCarryTheVerdictsForTheLuaDissector) {
-  decoder::Frame frame;
+  Frame frame;
   const auto raw = hex("01 03 02 07 d0 bb e9");
   frame.raw = frame.adu = raw;
   frame.index = 7;
-  frame.role = decoder::Role::response;
+  frame.role = Role::response;
   frame.check_ok = false;
   frame.expected_check = 0xE8BB;
   frame.request = 6;
   frame.latency_ns = 2'500'000;
-  frame.findings = decoder::finding_bad_check;
+  frame.findings = finding_bad_check;
   frame.t_ns = 1'000'000;
   frame.end_ns = 4'645'833;  // 7 bytes at 19200 8E1: what a reread needs to time it again
   EXPECT_EQ(
@@ -192,11 +192,11 @@ TEST(PcapngSink, CommentsCarryTheVerdictsForTheLuaDissector) {
 // until its outcome is known, and writes everything in order.
 TEST(PcapngSink, ARequestThatTimedOutSaysSoAndOrderIsKept) {
   const auto path = temp_path("modtap-timeout-test.pcapng");
-  const std::vector<decoder::ChannelInfo> channels{{"bus", decoder::ChannelRole::bus}};
+  const std::vector<ChannelInfo> channels{{"bus", ChannelRole::bus}};
   const auto request = hex("01 03 00 00 00 01 84 0a");
   const auto answer = hex("02 03 02 00 07 7c 46");
-  auto frame = [&](uint64_t index, decoder::Role role, std::span<const uint8_t> raw) {
-    decoder::Frame f;
+  auto frame = [&](uint64_t index, Role role, std::span<const uint8_t> raw) {
+    Frame f;
     f.index = index;
     f.role = role;
     f.raw = f.adu = raw;
@@ -207,23 +207,23 @@ TEST(PcapngSink, ARequestThatTimedOutSaysSoAndOrderIsKept) {
   {
     PcapngWriter writer(path);
     PcapngSink sink(writer, channels, {});
-    sink.on_frame(frame(1, decoder::Role::request, request));  // slave 1 never answers
-    decoder::Noise noise;
+    sink.on_frame(frame(1, Role::request, request));  // slave 1 never answers
+    Noise noise;
     noise.index = 2;
     const auto junk = hex("ff");
     noise.raw = junk;
     sink.on_noise(noise);
-    decoder::Timeout timeout;
+    Timeout timeout;
     timeout.index = 3;
     timeout.request = 1;
     timeout.waited_ns = 1'000'000'123;
-    timeout.reason = decoder::TimeoutReason::silence;
+    timeout.reason = TimeoutReason::silence;
     sink.on_timeout(timeout);
-    sink.on_frame(frame(4, decoder::Role::request, request));
-    auto response = frame(5, decoder::Role::response, answer);
+    sink.on_frame(frame(4, Role::request, request));
+    auto response = frame(5, Role::response, answer);
     response.request = 4;
     sink.on_frame(response);
-    sink.on_frame(frame(6, decoder::Role::request, request));  // the capture ends first
+    sink.on_frame(frame(6, Role::request, request));  // the capture ends first
     sink.finish();
     writer.close();
   }

@@ -64,7 +64,7 @@ std::string error_of(const std::string& path, Format format = Format::automatic)
     OpenOptions o;
     o.format = format;
     auto source = open_capture(path, o);
-    decoder::Chunk chunk;
+    Chunk chunk;
     while (source->next(chunk)) {
     }
   } catch (const CaptureError& e) {
@@ -80,7 +80,7 @@ TEST_F(TempDir, HexlogReadsJpnevulatorBlocksAndTtyNames) {
                           "2026-11-22 10:57:33.963377: /dev/ttyUSB1\n"
                           "01 03 02 00 0A 38 43");
   HexlogReader reader(path, 1000);
-  decoder::Chunk chunk;
+  Chunk chunk;
   ASSERT_TRUE(reader.next(chunk));
   EXPECT_EQ(std::vector<uint8_t>(chunk.bytes.begin(), chunk.bytes.end()),
             hex("01 03 00 00 00 0a c5 cd"));
@@ -108,7 +108,7 @@ TEST_F(TempDir, HexlogBytesBeforeAnyTimeStampAreAnError) {
 TEST_F(TempDir, PcapPacketsBecomeTimedChunks) {
   const auto path = write_pcap("user0.pcap", 147, {hex("01 03 00 00"), hex("00 0a c5 cd")});
   PcapReader reader(path);
-  decoder::Chunk chunk;
+  Chunk chunk;
   ASSERT_TRUE(reader.next(chunk));
   EXPECT_EQ(chunk.t_ns, 1700000000LL * 1'000'000'000);
   ASSERT_TRUE(reader.next(chunk));
@@ -141,7 +141,7 @@ TEST_F(TempDir, PcapInTheOtherByteOrderWithNanosecondsReads) {
   be32(0x7FFF'FFFF);
   const auto path = write("be.pcap", file);
   PcapReader reader(path);
-  decoder::Chunk chunk;
+  Chunk chunk;
   ASSERT_TRUE(reader.next(chunk));
   EXPECT_EQ(chunk.t_ns, 1700000000LL * 1'000'000'000 + 123'456'789);
   EXPECT_EQ(chunk.bytes.size(), 3u);
@@ -183,7 +183,7 @@ void expect_every_cut_is_clear(TempDir& dir, const std::string& name, const std:
     size_t bytes = 0;
     try {
       PcapReader reader(path);
-      decoder::Chunk chunk;
+      Chunk chunk;
       while (reader.next(chunk)) bytes += chunk.bytes.size();
     } catch (const CaptureError& e) {
       EXPECT_EQ(std::string(e.what()).rfind(path + ": offset ", 0), 0u) << cut << ": " << e.what();
@@ -246,11 +246,11 @@ TEST_F(TempDir, FormatIsToldByContentBeforeName) {
 TEST_F(TempDir, RawReaderDeliversEveryByteUntimed) {
   std::string content(200000, '\x5a');
   RawReader reader(write("big.bin", content));
-  decoder::Chunk chunk;
+  Chunk chunk;
   size_t total = 0;
   while (reader.next(chunk)) total += chunk.bytes.size();
   EXPECT_EQ(total, content.size());
-  EXPECT_EQ(reader.clock(), decoder::ClockQuality::none);
+  EXPECT_EQ(reader.clock(), ClockQuality::none);
 }
 
 }  // namespace

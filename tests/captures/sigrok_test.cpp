@@ -4,23 +4,21 @@
 
 #include <gtest/gtest.h>
 
-#include "decoder/analyzer.hpp"
+#include "protocol/analyzer.hpp"
 #include "tests/support/collector.hpp"
 
 namespace modtap::captures {
 namespace {
-
-using decoder::Role;
 using testing::Collector;
 
 Collector analyze(const std::string& file, const SigrokOptions& options) {
   SigrokReader reader(std::string(MODTAP_SAMPLES) + "/" + file, options);
-  decoder::AnalyzerOptions a;
+  AnalyzerOptions a;
   a.format = options.format;
   a.clock = reader.clock();
   Collector out;
-  decoder::Analyzer bus(a, reader.channels(), out);
-  decoder::Chunk chunk;
+  Analyzer bus(a, reader.channels(), out);
+  Chunk chunk;
   while (reader.next(chunk)) bus.push(chunk);
   bus.finish();
   return out;
@@ -46,7 +44,7 @@ TEST(SigrokCaptures, BrainchildSplitLinesGiveFifteenCleanPairs) {
   SigrokOptions o;
   o.lines = parse_sigrok_channels("tx=1,rx=0");
   o.invert = true;
-  o.format = {19200, 8, decoder::Parity::even, 1};
+  o.format = {19200, 8, Parity::even, 1};
   const auto out = analyze("brainchild-io-16do.sr", o);
   expect_clean_pairs(out, 30);
   // The slave answers about 3.9 character times after the request: just above t3.5.
@@ -62,7 +60,7 @@ TEST(SigrokCaptures, BrainchildSplitLinesGiveFifteenCleanPairs) {
 TEST(SigrokCaptures, FlowmeterBusProbeGivesCleanPairs) {
   SigrokOptions o;
   o.lines = parse_sigrok_channels("bus=RXTX");
-  o.format = {9600, 8, decoder::Parity::none, 1};
+  o.format = {9600, 8, Parity::none, 1};
   const auto graph = analyze("flowmeter_graph_tool.sr", o);
   expect_clean_pairs(graph, 18);
   const auto target = analyze("flowmeter_target_15liter_per_min.sr", o);

@@ -4,12 +4,12 @@
 // (for texts without a ')' of their own, which could close the wrapping parenthesis early).
 #include <string>
 
-#include "decoder/display_filter.hpp"
-#include "decoder/register_meaning.hpp"
+#include "filter/display_filter.hpp"
+#include "models/register_meaning.hpp"
 #include "tests/fuzz/fuzz_input.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  using namespace modtap::decoder;
+  using namespace modtap;
   const std::string text(reinterpret_cast<const char*>(data), size);
   auto is_register = [](std::string_view name) { return name == "frequency_command"; };
   try {

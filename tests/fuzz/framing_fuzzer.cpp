@@ -9,9 +9,9 @@
 #include <nlohmann/json.hpp>
 
 #include "captures/output_file.hpp"
-#include "decoder/analyzer.hpp"
-#include "decoder/checksum.hpp"
-#include "decoder/model_interpreter.hpp"
+#include "models/model_interpreter.hpp"
+#include "protocol/analyzer.hpp"
+#include "protocol/checksum.hpp"
 #include "tests/fuzz/fuzz_input.hpp"
 #include "tools/modtap/json_sink.hpp"
 #include "tools/modtap/model_catalog.hpp"
@@ -20,8 +20,6 @@
 
 namespace modtap::fuzz {
 namespace {
-
-using namespace decoder;
 
 // Checks each record as it comes, then passes it on to the sinks that render it.
 class PropertySink final : public RecordSink {
@@ -99,14 +97,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace modtap;
   fuzz::FuzzInput in(data, size);
   const uint8_t setup = in.byte();
-  decoder::AnalyzerOptions options;
+  AnalyzerOptions options;
   options.mode = FUZZ_MODE;
-  options.clock = setup & 1 ? decoder::ClockQuality::per_byte : decoder::ClockQuality::per_chunk;
+  options.clock = setup & 1 ? ClockQuality::per_byte : ClockQuality::per_chunk;
   options.format.baud = (setup & 2) ? 9600 : 115200;
   const bool two_channels = setup & 4;
-  std::vector<decoder::ChannelInfo> channels{{"a", decoder::ChannelRole::bus}};
-  if (two_channels)
-    channels = {{"tx", decoder::ChannelRole::master}, {"rx", decoder::ChannelRole::slave}};
+  std::vector<ChannelInfo> channels{{"a", ChannelRole::bus}};
+  if (two_channels) channels = {{"tx", ChannelRole::master}, {"rx", ChannelRole::slave}};
 
   char* json_text = nullptr;
   size_t json_size = 0;
@@ -121,10 +118,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     fuzz::PropertySink properties({&json, &text});
     // Every frame read through one of the drives' models too, as --model does.
     const auto models = fuzz::catalog().all();
-    decoder::ModelChoice choice;
+    ModelChoice choice;
     choice.bus = models[(setup >> 4) % models.size()];
-    decoder::ModelInterpreter interpreter(models, choice, options.clock, properties);
-    decoder::Analyzer analyzer(options, channels, interpreter);
+    ModelInterpreter interpreter(models, choice, options.clock, properties);
+    Analyzer analyzer(options, channels, interpreter);
     int64_t t = 1'000'000'000;
     while (!in.empty()) {
       const uint8_t control = in.byte();

@@ -12,7 +12,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   uint64_t bytes = 0;
   try {
     captures::HexlogReader reader(path, 1'000'000);
-    decoder::Chunk chunk;
+    Chunk chunk;
     while (reader.next(chunk)) {
       FUZZ_EXPECT(chunk.channel < reader.channels().size() || reader.channels().empty());
       bytes += chunk.bytes.size();

@@ -3,13 +3,13 @@
 #include <string>
 #include <string_view>
 
-#include "decoder/model_yaml.hpp"
+#include "models/model_yaml.hpp"
 #include "tests/fuzz/fuzz_input.hpp"
 #include "tools/modtap/model_catalog.hpp"
 
 namespace {
 
-void expect_names_the_file(const modtap::decoder::ModelError& e) {
+void expect_names_the_file(const modtap::ModelError& e) {
   FUZZ_EXPECT(!e.problems().empty());
   for (const auto& problem : e.problems()) FUZZ_EXPECT(problem.rfind("fuzz.yaml", 0) == 0);
 }
@@ -26,16 +26,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view yaml(reinterpret_cast<const char*>(data), size);
   // The text is parsed once and read as a model twice: alone and extending a built-in one.
   try {
-    const decoder::ModelFile file(yaml, "fuzz.yaml");
-    for (const decoder::DeviceModel* base :
-         {static_cast<const decoder::DeviceModel*>(nullptr), catalog.find("nta5000")}) {
+    const ModelFile file(yaml, "fuzz.yaml");
+    for (const DeviceModel* base :
+         {static_cast<const DeviceModel*>(nullptr), catalog.find("nta5000")}) {
       try {
         FUZZ_EXPECT(!file.model(base).name.empty());
-      } catch (const decoder::ModelError& e) {
+      } catch (const ModelError& e) {
         expect_names_the_file(e);
       }
     }
-  } catch (const decoder::ModelError& e) {
+  } catch (const ModelError& e) {
     expect_names_the_file(e);
   }
   return 0;

@@ -15,7 +15,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     captures::OpenOptions options;
     options.format = captures::Format::pcap;
     const auto reader = captures::open_capture(path, options);
-    decoder::Chunk chunk;
+    Chunk chunk;
     while (reader->next(chunk)) {
       FUZZ_EXPECT(chunk.channel < reader->channels().size());
       bytes += chunk.bytes.size();

@@ -2,14 +2,13 @@
 // response to any request. Properties: no crash, and a register's value text renders.
 #include <fmt/format.h>
 
-#include "decoder/pdu_fields.hpp"
-#include "decoder/register_meaning.hpp"
+#include "models/register_meaning.hpp"
+#include "protocol/pdu_fields.hpp"
 #include "tests/fuzz/fuzz_input.hpp"
 #include "tools/modtap/model_catalog.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace modtap;
-  using namespace modtap::decoder;
   static const tools::ModelCatalog catalog = [] {
     tools::ModelCatalog c;
     c.load_builtin();

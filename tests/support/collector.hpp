@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "decoder/analyzer.hpp"
+#include "protocol/analyzer.hpp"
 
 namespace modtap::testing {
 
@@ -18,23 +18,23 @@ struct Record {
   uint16_t channel = 0;
   uint64_t offset = 0;
   std::vector<uint8_t> raw;
-  decoder::Role role = decoder::Role::unknown;
+  Role role = Role::unknown;
   bool check_ok = false;
   uint16_t expected_check = 0;
-  decoder::Damage damage = decoder::Damage::none;
+  Damage damage = Damage::none;
   uint32_t findings = 0;
   std::optional<uint64_t> request;
   std::optional<int64_t> latency_ns;
   int64_t t_ns = 0;
-  decoder::NoiseReason reason = decoder::NoiseReason::junk;
-  decoder::TimeoutReason timeout_reason = decoder::TimeoutReason::silence;
+  NoiseReason reason = NoiseReason::junk;
+  TimeoutReason timeout_reason = TimeoutReason::silence;
   uint8_t device = 0;           // a frame's device(); a noise record's request_slave
   bool damaged_answer = false;  // a noise record's
 };
 
-class Collector final : public decoder::RecordSink {
+class Collector final : public RecordSink {
  public:
-  void on_frame(const decoder::Frame& f) override {
+  void on_frame(const Frame& f) override {
     Record r;
     r.type = Record::Type::frame;
     r.index = f.index;
@@ -52,7 +52,7 @@ class Collector final : public decoder::RecordSink {
     r.device = f.device();
     records.push_back(std::move(r));
   }
-  void on_noise(const decoder::Noise& n) override {
+  void on_noise(const Noise& n) override {
     Record r;
     r.type = Record::Type::noise;
     r.index = n.index;
@@ -67,7 +67,7 @@ class Collector final : public decoder::RecordSink {
     r.t_ns = n.t_ns;
     records.push_back(std::move(r));
   }
-  void on_timeout(const decoder::Timeout& t) override {
+  void on_timeout(const Timeout& t) override {
     Record r;
     r.type = Record::Type::timeout;
     r.request = t.request;
@@ -128,12 +128,12 @@ inline std::vector<uint8_t> hex(const std::string& text) {
 
 // Runs bytes with no timing through an analyzer, split into chunks at `cuts`.
 inline Collector analyze_untimed(const std::vector<uint8_t>& bytes, std::vector<size_t> cuts = {},
-                                 decoder::ModeChoice mode = decoder::ModeChoice::rtu) {
+                                 ModeChoice mode = ModeChoice::rtu) {
   Collector out;
-  decoder::AnalyzerOptions options;
+  AnalyzerOptions options;
   options.mode = mode;
-  options.clock = decoder::ClockQuality::none;
-  decoder::Analyzer analyzer(options, {{"test", decoder::ChannelRole::bus}}, out);
+  options.clock = ClockQuality::none;
+  Analyzer analyzer(options, {{"test", ChannelRole::bus}}, out);
   cuts.push_back(bytes.size());
   size_t at = 0;
   for (size_t cut : cuts) {
@@ -148,8 +148,7 @@ inline Collector analyze_untimed(const std::vector<uint8_t>& bytes, std::vector<
 // Feeds the bytes cut at every offset, and at every pair of offsets when `pairs`, and expects
 // the same records as from one piece: how a source splits its reads must change nothing.
 inline void expect_same_at_every_split(const std::vector<uint8_t>& bytes,
-                                       decoder::ModeChoice mode = decoder::ModeChoice::rtu,
-                                       bool pairs = false) {
+                                       ModeChoice mode = ModeChoice::rtu, bool pairs = false) {
   const auto whole = analyze_untimed(bytes, {}, mode);
   auto expect_same = [&](const std::vector<size_t>& cuts) {
     const auto split = analyze_untimed(bytes, cuts, mode);

@@ -12,15 +12,12 @@
 #include <string>
 #include <vector>
 
-#include "decoder/analyzer.hpp"
-#include "decoder/checksum.hpp"
+#include "protocol/analyzer.hpp"
+#include "protocol/checksum.hpp"
 #include "tests/support/collector.hpp"
 
 namespace modtap::busgen {
 namespace {
-
-using decoder::Damage;
-using decoder::Role;
 using Bytes = std::vector<uint8_t>;
 
 // Five slaves polled in turn on an otherwise clean bus (no exceptions, silences or broadcasts),
@@ -58,7 +55,7 @@ Bytes wire(const BusCapture& c, const TruthFrame& f) {
 
 // An RTU frame: the body and its CRC.
 Bytes rtu(Bytes body) {
-  const uint16_t crc = decoder::crc16(body);
+  const uint16_t crc = crc16(body);
   body.push_back(static_cast<uint8_t>(crc & 0xFF));
   body.push_back(static_cast<uint8_t>(crc >> 8));
   return body;
@@ -66,7 +63,7 @@ Bytes rtu(Bytes body) {
 
 bool crc_ok(const Bytes& w) {
   const size_t n = w.size();
-  return n >= 4 && decoder::crc16(std::span(w).first(n - 2)) == (w[n - 2] | w[n - 1] << 8);
+  return n >= 4 && crc16(std::span(w).first(n - 2)) == (w[n - 2] | w[n - 1] << 8);
 }
 
 // When a frame's first byte began, and when its last byte ended.
@@ -177,7 +174,7 @@ TEST(SlaveFaults, TheMasterGivesASilentSlaveUpAfterThreeRetries) {
     // Retries start once the bus has shown how fast slaves answer (20 answers).
     EXPECT_TRUE(run.size() == 1 || run.size() == 4) << run.size();
     for (size_t i = 0; i < run.size(); ++i)
-      EXPECT_EQ((c.frames[run[i]].findings & decoder::finding_retry) != 0, i > 0);
+      EXPECT_EQ((c.frames[run[i]].findings & finding_retry) != 0, i > 0);
     runs_of_four += run.size() == 4;
     run.clear();
   };
@@ -302,7 +299,7 @@ TEST(SlaveFaults, ASlaveWithBitErrorsDamagesItsShareOfAnswersAndNoOneElses) {
     }
     ++damaged;
     EXPECT_EQ(f.damage, Damage::corrupted);
-    EXPECT_EQ(f.findings, decoder::finding_bad_check);
+    EXPECT_EQ(f.findings, finding_bad_check);
     EXPECT_FALSE(crc_ok(w));
     EXPECT_EQ(w[1], 0x03);  // the function code and byte count tell its length: never hit
     EXPECT_EQ(w[2], 8);
@@ -474,7 +471,7 @@ TEST(SlaveFaults, AGlitchingSlavePutsAGlitchBeforeEveryAnswer) {
 // In ASCII a bit error changes a hex digit to another: the frame still reads, its LRC wrong.
 TEST(SlaveFaults, AsciiBitErrorsKeepTheFrameReadable) {
   BusOptions o = scan();
-  o.mode = decoder::Mode::ascii;
+  o.mode = Mode::ascii;
   o.format.data_bits = 7;
   o.slave_faults[2].corruption_rate = 0.5;
   const BusCapture c = simulate(o);
@@ -493,7 +490,7 @@ TEST(SlaveFaults, AsciiBitErrorsKeepTheFrameReadable) {
           static_cast<uint8_t>(std::stoi(std::string(w.begin() + static_cast<ptrdiff_t>(i),
                                                      w.begin() + static_cast<ptrdiff_t>(i + 2)),
                                          nullptr, 16)));
-    EXPECT_NE(decoder::lrc(std::span(adu).first(adu.size() - 1)), adu.back());
+    EXPECT_NE(lrc(std::span(adu).first(adu.size() - 1)), adu.back());
   }
   EXPECT_GT(damaged, 60u);
 }
@@ -513,11 +510,11 @@ TEST(SlaveFaults, TheAnalyzerFindsEachFrameAsTheTruthSays) {
   add_slave_faults(o, "4:duplicate");
   add_slave_faults(o, "5:bit-errors=0.3");
   const BusCapture c = simulate(o);
-  decoder::AnalyzerOptions options;
-  options.mode = decoder::ModeChoice::rtu;
-  options.clock = decoder::ClockQuality::per_byte;
+  AnalyzerOptions options;
+  options.mode = ModeChoice::rtu;
+  options.clock = ClockQuality::per_byte;
   testing::Collector out;
-  decoder::Analyzer analyzer(options, {{"bus", decoder::ChannelRole::bus}}, out);
+  Analyzer analyzer(options, {{"bus", ChannelRole::bus}}, out);
   for (size_t i = 0; i < c.bytes.size(); ++i) analyzer.push({0, c.end_ns[i], {&c.bytes[i], 1}});
   analyzer.finish();
   std::map<uint64_t, const testing::Record*> at;

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "captures/pcap_chunk_writer.hpp"
-#include "decoder/checksum.hpp"
+#include "protocol/checksum.hpp"
 #include "tools/busgen/bus_simulator.hpp"
 
 namespace {
@@ -50,7 +50,7 @@ std::string raw_capture(const std::string& name, const std::vector<std::vector<u
   const auto path = std::filesystem::temp_directory_path() / name;
   std::ofstream out(path, std::ios::binary);
   for (auto body : bodies) {
-    const uint16_t crc = modtap::decoder::crc16(body);
+    const uint16_t crc = modtap::crc16(body);
     body.push_back(static_cast<uint8_t>(crc & 0xFF));
     body.push_back(static_cast<uint8_t>(crc >> 8));
     out.write(reinterpret_cast<const char*>(body.data()),

@@ -12,10 +12,6 @@
 
 namespace modtap::tools {
 namespace {
-
-using decoder::Frame;
-using decoder::Meaning;
-using decoder::RegisterValue;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
@@ -58,18 +54,18 @@ class RecordingBroker final : public MessageBroker {
 class Bus {
  public:
   Bus(RecordingBroker& broker, MqttOptions options)
-      : statistics_({}, decoder::ClockQuality::per_chunk),
+      : statistics_({}, ClockQuality::per_chunk),
         publisher_(broker, statistics_, std::move(options),
-                   [this] { return decoder::find_problems(statistics_, evidence_); }) {}
+                   [this] { return find_problems(statistics_, evidence_); }) {}
 
   void read(RegisterValue reg, double t_s, uint8_t slave = 1) {
-    see(reg, t_s, slave, decoder::Role::response);
+    see(reg, t_s, slave, Role::response);
   }
   // A write request carrying `reg`: what the master asks, not yet what the device holds.
   void ask(RegisterValue reg, double t_s, uint8_t slave = 1) {
-    see(reg, t_s, slave, decoder::Role::request);
+    see(reg, t_s, slave, Role::request);
   }
-  void see(RegisterValue reg, double t_s, uint8_t slave, decoder::Role role) {
+  void see(RegisterValue reg, double t_s, uint8_t slave, Role role) {
     Meaning meaning;
     meaning.registers.push_back(reg);
     const uint8_t adu[] = {slave, 3, 2, 0, 0, 0, 0};
@@ -90,7 +86,7 @@ class Bus {
     const uint8_t adu[] = {slave, 3, 0, 0, 0, 1, 0, 0};
     Frame frame;
     frame.index = ++index_;
-    frame.role = decoder::Role::request;
+    frame.role = Role::request;
     frame.adu = adu;
     frame.raw = adu;
     frame.check_ok = true;
@@ -99,13 +95,13 @@ class Bus {
     statistics_.on_frame(frame);
     evidence_.on_frame(frame);
     publisher_.on_frame(frame);
-    decoder::Timeout timeout;
+    Timeout timeout;
     timeout.request = frame.index;
     timeout.slave = slave;
     timeout.function = 3;
     timeout.t_ns = frame.end_ns + second / 2;
     timeout.waited_ns = second / 2;
-    timeout.reason = decoder::TimeoutReason::silence;
+    timeout.reason = TimeoutReason::silence;
     statistics_.on_timeout(timeout);
     evidence_.on_timeout(timeout);
     publisher_.on_timeout(timeout);
@@ -113,8 +109,8 @@ class Bus {
   MqttPublisher& publisher() { return publisher_; }
 
  private:
-  decoder::BusStatistics statistics_;
-  decoder::ProblemEvidence evidence_;
+  BusStatistics statistics_;
+  ProblemEvidence evidence_;
   MqttPublisher publisher_;
   uint64_t index_ = 0;
 };
@@ -220,10 +216,10 @@ TEST(MqttPublisher, DiscoveryPointsHomeAssistantAtTheValueAndTheStatus) {
 TEST(MqttPublisher, ARegisterNoModelNamesIsNamedByTableAndAddress) {
   RecordingBroker broker;
   MqttOptions o = options(0);
-  o.base = decoder::RegisterBase::modicon;
+  o.base = RegisterBase::modicon;
   Bus bus(broker, o);
   RegisterValue reg;
-  reg.table = decoder::Table::input;
+  reg.table = Table::input;
   reg.address = 7;
   reg.raw = 12;
   reg.value = 12;

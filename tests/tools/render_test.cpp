@@ -9,7 +9,7 @@ namespace {
 
 std::string number(double value, int decimals) {
   fmt::memory_buffer out;
-  decoder::append_number(out, value, decimals);
+  append_number(out, value, decimals);
   return fmt::to_string(out);
 }
 

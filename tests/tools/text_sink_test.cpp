@@ -16,12 +16,12 @@ std::vector<std::string> time_columns(TimeFormat format, const std::vector<int64
   {
     captures::OutputFile file(stream, "test");
     Output out(file);
-    const std::vector<decoder::ChannelInfo> channels{{"bus", decoder::ChannelRole::bus}};
+    const std::vector<ChannelInfo> channels{{"bus", ChannelRole::bus}};
     TextSink sink(out, channels, TextOptions{.time = format});
     static const uint8_t read[] = {0x01, 0x03, 0x00, 0x00, 0x00, 0x01, 0x84, 0x0A};
-    decoder::Frame frame;
+    Frame frame;
     frame.raw = frame.adu = read;
-    frame.role = decoder::Role::request;
+    frame.role = Role::request;
     frame.check_ok = true;
     for (const int64_t t : starts) {
       frame.t_ns = t;

@@ -8,19 +8,16 @@
 #include <string>
 #include <utility>
 
-#include "decoder/checksum.hpp"
-#include "decoder/function_codes.hpp"
+#include "protocol/checksum.hpp"
+#include "protocol/function_codes.hpp"
 
 namespace modtap::busgen {
-
-using decoder::Mode;
-using decoder::Role;
 using Bytes = std::vector<uint8_t>;
 
 void encode_frame(Mode mode, const Bytes& body, Bytes& out) {
   if (mode == Mode::rtu) {
     out.insert(out.end(), body.begin(), body.end());
-    const uint16_t crc = decoder::crc16(body);
+    const uint16_t crc = crc16(body);
     out.push_back(static_cast<uint8_t>(crc & 0xFF));
     out.push_back(static_cast<uint8_t>(crc >> 8));
     return;
@@ -32,7 +29,7 @@ void encode_frame(Mode mode, const Bytes& body, Bytes& out) {
   };
   out.push_back(':');
   for (uint8_t b : body) put(b);
-  put(decoder::lrc(body));
+  put(lrc(body));
   out.push_back('\r');
   out.push_back('\n');
 }
@@ -83,16 +80,16 @@ class Simulator {
                     double corruption_rate = 0.0) {
     Bytes adu = adu_of(body);
     uint32_t findings = 0;
-    auto damage = decoder::Damage::none;
+    auto damage = Damage::none;
     if ((chance(corruption_rate) || chance(o_.corruption_rate)) && corrupt(adu, role)) {
-      findings = decoder::finding_bad_check;
-      damage = decoder::Damage::corrupted;
+      findings = finding_bad_check;
+      damage = Damage::corrupted;
     }
     const Bytes wire = wire_of(adu);
     uint64_t offset;
     if (o_.mode == Mode::rtu && chance(o_.pause_rate)) {
       offset = send_with_pause(wire, gap_ns);
-      findings |= decoder::finding_gap_in_frame;
+      findings |= finding_gap_in_frame;
     } else {
       offset = send(wire, gap_ns);
     }
@@ -107,10 +104,10 @@ class Simulator {
   Bytes adu_of(const Bytes& body) const {
     Bytes adu = body;
     if (o_.mode == Mode::ascii) {
-      adu.push_back(decoder::lrc(body));
+      adu.push_back(lrc(body));
       return adu;
     }
-    const uint16_t crc = decoder::crc16(body);
+    const uint16_t crc = crc16(body);
     adu.push_back(static_cast<uint8_t>(crc & 0xFF));
     adu.push_back(static_cast<uint8_t>(crc >> 8));
     return adu;
@@ -131,8 +128,8 @@ class Simulator {
 
   bool check_ok(const Bytes& adu) const {
     const std::span<const uint8_t> body(adu.data(), adu.size() - check_size());
-    if (o_.mode == Mode::ascii) return decoder::lrc(body) == adu.back();
-    return decoder::crc16(body) == (adu[adu.size() - 2] | adu.back() << 8);
+    if (o_.mode == Mode::ascii) return lrc(body) == adu.back();
+    return crc16(body) == (adu[adu.size() - 2] | adu.back() << 8);
   }
 
   // A bit flipped in 1 to 3 bytes on the way. Never in a byte the frame's length is told by (the
@@ -141,8 +138,8 @@ class Simulator {
   // is no header's to tell (only a search for its CRC finds its end).
   bool corrupt(Bytes& adu, Role role) {
     const size_t body_size = adu.size() - check_size();
-    auto length_of = [&] { return decoder::body_length(role, {adu.data(), body_size}); };
-    using Kind = decoder::BodyLength::Kind;
+    auto length_of = [&] { return body_length(role, {adu.data(), body_size}); };
+    using Kind = BodyLength::Kind;
     const auto length = length_of();
     if (length.kind == Kind::invalid || (o_.mode == Mode::rtu && length.kind != Kind::known))
       return false;
@@ -232,7 +229,7 @@ class Simulator {
     // A corrupted request no slave takes; a retry is one only after a copy the analyzer saw.
     bool unanswered_copy = false;
     for (unsigned retries = 0;; ++retries) {
-      const bool corrupted = capture_.frames[req].damage != decoder::Damage::none;
+      const bool corrupted = capture_.frames[req].damage != Damage::none;
       if (!corrupted && !silent(faults) && !chance(o_.no_response_rate)) break;
       if (!corrupted) capture_.timed_out.push_back(req);
       unanswered_copy |= !corrupted;
@@ -243,9 +240,9 @@ class Simulator {
         timing_out_ns_ = o_.retry_after_ns;
         return;
       }
-      req = send_request(
-          request, request_findings | (unanswered_copy ? uint32_t{decoder::finding_retry} : 0u),
-          o_.retry_after_ns + pick(0, 50'000'000));
+      req =
+          send_request(request, request_findings | (unanswered_copy ? uint32_t{finding_retry} : 0u),
+                       o_.retry_after_ns + pick(0, 50'000'000));
     }
     int64_t turnaround =
         chance(o_.fast_turnaround_rate) ? char_ns_ * pick(15, 30) / 10 : t35_ + pick(0, 3'000'000);
@@ -298,8 +295,7 @@ class Simulator {
   size_t send_request(const Bytes& request, uint32_t findings, int64_t gap_ns) {
     if (chance(o_.request_glitch_rate)) gap_ns = glitch(gap_ns);
     const size_t req = send_frame(request, Role::request, gap_ns, std::nullopt);
-    if (capture_.frames[req].damage == decoder::Damage::none)
-      capture_.frames[req].findings |= findings;
+    if (capture_.frames[req].damage == Damage::none) capture_.frames[req].findings |= findings;
     return req;
   }
 
@@ -314,15 +310,15 @@ class Simulator {
   // their length are damaged here (RTU; ASCII frames end at their CR LF).
   bool damageable(const Bytes& response) const {
     if (o_.mode != Mode::rtu) return false;
-    const auto length = decoder::body_length(Role::response, response);
-    return length.kind == decoder::BodyLength::Kind::known;
+    const auto length = body_length(Role::response, response);
+    return length.kind == BodyLength::Kind::known;
   }
 
   void send_cut(const Bytes& response, int64_t gap_ns, size_t req) {
     Bytes wire;
     encode_frame(o_.mode, response, wire);
     wire.resize(pick(3, static_cast<unsigned>(wire.size() - 1)));
-    send_damaged(wire, gap_ns, req, decoder::Damage::cut, response[0]);
+    send_damaged(wire, gap_ns, req, Damage::cut, response[0]);
   }
 
   // Another device starts while the response's last bytes are on the wire: they arrive garbled
@@ -333,7 +329,7 @@ class Simulator {
     const size_t garbled = pick(1, 3);
     for (size_t i = wire.size() - garbled; i < wire.size(); ++i)
       wire[i] ^= static_cast<uint8_t>(pick(1, 255));
-    send_damaged(wire, gap_ns, req, decoder::Damage::collision, response[0]);
+    send_damaged(wire, gap_ns, req, Damage::collision, response[0]);
     Bytes other;
     random_bytes(other, pick(1, 6));
     send(other, 0);
@@ -348,11 +344,10 @@ class Simulator {
     capture_.garbled.push_back(send(junk, gap_ns));
   }
 
-  void send_damaged(const Bytes& wire, int64_t gap_ns, size_t req, decoder::Damage damage,
-                    uint8_t slave) {
+  void send_damaged(const Bytes& wire, int64_t gap_ns, size_t req, Damage damage, uint8_t slave) {
     const uint64_t offset = send(wire, gap_ns);
     capture_.frames.push_back({offset, static_cast<uint32_t>(wire.size()), Role::response, req,
-                               decoder::finding_bad_check, damage, slave});
+                               finding_bad_check, damage, slave});
   }
 
   // Two devices with the slave's address answer together, the second 0 to 1.9 characters after
@@ -375,9 +370,9 @@ class Simulator {
       const Bytes wire = wire_of(adu);
       const uint64_t offset = send(wire, gap_ns);
       const auto size = static_cast<uint32_t>(wire.size());
-      capture_.frames.push_back(
-          {offset, size, Role::response, req, whole ? 0u : uint32_t{decoder::finding_bad_check},
-           whole ? decoder::Damage::none : decoder::Damage::corrupted, response[0]});
+      capture_.frames.push_back({offset, size, Role::response, req,
+                                 whole ? 0u : uint32_t{finding_bad_check},
+                                 whole ? Damage::none : Damage::corrupted, response[0]});
       capture_.clashes.push_back({req, offset, size});
       return;
     }
@@ -418,7 +413,7 @@ class Simulator {
                                                         : 0x0F);
     req.push_back(fc);
     u16(req, pick(0, 1000));
-    uint32_t findings = decoder::finding_quantity_out_of_spec;
+    uint32_t findings = finding_quantity_out_of_spec;
     if (kind == 0) u16(req, chance(0.2) ? 0 : pick(126, 300));
     if (kind == 1) u16(req, chance(0.2) ? 0 : pick(2001, 4000));
     if (kind >= 2) {  // a byte count one more than the quantity needs
@@ -427,7 +422,7 @@ class Simulator {
       u16(req, qty);
       req.push_back(static_cast<uint8_t>(count));
       random_bytes(req, count);
-      findings = decoder::finding_byte_count_mismatch;
+      findings = finding_byte_count_mismatch;
     }
     exception(rsp, fc, 0x03);
     return findings;
@@ -478,7 +473,7 @@ class Simulator {
   }
 
   void build(uint8_t slave, Bytes& req, Bytes& rsp, bool broadcast) {
-    const auto unicast = decoder::public_function_codes();
+    const auto unicast = public_function_codes();
     static constexpr uint8_t writes[] = {0x05, 0x06, 0x0F, 0x10};
     uint8_t fc = broadcast ? writes[pick(0, 3)]
                            : unicast[pick(0, static_cast<unsigned>(unicast.size() - 1))].code;
@@ -791,18 +786,18 @@ void add_slave_faults(BusOptions& options, std::string_view spec) {
   }
 }
 
-decoder::ClockQuality clock_of(Delivery delivery) {
+ClockQuality clock_of(Delivery delivery) {
   switch (delivery) {
     case Delivery::per_byte:
-      return decoder::ClockQuality::per_byte;
+      return ClockQuality::per_byte;
     case Delivery::bursts:
     case Delivery::per_frame:
     case Delivery::whole_frames:
-      return decoder::ClockQuality::per_chunk;
+      return ClockQuality::per_chunk;
     case Delivery::untimed:
-      return decoder::ClockQuality::none;
+      return ClockQuality::none;
   }
-  return decoder::ClockQuality::none;
+  return ClockQuality::none;
 }
 
 namespace {

@@ -10,8 +10,8 @@
 #include <string_view>
 #include <vector>
 
-#include "decoder/records.hpp"
-#include "decoder/serial_format.hpp"
+#include "protocol/records.hpp"
+#include "protocol/serial_format.hpp"
 
 namespace modtap::busgen {
 
@@ -50,8 +50,8 @@ struct SlaveFaults {
 struct BusOptions {
   uint64_t seed = 1;
   size_t transactions = 1000;
-  decoder::SerialFormat format;
-  decoder::Mode mode = decoder::Mode::rtu;
+  SerialFormat format;
+  Mode mode = Mode::rtu;
   // Rates are per transaction, between 0 and 1.
   double exception_rate = 0.05;
   double no_response_rate = 0.03;  // the slave stays silent; the master waits out its time-out
@@ -97,12 +97,12 @@ void add_slave_faults(BusOptions& options, std::string_view spec);
 struct TruthFrame {
   uint64_t offset = 0;  // in the byte stream
   uint32_t size = 0;
-  decoder::Role role = decoder::Role::request;
+  Role role = Role::request;
   std::optional<size_t> request;  // for a response: its request's position in `frames`
-  uint32_t findings = 0;          // what the analyzer must say of it (decoder::finding_*)
+  uint32_t findings = 0;          // what the analyzer must say of it (finding_*)
   // A frame damaged on the wire: its bytes as they arrived, its check bad, and how it broke. A
   // corrupted request opens no transaction (no slave takes it): it is never in `timed_out`.
-  decoder::Damage damage = decoder::Damage::none;
+  Damage damage = Damage::none;
   // The slave it is to or from, as sent: a bit error may have changed the address on the wire.
   uint8_t slave = 0;
   // A response that came after the master's time-out (retry_after_ns) ran out; its request is
@@ -138,7 +138,7 @@ struct BusCapture {
 BusCapture simulate(const BusOptions& options);
 
 // Appends one frame in the mode's wire form (RTU: adu + CRC; ASCII: ':' hex LRC CR LF).
-void encode_frame(decoder::Mode mode, const std::vector<uint8_t>& body, std::vector<uint8_t>& out);
+void encode_frame(Mode mode, const std::vector<uint8_t>& body, std::vector<uint8_t>& out);
 
 // How an adapter hands bytes to the program that reads it.
 enum class Delivery {
@@ -164,6 +164,6 @@ struct ClockError {
 
 std::vector<DeliveredChunk> deliver(const BusCapture& capture, Delivery delivery, uint64_t seed,
                                     ClockError clock = {});
-decoder::ClockQuality clock_of(Delivery delivery);
+ClockQuality clock_of(Delivery delivery);
 
 }  // namespace modtap::busgen

@@ -22,7 +22,7 @@ int write(const busgen::BusCapture& capture, const std::string& format, busgen::
           uint64_t seed, const std::string& path, int64_t char_ns) {
   const auto chunks = busgen::deliver(capture, delivery, seed);
   auto chunk = [&](const busgen::DeliveredChunk& c) {
-    return decoder::Chunk{0, epoch_ns + c.t_ns, {capture.bytes.data() + c.offset, c.size}};
+    return Chunk{0, epoch_ns + c.t_ns, {capture.bytes.data() + c.offset, c.size}};
   };
   if (format == "pcap") {
     captures::PcapChunkWriter writer(path, 147);
@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
     o.pause_rate = o.garbled_rate = 0.01;
   }
   if (ascii) {
-    o.mode = decoder::Mode::ascii;
+    o.mode = Mode::ascii;
     o.format.data_bits = 7;
   }
   const std::map<std::string, busgen::Delivery> deliveries{

@@ -13,7 +13,7 @@
 
 #include "captures/chunk_source.hpp"
 #include "captures/serial_port.hpp"
-#include "decoder/format_probe.hpp"
+#include "protocol/format_probe.hpp"
 
 namespace modtap::live {
 namespace {
@@ -40,38 +40,38 @@ int64_t now_ns() {
 }
 
 // Counts what went by, for the status line.
-class Counting final : public decoder::RecordSink {
+class Counting final : public RecordSink {
  public:
-  explicit Counting(decoder::RecordSink& next) : next_(next) {}
-  void on_frame(const decoder::Frame& f) override {
+  explicit Counting(RecordSink& next) : next_(next) {}
+  void on_frame(const Frame& f) override {
     ++frames;
     errors += !f.check_ok;
     next_.on_frame(f);
   }
-  void on_noise(const decoder::Noise& n) override {
+  void on_noise(const Noise& n) override {
     ++noise;
     next_.on_noise(n);
   }
-  void on_timeout(const decoder::Timeout& t) override {
+  void on_timeout(const Timeout& t) override {
     timeouts += t.timed_out();
     next_.on_timeout(t);
   }
   uint64_t frames = 0, errors = 0, noise = 0, timeouts = 0;
 
  private:
-  decoder::RecordSink& next_;
+  RecordSink& next_;
 };
 
 }  // namespace
 
 PortSpec parse_port(const std::string& spec) {
   const auto eq = spec.find('=');
-  if (eq == std::string::npos) return {spec, spec, decoder::ChannelRole::bus};
-  PortSpec p{spec.substr(0, eq), spec.substr(eq + 1), decoder::ChannelRole::bus};
+  if (eq == std::string::npos) return {spec, spec, ChannelRole::bus};
+  PortSpec p{spec.substr(0, eq), spec.substr(eq + 1), ChannelRole::bus};
   if (p.name == "master") {
-    p.role = decoder::ChannelRole::master;
+    p.role = ChannelRole::master;
   } else if (p.name == "slave") {
-    p.role = decoder::ChannelRole::slave;
+    p.role = ChannelRole::slave;
   } else {
     throw std::invalid_argument("a port is PATH, master=PATH or slave=PATH, not \"" + spec + "\"");
   }
@@ -80,26 +80,25 @@ PortSpec parse_port(const std::string& spec) {
 }
 
 ProbeResult probe_ports(const std::vector<PortSpec>& specs, const LiveOptions& options,
-                        std::optional<uint32_t> baud, std::optional<decoder::Parity> parity,
+                        std::optional<uint32_t> baud, std::optional<Parity> parity,
                         int64_t window_ns, const std::atomic<bool>& stop) {
   const auto& base = options.analyzer.format;
-  std::vector<decoder::FormatTrial> trials;
+  std::vector<FormatTrial> trials;
   std::vector<std::vector<ReadBytes>> reads;
-  std::vector<decoder::ChannelInfo> channels;
+  std::vector<ChannelInfo> channels;
   for (const auto& spec : specs) channels.push_back({spec.name, spec.role});
-  for (const auto& format :
-       decoder::candidate_formats(baud, parity, base.data_bits, base.stop_bits)) {
+  for (const auto& format : candidate_formats(baud, parity, base.data_bits, base.stop_bits)) {
     if (stop) break;
     std::vector<std::unique_ptr<SerialPort>> ports;
     for (const auto& spec : specs) ports.push_back(std::make_unique<SerialPort>(spec.path, format));
-    decoder::AnalyzerOptions analyzer = options.analyzer;
+    AnalyzerOptions analyzer = options.analyzer;
     analyzer.format = format;
-    analyzer.clock = decoder::ClockQuality::per_chunk;
+    analyzer.clock = ClockQuality::per_chunk;
     const int64_t end = now_ns() + window_ns;
     std::vector<uint8_t> buffer(4096);
     size_t turn = 0;
     std::vector<ReadBytes>& kept = reads.emplace_back();
-    auto next = [&](decoder::Chunk& chunk) {
+    auto next = [&](Chunk& chunk) {
       while (!stop && now_ns() < end) {
         std::vector<pollfd> fds;
         for (const auto& p : ports) fds.push_back({p->fd(), POLLIN, 0});
@@ -118,18 +117,18 @@ ProbeResult probe_ports(const std::vector<PortSpec>& specs, const LiveOptions& o
       }
       return false;
     };
-    trials.push_back(decoder::try_format(analyzer, channels, next, 64 * 1024));
-    fmt::print(stderr, "modtap: listened as {}\n", decoder::describe(trials.back()));
+    trials.push_back(try_format(analyzer, channels, next, 64 * 1024));
+    fmt::print(stderr, "modtap: listened as {}\n", describe(trials.back()));
     if (trials.back().convincing()) break;
   }
   if (trials.empty()) return {base, {}};
-  const auto& best = decoder::best_trial(trials);
+  const auto& best = best_trial(trials);
   if (best.good_frames == 0) {
     fmt::print(stderr, "modtap: no setting gave a frame with a good check; using {}\n",
-               decoder::describe(base));
+               describe(base));
     return {base, {}};
   }
-  fmt::print(stderr, "modtap: using {}\n", decoder::describe(best.format));
+  fmt::print(stderr, "modtap: using {}\n", describe(best.format));
   return {best.format, std::move(reads[static_cast<size_t>(&best - trials.data())])};
 }
 
@@ -150,25 +149,25 @@ void request_stop() {
   stop_requested = true;
 }
 
-int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options,
-             decoder::RecordSink& sink, const std::atomic<bool>& stop) {
+int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options, RecordSink& sink,
+             const std::atomic<bool>& stop) {
   std::vector<std::unique_ptr<SerialPort>> ports;
-  std::vector<decoder::ChannelInfo> channels;
+  std::vector<ChannelInfo> channels;
   for (const auto& spec : specs) {
     ports.push_back(std::make_unique<SerialPort>(spec.path, options.analyzer.format));
     channels.push_back({spec.name, spec.role});
     if (options.announce)
       fmt::print(stderr, "modtap: listening on {} ({})\n", spec.path, ports.back()->clock_note());
   }
-  decoder::AnalyzerOptions analyzer_options = options.analyzer;
-  analyzer_options.clock = decoder::ClockQuality::per_chunk;
+  AnalyzerOptions analyzer_options = options.analyzer;
+  analyzer_options.clock = ClockQuality::per_chunk;
   Counting counting(sink);
-  decoder::Analyzer bus(analyzer_options, channels, counting);
+  Analyzer bus(analyzer_options, channels, counting);
 
   // Wake often enough to print a frame within t3.5 plus a few milliseconds of its end.
   const int wake_ms =
       static_cast<int>(std::max<int64_t>(1, analyzer_options.format.t35_ns() / 1'000'000));
-  auto take = [&](const decoder::Chunk& chunk) {
+  auto take = [&](const Chunk& chunk) {
     if (options.on_read) options.on_read(chunk, bus.between_frames());
     bus.push(chunk);
   };

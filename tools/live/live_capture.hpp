@@ -9,14 +9,14 @@
 #include <string>
 #include <vector>
 
-#include "decoder/analyzer.hpp"
+#include "protocol/analyzer.hpp"
 
 namespace modtap::live {
 
 struct PortSpec {
   std::string name;  // "master", "slave", or the path
   std::string path;
-  decoder::ChannelRole role = decoder::ChannelRole::bus;
+  ChannelRole role = ChannelRole::bus;
 };
 
 // Parses "PATH" or "master=PATH" / "slave=PATH"; throws std::invalid_argument.
@@ -33,14 +33,14 @@ struct ReadBytes {
 enum class PortEvent : uint8_t { read_failed, came_back };
 
 struct LiveOptions {
-  decoder::AnalyzerOptions analyzer;  // its clock is set to per_chunk
-  bool reconnect = false;             // wait for an unplugged port instead of ending
-  bool status_line = false;           // a rate/frames/errors line on stderr, once a second
-  bool announce = true;               // say on stderr what is being listened to
-  std::vector<ReadBytes> replay;      // analysed before the first read
+  AnalyzerOptions analyzer;       // its clock is set to per_chunk
+  bool reconnect = false;         // wait for an unplugged port instead of ending
+  bool status_line = false;       // a rate/frames/errors line on stderr, once a second
+  bool announce = true;           // say on stderr what is being listened to
+  std::vector<ReadBytes> replay;  // analysed before the first read
   // Every read, as read (--save-raw), and whether it begins after every frame before it
   // was out (where a file of reads may turn).
-  std::function<void(const decoder::Chunk&, bool between_frames)> on_read;
+  std::function<void(const Chunk&, bool between_frames)> on_read;
   // After every wake of the loop (a read, or a wait of about t3.5 with none), with the time:
   // what paces itself by the clock even on a silent bus (--mqtt).
   std::function<void(int64_t now_ns)> on_wake;
@@ -50,11 +50,11 @@ struct LiveOptions {
 
 // Runs until `stop` is set (a signal) or a port disappears without --reconnect; then
 // finishes the analyzer so every sink can close its files. Returns the exit status.
-int run_live(const std::vector<PortSpec>& ports, const LiveOptions& options,
-             decoder::RecordSink& sink, const std::atomic<bool>& stop);
+int run_live(const std::vector<PortSpec>& ports, const LiveOptions& options, RecordSink& sink,
+             const std::atomic<bool>& stop);
 
 struct ProbeResult {
-  decoder::SerialFormat format;
+  SerialFormat format;
   std::vector<ReadBytes> read;  // what was read under that format, so no byte is lost
 };
 
@@ -62,7 +62,7 @@ struct ProbeResult {
 // for up to `window_ns`, and returns the one under which the most bytes formed good frames.
 // Says on stderr what it tried. A fixed baud or parity narrows the search.
 ProbeResult probe_ports(const std::vector<PortSpec>& ports, const LiveOptions& options,
-                        std::optional<uint32_t> baud, std::optional<decoder::Parity> parity,
+                        std::optional<uint32_t> baud, std::optional<Parity> parity,
                         int64_t window_ns, const std::atomic<bool>& stop);
 
 // The wall clock the live loop stamps reads with (it never jumps, docs/live.md).

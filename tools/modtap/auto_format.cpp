@@ -2,11 +2,9 @@
 
 #include <fmt/format.h>
 
-#include "decoder/format_probe.hpp"
+#include "protocol/format_probe.hpp"
 
 namespace modtap::tools {
-
-using namespace decoder;
 
 namespace {
 

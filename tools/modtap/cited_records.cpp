@@ -2,9 +2,8 @@
 
 namespace modtap::tools {
 
-CitedRecords::CitedRecords(decoder::ProblemEvidence& evidence,
-                           const std::vector<decoder::ChannelInfo>& channels,
-                           decoder::RegisterBase base, const decoder::RecordClock* clock)
+CitedRecords::CitedRecords(ProblemEvidence& evidence, const std::vector<ChannelInfo>& channels,
+                           RegisterBase base, const RecordClock* clock)
     : evidence_(evidence),
       own_clock_used_(clock == nullptr),
       text_(text_out_, channels,
@@ -23,7 +22,7 @@ void CitedRecords::keep(std::optional<uint64_t> request, Render render) {
 }
 
 // A copy that outlives the framer's buffer, without what points into other stages' storage.
-void CitedRecords::remember_request(const decoder::Frame& frame) {
+void CitedRecords::remember_request(const Frame& frame) {
   request_raw_.assign(frame.raw.begin(), frame.raw.end());
   request_adu_.assign(frame.adu.begin(), frame.adu.end());
   request_ = frame;
@@ -34,20 +33,20 @@ void CitedRecords::remember_request(const decoder::Frame& frame) {
   request_.decoded = nullptr;
 }
 
-void CitedRecords::on_frame(const decoder::Frame& frame) {
+void CitedRecords::on_frame(const Frame& frame) {
   if (own_clock_used_) own_clock_.see(frame.t_ns);
   evidence_.on_frame(frame);
   keep(frame.request, [&] { text_.on_frame(frame); });
-  if (frame.role == decoder::Role::request && frame.check_ok) remember_request(frame);
+  if (frame.role == Role::request && frame.check_ok) remember_request(frame);
 }
 
-void CitedRecords::on_noise(const decoder::Noise& noise) {
+void CitedRecords::on_noise(const Noise& noise) {
   if (own_clock_used_) own_clock_.see(noise.t_ns);
   evidence_.on_noise(noise);
   keep(noise.request, [&] { text_.on_noise(noise); });
 }
 
-void CitedRecords::on_timeout(const decoder::Timeout& timeout) {
+void CitedRecords::on_timeout(const Timeout& timeout) {
   if (own_clock_used_) own_clock_.see(timeout.t_ns);
   evidence_.on_timeout(timeout);
   keep(timeout.request, [&] { text_.on_timeout(timeout); });

@@ -11,27 +11,26 @@
 #include <string>
 #include <vector>
 
-#include "decoder/bus_problems.hpp"
-#include "decoder/record_sink.hpp"
-#include "decoder/register_numbering.hpp"
+#include "analysis/bus_problems.hpp"
+#include "protocol/record_sink.hpp"
+#include "protocol/register_numbering.hpp"
 #include "tools/modtap/output.hpp"
 #include "tools/modtap/text_sink.hpp"
 
 namespace modtap::tools {
 
-class CitedRecords final : public decoder::RecordSink {
+class CitedRecords final : public RecordSink {
  public:
   static constexpr size_t max_kept = 1024;
 
   // `clock`: every record's, kept before a filter; none: this keeps the clock of the records
   // it is given, all of them.
-  CitedRecords(decoder::ProblemEvidence& evidence,
-               const std::vector<decoder::ChannelInfo>& channels, decoder::RegisterBase base,
-               const decoder::RecordClock* clock);
+  CitedRecords(ProblemEvidence& evidence, const std::vector<ChannelInfo>& channels,
+               RegisterBase base, const RecordClock* clock);
 
-  void on_frame(const decoder::Frame& frame) override;
-  void on_noise(const decoder::Noise& noise) override;
-  void on_timeout(const decoder::Timeout& timeout) override;
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override;
+  void on_timeout(const Timeout& timeout) override;
 
   // By the index a problem cites: the record's line, after its request's (a time-out's under
   // its request's index).
@@ -40,15 +39,15 @@ class CitedRecords final : public decoder::RecordSink {
  private:
   template <typename Render>
   void keep(std::optional<uint64_t> request, Render render);
-  void remember_request(const decoder::Frame& frame);
+  void remember_request(const Frame& frame);
 
-  decoder::ProblemEvidence& evidence_;
-  decoder::RecordClock own_clock_;
+  ProblemEvidence& evidence_;
+  RecordClock own_clock_;
   bool own_clock_used_;
   Output text_out_;
   TextSink text_;
   std::map<uint64_t, std::string> lines_;
-  decoder::Frame request_;  // the last request, its spans into the bytes below
+  Frame request_;  // the last request, its spans into the bytes below
   std::vector<uint8_t> request_raw_, request_adu_;
 };
 

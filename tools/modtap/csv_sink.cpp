@@ -6,8 +6,6 @@
 
 namespace modtap::tools {
 
-using namespace decoder;
-
 namespace {
 
 // A CSV field: quoted when it holds a comma, a quote or a line break (RFC 4180).
@@ -40,7 +38,7 @@ std::vector<FollowedRegister> parse_follow(const std::string& list, RegisterBase
 }
 
 CsvSink::CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat time_format,
-                 RegisterBase base, const decoder::RecordClock* clock)
+                 RegisterBase base, const RecordClock* clock)
     : out_(out), follow_(std::move(follow)), time_format_(time_format), base_(base), clock_(clock) {
   out_.print("t,slave,address,name,value,unit,raw\n");
 }
@@ -61,7 +59,7 @@ void CsvSink::time(int64_t t_ns) {
     out_.print(FMT_COMPILE("{}"), Fixed{t_ns, 9, 6});
     return;
   }
-  const decoder::RecordClock& clock = clock_ ? *clock_ : own_clock_;
+  const RecordClock& clock = clock_ ? *clock_ : own_clock_;
   out_.print(FMT_COMPILE("{}"), Fixed{t_ns - clock.first_ns.value_or(t_ns), 9, 6});
 }
 

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "decoder/record_sink.hpp"
-#include "decoder/register_meaning.hpp"
-#include "decoder/register_numbering.hpp"
+#include "models/register_meaning.hpp"
+#include "protocol/record_sink.hpp"
+#include "protocol/register_numbering.hpp"
 #include "tools/modtap/output.hpp"
 #include "tools/modtap/text_sink.hpp"
 
@@ -20,31 +20,30 @@ namespace modtap::tools {
 // or a decimal number in the --register-base convention: 9474, 9475, 49475).
 struct FollowedRegister {
   std::string name;
-  std::optional<decoder::NamedRegister> number;
+  std::optional<NamedRegister> number;
 };
 // "frequency_command,2503H"; throws std::invalid_argument for an empty item.
 std::vector<FollowedRegister> parse_follow(const std::string& list,
-                                           decoder::RegisterBase base = decoder::RegisterBase::hex);
+                                           RegisterBase base = RegisterBase::hex);
 // The same, where an empty list follows every register.
 inline std::vector<FollowedRegister> parse_follow_or_all(const std::string& list,
-                                                         decoder::RegisterBase base) {
+                                                         RegisterBase base) {
   return list.empty() ? std::vector<FollowedRegister>{} : parse_follow(list, base);
 }
 
 // Whether `reg` is one of `follow` (by name or address); an empty list follows every register.
-bool follows(const std::vector<FollowedRegister>& follow, const decoder::RegisterValue& reg);
+bool follows(const std::vector<FollowedRegister>& follow, const RegisterValue& reg);
 
-class CsvSink final : public decoder::RecordSink {
+class CsvSink final : public RecordSink {
  public:
   // `clock`: every record's, kept before a filter, so `t` counts from the capture's first
   // record as without the filter; none: the sink keeps the clock of the records it is given.
   CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat time_format,
-          decoder::RegisterBase base = decoder::RegisterBase::hex,
-          const decoder::RecordClock* clock = nullptr);
+          RegisterBase base = RegisterBase::hex, const RecordClock* clock = nullptr);
 
-  void on_frame(const decoder::Frame& frame) override;
-  void on_noise(const decoder::Noise& noise) override { see(noise.t_ns); }
-  void on_timeout(const decoder::Timeout& timeout) override { see(timeout.t_ns); }
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override { see(noise.t_ns); }
+  void on_timeout(const Timeout& timeout) override { see(timeout.t_ns); }
 
  private:
   void see(int64_t t_ns) {
@@ -55,9 +54,9 @@ class CsvSink final : public decoder::RecordSink {
   Output& out_;
   std::vector<FollowedRegister> follow_;
   TimeFormat time_format_;
-  decoder::RegisterBase base_;
-  const decoder::RecordClock* clock_;
-  decoder::RecordClock own_clock_;  // without clock_
+  RegisterBase base_;
+  const RecordClock* clock_;
+  RecordClock own_clock_;  // without clock_
 };
 
 }  // namespace modtap::tools

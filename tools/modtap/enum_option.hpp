@@ -1,4 +1,4 @@
-// Command-line options whose values are an enum's names (decoder::EnumNames): CLI11 checks the
+// Command-line options whose values are an enum's names (EnumNames): CLI11 checks the
 // name against the same table that prints it and the run gets the enum, so no option is a
 // string compared again later.
 #pragma once
@@ -10,18 +10,18 @@
 
 #include <CLI/CLI.hpp>
 
-#include "decoder/enum_names.hpp"
+#include "protocol/enum_names.hpp"
 
 namespace modtap::tools {
 
-template <decoder::NamedEnum Enum>
+template <NamedEnum Enum>
 std::vector<std::string> enum_names() {
-  const auto& names = decoder::EnumNames<Enum>::names;
+  const auto& names = EnumNames<Enum>::names;
   return {names.begin(), names.end()};
 }
 
 // `aliases`: further names for a value (pcapng for pcap).
-template <decoder::NamedEnum Enum>
+template <NamedEnum Enum>
 CLI::Option* add_enum_option(CLI::App& app, const std::string& name, Enum& value,
                              const std::string& description,
                              std::vector<std::pair<std::string, Enum>> aliases = {}) {
@@ -29,7 +29,7 @@ CLI::Option* add_enum_option(CLI::App& app, const std::string& name, Enum& value
   for (const std::string& name_of_value : enum_names<Enum>()) {
     accepted.push_back(name_of_value);
     for (const auto& [alias, aliased] : aliases)
-      if (decoder::to_string(aliased) == name_of_value) accepted.push_back(alias);
+      if (to_string(aliased) == name_of_value) accepted.push_back(alias);
   }
   return app
       .add_option_function<std::string>(
@@ -37,14 +37,14 @@ CLI::Option* add_enum_option(CLI::App& app, const std::string& name, Enum& value
           [&value, aliases](const std::string& text) {
             for (const auto& [alias, aliased] : aliases)
               if (text == alias) value = aliased;
-            if (auto named = decoder::enum_named<Enum>(text)) value = *named;
+            if (auto named = enum_named<Enum>(text)) value = *named;
           },
           description)
       ->check(CLI::IsMember(accepted));
 }
 
 // The same where "auto" leaves the value to the traffic (--parity auto): none.
-template <decoder::NamedEnum Enum>
+template <NamedEnum Enum>
 CLI::Option* add_enum_or_auto_option(CLI::App& app, const std::string& name,
                                      std::optional<Enum>& value, const std::string& description) {
   std::vector<std::string> accepted = enum_names<Enum>();
@@ -53,7 +53,7 @@ CLI::Option* add_enum_or_auto_option(CLI::App& app, const std::string& name,
       .add_option_function<std::string>(
           name,
           [&value](const std::string& text) {
-            value = decoder::enum_named<Enum>(text);  // none for auto
+            value = enum_named<Enum>(text);  // none for auto
           },
           description)
       ->check(CLI::IsMember(accepted));

@@ -3,12 +3,10 @@
 #include <array>
 #include <string>
 
-#include "decoder/pdu_fields.hpp"
+#include "protocol/pdu_fields.hpp"
 #include "tools/modtap/render.hpp"
 
 namespace modtap::tools {
-
-using namespace decoder;
 
 JsonSink::JsonSink(Output& out, const std::vector<ChannelInfo>& channels)
     : out_(out), channels_(channels) {}

@@ -1,5 +1,5 @@
 // modtap: a passive Modbus RTU/ASCII analyzer. This file is its command line: it checks the
-// options and hands them to a run (run.hpp); the work happens in decoder/ and captures/.
+// options and hands them to a run (run.hpp); the stages do the work (docs/architecture.md).
 #include <algorithm>
 #include <csignal>
 #include <cstdio>
@@ -14,8 +14,8 @@
 #include <CLI/CLI.hpp>
 
 #include "captures/output_file.hpp"
-#include "decoder/display_filter.hpp"
-#include "decoder/field_registry.hpp"
+#include "filter/display_filter.hpp"
+#include "protocol/field_registry.hpp"
 #include "tools/modtap/capture_conditions.hpp"
 #include "tools/modtap/csv_sink.hpp"
 #include "tools/modtap/enum_option.hpp"
@@ -75,11 +75,9 @@ std::optional<std::string> refuse_ring(const RunOptions& o, const captures::Ring
 // Every field modtap shows, one a line: its name (the JSON key, the -Y name, Wireshark's
 // modtap.NAME), where it is (record, pdu, or item of a list), its JSON kind, its type, title.
 int list_fields() {
-  for (const auto& field : decoder::field_registry()) {
-    const char* where = field.item                            ? "item"
-                        : field.id < decoder::first_pdu_field ? "record"
-                                                              : "pdu";
-    fmt::print("{}\t{}\t{}\t{}\t{}\n", field.name, where, decoder::json_kind(field.type),
+  for (const auto& field : field_registry()) {
+    const char* where = field.item ? "item" : field.id < first_pdu_field ? "record" : "pdu";
+    fmt::print("{}\t{}\t{}\t{}\t{}\n", field.name, where, json_kind(field.type),
                to_string(field.type), field.title);
   }
   return 0;
@@ -109,11 +107,10 @@ size_t edits(std::string_view a, std::string_view b) {
 }
 
 // "; did you mean NAME?" for the models' register name nearest `name`, if one is near.
-std::string nearest_register(const std::vector<const decoder::DeviceModel*>& models,
-                             std::string_view name) {
+std::string nearest_register(const std::vector<const DeviceModel*>& models, std::string_view name) {
   std::string best;
   size_t best_edits = std::max<size_t>(2, name.size() / 3) + 1;  // farther is no typo
-  for (const decoder::DeviceModel* model : models)
+  for (const DeviceModel* model : models)
     for (const auto& [key, def] : model->registers)
       if (const size_t n = edits(name, def.name); n < best_edits) {
         best = def.name;
@@ -319,7 +316,7 @@ int run_command(RunOptions& o, const Command& command) {
     }
     return o.interfaces.empty() ? tools::read_capture(o, autostop, ring)
                                 : tools::listen(o, autostop, ring);
-  } catch (const decoder::FilterError& e) {
+  } catch (const FilterError& e) {
     fmt::print(stderr, "modtap: -Y: {}\n", e.what());
     return 2;
   } catch (const captures::WriteError& e) {

@@ -10,14 +10,10 @@
 #include <stdexcept>
 #include <string_view>
 
-#include "decoder/records.hpp"
+#include "protocol/records.hpp"
 #include "tools/modtap/shared_library.hpp"
 
 namespace modtap::tools {
-
-using decoder::BusStatistics;
-using decoder::ExchangeCounts;
-using decoder::SlaveStatistics;
 
 namespace {
 
@@ -123,7 +119,7 @@ void bus_wide(Exposition& e, const BusStatistics& s) {
   e.family("modtap_noise_records_total", "counter", "Runs of noise, by why they are noise");
   for (size_t reason = 0; reason < s.noise_by_reason.size(); ++reason)
     e.sample("modtap_noise_records_total",
-             fmt::format("reason=\"{}\"", to_string(static_cast<decoder::NoiseReason>(reason))),
+             fmt::format("reason=\"{}\"", to_string(static_cast<NoiseReason>(reason))),
              s.noise_by_reason[reason]);
   e.family("modtap_line_busy_seconds_total", "counter",
            "Wire time of every byte seen, from the character format: its rate is the bus load");
@@ -142,7 +138,7 @@ void bus_wide(Exposition& e, const BusStatistics& s) {
   e.sample("modtap_stray_bad_checks_total", "", s.stray_bad_checks());
   e.family("modtap_findings_total", "counter",
            "Records with each finding (docs/output.md lists them), frames and noise alike");
-  const auto registry = decoder::finding_registry();
+  const auto registry = finding_registry();
   for (size_t slot = 0; slot < registry.size(); ++slot)
     e.sample("modtap_findings_total", fmt::format("finding=\"{}\"", registry[slot].name),
              s.findings[slot].count);
@@ -231,12 +227,12 @@ MHD_Result answer(void* server, MHD_Connection* connection, const char* url, con
 
 // One sample a problem found now: a series that appears when the diagnosis finds it and goes
 // when it no longer does, so an alert rule is `modtap_problem > 0`.
-void problems_family(Exposition& e, std::span<const decoder::Problem> problems) {
+void problems_family(Exposition& e, std::span<const Problem> problems) {
   e.family("modtap_problem", "gauge",
            "A problem the diagnosis finds now, per kind and slave (none: the whole bus); "
            "1 while found (docs/output.md)");
-  for (const decoder::Problem& p : problems) {
-    const std::string_view kind = decoder::problem_info(p.kind).name;
+  for (const Problem& p : problems) {
+    const std::string_view kind = problem_info(p.kind).name;
     const std::string_view severity = to_string(p.severity);
     if (p.slave) {
       e.sample("modtap_problem",
@@ -251,7 +247,7 @@ void problems_family(Exposition& e, std::span<const decoder::Problem> problems) 
 }  // namespace
 
 void append_metrics(fmt::memory_buffer& out, const BusStatistics& statistics,
-                    std::span<const decoder::Problem> problems, const PortHealth& ports) {
+                    std::span<const Problem> problems, const PortHealth& ports) {
   Exposition e(out);
   bus_wide(e, statistics);
   per_slave(e, statistics);

@@ -13,8 +13,8 @@
 
 #include <fmt/format.h>
 
-#include "decoder/bus_problems.hpp"
-#include "decoder/bus_statistics.hpp"
+#include "analysis/bus_problems.hpp"
+#include "analysis/bus_statistics.hpp"
 
 namespace modtap::tools {
 
@@ -26,24 +26,24 @@ struct PortHealth {
 };
 
 // The exposition (version 0.0.4) of the statistics, the problems and the ports' health.
-void append_metrics(fmt::memory_buffer& out, const decoder::BusStatistics& statistics,
-                    std::span<const decoder::Problem> problems, const PortHealth& ports);
+void append_metrics(fmt::memory_buffer& out, const BusStatistics& statistics,
+                    std::span<const Problem> problems, const PortHealth& ports);
 
 // The statistics and the problems' evidence (`health`), fed by the pipeline and read by the
 // server's thread, one at a time.
-class SharedStatistics final : public decoder::RecordSink {
+class SharedStatistics final : public RecordSink {
  public:
-  explicit SharedStatistics(decoder::RecordSink& health) : health_(health) {}
+  explicit SharedStatistics(RecordSink& health) : health_(health) {}
 
-  void on_frame(const decoder::Frame& frame) override {
+  void on_frame(const Frame& frame) override {
     std::lock_guard lock(mutex_);
     health_.on_frame(frame);
   }
-  void on_noise(const decoder::Noise& noise) override {
+  void on_noise(const Noise& noise) override {
     std::lock_guard lock(mutex_);
     health_.on_noise(noise);
   }
-  void on_timeout(const decoder::Timeout& timeout) override {
+  void on_timeout(const Timeout& timeout) override {
     std::lock_guard lock(mutex_);
     health_.on_timeout(timeout);
   }
@@ -55,7 +55,7 @@ class SharedStatistics final : public decoder::RecordSink {
 
  private:
   std::mutex mutex_;
-  decoder::RecordSink& health_;
+  RecordSink& health_;
 };
 
 // An HTTP server (libmicrohttpd, on its own thread) that answers GET /metrics with what

@@ -8,13 +8,10 @@
 
 #include <fmt/format.h>
 
-#include "decoder/model_yaml.hpp"
+#include "models/model_yaml.hpp"
 #include "plugins/models/builtin_models.hpp"
 
 namespace modtap::tools {
-
-using decoder::DeviceModel;
-using decoder::ModelError;
 
 namespace {
 
@@ -29,7 +26,7 @@ std::string read_text(const std::string& path) {
 }  // namespace
 
 void ModelCatalog::load_builtin() {
-  std::vector<decoder::ModelFile> files;
+  std::vector<ModelFile> files;
   for (const auto& builtin : models::builtin_models())
     files.emplace_back(builtin.yaml, std::string(builtin.file));
   load(std::move(files), "built-in");
@@ -43,15 +40,15 @@ void ModelCatalog::load_dir(const std::string& dir) {
     if (item.path().extension() == ".yaml" || item.path().extension() == ".yml")
       paths.push_back(item.path().string());
   std::sort(paths.begin(), paths.end());
-  std::vector<decoder::ModelFile> files;
+  std::vector<ModelFile> files;
   for (const auto& path : paths) files.emplace_back(read_text(path), path);
   load(std::move(files), dir);
 }
 
 // Models that extend another load after it, so bases are loaded in passes until none is left.
-void ModelCatalog::load(std::vector<decoder::ModelFile> files, const std::string& origin) {
+void ModelCatalog::load(std::vector<ModelFile> files, const std::string& origin) {
   while (!files.empty()) {
-    std::vector<decoder::ModelFile> waiting;
+    std::vector<ModelFile> waiting;
     for (auto& file : files) {
       const DeviceModel* base = file.base().empty() ? nullptr : find(file.base());
       if (!file.base().empty() && !base) {
@@ -92,8 +89,8 @@ std::vector<const DeviceModel*> ModelCatalog::all() const {
   return models;
 }
 
-decoder::ModelChoice ModelCatalog::choose(const std::vector<std::string>& specs) const {
-  decoder::ModelChoice choice;
+ModelChoice ModelCatalog::choose(const std::vector<std::string>& specs) const {
+  ModelChoice choice;
   auto model_named = [&](const std::string& name) {
     const DeviceModel* model = find(name);
     if (!model)
@@ -128,7 +125,7 @@ int check_model_files(const std::vector<std::string>& files) {
 int check_model_file(const ModelCatalog& catalog, const std::string& file) {
   const std::string yaml = read_text(file);
   try {
-    const decoder::ModelFile parsed(yaml, file);
+    const ModelFile parsed(yaml, file);
     const DeviceModel* base = parsed.base().empty() ? nullptr : catalog.find(parsed.base());
     if (!parsed.base().empty() && !base)
       throw ModelError(

@@ -6,33 +6,33 @@
 #include <string_view>
 #include <vector>
 
-#include "decoder/device_model.hpp"
-#include "decoder/model_interpreter.hpp"
-#include "decoder/model_yaml.hpp"
+#include "models/device_model.hpp"
+#include "models/model_interpreter.hpp"
+#include "models/model_yaml.hpp"
 
 namespace modtap::tools {
 
 class ModelCatalog {
  public:
   struct Entry {
-    decoder::DeviceModel model;
+    DeviceModel model;
     std::string origin;  // "built-in" or the file it came from
   };
 
-  // Throws decoder::ModelError naming the file and line of each problem.
+  // Throws ModelError naming the file and line of each problem.
   void load_builtin();
   void load_dir(const std::string& dir);  // every *.yaml in it; a name may replace a built-in
 
-  const decoder::DeviceModel* find(std::string_view name) const;
+  const DeviceModel* find(std::string_view name) const;
   const std::deque<Entry>& entries() const { return entries_; }
-  std::vector<const decoder::DeviceModel*> all() const;
+  std::vector<const DeviceModel*> all() const;
 
   // From --model values: "MODEL" for the bus, "SLAVE=MODEL" for one slave. No model: generic.
-  decoder::ModelChoice choose(const std::vector<std::string>& specs) const;
+  ModelChoice choose(const std::vector<std::string>& specs) const;
 
  private:
-  void load(std::vector<decoder::ModelFile> files, const std::string& origin);
-  void add(decoder::DeviceModel model, std::string origin);
+  void load(std::vector<ModelFile> files, const std::string& origin);
+  void add(DeviceModel model, std::string origin);
 
   std::deque<Entry> entries_;  // a deque: ModelChoice holds pointers into it
 };

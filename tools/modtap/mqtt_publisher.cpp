@@ -5,13 +5,11 @@
 
 #include <fmt/chrono.h>
 
-#include "decoder/device_model.hpp"
+#include "models/device_model.hpp"
 #include "tools/modtap/render.hpp"
 #include "tools/modtap/statistics_output.hpp"
 
 namespace modtap::tools {
-
-using namespace decoder;
 
 namespace {
 
@@ -35,8 +33,7 @@ std::string topic_level(std::string_view text) {
 }
 
 MqttPublisher::MqttPublisher(MessageBroker& broker, const BusStatistics& statistics,
-                             MqttOptions options,
-                             std::function<std::vector<decoder::Problem>()> problems)
+                             MqttOptions options, std::function<std::vector<Problem>()> problems)
     : broker_(broker),
       statistics_(statistics),
       options_(std::move(options)),
@@ -170,7 +167,7 @@ void MqttPublisher::send_health(int64_t now_ns) {
   });
   // What a dashboard shows first: the problems found so far, as --stats writes them.
   fmt::format_to(out, "}},\"problems\":");
-  append_problems_json(payload_, problems_ ? problems_() : std::vector<decoder::Problem>{});
+  append_problems_json(payload_, problems_ ? problems_() : std::vector<Problem>{});
   payload_.push_back('}');
   publish(fmt::format("{}/{}/health", options_.prefix, options_.bus));
   health_sent_ns_ = now_ns;

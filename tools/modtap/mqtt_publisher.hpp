@@ -18,10 +18,10 @@
 
 #include <fmt/format.h>
 
-#include "decoder/bus_problems.hpp"
-#include "decoder/bus_statistics.hpp"
-#include "decoder/record_sink.hpp"
-#include "decoder/register_numbering.hpp"
+#include "analysis/bus_problems.hpp"
+#include "analysis/bus_statistics.hpp"
+#include "protocol/record_sink.hpp"
+#include "protocol/register_numbering.hpp"
 #include "tools/modtap/csv_sink.hpp"
 
 namespace modtap::tools {
@@ -44,7 +44,7 @@ struct MqttOptions {
   // 1 s. 0: every change at once.
   int64_t interval_ns = 10'000'000'000;
   std::vector<FollowedRegister> follow;  // empty: every register read or written
-  decoder::RegisterBase base = decoder::RegisterBase::hex;
+  RegisterBase base = RegisterBase::hex;
   std::optional<std::string> discovery_prefix;  // Home Assistant's, "homeassistant"
 };
 
@@ -54,16 +54,16 @@ std::string topic_level(std::string_view text);
 // PREFIX/BUS/status: online, offline, and the broker's last will.
 std::string status_topic(const MqttOptions& options);
 
-class MqttPublisher final : public decoder::RecordSink {
+class MqttPublisher final : public RecordSink {
  public:
   // `statistics` gives the health summary; it is a sink of the same pipeline, fed first.
   // `problems` gives the problems found so far (none when empty).
-  MqttPublisher(MessageBroker& broker, const decoder::BusStatistics& statistics,
-                MqttOptions options, std::function<std::vector<decoder::Problem>()> problems = {});
+  MqttPublisher(MessageBroker& broker, const BusStatistics& statistics, MqttOptions options,
+                std::function<std::vector<Problem>()> problems = {});
 
-  void on_frame(const decoder::Frame& frame) override;
-  void on_noise(const decoder::Noise& noise) override { tick(noise.t_ns); }
-  void on_timeout(const decoder::Timeout& timeout) override { tick(timeout.t_ns); }
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override { tick(noise.t_ns); }
+  void on_timeout(const Timeout& timeout) override { tick(timeout.t_ns); }
 
   // Time passing without records (a live bus gone quiet): held values and the summary.
   void tick(int64_t now_ns);
@@ -75,31 +75,30 @@ class MqttPublisher final : public decoder::RecordSink {
  private:
   struct Published {
     std::string topic;
-    const decoder::DeviceModel* model = nullptr;
-    decoder::LastValue value;  // the latest the bus carried
+    const DeviceModel* model = nullptr;
+    LastValue value;  // the latest the bus carried
     std::optional<int64_t> sent_ns;
     uint32_t sent_raw = 0;  // what was sent then
     std::string sent_text;
     bool held = false;  // changed since it was last sent
   };
 
-  void see(const decoder::RegisterKey& key, const decoder::RegisterValue& reg,
-           const decoder::DeviceModel* model, int64_t t_ns);
-  Published* entry(const decoder::RegisterKey& key, const decoder::RegisterValue& reg,
-                   const decoder::DeviceModel* model);
-  void send(const decoder::RegisterKey& key, Published& published, int64_t now_ns);
-  void send_held(const decoder::RegisterKey& key, Published& published, int64_t now_ns);
+  void see(const RegisterKey& key, const RegisterValue& reg, const DeviceModel* model,
+           int64_t t_ns);
+  Published* entry(const RegisterKey& key, const RegisterValue& reg, const DeviceModel* model);
+  void send(const RegisterKey& key, Published& published, int64_t now_ns);
+  void send_held(const RegisterKey& key, Published& published, int64_t now_ns);
   void send_health(int64_t now_ns);
-  void announce(const decoder::RegisterKey& key, const Published& published);
+  void announce(const RegisterKey& key, const Published& published);
   void republish_everything();
   void publish(std::string_view topic);  // payload_, retained
 
   MessageBroker& broker_;
-  const decoder::BusStatistics& statistics_;
+  const BusStatistics& statistics_;
   MqttOptions options_;
-  std::function<std::vector<decoder::Problem>()> problems_;
-  std::map<decoder::RegisterKey, Published> registers_;
-  std::deque<std::pair<int64_t, decoder::RegisterKey>> held_;  // (due, register), due ascending
+  std::function<std::vector<Problem>()> problems_;
+  std::map<RegisterKey, Published> registers_;
+  std::deque<std::pair<int64_t, RegisterKey>> held_;  // (due, register), due ascending
   std::optional<int64_t> health_sent_ns_;
   int64_t last_ns_ = 0;
   uint64_t not_published_ = 0;  // values of registers beyond BusStatistics::kept_registers

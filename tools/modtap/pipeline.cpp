@@ -10,18 +10,18 @@
 namespace modtap::tools {
 namespace {
 
-std::unique_ptr<decoder::RecordSink> make_sink(const RunOptions& o, Output& out,
-                                               const std::vector<decoder::ChannelInfo>& channels,
-                                               const decoder::RecordClock& clock) {
+std::unique_ptr<RecordSink> make_sink(const RunOptions& o, Output& out,
+                                      const std::vector<ChannelInfo>& channels,
+                                      const RecordClock& clock) {
   if (o.output == OutputKind::json) return std::make_unique<JsonSink>(out, channels);
-  const decoder::RecordClock* clock_before_filter = o.display_filter.empty() ? nullptr : &clock;
+  const RecordClock* clock_before_filter = o.display_filter.empty() ? nullptr : &clock;
   if (o.output == OutputKind::csv)
     return std::make_unique<CsvSink>(out, parse_follow_or_all(o.follow, o.register_base),
                                      o.time_format, o.register_base, clock_before_filter);
   if (o.output == OutputKind::text)
     return std::make_unique<TextSink>(
         out, channels, TextOptions{o.verbose, o.time_format, o.register_base, clock_before_filter});
-  return std::make_unique<decoder::NullSink>();  // stats: the statistics print at the end
+  return std::make_unique<NullSink>();  // stats: the statistics print at the end
 }
 
 bool wants_statistics(const RunOptions& o) {
@@ -30,19 +30,19 @@ bool wants_statistics(const RunOptions& o) {
 }
 
 // The report's registers over time: those --follow names, none without it.
-std::function<bool(const decoder::RegisterValue&)> report_follow(const RunOptions& o) {
+std::function<bool(const RegisterValue&)> report_follow(const RunOptions& o) {
   if (o.follow.empty()) return {};
   const auto base = o.register_base;
-  return [follow = parse_follow(o.follow, base)](const decoder::RegisterValue& reg) {
+  return [follow = parse_follow(o.follow, base)](const RegisterValue& reg) {
     return follows(follow, reg);
   };
 }
 
 }  // namespace
 
-decoder::SerialFormat serial_format(const RunOptions& o) {
+SerialFormat serial_format(const RunOptions& o) {
   return {o.baud.value_or(19200), static_cast<uint8_t>(o.data_bits),
-          o.parity.value_or(decoder::Parity::even), static_cast<uint8_t>(o.stop_bits)};
+          o.parity.value_or(Parity::even), static_cast<uint8_t>(o.stop_bits)};
 }
 
 namespace {
@@ -55,8 +55,8 @@ int64_t read_jitter_ns(const RunOptions& o) {
 
 }  // namespace
 
-decoder::AnalyzerOptions analyzer_options(const RunOptions& o, decoder::ClockQuality clock) {
-  decoder::AnalyzerOptions analyzer;
+AnalyzerOptions analyzer_options(const RunOptions& o, ClockQuality clock) {
+  AnalyzerOptions analyzer;
   analyzer.mode = o.mode;
   analyzer.format = serial_format(o);
   analyzer.clock = clock;
@@ -74,13 +74,13 @@ ModelCatalog load_models(const RunOptions& o) {
 }
 
 Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output& out,
-                   const std::vector<decoder::ChannelInfo>& channels,
-                   const decoder::SerialFormat& format, decoder::ClockQuality clock)
+                   const std::vector<ChannelInfo>& channels, const SerialFormat& format,
+                   ClockQuality clock)
     : terminal_(make_sink(o, out, channels, clock_)) {
   fan_out_.add(*terminal_);
   if (wants_statistics(o)) {
-    statistics_ = std::make_unique<decoder::BusStatistics>(format, clock);
-    evidence_ = std::make_unique<decoder::ProblemEvidence>();
+    statistics_ = std::make_unique<BusStatistics>(format, clock);
+    evidence_ = std::make_unique<ProblemEvidence>();
     problem_options_.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
     if (!o.report_file.empty()) {  // the report shows the lines of the records problems cite
       cited_ = std::make_unique<CitedRecords>(*evidence_, channels, o.register_base,
@@ -98,7 +98,7 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output
     }
   }
   if (!o.report_file.empty()) {
-    timeline_ = std::make_unique<decoder::BusTimeline>(report_follow(o));
+    timeline_ = std::make_unique<BusTimeline>(report_follow(o));
     fan_out_.add(*timeline_);
   }
   // Only text, JSON, CSV, MQTT, pcapng comments and statistics show what the models say;
@@ -109,33 +109,32 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output
   const bool interpret = lines || wants_statistics(o) ||  // the registers' last values
                          (!o.write_file.empty() && o.link != captures::PcapngLink::bare) ||
                          !o.display_filter.empty();
-  decoder::ModelChoice choice;
+  ModelChoice choice;
   if (interpret || !o.models.empty() || !o.models_dir.empty()) {
     catalog_ = load_models(o);
     choice = catalog_.choose(o.models);
-    if (!o.timeout_given) model_timeouts_ = decoder::model_timeouts(choice);
+    if (!o.timeout_given) model_timeouts_ = modtap::model_timeouts(choice);
     if (!o.display_filter.empty()) filter(o.display_filter, channels);
   }
   // Every record's time is kept before the filter picks some: the time column counts over the
   // whole capture, as without the filter.
-  if (filter_) clock_stage_ = std::make_unique<decoder::ClockStage>(clock_, *filter_);
+  if (filter_) clock_stage_ = std::make_unique<ClockStage>(clock_, *filter_);
   if (interpret) {
     // Registers the model does not name show only in JSON, CSV, statistics, -V and filters,
     // and are watched for --follow.
     const bool list_unnamed = o.output == OutputKind::json || o.output == OutputKind::csv ||
                               wants_statistics(o) || (o.output == OutputKind::text && o.verbose) ||
                               !o.display_filter.empty() || !o.follow.empty();
-    interpreter_ = std::make_unique<decoder::ModelInterpreter>(
+    interpreter_ = std::make_unique<ModelInterpreter>(
         catalog_.all(), choice, clock, watch_follow(o, before_filter()), list_unnamed);
   }
-  diagnostics_ = std::make_unique<decoder::BusDiagnostics>(format, clock, after_diagnostics(),
-                                                           read_jitter_ns(o));
+  diagnostics_ =
+      std::make_unique<BusDiagnostics>(format, clock, after_diagnostics(), read_jitter_ns(o));
   if (!o.write_file.empty()) write_pcapng(o, ring, channels, clock);
 }
 
 void Pipeline::write_pcapng(const RunOptions& o, const captures::RingLimits& ring,
-                            const std::vector<decoder::ChannelInfo>& channels,
-                            decoder::ClockQuality clock) {
+                            const std::vector<ChannelInfo>& channels, ClockQuality clock) {
   captures::PcapngOptions options;
   options.link = o.link;
   options.dlt = o.dlt;
@@ -147,15 +146,15 @@ void Pipeline::write_pcapng(const RunOptions& o, const captures::RingLimits& rin
   fan_out_.add(*pcapng_);
 }
 
-std::vector<decoder::Problem> Pipeline::problems() const {
+std::vector<Problem> Pipeline::problems() const {
   if (!statistics_) return {};
-  return decoder::find_problems(*statistics_, *evidence_, problem_options_);
+  return find_problems(*statistics_, *evidence_, problem_options_);
 }
 
 void Pipeline::limit_records(uint64_t max_records, std::function<void()> on_reached) {
   if (max_records == 0) return;
-  decoder::RecordSink& next = all();
-  limit_ = std::make_unique<decoder::RecordLimit>(max_records, next, std::move(on_reached));
+  RecordSink& next = all();
+  limit_ = std::make_unique<RecordLimit>(max_records, next, std::move(on_reached));
 }
 
 MqttPublisher& Pipeline::publish(MessageBroker& broker, MqttOptions options) {
@@ -165,32 +164,32 @@ MqttPublisher& Pipeline::publish(MessageBroker& broker, MqttOptions options) {
   return *mqtt_;
 }
 
-decoder::RecordSink& Pipeline::after_diagnostics() {
+RecordSink& Pipeline::after_diagnostics() {
   if (interpreter_) return *interpreter_;
   return before_filter();
 }
 
-decoder::RecordSink& Pipeline::before_filter() {
+RecordSink& Pipeline::before_filter() {
   if (clock_stage_) return *clock_stage_;
   return fan_out_;
 }
 
 // Behind the model stage, whose registers it looks at; before the filter, which may hide them.
-decoder::RecordSink& Pipeline::watch_follow(const RunOptions& o, decoder::RecordSink& next) {
+RecordSink& Pipeline::watch_follow(const RunOptions& o, RecordSink& next) {
   if (o.follow.empty()) return next;
   const auto base = o.register_base;
   follow_watch_ = std::make_unique<FollowWatch>(parse_follow(o.follow, base), next);
   return *follow_watch_;
 }
 
-FollowWatch::FollowWatch(const std::vector<FollowedRegister>& follow, decoder::RecordSink& next)
+FollowWatch::FollowWatch(const std::vector<FollowedRegister>& follow, RecordSink& next)
     : next_(next) {
   for (const FollowedRegister& item : follow) unseen_.push_back({item});
 }
 
-void FollowWatch::on_frame(const decoder::Frame& frame) {
+void FollowWatch::on_frame(const Frame& frame) {
   if (frame.meaning && !unseen_.empty())
-    for (const decoder::RegisterValue& reg : frame.meaning->registers)
+    for (const RegisterValue& reg : frame.meaning->registers)
       std::erase_if(unseen_, [&](const auto& item) { return follows(item, reg); });
   next_.on_frame(frame);
 }
@@ -202,16 +201,16 @@ std::vector<std::string> FollowWatch::unseen() const {
 }
 
 // -Y: every output (text, JSON, statistics, pcapng) sees only the records it matches.
-void Pipeline::filter(const std::string& text, const std::vector<decoder::ChannelInfo>& channels) {
+void Pipeline::filter(const std::string& text, const std::vector<ChannelInfo>& channels) {
   const auto models = catalog_.all();
-  decoder::DisplayFilter filter(text, [models](std::string_view name) {
+  DisplayFilter filter(text, [models](std::string_view name) {
     return std::any_of(models.begin(), models.end(),
-                       [&](const decoder::DeviceModel* m) { return names_register(*m, name); });
+                       [&](const DeviceModel* m) { return names_register(*m, name); });
   });
   std::vector<std::string> names;
   for (const auto& channel : channels) names.push_back(channel.name);
   filter.set_channel_names(std::move(names));
-  filter_ = std::make_unique<decoder::FilterStage>(std::move(filter), fan_out_);
+  filter_ = std::make_unique<FilterStage>(std::move(filter), fan_out_);
 }
 
 }  // namespace modtap::tools

@@ -11,17 +11,17 @@
 #include <string>
 #include <vector>
 
+#include "analysis/bus_diagnostics.hpp"
+#include "analysis/bus_problems.hpp"
+#include "analysis/bus_statistics.hpp"
+#include "analysis/bus_timeline.hpp"
 #include "captures/file_ring.hpp"
 #include "captures/open_capture.hpp"
 #include "captures/pcapng_sink.hpp"
-#include "decoder/analyzer.hpp"
-#include "decoder/bus_diagnostics.hpp"
-#include "decoder/bus_problems.hpp"
-#include "decoder/bus_statistics.hpp"
-#include "decoder/bus_timeline.hpp"
-#include "decoder/display_filter.hpp"
-#include "decoder/model_interpreter.hpp"
-#include "decoder/record_sink.hpp"
+#include "filter/display_filter.hpp"
+#include "models/model_interpreter.hpp"
+#include "protocol/analyzer.hpp"
+#include "protocol/record_sink.hpp"
 #include "tools/modtap/cited_records.hpp"
 #include "tools/modtap/csv_sink.hpp"
 #include "tools/modtap/metrics.hpp"
@@ -36,12 +36,12 @@ namespace modtap::tools {
 enum class OutputKind : uint8_t { text, json, stats, csv, none };
 }  // namespace modtap::tools
 
-namespace modtap::decoder {
+namespace modtap {
 template <>
 struct EnumNames<tools::OutputKind> {
   static constexpr std::array<std::string_view, 5> names{"text", "json", "stats", "csv", "none"};
 };
-}  // namespace modtap::decoder
+}  // namespace modtap
 
 namespace modtap::tools {
 
@@ -57,17 +57,17 @@ struct RunOptions {
   std::vector<std::string> interfaces;
   bool reconnect = false;
   captures::Format format = captures::Format::automatic;
-  decoder::ModeChoice mode = decoder::ModeChoice::automatic;
+  ModeChoice mode = ModeChoice::automatic;
   OutputKind output = OutputKind::text;
   bool verbose = false;
-  std::optional<uint32_t> baud = 19200;                           // none: --baud auto
-  std::optional<decoder::Parity> parity = decoder::Parity::even;  // none: --parity auto
+  std::optional<uint32_t> baud = 19200;         // none: --baud auto
+  std::optional<Parity> parity = Parity::even;  // none: --parity auto
   unsigned stop_bits = 1;
   unsigned data_bits = 8;
   double timeout_s = 1.0;
   bool timeout_given = false;  // --timeout wins over the models' own time-outs
   double ascii_timeout_s = 1.0;
-  double jitter_ms = decoder::default_read_jitter_ns / 1e6;
+  double jitter_ms = default_read_jitter_ns / 1e6;
   std::string sigrok_channels;
   bool sigrok_invert = false;
   std::string write_file;
@@ -84,7 +84,7 @@ struct RunOptions {
   bool quiet = false;
   std::string display_filter;
   std::string follow;
-  decoder::RegisterBase register_base = decoder::RegisterBase::hex;
+  RegisterBase register_base = RegisterBase::hex;
   std::string metrics_address;
   std::string mqtt_url;
   double mqtt_interval_s = 10;
@@ -97,23 +97,23 @@ struct RunOptions {
   bool announce = true;
 };
 
-decoder::SerialFormat serial_format(const RunOptions& o);
-decoder::AnalyzerOptions analyzer_options(const RunOptions& o, decoder::ClockQuality clock);
+SerialFormat serial_format(const RunOptions& o);
+AnalyzerOptions analyzer_options(const RunOptions& o, ClockQuality clock);
 ModelCatalog load_models(const RunOptions& o);
 
 // --follow: which followed registers some frame read or wrote, so that the end of the run can
 // name those none did (a mistyped address, a register the master never touches).
-class FollowWatch final : public decoder::RecordSink {
+class FollowWatch final : public RecordSink {
  public:
-  FollowWatch(const std::vector<FollowedRegister>& follow, decoder::RecordSink& next);
-  void on_frame(const decoder::Frame& frame) override;
-  void on_noise(const decoder::Noise& noise) override { next_.on_noise(noise); }
-  void on_timeout(const decoder::Timeout& timeout) override { next_.on_timeout(timeout); }
+  FollowWatch(const std::vector<FollowedRegister>& follow, RecordSink& next);
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override { next_.on_noise(noise); }
+  void on_timeout(const Timeout& timeout) override { next_.on_timeout(timeout); }
   std::vector<std::string> unseen() const;  // as --follow wrote them
 
  private:
   std::vector<std::vector<FollowedRegister>> unseen_;  // one item each, as follows() takes them
-  decoder::RecordSink& next_;
+  RecordSink& next_;
 };
 
 // The stages and sinks a run writes to: in front, the record limit, the bus's history, the
@@ -123,14 +123,14 @@ class FollowWatch final : public decoder::RecordSink {
 class Pipeline {
  public:
   Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output& out,
-           const std::vector<decoder::ChannelInfo>& channels, const decoder::SerialFormat& format,
-           decoder::ClockQuality clock);
+           const std::vector<ChannelInfo>& channels, const SerialFormat& format,
+           ClockQuality clock);
   // Where records enter.
-  decoder::RecordSink& all() {
+  RecordSink& all() {
     if (limit_) return *limit_;
     return *diagnostics_;
   }
-  const decoder::BusDiagnostics& diagnostics() const { return *diagnostics_; }
+  const BusDiagnostics& diagnostics() const { return *diagnostics_; }
   // -c N: stop after N frames and noise records; `on_reached` stops a live run.
   void limit_records(uint64_t max_records, std::function<void()> on_reached = {});
   bool limit_reached() const { return limit_ && limit_->reached(); }
@@ -138,14 +138,14 @@ class Pipeline {
   MqttPublisher& publish(MessageBroker& broker, MqttOptions options);
   // How much the -w files hold so far (0 without -w).
   uint64_t pcapng_bytes() const { return pcapng_ ? pcapng_->bytes_written() : 0; }
-  const decoder::BusStatistics* statistics() const { return statistics_.get(); }
+  const BusStatistics* statistics() const { return statistics_.get(); }
   // The problems the statistics and the evidence beside them show (none without statistics).
   // With --metrics, call it under shared_statistics()'s lock.
-  std::vector<decoder::Problem> problems() const;
+  std::vector<Problem> problems() const;
   // With --report: the lines of the records the problems cite.
   const CitedRecords* cited_records() const { return cited_.get(); }
   SharedStatistics* shared_statistics() { return shared_statistics_.get(); }
-  const decoder::BusTimeline* timeline() const { return timeline_.get(); }
+  const BusTimeline* timeline() const { return timeline_.get(); }
   // The --follow items no frame read or wrote, so far.
   std::vector<std::string> unseen_follow() const {
     return follow_watch_ ? follow_watch_->unseen() : std::vector<std::string>{};
@@ -158,32 +158,32 @@ class Pipeline {
   }
 
  private:
-  decoder::RecordSink& after_diagnostics();
-  decoder::RecordSink& before_filter();  // the clock stage in front of the filter, or the sinks
-  decoder::RecordSink& watch_follow(const RunOptions& o, decoder::RecordSink& next);
-  void filter(const std::string& text, const std::vector<decoder::ChannelInfo>& channels);
+  RecordSink& after_diagnostics();
+  RecordSink& before_filter();  // the clock stage in front of the filter, or the sinks
+  RecordSink& watch_follow(const RunOptions& o, RecordSink& next);
+  void filter(const std::string& text, const std::vector<ChannelInfo>& channels);
   void write_pcapng(const RunOptions& o, const captures::RingLimits& ring,
-                    const std::vector<decoder::ChannelInfo>& channels, decoder::ClockQuality clock);
+                    const std::vector<ChannelInfo>& channels, ClockQuality clock);
 
-  decoder::RecordClock clock_;  // of every record, before the filter: the text's time column
-  decoder::FanOut fan_out_;
-  std::unique_ptr<decoder::RecordSink> terminal_;
-  std::unique_ptr<decoder::BusStatistics> statistics_;
-  std::unique_ptr<decoder::ProblemEvidence> evidence_;
+  RecordClock clock_;  // of every record, before the filter: the text's time column
+  FanOut fan_out_;
+  std::unique_ptr<RecordSink> terminal_;
+  std::unique_ptr<BusStatistics> statistics_;
+  std::unique_ptr<ProblemEvidence> evidence_;
   std::unique_ptr<CitedRecords> cited_;  // in front of the evidence, with --report
-  decoder::FanOut health_;               // the evidence, then the statistics
-  decoder::ProblemOptions problem_options_;
+  FanOut health_;                        // the evidence, then the statistics
+  ProblemOptions problem_options_;
   std::unique_ptr<SharedStatistics> shared_statistics_;
-  std::unique_ptr<decoder::BusTimeline> timeline_;
+  std::unique_ptr<BusTimeline> timeline_;
   ModelCatalog catalog_;
-  std::unique_ptr<decoder::FilterStage> filter_;
-  std::unique_ptr<decoder::ClockStage> clock_stage_;
+  std::unique_ptr<FilterStage> filter_;
+  std::unique_ptr<ClockStage> clock_stage_;
   std::unique_ptr<FollowWatch> follow_watch_;
-  std::unique_ptr<decoder::BusDiagnostics> diagnostics_;
-  std::unique_ptr<decoder::ModelInterpreter> interpreter_;
+  std::unique_ptr<BusDiagnostics> diagnostics_;
+  std::unique_ptr<ModelInterpreter> interpreter_;
   std::map<uint8_t, int64_t> model_timeouts_;
   std::unique_ptr<captures::PcapngFiles> pcapng_;
-  std::unique_ptr<decoder::RecordLimit> limit_;
+  std::unique_ptr<RecordLimit> limit_;
   std::unique_ptr<MqttPublisher> mqtt_;
 };
 

@@ -8,13 +8,9 @@
 
 #include <fmt/compile.h>
 
-#include "decoder/function_codes.hpp"
+#include "protocol/function_codes.hpp"
 
 namespace modtap::tools {
-
-using decoder::DecodedPdu;
-using decoder::Field;
-using decoder::FieldType;
 
 namespace {
 
@@ -67,7 +63,7 @@ void append_json_scalar(fmt::memory_buffer& out, const Field& f) {
 void append_json_key(fmt::memory_buffer& out, const Field& f) {
   static const std::vector<std::string> keys = [] {
     std::vector<std::string> made;
-    for (const decoder::FieldInfo& info : decoder::field_registry()) {
+    for (const FieldInfo& info : field_registry()) {
       const auto slot = static_cast<size_t>(info.id);
       if (made.size() <= slot) made.resize(slot + 1);
       made[slot] = fmt::format("\"{}\":", info.name);
@@ -90,13 +86,13 @@ void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_item
       }
       break;
     case FieldType::address:  // as the manuals write registers (2502H), or --register-base
-      if (numbering.base == decoder::RegisterBase::hex) {
+      if (numbering.base == RegisterBase::hex) {
         put_hex4(out, static_cast<uint16_t>(f.number));
         out.push_back('H');
       } else {
-        fmt::format_to(it, FMT_COMPILE("{}"),
-                       decoder::RegisterNumber{numbering.table, static_cast<uint16_t>(f.number),
-                                               numbering.base});
+        fmt::format_to(
+            it, FMT_COMPILE("{}"),
+            RegisterNumber{numbering.table, static_cast<uint16_t>(f.number), numbering.base});
       }
       break;
     case FieldType::code:  // as vendors' tables write codes: 52H
@@ -218,14 +214,12 @@ size_t append_json_field(fmt::memory_buffer& out, const DecodedPdu& pdu, size_t 
   return end;
 }
 
-decoder::Table addressed_table(const decoder::Frame& frame) {
+Table addressed_table(const Frame& frame) {
   // A response's fields are placed by its request; an echo or a lone frame reads as its own.
-  using decoder::Table;
-  const bool placed_by_request =
-      frame.role == decoder::Role::response && !frame.request_pdu.empty();
+  const bool placed_by_request = frame.role == Role::response && !frame.request_pdu.empty();
   const auto pdu = placed_by_request ? frame.request_pdu : frame.pdu();
   if (pdu.empty()) return Table::holding;
-  const auto accesses = decoder::function_code(pdu[0] & 0x7F).request_accesses(pdu);
+  const auto accesses = function_code(pdu[0] & 0x7F).request_accesses(pdu);
   return accesses.size ? accesses.list[0].table : Table::holding;
 }
 
@@ -251,13 +245,13 @@ size_t append_text_value(fmt::memory_buffer& out, const DecodedPdu& pdu, size_t 
   return end;
 }
 
-void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue& reg) {
+void append_register_json(fmt::memory_buffer& out, const RegisterValue& reg) {
   out.push_back('{');
   append_register_keys(out, reg);
   out.push_back('}');
 }
 
-void append_register_keys(fmt::memory_buffer& out, const decoder::RegisterValue& reg) {
+void append_register_keys(fmt::memory_buffer& out, const RegisterValue& reg) {
   auto optional_string = [&](std::string_view text) {
     if (text.empty()) {
       put(out, "null");
@@ -282,7 +276,7 @@ void append_register_keys(fmt::memory_buffer& out, const decoder::RegisterValue&
   if (reg.value == reg.raw && reg.decimals == 0 && !std::signbit(reg.value)) {
     put_again(out, raw_at, raw_end);
   } else if (std::isfinite(reg.value)) {
-    decoder::append_number(out, reg.value, reg.decimals);
+    append_number(out, reg.value, reg.decimals);
   } else {
     put(out, "null");
   }
@@ -298,7 +292,7 @@ void append_register_keys(fmt::memory_buffer& out, const decoder::RegisterValue&
 
 // The label in `unnamed`'s room when the standard has no name for the code.
 std::string_view function_label(uint8_t fc, char (&unnamed)[16]) {
-  const std::string_view name = decoder::function_name(fc);
+  const std::string_view name = function_name(fc);
   if (!name.empty()) return name;
   const auto end = fmt::format_to(unnamed, FMT_COMPILE("Function 0x{:02X}"), fc & 0x7F);
   return {unnamed, static_cast<size_t>(end - unnamed)};

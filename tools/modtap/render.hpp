@@ -10,11 +10,11 @@
 #include <fmt/compile.h>
 #include <fmt/format.h>
 
-#include "decoder/buffer_put.hpp"
-#include "decoder/pdu_fields.hpp"
-#include "decoder/records.hpp"
-#include "decoder/register_meaning.hpp"
-#include "decoder/register_numbering.hpp"
+#include "models/register_meaning.hpp"
+#include "protocol/buffer_put.hpp"
+#include "protocol/pdu_fields.hpp"
+#include "protocol/records.hpp"
+#include "protocol/register_numbering.hpp"
 
 namespace modtap::tools {
 
@@ -24,23 +24,23 @@ void append_json_string(fmt::memory_buffer& out, std::string_view text);
 // How text writes a frame's address fields: the convention, and the table the frame's function
 // code addresses (Modicon's numbers say it).
 struct AddressNumbering {
-  decoder::RegisterBase base = decoder::RegisterBase::hex;
-  decoder::Table table = decoder::Table::holding;
+  RegisterBase base = RegisterBase::hex;
+  Table table = Table::holding;
 };
 // The table a frame's address fields name, from its function code's register accesses.
-decoder::Table addressed_table(const decoder::Frame& frame);
+Table addressed_table(const Frame& frame);
 
 // The field at `at` as JSON ("key":value; a list with its items), and as text (`key=` is the
 // caller's), with at most `max_items` values of an array. Both return the index of the next
 // field of the same level.
-size_t append_json_field(fmt::memory_buffer& out, const decoder::DecodedPdu& pdu, size_t at);
-size_t append_text_value(fmt::memory_buffer& out, const decoder::DecodedPdu& pdu, size_t at,
+size_t append_json_field(fmt::memory_buffer& out, const DecodedPdu& pdu, size_t at);
+size_t append_text_value(fmt::memory_buffer& out, const DecodedPdu& pdu, size_t at,
                          size_t max_items, AddressNumbering numbering = {});
 
 // The same as a JSON object: {"addr", "name", "raw", "value", "unit", "text"}.
-void append_register_json(fmt::memory_buffer& out, const decoder::RegisterValue& reg);
+void append_register_json(fmt::memory_buffer& out, const RegisterValue& reg);
 // The same keys without the braces, for an object that adds its own.
-void append_register_keys(fmt::memory_buffer& out, const decoder::RegisterValue& reg);
+void append_register_keys(fmt::memory_buffer& out, const RegisterValue& reg);
 
 // "Read Holding Registers", or "Function 0x41" for a code the standard does not name.
 struct FunctionLabel {

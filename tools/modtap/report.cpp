@@ -8,14 +8,12 @@
 
 #include <fmt/chrono.h>
 
-#include "decoder/format_probe.hpp"
+#include "protocol/format_probe.hpp"
 #include "tools/modtap/render.hpp"
 #include "tools/modtap/svg_plot.hpp"
 #include "tools/modtap/text_sink.hpp"
 
 namespace modtap::tools {
-
-using namespace decoder;
 
 namespace {
 

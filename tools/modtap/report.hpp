@@ -14,11 +14,11 @@
 
 #include <fmt/format.h>
 
-#include "decoder/bus_diagnostics.hpp"
-#include "decoder/bus_problems.hpp"
-#include "decoder/bus_statistics.hpp"
-#include "decoder/bus_timeline.hpp"
-#include "decoder/register_numbering.hpp"
+#include "analysis/bus_diagnostics.hpp"
+#include "analysis/bus_problems.hpp"
+#include "analysis/bus_statistics.hpp"
+#include "analysis/bus_timeline.hpp"
+#include "protocol/register_numbering.hpp"
 
 namespace modtap::tools {
 
@@ -26,16 +26,16 @@ struct ReportInfo {
   std::string capture;   // the file read or the ports listened to
   std::string version;   // modtap's
   bool complete = true;  // false: the input broke off; the numbers cover what was read
-  decoder::RegisterBase register_base = decoder::RegisterBase::hex;
+  RegisterBase register_base = RegisterBase::hex;
   std::vector<std::string> unseen_follow;  // --follow items no frame read or wrote
 };
 
 // The lines of the records problems cite, by the index they cite (CitedRecords).
 using CitedLines = std::map<uint64_t, std::string>;
 
-void append_report(fmt::memory_buffer& out, const decoder::BusStatistics& stats,
-                   const decoder::BusDiagnostics& diagnostics, const decoder::BusTimeline& timeline,
-                   std::span<const decoder::Problem> problems, const CitedLines& cited,
+void append_report(fmt::memory_buffer& out, const BusStatistics& stats,
+                   const BusDiagnostics& diagnostics, const BusTimeline& timeline,
+                   std::span<const Problem> problems, const CitedLines& cited,
                    const ReportInfo& info);
 
 }  // namespace modtap::tools

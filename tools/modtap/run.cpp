@@ -10,7 +10,7 @@
 #include "captures/open_capture.hpp"
 #include "captures/piped_input.hpp"
 #include "captures/raw_recorder.hpp"
-#include "decoder/format_probe.hpp"
+#include "protocol/format_probe.hpp"
 #include "tools/live/live_capture.hpp"
 #include "tools/modtap/auto_format.hpp"
 #include "tools/modtap/enum_option.hpp"
@@ -31,7 +31,7 @@ void write_whole(const std::string& path, const fmt::memory_buffer& content) {
 // The end of a run: -T stats prints the statistics, --stats and --report write them
 // (`complete` false when the input broke off: they cover what was read).
 void summarise(const RunOptions& o, Output& out, const Pipeline& pipeline, bool complete) {
-  const decoder::BusStatistics* statistics = pipeline.statistics();
+  const BusStatistics* statistics = pipeline.statistics();
   if (!statistics) return;
   const auto base = o.register_base;
   const auto problems = pipeline.problems();
@@ -96,9 +96,10 @@ std::unique_ptr<MetricsServer> serve_metrics(const RunOptions& o, Pipeline& pipe
   });
 }
 
-std::unique_ptr<captures::RawRecorder> raw_recorder(
-    const RunOptions& o, const captures::RingLimits& ring,
-    const std::vector<decoder::ChannelInfo>& channels, const decoder::SerialFormat& format) {
+std::unique_ptr<captures::RawRecorder> raw_recorder(const RunOptions& o,
+                                                    const captures::RingLimits& ring,
+                                                    const std::vector<ChannelInfo>& channels,
+                                                    const SerialFormat& format) {
   if (o.save_raw.empty()) return nullptr;
   return std::make_unique<captures::RawRecorder>(o.save_raw, channels, format.char_time_ns(), ring);
 }
@@ -149,8 +150,8 @@ std::unique_ptr<MqttOutput> mqtt_output(const RunOptions& o, Pipeline& pipeline,
 }
 
 // After a run whose traffic made little sense, or came faster than the baud allows, say so.
-void hint_settings(const decoder::SerialFormat& format, const decoder::LineHealth& health,
-                   const decoder::ChunkPace& pace, bool logic_analyzer) {
+void hint_settings(const SerialFormat& format, const LineHealth& health, const ChunkPace& pace,
+                   bool logic_analyzer) {
   // A logic-analyzer capture that reads as nothing is usually a line inverted (RS-232 levels)
   // or probes swapped, which no baud rate mends.
   if (logic_analyzer && health.looks_wrong() && health.good_frames == 0) {
@@ -158,19 +159,19 @@ void hint_settings(const decoder::SerialFormat& format, const decoder::LineHealt
                "modtap: hint: no frame had a good check; is the line inverted (try "
                "--sigrok-invert), are the channels right (--sigrok-channels tx=NAME,rx=NAME), "
                "or are {} not the line's settings (try --baud auto)?\n",
-               decoder::describe(format));
+               describe(format));
     return;
   }
   if (pace.too_fast())
     fmt::print(stderr,
                "modtap: hint: bytes arrive faster than {} allows ({} of {} reads); "
                "the line is faster: try --baud auto\n",
-               decoder::describe(format), pace.fast_reads, pace.reads);
+               describe(format), pace.fast_reads, pace.reads);
   else if (health.looks_wrong())
     fmt::print(stderr,
                "modtap: hint: only {:.0f}% of {} bytes formed frames with a good check; are {} "
                "the line's settings? try --baud auto\n",
-               100 * health.good_share(), health.bytes, decoder::describe(format));
+               100 * health.good_share(), health.bytes, describe(format));
 }
 
 }  // namespace
@@ -198,14 +199,14 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   Output out(standard_output);
   Pipeline pipeline(o, ring, out, source->channels(), open.serial, source->clock());
   pipeline.limit_records(o.max_records);
-  decoder::LineHealth health(&pipeline.all());
-  decoder::AnalyzerOptions options = analyzer_options(o, source->clock());
+  LineHealth health(&pipeline.all());
+  AnalyzerOptions options = analyzer_options(o, source->clock());
   options.format = open.serial;
   options.slave_timeout_ns = pipeline.model_timeouts();
-  decoder::Analyzer bus(options, source->channels(), health);
-  decoder::ChunkPace pace(open.serial);
+  Analyzer bus(options, source->channels(), health);
+  ChunkPace pace(open.serial);
   auto raw = raw_recorder(o, ring, source->channels(), open.serial);
-  decoder::Chunk chunk;
+  Chunk chunk;
   // A capture that breaks off (a truncated file) still gives everything read before the
   // break, in every output, and then the error.
   std::optional<captures::CaptureError> broken;
@@ -220,7 +221,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
       if (autostop.duration_ns && chunk.t_ns - *first_ns >= *autostop.duration_ns) break;
       if (autostop.filesize_bytes && pipeline.pcapng_bytes() >= *autostop.filesize_bytes) break;
       if (progress) progress->update(*source->file_position());
-      if (source->clock() == decoder::ClockQuality::per_chunk) pace.add(chunk);
+      if (source->clock() == ClockQuality::per_chunk) pace.add(chunk);
       if (raw) raw->write(chunk, bus.between_frames());
       bus.push(chunk);
     }
@@ -252,7 +253,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
 
 int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLimits& ring) {
   std::vector<live::PortSpec> ports;
-  std::vector<decoder::ChannelInfo> channels;
+  std::vector<ChannelInfo> channels;
   for (const auto& spec : o.interfaces) {
     ports.push_back(live::parse_port(spec));
     channels.push_back({ports.back().name, ports.back().role});
@@ -262,15 +263,14 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
   Output out(standard_output);
   out.set_line_buffered(true);
   live::LiveOptions options;
-  options.analyzer = analyzer_options(o, decoder::ClockQuality::per_chunk);
+  options.analyzer = analyzer_options(o, ClockQuality::per_chunk);
   if (!o.baud || !o.parity) {
     auto probed = live::probe_ports(ports, options, o.baud, o.parity,
                                     static_cast<int64_t>(o.probe_s * 1e9), stop);
     options.analyzer.format = probed.format;
     options.replay = std::move(probed.read);  // the winning setting's bytes are analysed too
   }
-  Pipeline pipeline(o, ring, out, channels, options.analyzer.format,
-                    decoder::ClockQuality::per_chunk);
+  Pipeline pipeline(o, ring, out, channels, options.analyzer.format, ClockQuality::per_chunk);
   pipeline.limit_records(o.max_records, live::request_stop);
   const int64_t started_ns = live::wall_clock_ns();
   options.done = [&](int64_t now_ns) {
@@ -280,7 +280,7 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
   options.analyzer.slave_timeout_ns = pipeline.model_timeouts();
   auto raw = raw_recorder(o, ring, channels, options.analyzer.format);
   if (raw)
-    options.on_read = [&](const decoder::Chunk& chunk, bool between_frames) {
+    options.on_read = [&](const Chunk& chunk, bool between_frames) {
       raw->write(chunk, between_frames);
     };
   options.reconnect = o.reconnect;

@@ -5,13 +5,11 @@
 
 #include <fmt/chrono.h>
 
-#include "decoder/format_probe.hpp"
-#include "decoder/register_meaning.hpp"
+#include "models/register_meaning.hpp"
+#include "protocol/format_probe.hpp"
 #include "tools/modtap/render.hpp"
 
 namespace modtap::tools {
-
-using namespace decoder;
 
 namespace {
 

@@ -6,27 +6,25 @@
 
 #include <span>
 
-#include "decoder/bus_diagnostics.hpp"
-#include "decoder/bus_problems.hpp"
-#include "decoder/bus_statistics.hpp"
-#include "decoder/register_numbering.hpp"
+#include "analysis/bus_diagnostics.hpp"
+#include "analysis/bus_problems.hpp"
+#include "analysis/bus_statistics.hpp"
+#include "protocol/register_numbering.hpp"
 #include "tools/modtap/output.hpp"
 
 namespace modtap::tools {
 
 // The outages (slaves that went silent) come from the diagnostics stage; the problems, first,
-// from decoder::find_problems.
-void print_statistics(Output& out, const decoder::BusStatistics& stats,
-                      const decoder::BusDiagnostics& diagnostics,
-                      std::span<const decoder::Problem> problems,
-                      decoder::RegisterBase base = decoder::RegisterBase::hex);
+// from find_problems.
+void print_statistics(Output& out, const BusStatistics& stats, const BusDiagnostics& diagnostics,
+                      std::span<const Problem> problems, RegisterBase base = RegisterBase::hex);
 
 // `complete` is false when the input ended in an error: the numbers cover what was read.
-void append_statistics_json(fmt::memory_buffer& out, const decoder::BusStatistics& stats,
-                            const decoder::BusDiagnostics& diagnostics,
-                            std::span<const decoder::Problem> problems, bool complete);
+void append_statistics_json(fmt::memory_buffer& out, const BusStatistics& stats,
+                            const BusDiagnostics& diagnostics, std::span<const Problem> problems,
+                            bool complete);
 
 // The problems as a JSON array, as --stats, the metrics and MQTT give them.
-void append_problems_json(fmt::memory_buffer& out, std::span<const decoder::Problem> problems);
+void append_problems_json(fmt::memory_buffer& out, std::span<const Problem> problems);
 
 }  // namespace modtap::tools

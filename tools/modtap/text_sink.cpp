@@ -5,13 +5,11 @@
 
 #include <fmt/chrono.h>
 
-#include "decoder/pdu_fields.hpp"
-#include "decoder/register_meaning.hpp"
+#include "models/register_meaning.hpp"
+#include "protocol/pdu_fields.hpp"
 #include "tools/modtap/render.hpp"
 
 namespace modtap::tools {
-
-using namespace decoder;
 
 namespace {
 

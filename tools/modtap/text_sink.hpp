@@ -5,10 +5,10 @@
 #include <string_view>
 #include <vector>
 
-#include "decoder/pdu_fields.hpp"
-#include "decoder/record_sink.hpp"
-#include "decoder/register_meaning.hpp"
-#include "decoder/register_numbering.hpp"
+#include "models/register_meaning.hpp"
+#include "protocol/pdu_fields.hpp"
+#include "protocol/record_sink.hpp"
+#include "protocol/register_numbering.hpp"
 #include "tools/modtap/output.hpp"
 #include "tools/modtap/render.hpp"
 
@@ -20,56 +20,52 @@ namespace modtap::tools {
 enum class TimeFormat : uint8_t { relative, absolute, absolute_date, delta, delta_displayed };
 }  // namespace modtap::tools
 
-namespace modtap::decoder {
+namespace modtap {
 template <>
 struct EnumNames<tools::TimeFormat> {
   static constexpr std::array<std::string_view, 5> names{"r", "a", "ad", "d", "dd"};
 };
-}  // namespace modtap::decoder
+}  // namespace modtap
 
 namespace modtap::tools {
 
 struct TextOptions {
   bool verbose = false;  // -V: each frame's field tree
   TimeFormat time = TimeFormat::relative;
-  decoder::RegisterBase register_base = decoder::RegisterBase::hex;
-  // The clock of every record, kept before a filter (decoder::ClockStage): -t r and -t d count
+  RegisterBase register_base = RegisterBase::hex;
+  // The clock of every record, kept before a filter (ClockStage): -t r and -t d count
   // over the whole capture. None: the sink keeps its own, of the records it is given.
-  const decoder::RecordClock* clock = nullptr;
+  const RecordClock* clock = nullptr;
 };
 
-class TextSink final : public decoder::RecordSink {
+class TextSink final : public RecordSink {
  public:
-  TextSink(Output& out, const std::vector<decoder::ChannelInfo>& channels,
-           TextOptions options = {});
+  TextSink(Output& out, const std::vector<ChannelInfo>& channels, TextOptions options = {});
 
-  void on_frame(const decoder::Frame& frame) override;
-  void on_noise(const decoder::Noise& noise) override;
-  void on_timeout(const decoder::Timeout& timeout) override;
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override;
+  void on_timeout(const Timeout& timeout) override;
 
  private:
   void time_column(int64_t t_ns);
-  const decoder::RecordClock& clock() const {
-    return options_.clock ? *options_.clock : own_clock_;
-  }
+  const RecordClock& clock() const { return options_.clock ? *options_.clock : own_clock_; }
   void seconds_column(int64_t ns);
   void absolute_time(int64_t t_ns);
   void channel_column(uint16_t channel);
-  AddressNumbering numbering_of(const decoder::Frame& frame) const;
-  void tree(const decoder::Frame& frame, const decoder::DecodedPdu& pdu,
-            AddressNumbering numbering);
-  void registers_line(const decoder::Meaning& meaning);
-  void registers_tree(const decoder::Meaning& meaning);
+  AddressNumbering numbering_of(const Frame& frame) const;
+  void tree(const Frame& frame, const DecodedPdu& pdu, AddressNumbering numbering);
+  void registers_line(const Meaning& meaning);
+  void registers_tree(const Meaning& meaning);
 
   Output& out_;
-  const std::vector<decoder::ChannelInfo>& channels_;
+  const std::vector<ChannelInfo>& channels_;
   TextOptions options_;
-  decoder::RecordClock own_clock_;            // without options_.clock
+  RecordClock own_clock_;                     // without options_.clock
   std::optional<int64_t> previous_shown_ns_;  // -t dd counts from here
   int64_t shown_second_ = -1;                 // the second whose date and time `shown_` holds
   KeptDecimal seconds_;                       // relative and delta times' whole seconds
   fmt::memory_buffer shown_;
-  decoder::DecodedPdu decoded_;  // the frame's fields, its capacity kept from frame to frame
+  DecodedPdu decoded_;  // the frame's fields, its capacity kept from frame to frame
 };
 
 }  // namespace modtap::tools

@@ -1,0 +1,717 @@
+#include "filter/display_filter.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "models/register_meaning.hpp"
+#include "protocol/findings.hpp"
+#include "protocol/function_codes.hpp"
+#include "protocol/number_text.hpp"
+
+namespace modtap {
+
+FilterError::FilterError(size_t column, const std::string& message)
+    : std::runtime_error(fmt::format("column {}: {}", column, message)), column_(column) {}
+
+enum class Op : uint8_t { eq, ne, lt, le, gt, ge };
+enum class NameKind : uint8_t { field, finding, register_attribute, register_named };
+enum class RegisterAttribute : uint8_t { name, addr, value, raw, unit, text };
+
+struct Name {
+  NameKind kind = NameKind::field;
+  std::vector<FieldId> ids;  // a field: every field the name stands for (FC05's and FC06's value)
+  size_t finding = 0;        // a finding: its registry slot
+  RegisterAttribute attribute = RegisterAttribute::value;
+  std::string register_name;
+};
+
+struct Literal {
+  bool is_number = false;
+  double number = 0;
+  std::string text;
+};
+
+struct FilterNode {
+  enum class Kind : uint8_t { any_of, all_of, negation, presence, comparison } kind;
+  size_t left = 0, right = 0;
+  Name name;
+  Op op = Op::eq;
+  Literal literal;
+};
+
+namespace {
+
+// One value a name has on a record: a number, a text, or both (a register with a meaning).
+struct Value {
+  bool has_number = false;
+  double number = 0;
+  bool has_text = false;
+  std::string_view text;
+};
+
+Value number(double n) {
+  return {true, n, false, {}};
+}
+Value text(std::string_view t) {
+  return {false, 0, true, t};
+}
+
+bool equal_ignoring_case(std::string_view a, std::string_view b) {
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+           return std::tolower(static_cast<unsigned char>(x)) ==
+                  std::tolower(static_cast<unsigned char>(y));
+         });
+}
+
+template <typename T>
+bool ordered(Op op, const T& a, const T& b) {
+  switch (op) {
+    case Op::eq:
+      return a == b;
+    case Op::ne:
+      return a != b;
+    case Op::lt:
+      return a < b;
+    case Op::le:
+      return a <= b;
+    case Op::gt:
+      return a > b;
+    case Op::ge:
+      return a >= b;
+  }
+  return false;
+}
+
+// `==` for one value; `!=` is handled as the negation of `==` over all values.
+bool compare(const Value& v, Op op, const Literal& literal) {
+  if (literal.is_number) return v.has_number && ordered(op, v.number, literal.number);
+  if (!v.has_text) return false;
+  if (op == Op::eq) return equal_ignoring_case(v.text, literal.text);
+  return ordered(op, v.text, std::string_view(literal.text));
+}
+
+// ---- Parsing ----------------------------------------------------------------------------
+
+struct Token {
+  enum class Kind : uint8_t { name, number, string, op, open, close, both, either, negate, end };
+  Kind kind = Kind::end;
+  size_t column = 0;  // from 1
+  std::string text;
+  double number = 0;
+  Op op = Op::eq;
+};
+
+bool is_name_start(char c) {
+  return std::isalpha(static_cast<unsigned char>(c)) || c == '_';
+}
+bool is_name_char(char c) {
+  return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-';
+}
+
+class Lexer {
+ public:
+  explicit Lexer(std::string_view text) : text_(text) {}
+
+  Token next() {
+    while (at_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[at_]))) ++at_;
+    Token t;
+    t.column = at_ + 1;
+    if (at_ >= text_.size()) return t;
+    const char c = text_[at_];
+    auto two = [&](const char* s) { return text_.substr(at_, 2) == s; };
+    auto symbol = [&](Token::Kind kind, size_t length) {
+      t.kind = kind;
+      t.text = std::string(text_.substr(at_, length));
+      at_ += length;
+      return t;
+    };
+    auto op = [&](Op o, size_t length) {
+      t.op = o;
+      return symbol(Token::Kind::op, length);
+    };
+    if (two("==")) return op(Op::eq, 2);
+    if (two("!=")) return op(Op::ne, 2);
+    if (two("<=")) return op(Op::le, 2);
+    if (two(">=")) return op(Op::ge, 2);
+    if (c == '<') return op(Op::lt, 1);
+    if (c == '>') return op(Op::gt, 1);
+    if (two("&&")) return symbol(Token::Kind::both, 2);
+    if (two("||")) return symbol(Token::Kind::either, 2);
+    if (c == '!') return symbol(Token::Kind::negate, 1);
+    if (c == '(') return symbol(Token::Kind::open, 1);
+    if (c == ')') return symbol(Token::Kind::close, 1);
+    if (c == '"') return string(t);
+    if (std::isdigit(static_cast<unsigned char>(c)) || c == '-' || c == '.') return numeric(t);
+    if (is_name_start(c)) return word(t);
+    throw FilterError(t.column, fmt::format("unexpected '{}'", c));
+  }
+
+ private:
+  Token string(Token& t) {
+    ++at_;
+    while (at_ < text_.size() && text_[at_] != '"') {
+      if (text_[at_] == '\\' && at_ + 1 < text_.size()) ++at_;
+      t.text += text_[at_++];
+    }
+    if (at_ >= text_.size()) throw FilterError(t.column, "a string with no closing quote");
+    ++at_;
+    t.kind = Token::Kind::string;
+    return t;
+  }
+
+  // 42, -1.5, 0x2502, 2502H.
+  Token numeric(Token& t) {
+    const size_t start = at_;
+    if (text_[at_] == '-') ++at_;
+    while (at_ < text_.size() &&
+           (std::isalnum(static_cast<unsigned char>(text_[at_])) || text_[at_] == '.'))
+      ++at_;
+    const std::string_view word = text_.substr(start, at_ - start);
+    t.kind = Token::Kind::number;
+    t.text = std::string(word);
+    if (auto whole = parse_written_number(word)) {
+      t.number = static_cast<double>(*whole);
+      return t;
+    }
+    const auto [end, error] = std::from_chars(word.data(), word.data() + word.size(), t.number);
+    if (error == std::errc() && end == word.data() + word.size() && std::isfinite(t.number))
+      return t;
+    throw FilterError(t.column, fmt::format("\"{}\" is not a number", word));
+  }
+
+  Token word(Token& t) {
+    const size_t start = at_;
+    while (at_ < text_.size() && is_name_char(text_[at_])) ++at_;
+    t.text = std::string(text_.substr(start, at_ - start));
+    static constexpr std::pair<const char*, Op> word_ops[] = {{"eq", Op::eq}, {"ne", Op::ne},
+                                                              {"lt", Op::lt}, {"le", Op::le},
+                                                              {"gt", Op::gt}, {"ge", Op::ge}};
+    for (const auto& [name, op] : word_ops)
+      if (t.text == name) {
+        t.kind = Token::Kind::op;
+        t.op = op;
+        return t;
+      }
+    t.kind = t.text == "and"   ? Token::Kind::both
+             : t.text == "or"  ? Token::Kind::either
+             : t.text == "not" ? Token::Kind::negate
+                               : Token::Kind::name;
+    return t;
+  }
+
+  std::string_view text_;
+  size_t at_ = 0;
+};
+
+constexpr std::string_view register_prefix = "register.";
+
+class Parser {
+ public:
+  Parser(std::string_view text, const std::function<bool(std::string_view)>& is_register_name,
+         std::vector<FilterNode>& nodes)
+      : lexer_(text), is_register_name_(is_register_name), nodes_(nodes) {
+    advance();
+  }
+
+  void parse() {
+    nodes_.emplace_back();  // the root, filled once the whole text is read
+    depth_.push_back(0);
+    if (token_.kind == Token::Kind::end) throw FilterError(token_.column, "an empty filter");
+    const size_t root = either();
+    if (token_.kind != Token::Kind::end)
+      throw FilterError(token_.column, fmt::format("unexpected \"{}\"", token_.text));
+    nodes_[0] = nodes_[root];
+  }
+
+ private:
+  void advance() { token_ = lexer_.next(); }
+
+  // Evaluation recurses as deep as the tree: a filter deeper than a person writes is refused
+  // before it can exhaust the stack.
+  static constexpr size_t max_depth = 256;
+
+  size_t add(FilterNode node) {
+    size_t depth = 1;
+    if (node.kind == FilterNode::Kind::negation) depth += depth_[node.left];
+    if (node.kind == FilterNode::Kind::any_of || node.kind == FilterNode::Kind::all_of)
+      depth += std::max(depth_[node.left], depth_[node.right]);
+    if (depth > max_depth)
+      throw FilterError(token_.column,
+                        fmt::format("the filter nests deeper than {} levels", max_depth));
+    nodes_.push_back(std::move(node));
+    depth_.resize(nodes_.size());
+    depth_.back() = depth;
+    return nodes_.size() - 1;
+  }
+
+  size_t either() {
+    size_t left = both();
+    while (token_.kind == Token::Kind::either) {
+      advance();
+      left = add({FilterNode::Kind::any_of, left, both(), {}, Op::eq, {}});
+    }
+    return left;
+  }
+
+  size_t both() {
+    size_t left = unary();
+    while (token_.kind == Token::Kind::both) {
+      advance();
+      left = add({FilterNode::Kind::all_of, left, unary(), {}, Op::eq, {}});
+    }
+    return left;
+  }
+
+  size_t unary() {
+    // Parentheses and negations recurse before any node is made: count them here.
+    if (++nesting_ > max_depth)
+      throw FilterError(token_.column,
+                        fmt::format("the filter nests deeper than {} levels", max_depth));
+    const size_t made = unary_inner();
+    --nesting_;
+    return made;
+  }
+
+  size_t unary_inner() {
+    if (token_.kind == Token::Kind::negate) {
+      advance();
+      return add({FilterNode::Kind::negation, unary(), 0, {}, Op::eq, {}});
+    }
+    if (token_.kind == Token::Kind::open) {
+      const size_t column = token_.column;
+      advance();
+      const size_t inner = either();
+      if (token_.kind != Token::Kind::close)
+        throw FilterError(token_.column, fmt::format("the '(' at column {} is not closed", column));
+      advance();
+      return inner;
+    }
+    return test();
+  }
+
+  size_t test() {
+    if (token_.kind != Token::Kind::name)
+      throw FilterError(token_.column,
+                        token_.kind == Token::Kind::end
+                            ? std::string("a name is missing at the end")
+                            : fmt::format("expected a name, not \"{}\"", token_.text));
+    FilterNode node{FilterNode::Kind::presence, 0, 0, resolve(token_), Op::eq, {}};
+    advance();
+    if (token_.kind != Token::Kind::op) return add(std::move(node));
+    node.kind = FilterNode::Kind::comparison;
+    node.op = token_.op;
+    const Token op = token_;
+    advance();
+    node.literal = literal(op);
+    advance();
+    return add(std::move(node));
+  }
+
+  Literal literal(const Token& op) {
+    switch (token_.kind) {
+      case Token::Kind::number:
+        return {true, token_.number, {}};
+      case Token::Kind::string:
+        return {false, 0, token_.text};
+      case Token::Kind::name:  // a bare word: role == request; or a manual's hex, FFFFH
+        if (auto hex = parse_written_number(token_.text))
+          return {true, static_cast<double>(*hex), {}};
+        return {false, 0, token_.text};
+      default:
+        throw FilterError(token_.column, fmt::format("expected a value after {}", op.text));
+    }
+  }
+
+  Name resolve(const Token& t) {
+    Name name;
+    const std::string_view word = t.text;
+    if (word == "finding" || word == "findings") {
+      name.ids = {FieldId::findings};
+      return name;
+    }
+    for (const FieldInfo& field : field_registry())
+      if (field.name == word) name.ids.push_back(field.id);
+    if (!name.ids.empty()) return name;
+    const auto findings = finding_registry();
+    for (size_t slot = 0; slot < findings.size(); ++slot)
+      if (findings[slot].name == word) {
+        name.kind = NameKind::finding;
+        name.finding = slot;
+        return name;
+      }
+    if (word.starts_with(register_prefix)) {
+      static constexpr std::pair<std::string_view, RegisterAttribute> attributes[] = {
+          {"name", RegisterAttribute::name},   {"addr", RegisterAttribute::addr},
+          {"value", RegisterAttribute::value}, {"raw", RegisterAttribute::raw},
+          {"unit", RegisterAttribute::unit},   {"text", RegisterAttribute::text}};
+      for (const auto& [attribute_name, attribute] : attributes)
+        if (word.substr(register_prefix.size()) == attribute_name) {
+          name.kind = NameKind::register_attribute;
+          name.attribute = attribute;
+          return name;
+        }
+    }
+    if (is_register_name_ && is_register_name_(word)) {
+      name.kind = NameKind::register_named;
+      name.register_name = std::string(word);
+      return name;
+    }
+    throw FilterError(t.column, fmt::format("unknown name \"{}\" (docs/output.md lists the names; "
+                                            "register names need their --model)",
+                                            word));
+  }
+
+  Lexer lexer_;
+  const std::function<bool(std::string_view)>& is_register_name_;
+  std::vector<FilterNode>& nodes_;
+  std::vector<size_t> depth_;  // of each node's subtree
+  size_t nesting_ = 0;
+  Token token_;
+};
+
+// ---- Values of a name on a record --------------------------------------------------------
+
+// Hex as JSON writes bytes, into a scratch buffer.
+std::string_view hex(std::span<const uint8_t> bytes, std::string& scratch) {
+  static constexpr char digits[] = "0123456789abcdef";
+  scratch.clear();
+  for (uint8_t b : bytes) {
+    scratch += digits[b >> 4];
+    scratch += digits[b & 15];
+  }
+  return scratch;
+}
+
+// Calls visit(value) for each value; stops and returns true as soon as visit does.
+template <typename Visit>
+bool pdu_values(const Name& name, const DecodedPdu& pdu, std::string& scratch, Visit&& visit) {
+  for (const Field& f : pdu.fields) {
+    if (std::find(name.ids.begin(), name.ids.end(), f.id) == name.ids.end()) continue;
+    switch (f.type()) {
+      case FieldType::registers:
+        for (size_t i = 0; i < f.count; ++i)
+          if (visit(number(f.word(i)))) return true;
+        break;
+      case FieldType::bits:
+        for (size_t i = 0; i < f.count; ++i)
+          if (visit(number(f.bit(i)))) return true;
+        break;
+      case FieldType::name:
+        if (visit(text(f.text))) return true;
+        break;
+      case FieldType::string:
+        if (visit(text({reinterpret_cast<const char*>(f.bytes.data()), f.bytes.size()})))
+          return true;
+        break;
+      case FieldType::bytes:
+        if (visit(text(hex(f.bytes, scratch)))) return true;
+        break;
+      case FieldType::list:
+        if (visit(number(f.count))) return true;
+        break;
+      default:
+        if (visit(number(static_cast<double>(f.number)))) return true;
+    }
+  }
+  return false;
+}
+
+template <typename Visit>
+bool register_values(const Name& name, const Meaning* meaning, Visit&& visit) {
+  if (!meaning) return false;
+  for (const RegisterValue& reg : meaning->registers) {
+    if (name.kind == NameKind::register_named) {
+      if (reg.name != name.register_name) continue;
+      if (visit(Value{true, reg.value, !reg.text.empty(), reg.text})) return true;
+      continue;
+    }
+    Value v;
+    switch (name.attribute) {
+      case RegisterAttribute::name:
+        v = text(reg.name);
+        break;
+      case RegisterAttribute::addr:
+        v = number(reg.address);
+        break;
+      case RegisterAttribute::value:
+        v = Value{true, reg.value, !reg.text.empty(), reg.text};
+        break;
+      case RegisterAttribute::raw:
+        v = number(reg.raw);
+        break;
+      case RegisterAttribute::unit:
+        v = text(reg.unit);
+        break;
+      case RegisterAttribute::text:
+        v = text(reg.text);
+        break;
+    }
+    if (visit(v)) return true;
+  }
+  return false;
+}
+
+template <typename Visit>
+bool finding_names(uint32_t bits, Visit&& visit) {
+  const auto names = frame_findings();
+  bool stop = false;
+  for_each_frame_finding(bits, [&](size_t slot) { stop = stop || visit(text(names[slot].name)); });
+  return stop;
+}
+
+template <typename Visit>
+bool finding_values(const Frame& frame, Visit&& visit) {
+  if (finding_names(frame.findings, visit)) return true;
+  if (!frame.meaning) return false;
+  for (const RuleFinding& finding : frame.meaning->findings)
+    if (visit(text(to_string(finding.kind)))) return true;
+  return false;
+}
+
+bool has_finding(const Frame& frame, size_t slot) {
+  if (slot < frame_finding_count) return (frame.findings >> slot) & 1;
+  if (!frame.meaning) return false;
+  return std::any_of(frame.meaning->findings.begin(), frame.meaning->findings.end(),
+                     [&](const RuleFinding& f) { return finding_slot(f.kind) == slot; });
+}
+
+// The record-level fields of a frame, as JSON gives them.
+template <typename Visit>
+bool frame_field(FieldId id, const Frame& frame, const DecodedPdu& pdu, std::string& scratch,
+                 Visit&& visit) {
+  switch (id) {
+    case FieldId::type:
+      return visit(text("frame"));
+    case FieldId::index:
+      return visit(number(static_cast<double>(frame.index)));
+    case FieldId::t_ns:
+      return visit(number(static_cast<double>(frame.t_ns)));
+    case FieldId::end_ns:
+      return visit(number(static_cast<double>(frame.end_ns)));
+    case FieldId::offset:
+      return visit(number(static_cast<double>(frame.offset)));
+    case FieldId::mode:
+      return visit(text(to_string(frame.mode)));
+    case FieldId::raw:
+      return visit(text(hex(frame.raw, scratch)));
+    case FieldId::role:
+      return visit(text(to_string(frame.role)));
+    case FieldId::slave:
+      return visit(number(frame.slave()));
+    case FieldId::fc:
+      return visit(number(frame.function() & 0x7F));
+    case FieldId::function: {
+      const std::string_view standard = function_name(frame.function());
+      if (!standard.empty()) return visit(text(standard));
+      scratch = fmt::format("Function 0x{:02X}", frame.function() & 0x7F);
+      return visit(text(scratch));
+    }
+    case FieldId::check:
+      return visit(text(frame.check_ok ? "ok" : "bad"));
+    case FieldId::check_value:
+      return visit(number(frame.wire_check()));
+    case FieldId::expected_check:
+      return frame.damage != Damage::cut && visit(number(frame.expected_check));
+    case FieldId::damage:
+      return frame.damage != Damage::none && visit(text(to_string(frame.damage)));
+    case FieldId::exception:
+      return frame.is_exception() && frame.adu.size() > 2 && visit(number(frame.adu[2]));
+    case FieldId::request:
+      return frame.request && visit(number(static_cast<double>(*frame.request)));
+    case FieldId::latency_us:
+      return frame.latency_ns && visit(number(static_cast<double>(*frame.latency_ns) / 1000));
+    case FieldId::findings:
+      return finding_values(frame, visit);
+    case FieldId::model:
+      return frame.meaning && visit(text(frame.meaning->model->name));
+    case FieldId::registers:
+      return frame.meaning && !frame.meaning->registers.empty() &&
+             visit(number(static_cast<double>(frame.meaning->registers.size())));
+    case FieldId::notes:
+      return frame.meaning && !frame.meaning->findings.empty() &&
+             visit(number(static_cast<double>(frame.meaning->findings.size())));
+    case FieldId::truncated:
+      return pdu.truncated && visit(number(1));
+    default:
+      return false;  // noise and time-out fields; the channel is the record's caller's
+  }
+}
+
+template <typename Visit>
+bool noise_field(FieldId id, const Noise& noise, std::string& scratch, Visit&& visit) {
+  switch (id) {
+    case FieldId::type:
+      return visit(text("noise"));
+    case FieldId::index:
+      return visit(number(static_cast<double>(noise.index)));
+    case FieldId::t_ns:
+      return visit(number(static_cast<double>(noise.t_ns)));
+    case FieldId::end_ns:
+      return visit(number(static_cast<double>(noise.end_ns)));
+    case FieldId::offset:
+      return visit(number(static_cast<double>(noise.offset)));
+    case FieldId::mode:
+      return visit(text(to_string(noise.mode)));
+    case FieldId::raw:
+      return visit(text(hex(noise.raw, scratch)));
+    case FieldId::reason:
+      return visit(text(to_string(noise.reason)));
+    case FieldId::request:
+      return noise.request && visit(number(static_cast<double>(*noise.request)));
+    case FieldId::findings:
+      return finding_names(noise.findings, visit);
+    default:
+      return false;
+  }
+}
+
+template <typename Visit>
+bool timeout_field(FieldId id, const Timeout& t, Visit&& visit) {
+  switch (id) {
+    case FieldId::type:
+      return visit(text(t.timed_out() ? "timeout" : "unanswered"));
+    case FieldId::request:
+      return visit(number(static_cast<double>(t.request)));
+    case FieldId::t_ns:
+      return visit(number(static_cast<double>(t.t_ns)));
+    case FieldId::slave:
+      return visit(number(t.slave));
+    case FieldId::fc:
+      return visit(number(t.function));
+    case FieldId::waited_us:
+      return visit(number(static_cast<double>(t.waited_ns) / 1000));
+    case FieldId::reason:
+      return visit(text(to_string(t.reason)));
+    default:
+      return false;
+  }
+}
+
+// What a node needs of a record: whether any value of a name satisfies a test.
+// A record's channel, by the name JSON gives it.
+template <typename Visit>
+bool channel_value(const Name& name, uint16_t channel, const std::vector<std::string>& channels,
+                   Visit&& visit) {
+  if (std::find(name.ids.begin(), name.ids.end(), FieldId::channel) == name.ids.end()) return false;
+  return visit(text(channel < channels.size() ? std::string_view(channels[channel]) : ""));
+}
+
+struct FrameRecord {
+  const Frame& frame;
+  const DecodedPdu& pdu;
+  const std::vector<std::string>& channels;
+  template <typename Visit>
+  bool any(const Name& name, std::string& scratch, Visit&& visit) const {
+    if (channel_value(name, frame.channel, channels, visit)) return true;
+    switch (name.kind) {
+      case NameKind::finding:
+        return has_finding(frame, name.finding) && visit(number(1));
+      case NameKind::register_attribute:
+      case NameKind::register_named:
+        return register_values(name, frame.meaning, visit);
+      case NameKind::field:
+        break;
+    }
+    for (FieldId id : name.ids)
+      if (frame_field(id, frame, pdu, scratch, visit)) return true;
+    return pdu_values(name, pdu, scratch, visit);
+  }
+};
+
+struct NoiseRecord {
+  const Noise& noise;
+  const std::vector<std::string>& channels;
+  template <typename Visit>
+  bool any(const Name& name, std::string& scratch, Visit&& visit) const {
+    if (name.kind == NameKind::finding)
+      return name.finding < frame_finding_count && ((noise.findings >> name.finding) & 1) &&
+             visit(number(1));
+    if (name.kind != NameKind::field) return false;
+    if (channel_value(name, noise.channel, channels, visit)) return true;
+    for (FieldId id : name.ids)
+      if (noise_field(id, noise, scratch, visit)) return true;
+    return false;
+  }
+};
+
+struct TimeoutRecord {
+  const Timeout& timeout;
+  const std::vector<std::string>& channels;
+  template <typename Visit>
+  bool any(const Name& name, std::string&, Visit&& visit) const {
+    if (name.kind != NameKind::field) return false;
+    if (channel_value(name, timeout.channel, channels, visit)) return true;
+    for (FieldId id : name.ids)
+      if (timeout_field(id, timeout, visit)) return true;
+    return false;
+  }
+};
+
+template <typename Record>
+bool evaluate(const std::vector<FilterNode>& nodes, size_t at, const Record& record,
+              std::string& scratch) {
+  const FilterNode& node = nodes[at];
+  switch (node.kind) {
+    case FilterNode::Kind::any_of:
+      return evaluate(nodes, node.left, record, scratch) ||
+             evaluate(nodes, node.right, record, scratch);
+    case FilterNode::Kind::all_of:
+      return evaluate(nodes, node.left, record, scratch) &&
+             evaluate(nodes, node.right, record, scratch);
+    case FilterNode::Kind::negation:
+      return !evaluate(nodes, node.left, record, scratch);
+    case FilterNode::Kind::presence:
+      return record.any(node.name, scratch, [](const Value&) { return true; });
+    case FilterNode::Kind::comparison: {
+      const Op op = node.op == Op::ne ? Op::eq : node.op;
+      const bool any = record.any(node.name, scratch,
+                                  [&](const Value& v) { return compare(v, op, node.literal); });
+      return node.op == Op::ne ? !any : any;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+DisplayFilter::DisplayFilter(std::string_view text,
+                             std::function<bool(std::string_view)> is_register_name) {
+  Parser(text, is_register_name, nodes_).parse();
+}
+DisplayFilter::~DisplayFilter() = default;
+DisplayFilter::DisplayFilter(DisplayFilter&&) noexcept = default;
+
+bool DisplayFilter::matches(const Frame& frame, const DecodedPdu& pdu) const {
+  return evaluate(nodes_, 0, FrameRecord{frame, pdu, channels_}, scratch_);
+}
+bool DisplayFilter::matches(const Noise& noise) const {
+  return evaluate(nodes_, 0, NoiseRecord{noise, channels_}, scratch_);
+}
+bool DisplayFilter::matches(const Timeout& timeout) const {
+  return evaluate(nodes_, 0, TimeoutRecord{timeout, channels_}, scratch_);
+}
+
+FilterStage::FilterStage(DisplayFilter filter, RecordSink& next)
+    : filter_(std::move(filter)), next_(next) {}
+
+void FilterStage::on_frame(const Frame& frame) {
+  decode_pdu(frame.role, frame.pdu(), frame.request_pdu, decoded_);
+  if (!filter_.matches(frame, decoded_)) return;
+  Frame decoded = frame;
+  decoded.decoded = &decoded_;
+  next_.on_frame(decoded);
+}
+
+void FilterStage::on_noise(const Noise& noise) {
+  if (filter_.matches(noise)) next_.on_noise(noise);
+}
+
+void FilterStage::on_timeout(const Timeout& timeout) {
+  if (filter_.matches(timeout)) next_.on_timeout(timeout);
+}
+
+}  // namespace modtap

@@ -1,0 +1,136 @@
+#include "protocol/checksum.hpp"
+
+#include <algorithm>
+#include <array>
+
+namespace modtap {
+namespace {
+
+using Table = std::array<uint16_t, 256>;
+
+// tables[0] is the usual byte table; tables[k] advances a byte k positions further, so four
+// bytes take four look-ups and no dependency chain between them (slicing-by-4).
+constexpr std::array<Table, 4> make_crc_tables() {
+  std::array<Table, 4> tables{};
+  for (unsigned i = 0; i < 256; ++i) {
+    uint16_t crc = static_cast<uint16_t>(i);
+    for (int bit = 0; bit < 8; ++bit) crc = (crc & 1) ? (crc >> 1) ^ 0xA001 : crc >> 1;
+    tables[0][i] = crc;
+  }
+  for (size_t k = 1; k < 4; ++k)
+    for (unsigned i = 0; i < 256; ++i)
+      tables[k][i] =
+          static_cast<uint16_t>((tables[k - 1][i] >> 8) ^ tables[0][tables[k - 1][i] & 0xFF]);
+  return tables;
+}
+
+constexpr auto crc_tables = make_crc_tables();
+constexpr const Table& crc_table = crc_tables[0];
+
+// The byte table's high bytes are all different, so a step through 0x00 can be undone: the
+// high byte names the entry, and the entry gives back the byte shifted out.
+constexpr Table make_unshift_table() {
+  Table entry_of_high_byte{};
+  for (unsigned i = 0; i < 256; ++i)
+    entry_of_high_byte[crc_table[i] >> 8] = static_cast<uint16_t>(i);
+  return entry_of_high_byte;
+}
+
+constexpr bool high_bytes_distinct() {
+  std::array<bool, 256> seen{};
+  for (uint16_t entry : crc_table) {
+    if (seen[entry >> 8]) return false;
+    seen[entry >> 8] = true;
+  }
+  return true;
+}
+static_assert(high_bytes_distinct());
+
+constexpr Table entry_of_high_byte = make_unshift_table();
+
+// A^-1: the state that a step through 0x00 takes to `crc`.
+uint16_t crc16_unshift(uint16_t crc) {
+  const uint16_t low = entry_of_high_byte[crc >> 8];
+  return static_cast<uint16_t>(((crc ^ crc_table[low]) << 8) | low);
+}
+
+}  // namespace
+
+uint16_t crc16_step(uint16_t crc, uint8_t byte) {
+  return static_cast<uint16_t>((crc >> 8) ^ crc_table[(crc ^ byte) & 0xFF]);
+}
+
+uint16_t crc16(std::span<const uint8_t> bytes, uint16_t crc) {
+  const uint8_t* p = bytes.data();
+  size_t n = bytes.size();
+  for (; n >= 4; n -= 4, p += 4) {
+    const unsigned w = crc ^ (p[0] | p[1] << 8);
+    crc = static_cast<uint16_t>(crc_tables[3][w & 0xFF] ^ crc_tables[2][w >> 8] ^
+                                crc_tables[1][p[2]] ^ crc_tables[0][p[3]]);
+  }
+  for (; n > 0; --n, ++p) crc = crc16_step(crc, *p);
+  return crc;
+}
+
+CrcIndex::CrcIndex() : newest_(chain_mask + 1, none) {
+  restart(0);
+}
+
+void CrcIndex::restart(uint64_t origin) {
+  // Chains stop at offsets below the origin; going back would let old ones run on.
+  if (origin < origin_) std::fill(newest_.begin(), newest_.end(), none);
+  base_ = origin_ = origin;
+  ends_.assign(1, 0);
+  starts_.clear();
+  same_before_.assign(1, newest_[0]);  // the value 0 is in chain 0
+  newest_[0] = origin;
+  for (unsigned bit = 0; bit < 8; ++bit) unshifted_bits_[bit] = static_cast<uint16_t>(1 << bit);
+  unshifted_init_ = 0xFFFF;
+}
+
+void CrcIndex::append(std::span<const uint8_t> bytes) {
+  uint16_t w = ends_.back();
+  uint64_t offset = base_ + ends_.size();  // of the end being added
+  for (uint8_t byte : bytes) {
+    starts_.push_back(static_cast<uint16_t>(w ^ unshifted_init_));
+    for (unsigned bit = 0; bit < 8; ++bit) {
+      w ^= static_cast<uint16_t>(-((byte >> bit) & 1) & unshifted_bits_[bit]);
+      unshifted_bits_[bit] = crc16_unshift(unshifted_bits_[bit]);
+    }
+    unshifted_init_ = crc16_unshift(unshifted_init_);
+    ends_.push_back(w);
+    same_before_.push_back(newest_[w & chain_mask]);
+    newest_[w & chain_mask] = offset++;
+  }
+}
+
+void CrcIndex::drop_before(uint64_t offset) {
+  // Nothing indexed since the last restart (a frame its length rules found, as most are): the
+  // next search restarts the index where it begins, past anything forgotten here.
+  if (offset <= base_ || starts_.empty()) return;
+  if (offset >= end()) return restart(offset);
+  const auto count = static_cast<ptrdiff_t>(offset - base_);
+  ends_.erase(ends_.begin(), ends_.begin() + count);
+  starts_.erase(starts_.begin(), starts_.begin() + count);
+  same_before_.erase(same_before_.begin(), same_before_.begin() + count);
+  base_ = offset;
+}
+
+bool CrcIndex::chained_ends(uint16_t key, uint64_t first, uint64_t last,
+                            std::array<uint64_t, 256>& out, size_t& count) const {
+  uint64_t end = newest_[key & chain_mask];
+  for (int walked = 0; end != none && end > last; end = same_before_[end - base_])
+    if (++walked > max_chain_walk) return false;
+  // `first` is at least base_, so an end forgotten by drop_before stops the walk here.
+  for (; end != none && end >= first; end = same_before_[end - base_])
+    if (ends_[end - base_] == key) out[count++] = end;
+  return true;
+}
+
+uint8_t lrc(std::span<const uint8_t> bytes) {
+  uint8_t sum = 0;
+  for (uint8_t b : bytes) sum = static_cast<uint8_t>(sum + b);
+  return static_cast<uint8_t>(-sum);
+}
+
+}  // namespace modtap

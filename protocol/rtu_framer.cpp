@@ -1,0 +1,922 @@
+#include "protocol/rtu_framer.hpp"
+
+#include <algorithm>
+#include <array>
+
+#include "protocol/checksum.hpp"
+#include "protocol/function_codes.hpp"
+
+namespace modtap {
+namespace {
+
+constexpr uint16_t crc_size = 2;
+constexpr uint16_t min_adu = 4;             // slave, function, CRC
+constexpr uint8_t max_unicast_slave = 247;  // 248-255 are reserved (Serial Line 2.2)
+// Compact the buffer once this much has been consumed, so memmove stays rare.
+constexpr size_t compact_after = 1 << 16;
+// A frame found by CRC search may be confirmed by following ones found the same way (FC08
+// Return Query Data requests and their echoes, back to back); CRC hits are rare, so each
+// level costs one more bounded scan.
+constexpr int max_search = 8;
+
+// Reserved addresses still carry frames where a device uses them (N3 answers to 248-254), but
+// only with a public function code: a turnaround's 0xFF must not start a frame of any length.
+bool plausible_start(uint8_t slave, uint8_t fc) {
+  return (fc & 0x7F) != 0 && (slave <= max_unicast_slave || is_public_function(fc));
+}
+
+// What a driver turning on puts on the bus: one byte, the line's idle level or its opposite.
+bool is_glitch_byte(uint8_t byte) {
+  return byte == 0x00 || byte == 0xFF;
+}
+
+bool crc_ok(const uint8_t* p, size_t n) {
+  return crc16({p, n - crc_size}) == wire_crc({p, n});
+}
+
+}  // namespace
+
+RtuFramer::RtuFramer(uint16_t channel, const RtuFramerOptions& options, FrameSink& sink)
+    : channel_(channel),
+      options_(options),
+      sink_(sink),
+      expected_(sink.expectation()),
+      char_ns_(options.format.char_time_ns()),
+      t15_ns_(options.format.t15_ns()),
+      gap_threshold_ns_(options.format.t35_ns() +
+                        (options.clock == ClockQuality::per_chunk ? options.chunk_jitter_ns : 0)) {
+  buf_.reserve(compact_after + 4096);
+}
+
+void RtuFramer::push(const Chunk& chunk) {
+  if (chunk.bytes.empty()) return;
+  const auto n = static_cast<int64_t>(chunk.bytes.size());
+  int64_t t_end = chunk.t_ns;
+  if (options_.clock == ClockQuality::none) {
+    t_end = static_cast<int64_t>(end_ + chunk.bytes.size()) * char_ns_;
+  } else if (have_time_) {
+    const int64_t first_start = t_end - n * char_ns_;
+    if (first_start - last_end_ns_ >= gap_threshold_ns_) gaps_.push_back(end_);
+  }
+  have_time_ = true;
+  last_end_ns_ = std::max(last_end_ns_, t_end);
+  if (!chunk.continues_read || marks_.empty()) ++reads_;
+  marks_.push_back({end_, end_ + chunk.bytes.size(), t_end, chunk.continues_read, reads_});
+  buf_.insert(buf_.end(), chunk.bytes.begin(), chunk.bytes.end());
+  end_ += chunk.bytes.size();
+  resolve(false);
+}
+
+void RtuFramer::flush(int64_t now_ns) {
+  if (head_ < end_ && options_.clock != ClockQuality::none &&
+      now_ns - last_end_ns_ >= gap_threshold_ns_)
+    resolve(true);
+}
+
+int64_t RtuFramer::held_since_ns() const {
+  return head_ < end_ ? end_time(head_) - char_ns_ : INT64_MAX;
+}
+
+void RtuFramer::finish() {
+  resolve(true);
+}
+
+void RtuFramer::resolve(bool final) {
+  while (head_ < end_) {
+    const Match m = match_at(head_, final, max_search);
+    if (m.kind == Match::Kind::found) {
+      emit_frame(head_, m);
+      continue;
+    }
+    if (m.kind == Match::Kind::need_more && !final && !blocked_by_gap(head_, final)) return;
+    bool decided = false;
+    const uint64_t next = next_start(head_ + 1, final, decided);
+    if (!decided && next - head_ <= max_rtu_adu) return;  // may still be one (bad) frame
+    emit_unframed(head_, next);
+  }
+}
+
+RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const {
+  const uint64_t avail = end_ - at;
+  const uint8_t* p = at_ptr(at);
+  if (avail < 2) return need_more();
+  const uint8_t fc = p[1];
+  if (!plausible_start(p[0], fc)) return {};
+
+  const bool broadcast = p[0] == 0;
+  const bool may_request =
+      options_.role != ChannelRole::slave && !(fc & 0x80) && (!broadcast || may_broadcast(fc));
+  const bool may_respond = options_.role != ChannelRole::master && !broadcast;
+  const Expectation& expected = expected_;
+  const bool response_first =
+      expected.pending && expected.slave == p[0] && expected.function == (fc & 0x7F);
+
+  Role order[2] = {Role::request, Role::response};
+  if (response_first) std::swap(order[0], order[1]);
+  bool waiting = false;
+  for (Role role : order) {
+    if ((role == Role::request && !may_request) || (role == Role::response && !may_respond))
+      continue;
+    Match m = match_role(role, at, final, search);
+    const Role other = role == Role::request ? Role::response : Role::request;
+    const bool other_allowed = other == Role::request ? may_request : may_respond;
+    if (m.kind == Match::Kind::found) {
+      switch (judge_found(at, role, m.length, other_allowed ? &other : nullptr, final, search)) {
+        case Verdict::refuse:
+          return {};
+        case Verdict::wait:
+          return need_more();
+        case Verdict::other_reading:
+          continue;
+        case Verdict::keep:
+          break;
+      }
+      // The same bytes may read as the other role too (echo codes 05, 06, 08, ...).
+      if (other_allowed && fits_role(other, at, m.length)) m.fit = {true, true};
+      return m;
+    }
+    if (m.kind == Match::Kind::need_more) {
+      // The likelier reading is still open: wait for it rather than take the other one early,
+      // unless a silence with a good frame after it says it never completes (a master's retry
+      // read as the response its slave did not send).
+      if (blocked_by_gap(at, final)) continue;
+      if (!final) return m;
+      waiting = true;
+    }
+  }
+  return waiting ? need_more() : Match{};
+}
+
+// What the bus says against a reading of [at, at + length) whose length rules and CRC agree.
+// `other` is the other role, where it is allowed.
+RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t length,
+                                          const Role* other, bool final, int search) const {
+  const uint8_t* p = at_ptr(at);
+  const uint64_t gap = first_gap_after(at);
+  if (gap < at + length) {
+    // A frame ends before the silence, and what came after it kept the CRC good (a trailing
+    // 0x00 keeps a zero residue zero: a retry of FC07, four bytes, and the 0x00 of a broadcast
+    // after the silence read as its five-byte answer): the other reading, if any, is the frame,
+    // whatever comes after the silence.
+    if (gap - at >= min_adu && crc_ok(p, gap - at)) return Verdict::other_reading;
+    // A silence inside a frame, with a good frame starting right after it, means this was a
+    // frame that broke off, whatever its CRC says.
+    const Match after_gap = match_at(gap, final, 0);
+    if (after_gap.kind == Match::Kind::found) return Verdict::refuse;
+    if (after_gap.kind == Match::Kind::need_more && !final) return Verdict::wait;
+  }
+  // The first bytes after the request (a glitch aside), beginning as the awaited answer with
+  // every byte its request predicts in place (a read's byte count), read as a request the
+  // standard does not allow, too soon for the master's next one: a talked-over answer whose
+  // junk passed a CRC by chance (`55 01 04 69 ff c9 69 16`, a read of 0xFFC9 coils, where 4
+  // bytes of coils were due). The answer, damaged, is the reading. So is a 0xFF glitch with the
+  // awaited answer's slave and function code after it: `ff 03 0c 15 de 10 1a ec` passed a CRC
+  // as a read for slave 255, where slave 3's answer to FC0C began after its driver's 0xFF. (A
+  // request the standard allows may be the master's, after a time-out shorter than the
+  // threshold: a write of the same block with new values begins as its echo would.)
+  if (role == Role::request && other && first_after_request(at) && too_soon_for_retry(at) &&
+      !copies_request(at, length)) {
+    const bool junk_as_request =
+        begins_as_awaited(at) &&
+        request_spec_findings({p + 1, static_cast<size_t>(length - 1 - crc_size)}) != 0;
+    const bool glitch_then_awaited =
+        p[0] == 0xFF && awaited_length(at + 1, end_ - at - 1).has_value();
+    if (junk_as_request || glitch_then_awaited) return Verdict::refuse;
+  }
+  // A request inside the span the awaited answer's structure claims is a collision's junk
+  // that passed a CRC unless its own answer follows it (after a cut answer, the master's next
+  // request and its answer): a FC0C poll of slave 113, then junk, inside a talked-over answer
+  // of 51 bytes (seed 896); a FC06 write of slave 3 from the last bytes of a talked-over FC14
+  // answer on, then another slave's request (1008); a read of 10,773 inputs of slave 131 from
+  // the second byte of a cut exception `ae 83 02` on (946). A silence after it may be its slave's;
+  // with no clock, where the master's time-out after a silent slave cannot show, no rule.
+  if (role == Role::request && p[0] != 0 && options_.clock != ClockQuality::none && at > head_ &&
+      at < awaited_end(head_)) {
+    const auto answered = answer_follows(at, at + length, final);
+    if (!answered) return Verdict::wait;
+    if (!*answered) return Verdict::refuse;
+  }
+  // A copy of the pending request with a glitch after it reads as a response of one more
+  // byte (FC07: a status equal to the request's CRC low byte); on a bus of glitches, the copy
+  // is the likelier (a master's retry), unless it came too soon for a retry. (Any other frame
+  // whose CRC ends in 0x00 holds a frame one byte shorter too: that is no reason to cut it.)
+  if (other && *other == Role::request && zero_glitches_common() && p[length - 1] == 0x00 &&
+      may_be_glitch(at + length - 1) && copies_request(at, length - 1) && !too_soon_for_retry(at))
+    return Verdict::other_reading;
+  // The pending request again (a retry) whose CRC ends in 0x00 holds a response one byte
+  // shorter, which its request would not have asked for: the copy is the reading, once its
+  // last byte is there to say so.
+  if (other && *other == Role::request && starts_request_copy(at, length)) {
+    if (at + length == end_) {
+      if (!final) return Verdict::wait;
+    } else if (copies_request(at, length + 1) && !too_soon_for_retry(at)) {
+      return Verdict::other_reading;
+    }
+  }
+  // A copy of the pending request too soon for a retry, where the awaited answer is longer, is
+  // that answer damaged. FC07's answer whose status equals the request's CRC low byte is the
+  // request and a 0x00, so right where the answer begins, if the answer may begin so, the copy
+  // is that answer cut or talked over (a quick retry of a read of 2 registers at 0400H also
+  // begins as its answer would, but that answer's data would all have to repeat the request).
+  // Further on, after a damaged answer, a master may repeat its request as soon: there only
+  // bytes no frame explains after the copy make it the answer, unless they begin as the
+  // answer to it would (a FC07 poll `c7 07 12 42` again after a talked-over answer, then its
+  // own answer talked over, `c7 07 31 c1 cd`; seed 1021).
+  if (other && *other == Role::response && copies_request(at, length) && too_soon_for_retry(at)) {
+    const uint64_t end = at + length;
+    const auto awaited = awaited_length(at, end_ - at);
+    if (awaited && *awaited > length) {
+      if (first_after_request(at) && answer_may_copy_request(at, length, *awaited))
+        return Verdict::refuse;
+      if (end == end_ && !final) return Verdict::wait;  // what follows tells
+      if (end < end_ && !gap_at(end)) {
+        const Match next = match_at(end, final, 0);
+        if (next.kind == Match::Kind::need_more && !final) return Verdict::wait;
+        if (next.kind == Match::Kind::none && !glitch_then_frame(end, final, 0) &&
+            !starts_awaited(end, end_ - end))
+          return Verdict::refuse;
+      }
+    }
+  }
+  // The awaited response cut one byte short, whose missing CRC byte the next request's slave
+  // address repeats, reads whole and good; the request, one byte short, then reads as junk.
+  // The bytes after it tell. Only on a bus channel (on a split tap the request is on the
+  // other), and only for a reading that may search on (search 0: nested in another reading's
+  // judgement, or a CRC search at its depth), so that it never nests.
+  if (role == Role::response && options_.role == ChannelRole::bus && search > 0 &&
+      expected_.pending && expected_.slave == p[0] && expected_.function == (p[1] & 0x7F)) {
+    const auto cut = cut_before_frame(at, length, final);
+    if (!cut) return Verdict::wait;
+    if (*cut) return Verdict::refuse;
+  }
+  // A reserved address is as often a turnaround's 0xFF, and an answer nobody awaits (another
+  // slave's or function's while a request waits) a collision's junk that passed a CRC: such a
+  // frame never swallows one whose length rules and CRC agree (a glitch, a response and the
+  // next glitch can read as one; a talked-over exception's tail read as a 245-byte answer of a
+  // slave nobody asked, across the next request and its answer).
+  const bool unawaited = role == Role::response && expected_.pending &&
+                         (expected_.slave != p[0] || expected_.function != (p[1] & 0x7F));
+  if ((p[0] > max_unicast_slave || unawaited) && swallows_known_frame(at, at + length))
+    return Verdict::refuse;
+  // Nor does any frame whose CRC holds by chance across a whole exchange: junk after it, and
+  // inside it a request with its own answer's first bytes after it. A cut FC0C answer
+  // `a5 0c 08 fb e1 58`, a glitch, the next request `10 0b 4d b7`, a glitch and its answer's
+  // slave address passed a CRC as the 13 bytes the answer claimed (seed 1073); a FC0F request
+  // of 255 bytes from inside a talked-over answer on, across the two exchanges after it (1020).
+  if (search > 0 && swallows_exchange(at, at + length, final)) return Verdict::refuse;
+  return Verdict::keep;
+}
+
+// Whether what follows the request [at, end), after a glitch if one comes, may be its answer:
+// its slave and function code (an exception's too), a silence, or the end of the input.
+// Nothing while the bytes that tell are still to come.
+std::optional<bool> RtuFramer::answer_follows(uint64_t at, uint64_t end, bool final) const {
+  const uint64_t answer = end + (end < end_ && is_glitch_byte(*at_ptr(end)) ? 1 : 0);
+  if (answer + 2 > end_) return final ? std::optional(true) : std::nullopt;
+  if (gap_at(end) || gap_at(answer)) return true;
+  const uint8_t* request = at_ptr(at);
+  const uint8_t* p = at_ptr(answer);
+  return p[0] == request[0] && (p[1] & 0x7F) == request[1];
+}
+
+// Whether junk follows [begin, end) and a request starts inside it with a frame of its slave
+// and function code (its answer) right after it, or after a glitch. Junk first, and a public
+// function code right after (or after a glitch) is taken to begin a frame without looking
+// further: a frame follows almost every frame, and the search inside is rare.
+bool RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) const {
+  if (end + 3 > end_) return false;
+  const uint8_t* after = at_ptr(end);
+  if (is_public_function(after[1] & 0x7F) ||
+      (is_glitch_byte(after[0]) && is_public_function(after[2] & 0x7F)) || gap_at(end) ||
+      match_at(end, final, 0).kind != Match::Kind::none || glitch_then_frame(end, final, 0))
+    return false;
+  for (uint64_t inner = begin + 1; inner < end && inner + 3 <= end_; ++inner) {
+    if (!standard_frame(inner)) continue;
+    const Match request = match_at(inner, final, 0);
+    if (request.kind != Match::Kind::found || !request.fit.request) continue;
+    const uint64_t after = inner + request.length;
+    const bool glitch = after < end_ && is_glitch_byte(*at_ptr(after));
+    for (uint64_t answer = after; answer <= after + (glitch ? 1 : 0); ++answer)
+      if (answer + 2 <= end_ && std::equal(at_ptr(inner), at_ptr(inner + 2), at_ptr(answer)) &&
+          match_at(answer, final, 0).kind != Match::Kind::none)
+        return true;
+  }
+  return false;
+}
+
+// Whether the response [at, at + length) is one cut a byte short with the next request right
+// behind it: a whole request starts at its last byte, and nothing starts after it (not even
+// after a glitch). Nothing when what follows is still to come. With no bytes after it yet, it
+// waits for them only where its last byte came in a read of its own after a read of several,
+// as the next frame's first byte does in modtap's own pcapng (its reader reads a packet's
+// first byte apart, to time it), or where the read that brought its first byte began before
+// it (a timer's reads end anywhere). Waiting behind every response that ends a read cost a pcap
+// 17% more to frame; behind every last byte read alone, a capture read a byte at a time held
+// each response back until its channel's next byte, behind the other channel's frames.
+std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bool final) const {
+  const uint64_t end = at + length;
+  if (end == end_) {
+    if (final || options_.clock != ClockQuality::per_chunk || marks_.empty()) return false;
+    if (read_starts_inside(at)) return std::nullopt;
+    if (marks_.size() < 2 || marks_.back().first != end - 1) return false;
+    const TimeMark& before = marks_[marks_.size() - 2];
+    return before.end - before.first > 1 ? std::nullopt : std::optional<bool>(false);
+  }
+  // The request's function code, where the longer reading has the next frame's slave address:
+  // a public one, or no request starts at the response's last byte (most responses end here).
+  const uint8_t fc = *at_ptr(end);
+  if ((fc & 0x80) || !is_public_function(fc) || gap_at(end)) return false;
+  const Match next = match_at(end - 1, final, 0);
+  if (next.kind == Match::Kind::need_more && !final) return std::nullopt;
+  if (next.kind != Match::Kind::found || !next.fit.request) return false;
+  const Match after = match_at(end, final, 0);
+  if (after.kind == Match::Kind::need_more && !final) return std::nullopt;
+  return after.kind == Match::Kind::none && !glitch_then_frame(end, final, 0);
+}
+
+// Whether the read that brought byte `at` began before it: reads that do not follow the
+// frames (a timer's, every 16 ms) end wherever the bytes did, as likely right after the next
+// frame's first byte as after a frame. Reads that follow them (a packet a frame, an adapter's
+// read a frame) begin with the frame.
+bool RtuFramer::read_starts_inside(uint64_t at) const {
+  for (auto mark = marks_.rbegin(); mark != marks_.rend(); ++mark)
+    if (mark->first <= at) return mark->first < at && at < mark->end;
+  return false;
+}
+
+RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int search) const {
+  const uint64_t avail = end_ - at;
+  const uint8_t* p = at_ptr(at);
+  const BodyLength body = body_length(role, {p, static_cast<size_t>(avail)});
+  const RoleFit fit{role == Role::request, role == Role::response};
+  switch (body.kind) {
+    case BodyLength::Kind::need_more:
+      return need_more();
+    case BodyLength::Kind::invalid:
+      return {};
+    case BodyLength::Kind::known: {
+      const uint16_t total = body.bytes + crc_size;
+      if (total > max_rtu_adu) return {};
+      if (avail < total) return need_more();
+      if (crc_ok(p, total)) return {Match::Kind::found, total, fit};
+      return {};
+    }
+    case BodyLength::Kind::variable: {
+      const Expectation& expected = expected_;
+      if (role == Role::response && expected.echo_size && expected.slave == p[0] &&
+          expected.function == p[1]) {
+        if (avail < expected.echo_size) return need_more();
+        if (crc_ok(p, expected.echo_size)) {
+          // The echo of a request whose end was in doubt is in doubt alike: one byte longer where
+          // a 0x00 follows it with no silence before it (a good frame and a 0x00 check again),
+          // one byte shorter where it ends in 0x00.
+          const uint16_t n = expected.echo_size;
+          if (!expected.echo_end_in_doubt) return {Match::Kind::found, n, fit};
+          if (avail == n && !final) return need_more();
+          const bool doubt = p[n - 1] == 0x00 || (avail > n && p[n] == 0x00 && !gap_at(at + n));
+          return {Match::Kind::found, n, fit, doubt};
+        }
+      }
+      if (search <= 0 || p[0] > max_unicast_slave) return {};
+      return search_end(at, std::max<size_t>(body.bytes + crc_size, min_adu), fit, final, search);
+    }
+  }
+  return {};
+}
+
+// A bounded CRC search for the end of a frame of no fixed length, from `first` bytes on. A CRC
+// match alone is weak evidence (a trailing 0x00 keeps a zero residue zero), so the end must
+// also be confirmed by a gap or the next frame; only when nothing confirms that way may a
+// turnaround glitch stand in between. A frame found this way never swallows a standard frame
+// whose length rules and CRC agree.
+RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, bool final,
+                                       int search) const {
+  const uint64_t avail = end_ - at;
+  const uint8_t* p = at_ptr(at);
+  const uint64_t limit = std::min<uint64_t>(avail, max_rtu_adu);
+  const bool in_junk = at >= crc_index_.begin() && at < crc_index_.end();
+  if (!in_junk) {
+    const Match m = first_confirmed_end(at, first, limit, fit, final, search);
+    if (m.kind == Match::Kind::found) return m;
+  }
+  std::array<uint16_t, max_rtu_adu> hits;  // lengths with a good CRC, ascending
+  const size_t hit_count = good_lengths(at, first, limit, hits);
+  bool open = false;
+  size_t unconfirmed = 0;  // the first plausible end nothing confirmed
+  for (bool allow_glitch : {false, true}) {
+    for (size_t i = 0; i < hit_count; ++i) {
+      const uint16_t n = hits[i];
+      const bool zero_appended = i > 0 && hits[i - 1] == n - 1;
+      if (zero_appended && glitch_appended(at, at + n, final, search - 1)) {
+        open |= at + n == end_;
+        continue;
+      }
+      // Whether it swallows a frame is the costly question: asked only where it decides.
+      const bool confirmed = confirmed_end(at, at + n, final, search - 1, allow_glitch);
+      const bool at_end = at + n == end_;
+      const bool may_stand_alone = !unconfirmed && p[1] == 0x08;
+      if (!confirmed && !at_end && !may_stand_alone) continue;
+      if (swallows_known_frame(at, at + n)) continue;
+      // Confirmed only by taking the next 0x00 for a glitch, where one byte more holds too; or
+      // ending in a 0x00 that could be a glitch after a good frame one byte shorter.
+      const bool doubt = (allow_glitch && i + 1 < hit_count && hits[i + 1] == n + 1) ||
+                         (zero_appended && shorter_reading_holds(at + n, final, search - 1));
+      if (confirmed) return {Match::Kind::found, n, fit, doubt};
+      open |= at_end;
+      if (may_stand_alone) unconfirmed = n;
+    }
+  }
+  // FC08 Return Query Data followed by junk: once nothing more can confirm it, its own
+  // header (slave, 08, sub-function 0000) and CRC have to do. A silence with a good frame after
+  // it bounds the junk as the end of the input does (a glitch, a cut answer and a glitch, then
+  // the master's next request after its time-out). Where a 0x00 after it makes one byte more
+  // good too, that reading stands as well (a query whose CRC ends in 0x00, answered by a cut
+  // exception; seed 1690).
+  if (unconfirmed && p[1] == 0x08 &&
+      (final || (avail >= max_rtu_adu && !open) || blocked_by_gap(at, final))) {
+    const bool longer_holds = std::find(hits.begin(), hits.begin() + hit_count, unconfirmed + 1) !=
+                              hits.begin() + hit_count;
+    return {Match::Kind::found, static_cast<uint16_t>(unconfirmed), fit, longer_holds};
+  }
+  if (!final && (avail < max_rtu_adu || open)) return need_more();
+  return {};
+}
+
+// Both readings of a start often search the same span (an unknown function code reads as a
+// request and as a response alike), so the last answer is kept.
+size_t RtuFramer::good_lengths(uint64_t at, size_t first, size_t limit,
+                               std::array<uint16_t, max_rtu_adu>& lengths) const {
+  CrcHits& last = last_hits_;
+  if (last.at != at || last.first != first || last.limit != limit) {
+    last.at = at;
+    last.first = first;
+    last.limit = limit;
+    last.count = 0;
+    index_span(at, at + limit);
+    crc_index_.good_ends(at, at + first, at + limit, [&](uint64_t end) {
+      last.lengths[last.count++] = static_cast<uint16_t>(end - at);
+    });
+  }
+  // Copied out: confirming one of them searches further on, which replaces the kept answer.
+  std::copy_n(last.lengths.begin(), last.count, lengths.begin());
+  return last.count;
+}
+
+// A frame with no fixed length is found by running the CRC from its start, stopping at its end
+// as soon as something confirms it: few steps for a real frame. Where this finds nothing, the
+// bytes are junk, and the CRC index takes over for this start and the ones after it.
+RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_t limit,
+                                                RoleFit fit, bool final, int search) const {
+  const uint8_t* p = at_ptr(at);
+  uint16_t crc = crc16({p, first - crc_size});
+  bool previous_hit = false;
+  for (size_t n = first; n <= limit; ++n) {
+    const bool hit = crc == wire_crc({p, n});
+    const bool zero_appended = hit && previous_hit;
+    previous_hit = hit;
+    crc = crc16_step(crc, p[n - crc_size]);
+    if (!hit || (zero_appended && glitch_appended(at, at + n, final, search - 1))) continue;
+    if (confirmed_end(at, at + n, final, search - 1, false) && !swallows_known_frame(at, at + n))
+      return {Match::Kind::found, static_cast<uint16_t>(n), fit,
+              zero_appended && shorter_reading_holds(at + n, final, search - 1)};
+  }
+  return {};
+}
+
+// A CRC end right after a CRC end is the shorter frame with a 0x00 appended: a glitch, unless a
+// silence right after it says that 0x00 was the frame's last CRC byte, or the next driver's
+// glitch comes right after it (one driver turning on puts one glitch on the line, not two).
+bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end, bool final, int search) const {
+  return !gap_at(end) &&
+         ((zero_glitches_common() && may_be_glitch(end - 1)) || !copy_follows(begin, end)) &&
+         !glitch_then_frame(end, final, search);
+}
+
+// Whether a frame ending at `end` in a 0x00, kept though one byte shorter is a good frame too,
+// could be that shorter frame and a glitch: no silence after it, no clock that saw the byte
+// sent straight on, and no second glitch that reading would need.
+bool RtuFramer::shorter_reading_holds(uint64_t end, bool final, int search) const {
+  return !gap_at(end) && may_be_glitch(end - 1) && !glitch_then_frame(end, final, search);
+}
+
+// A turnaround's glitch at `at` with a good frame right behind it.
+bool RtuFramer::glitch_then_frame(uint64_t at, bool final, int search) const {
+  return at + 1 < end_ && is_glitch_byte(*at_ptr(at)) &&
+         match_at(at + 1, final, search).kind == Match::Kind::found;
+}
+
+// A glitch comes as a driver turns on, after the line was quiet: where the clock times each
+// byte, a byte sent right behind the one before it is no glitch.
+bool RtuFramer::may_be_glitch(uint64_t offset) const {
+  if (options_.clock != ClockQuality::per_byte || offset == 0) return true;
+  return end_time(offset) - end_time(offset - 1) >= 2 * char_ns_;
+}
+
+// Where the bytes alone cannot tell a frame whose CRC ends in 0x00 (1 in 256) from the frame
+// one byte shorter and a 0x00 glitch, the bus's own glitches decide: the glitch reading needs
+// one glitch, or two around an echo, so it is the likelier once more than 1 in 16 frames
+// comes with a 0x00 glitch.
+bool RtuFramer::zero_glitches_common() const {
+  return good_frames_ >= 16 && zero_glitches_ * 16 > good_frames_;
+}
+
+// The CRC index is kept only over what is searched: traffic whose lengths the function codes
+// tell never pays for it, and junk is indexed once, however many starts search it.
+void RtuFramer::index_span(uint64_t begin, uint64_t end) const {
+  if (begin < crc_index_.begin() || begin > crc_index_.end()) crc_index_.restart(begin);
+  const uint64_t from = crc_index_.end();
+  if (end > from) crc_index_.append({at_ptr(from), static_cast<size_t>(end - from)});
+}
+
+bool RtuFramer::fits_role(Role role, uint64_t at, uint16_t length) const {
+  const BodyLength body = body_length(role, {at_ptr(at), length});
+  if (body.kind == BodyLength::Kind::known) return body.bytes + crc_size == length;
+  return body.kind == BodyLength::Kind::variable && body.bytes + crc_size <= length;
+}
+
+bool RtuFramer::confirmed_end(uint64_t begin, uint64_t end, bool final, int search,
+                              bool allow_glitch) const {
+  if (end == end_) return final;
+  if (gap_at(end) || paused_before(end) || match_at(end, final, search).kind == Match::Kind::found)
+    return true;
+  if (copy_follows(begin, end)) return true;
+  // A turnaround glitch between this frame and the next still confirms this end; without
+  // this, the glitch's 0x00 would be taken into the frame (it keeps the CRC residue zero).
+  const uint8_t next = *at_ptr(end);
+  return allow_glitch && is_glitch_byte(next) && end + 1 < end_ &&
+         (gap_at(end + 1) || match_at(end + 1, final, search).kind == Match::Kind::found);
+}
+
+// An exact copy right behind is the echo of FC08 Return Query Data; a silence inside it says
+// its bytes were not one frame (a glitch after an echo can complete a false copy).
+bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
+  const uint64_t size = end - begin;
+  return end + size <= end_ && std::equal(at_ptr(begin), at_ptr(end), at_ptr(end)) &&
+         first_gap_after(end) >= end + size;
+}
+
+// Only a frame a bus carries counts (a public function code, a standard exception): inside a
+// long frame, bytes pass a CRC as a vendor code or an unnamed exception now and then (FC08's
+// query `ba 08 00 00 58 a9 54 52 cd d5 45 1e` holds `52 cd d5 45 1e`). One that starts in the
+// last bytes and runs on past them is swallowed too: a collision's junk `c0 f1 a0`, then the
+// next request `34 14 0e ...`, passed a CRC as an answer of slave 192 ending in `34 14`
+// (seed 1045). A frame with its exact copy right behind it, FC08's query and echo, swallows
+// none: the same chance twice over is none (`2a 08 00 00 dd 47 07 aa 43 9a` holds an answer of
+// slave 71 to FC07 in query and echo; seed 1215).
+bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end) const {
+  if (copy_follows(begin, end)) return false;
+  for (uint64_t inner = begin + 1; inner < end && inner + 3 <= end_; ++inner)
+    if (standard_frame(inner) && match_at(inner, false, 0).kind == Match::Kind::found) return true;
+  return false;
+}
+
+// A silence after `at` with a good frame right after it, or after the glitch of the driver
+// that sends it, bounds whatever starts at `at`.
+bool RtuFramer::blocked_by_gap(uint64_t at, bool final) const {
+  const uint64_t gap = first_gap_after(at);
+  if (gap >= end_) return false;
+  if (match_at(gap, final, 0).kind == Match::Kind::found) return true;
+  const uint8_t first = *at_ptr(gap);
+  return is_glitch_byte(first) && gap + 1 < end_ &&
+         match_at(gap + 1, final, 0).kind == Match::Kind::found;
+}
+
+uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
+  // Inside the span the awaited response's structure claims, a frame must be one a bus
+  // carries: a collision's junk has bytes that pass a CRC 1 start in 65,536, most often as a
+  // vendor code or an exception no standard names; and such a start, whose end only a CRC
+  // search could tell, does not keep the bytes before it waiting for that search (up to 256
+  // bytes on, however many frames came meanwhile).
+  const uint64_t claimed_end = awaited_end(head_);
+  uint64_t at = std::max(from, scanned_to_);
+  for (; at < end_; ++at) {
+    // A start too short to tell yet (an exception's code) may still stand.
+    if (at < claimed_end && at + 3 <= end_ && !standard_frame(at)) continue;
+    const Match m = match_at(at, final, max_search);
+    if (m.kind == Match::Kind::found) break;
+    if (m.kind == Match::Kind::need_more && !final && !blocked_by_gap(at, final)) {
+      scanned_to_ = at;
+      decided = false;
+      return at;
+    }
+  }
+  scanned_to_ = at;
+  decided = true;
+  return at;
+}
+
+// Where the awaited response that starts at `at` ends by its structure, after the glitch of its
+// driver turning on if there is one; 0 where no awaited response starts there.
+uint64_t RtuFramer::awaited_end(uint64_t at) const {
+  if (at >= end_) return 0;
+  if (const auto length = awaited_length(at, end_ - at)) return at + *length;
+  if (at + 1 < end_ && is_glitch_byte(*at_ptr(at)))
+    if (const auto length = awaited_length(at + 1, end_ - at - 1)) return at + 1 + *length;
+  return 0;
+}
+
+// Whether the frame at `at` has a public function code and, as an exception, a standard code.
+bool RtuFramer::standard_frame(uint64_t at) const {
+  const uint8_t* p = at_ptr(at);
+  const uint8_t fc = p[1];
+  if (!(fc & 0x80)) return is_public_function(fc);
+  return is_public_function(fc & 0x7F) && !exception_name(p[2]).empty();
+}
+
+// The bytes [begin, end) as a frame with its place and time; the check is the caller's to judge.
+Frame RtuFramer::frame_of(uint64_t begin, uint64_t end, RoleFit fit) const {
+  Frame frame;
+  frame.channel = channel_;
+  frame.mode = Mode::rtu;
+  frame.fit = fit;
+  frame.offset = begin;
+  frame.raw = frame.adu = {at_ptr(begin), static_cast<size_t>(end - begin)};
+  frame.t_ns = end_time(begin) - char_ns_;
+  frame.end_ns = end_time(end - 1);
+  const TimeMark& first = mark_of(begin);
+  frame.untimed_start = starts_untimed(first, begin);
+  frame.start_read = first.read;
+  frame.end_read = mark_of(end - 1).read;
+  if (paused_inside(begin, end)) frame.findings = finding_gap_in_frame;
+  return frame;
+}
+
+// Whether the byte at `offset`, held by `mark`, came in one read with the byte before it
+// (Frame::untimed_start).
+bool RtuFramer::starts_untimed(const TimeMark& mark, uint64_t offset) const {
+  return options_.clock == ClockQuality::per_chunk && (mark.first < offset || mark.continues_read);
+}
+
+// The chunk that held the byte at `offset`, one not yet consumed: most often the newest.
+const RtuFramer::TimeMark& RtuFramer::mark_of(uint64_t offset) const {
+  const TimeMark& last = marks_.back();
+  if (offset >= last.first) return last;
+  auto it = std::upper_bound(marks_.begin(), marks_.end(), offset,
+                             [](uint64_t o, const TimeMark& m) { return o < m.end; });
+  return it == marks_.end() ? last : *it;
+}
+
+// Whether a clock per byte saw a silence over t1.5 before the byte at `offset`: no frame goes on
+// across one, so a CRC that holds right before it ends a frame (a request with junk after it).
+bool RtuFramer::paused_before(uint64_t offset) const {
+  return options_.clock == ClockQuality::per_byte && offset > head_ &&
+         end_time(offset) - char_ns_ - end_time(offset - 1) > t15_ns_;
+}
+
+// Whether the clock saw a silence over t1.5 between two of the bytes [begin, end), where the
+// standard allows none. Only a clock per byte can time a pause of a character or two.
+bool RtuFramer::paused_inside(uint64_t begin, uint64_t end) const {
+  if (options_.clock != ClockQuality::per_byte) return false;
+  auto it = std::upper_bound(marks_.begin(), marks_.end(), begin,
+                             [](uint64_t o, const TimeMark& m) { return o < m.end; });
+  for (; it != marks_.end(); ++it) {
+    const auto next = std::next(it);
+    if (next == marks_.end() || next->first >= end) return false;
+    const int64_t next_start =
+        next->end_ns - static_cast<int64_t>(next->end - next->first) * char_ns_;
+    if (next_start - it->end_ns > t15_ns_) return true;
+  }
+  return false;
+}
+
+void RtuFramer::emit_frame(uint64_t at, const Match& match) {
+  ++good_frames_;
+  Frame frame = frame_of(at, at + match.length, match.fit);
+  frame.check_ok = true;
+  frame.expected_check = wire_crc(frame.adu);
+  if (match.ambiguous_end) frame.findings |= finding_ambiguous_end;
+  sink_.on_frame(frame);
+  answer_start_ = at + match.length;
+  consume(at + match.length);
+}
+
+// Bytes that start no good frame, up to the next one: cut at every gap mark, then each piece
+// is a frame with a bad CRC when its header says exactly its length, else noise.
+void RtuFramer::emit_unframed(uint64_t begin, uint64_t end) {
+  while (begin < end) {
+    const uint64_t gap = std::min(first_gap_after(begin), end);
+    emit_piece(begin, gap);
+    begin = gap;
+  }
+}
+
+// The awaited response, when these bytes start it: how long its structure says it is.
+std::optional<uint16_t> RtuFramer::awaited_length(uint64_t begin, uint64_t size) const {
+  const uint8_t* p = at_ptr(begin);
+  if (size < 3 || options_.role == ChannelRole::master || !expected_.pending ||
+      expected_.slave != p[0] || expected_.function != (p[1] & 0x7F))
+    return std::nullopt;
+  const BodyLength body = body_length(Role::response, {p, static_cast<size_t>(size)});
+  // Cut before its structure is complete: at least one byte longer than what came.
+  if (body.kind == BodyLength::Kind::need_more) return static_cast<uint16_t>(size + 1);
+  if (body.kind != BodyLength::Kind::known) return std::nullopt;
+  return static_cast<uint16_t>(body.bytes + crc_size);
+}
+
+// What the request says of the byte at `pos` of its awaited response starting at `begin`:
+// that it is this byte (an echo, a byte count), that it cannot be, or nothing.
+std::optional<bool> RtuFramer::awaited_byte(uint64_t begin, uint64_t pos) const {
+  const uint8_t* p = at_ptr(begin);
+  const auto request = expected_.request_pdu;
+  if (pos < 2 || p[1] != expected_.function) return std::nullopt;  // an exception echoes nothing
+  const ResponsePrefix prefix = response_prefix(request);
+  if (pos - 1 < prefix.size) return prefix.pdu[pos - 1] == p[pos];
+  // A whole echo repeats the request's CRC too.
+  const size_t crc_at = 1 + request.size();
+  if (!prefix.whole_echo || pos < crc_at || pos >= crc_at + crc_size) return std::nullopt;
+  std::array<uint8_t, 1 + 8> adu{expected_.slave};
+  std::copy(request.begin(), request.end(), adu.begin() + 1);
+  const uint16_t crc = crc16({adu.data(), crc_at});
+  return (pos == crc_at ? (crc & 0xFF) : (crc >> 8)) == p[pos];
+}
+
+// Whether `at` is where the bytes after the last frame begin, or a lone glitch after it ends:
+// while a request is pending, where its answer begins. Bytes after junk are not.
+bool RtuFramer::first_after_request(uint64_t at) const {
+  return at == answer_start_ || (at == answer_start_ + 1 && answer_start_ >= head_ &&
+                                 answer_start_ < end_ && is_glitch_byte(*at_ptr(answer_start_)));
+}
+
+// Whether the awaited answer of `awaited` bytes may begin with the copy of its request at
+// [at, at + length) by chance a slave's answer often meets: no byte the request predicts is
+// otherwise, and the answer has at most one byte of its own before its CRC. Any good frame and
+// a 0x00 pass a CRC, so FC07's answer whose status equals the request's CRC low byte (1 in 256)
+// is its request and a 0x00; a read's answer would need all its data to repeat the request.
+bool RtuFramer::answer_may_copy_request(uint64_t at, uint16_t length, uint16_t awaited) const {
+  const ResponsePrefix prefix = response_prefix(expected_.request_pdu);
+  if (awaited > 1 + prefix.size + 1 + crc_size) return false;
+  for (uint64_t pos = 2; pos < length; ++pos)
+    if (awaited_byte(at, pos) == false) return false;
+  return true;
+}
+
+// Whether the bytes at `at` are the awaited response's slave, function code and what its
+// request predicts after them (at least one byte: a byte count, an echoed address).
+bool RtuFramer::begins_as_awaited(uint64_t at) const {
+  const uint8_t* p = at_ptr(at);
+  if (!expected_.pending || p[0] != expected_.slave || p[1] != expected_.function) return false;
+  const ResponsePrefix prefix = response_prefix(expected_.request_pdu);
+  return prefix.size >= 2 && at + 1 + prefix.size <= end_ &&
+         std::equal(prefix.pdu.begin() + 1, prefix.pdu.begin() + prefix.size, p + 2);
+}
+
+// Whether these bytes start the awaited response, or do with a glitch after them.
+bool RtuFramer::starts_awaited(uint64_t begin, uint64_t size) const {
+  return awaited_length(begin, size) || (size > 3 && awaited_length(begin, size - 1));
+}
+
+// Whether [at, at + size) is the pending request again, byte for byte: its slave, its PDU and
+// a good CRC (the same PDU has the same CRC).
+bool RtuFramer::copies_request(uint64_t at, uint64_t size) const {
+  return starts_request_copy(at, size - 1) && crc_ok(at_ptr(at), size);
+}
+
+// Whether [at, at + size) is the pending request again but for its last byte.
+bool RtuFramer::starts_request_copy(uint64_t at, uint64_t size) const {
+  const Expectation& expected = expected_;
+  const uint8_t* p = at_ptr(at);
+  return expected.pending && at + size <= end_ && size >= 2 && p[0] == expected.slave &&
+         size + 1 == expected.request_pdu.size() + 1 + crc_size &&
+         std::equal(expected.request_pdu.begin(), expected.request_pdu.end(), p + 1);
+}
+
+// A copy of the pending request (the caller knows it is one) that starts at `at` before the
+// master could have timed out is the answer (an echo), not the master's retry.
+bool RtuFramer::too_soon_for_retry(uint64_t at) const {
+  return expected_.retry_from_ns && end_time(at) - char_ns_ < expected_.retry_from_ns;
+}
+
+// A damaged response: reported as a frame with a bad check, so it stays in the slave's
+// picture. Cut short, it has no check to expect; run on, its end is where its structure says.
+void RtuFramer::emit_damaged(uint64_t begin, uint64_t end, Damage damage, uint32_t findings) {
+  Frame frame = frame_of(begin, end, {false, true});
+  frame.damage = damage;
+  if (damage != Damage::cut)
+    frame.expected_check = crc16(frame.adu.first(frame.adu.size() - crc_size));
+  frame.check_ok = false;
+  frame.findings |= finding_bad_check | findings;
+  sink_.on_frame(frame);
+  answer_start_ = end;
+  consume(end);
+}
+
+void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool glitch_after) {
+  const uint64_t size = end - begin;
+  const uint8_t* p = at_ptr(begin);
+  // The slave's driver turning on can put a glitch right before its damaged response.
+  if (size > 1 && is_glitch_byte(p[0]) && starts_awaited(begin + 1, size - 1)) {
+    emit_piece(begin, begin + 1);
+    return emit_piece(begin + 1, end, findings);
+  }
+  const auto length = awaited_length(begin, size);
+  // A damaged response ending in 0x00 or 0xFF (2 in 256) right before the next frame, or one
+  // cut short with that frame's glitch after it: on a bus where glitches come with more than
+  // 1 in 128 frames, the glitch, unless the request says whether the byte is the response's
+  // (then a silence after it does not matter). Cut short, its length may be told only without
+  // the glitch (FC08 "68 08 00" and a 0x00 read as Return Query Data).
+  // Among a capture's first frames, before the bus has shown whether it has glitches, the byte
+  // is left to the frame unless the request rules it out, marked: both readings stand (a cut
+  // answer and the next request's glitch among the first frames; seeds 731, 981, 1233, 1390).
+  const uint8_t last = p[size - 1];
+  const bool cut_short =
+      (length && size <= *length) || (!length && awaited_length(begin, size - 1));
+  const bool glitchy_bus = glitches_ * 128 > good_frames_;
+  const bool bus_unknown = glitches_ == 0 && good_frames_ < 128;
+  if (cut_short && size > 3 && is_glitch_byte(last) && !glitch_after &&
+      (glitchy_bus || bus_unknown) && end < end_ && may_be_glitch(end - 1)) {
+    const std::optional<bool> told = awaited_byte(begin, size - 1);
+    // The clock has not ruled a glitch out, nor has a silence after the byte said it ended a
+    // frame: unless the request rules the byte out, both readings pass every check, so say so.
+    if (told != false && !gap_at(end)) findings |= finding_ambiguous_end;
+    if (told ? !*told : glitchy_bus && !gap_at(end)) {
+      emit_piece(begin, end - 1, findings, true);
+      return emit_piece(end - 1, end);
+    }
+  }
+  if (length && *length != size) {
+    if (size < *length) return emit_damaged(begin, end, Damage::cut, findings);
+    emit_damaged(begin, begin + *length, Damage::collision, findings);
+    return emit_piece(begin + *length, end);
+  }
+  if (size >= min_adu && size <= max_rtu_adu && plausible_start(p[0], p[1])) {
+    RoleFit fit{options_.role != ChannelRole::slave && fits_role(Role::request, begin, size),
+                options_.role != ChannelRole::master && fits_role(Role::response, begin, size)};
+    if (fit.request || fit.response) {
+      Frame frame = frame_of(begin, end, fit);
+      frame.expected_check = crc16({p, static_cast<size_t>(size - crc_size)});
+      frame.check_ok = frame.expected_check == wire_crc(frame.adu);
+      if (!frame.check_ok) {
+        frame.findings |= finding_bad_check | findings;
+        frame.damage = Damage::corrupted;
+      }
+      sink_.on_frame(frame);
+      answer_start_ = end;
+      consume(end);
+      return;
+    }
+  }
+  NoiseReason reason = NoiseReason::junk;
+  if (size == 1 && is_glitch_byte(p[0])) {
+    reason = NoiseReason::glitch;
+    zero_glitches_ += p[0] == 0x00;
+    ++glitches_;
+  } else if (size >= 2 && is_public_function(p[1])) {
+    reason = NoiseReason::truncated;
+  }
+  // Long runs of junk leave as several records so each stays printable and memory stays flat.
+  for (uint64_t at = begin; at < end; at += max_rtu_adu)
+    emit_noise(at, std::min<uint64_t>(end, at + max_rtu_adu), reason);
+}
+
+void RtuFramer::emit_noise(uint64_t begin, uint64_t end, NoiseReason reason) {
+  Noise noise;
+  noise.channel = channel_;
+  noise.mode = Mode::rtu;
+  noise.offset = begin;
+  noise.raw = {at_ptr(begin), static_cast<size_t>(end - begin)};
+  noise.t_ns = end_time(begin) - char_ns_;
+  noise.end_ns = end_time(end - 1);
+  noise.untimed_start = starts_untimed(mark_of(begin), begin);
+  noise.reason = reason;
+  sink_.on_noise(noise);
+  if (reason == NoiseReason::glitch && begin == answer_start_) answer_start_ = end;
+  consume(end);
+}
+
+void RtuFramer::consume(uint64_t to) {
+  head_ = to;
+  while (!gaps_.empty() && gaps_.front() <= head_) gaps_.pop_front();
+  while (marks_.size() > 1 && marks_.front().end <= head_) marks_.pop_front();
+  if (head_ == end_) {
+    buf_.clear();
+    crc_index_.drop_before(head_);
+    base_ = head_;
+  } else if (head_ - base_ >= compact_after) {
+    buf_.erase(buf_.begin(), buf_.begin() + static_cast<ptrdiff_t>(head_ - base_));
+    crc_index_.drop_before(head_);
+    base_ = head_;
+  }
+}
+
+bool RtuFramer::gap_at(uint64_t offset) const {
+  return std::binary_search(gaps_.begin(), gaps_.end(), offset);
+}
+
+uint64_t RtuFramer::first_gap_after(uint64_t offset) const {
+  auto it = std::upper_bound(gaps_.begin(), gaps_.end(), offset);
+  return it == gaps_.end() ? end_ : *it;
+}
+
+// Bytes inside a chunk are placed back to back before its time, the best a chunk clock allows.
+int64_t RtuFramer::end_time(uint64_t offset) const {
+  if (options_.clock == ClockQuality::none) return static_cast<int64_t>(offset + 1) * char_ns_;
+  const TimeMark& last = marks_.back();
+  if (offset >= last.first && offset < last.end)
+    return last.end_ns - static_cast<int64_t>(last.end - 1 - offset) * char_ns_;
+  auto it = std::upper_bound(marks_.begin(), marks_.end(), offset,
+                             [](uint64_t o, const TimeMark& m) { return o < m.end; });
+  if (it == marks_.end()) return last_end_ns_;
+  return it->end_ns - static_cast<int64_t>(it->end - 1 - offset) * char_ns_;
+}
+
+}  // namespace modtap

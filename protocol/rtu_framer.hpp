@@ -1,0 +1,161 @@
+// Splits a channel's byte stream into RTU frames and noise.
+//
+// Structure decides, timing advises: a boundary is where the function-code length rules say
+// a frame ends and the CRC agrees. Gaps of t3.5 or more (beyond what the source's clock can
+// blur) are marks that cut a frame which cannot complete. Every byte pushed leaves in exactly
+// one Frame or Noise record, in order.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "protocol/checksum.hpp"
+#include "protocol/flat_queue.hpp"
+#include "protocol/frame_sink.hpp"
+#include "protocol/function_codes.hpp"
+#include "protocol/records.hpp"
+#include "protocol/serial_format.hpp"
+
+namespace modtap {
+
+struct RtuFramerOptions {
+  SerialFormat format;
+  ClockQuality clock = ClockQuality::per_chunk;
+  ChannelRole role = ChannelRole::bus;
+  // With per-chunk clocks a USB adapter holds bytes back (FTDI: 16 ms latency timer), so a
+  // gap is only evidence when it is longer than t3.5 plus this.
+  int64_t chunk_jitter_ns = default_read_jitter_ns;
+};
+
+class RtuFramer {
+ public:
+  RtuFramer(uint16_t channel, const RtuFramerOptions& options, FrameSink& sink);
+
+  void push(const Chunk& chunk);
+  // Called with the current time when no bytes came: after a silence long enough to be a
+  // boundary, whatever is pending is resolved.
+  void flush(int64_t now_ns);
+  // End of the stream: resolve everything.
+  void finish();
+
+  int64_t last_byte_ns() const { return last_end_ns_; }
+  // When the first byte not yet in a record began (INT64_MAX if none): what comes out later
+  // may still be from then.
+  int64_t held_since_ns() const;
+
+ private:
+  struct Match {
+    enum class Kind : uint8_t { found, need_more, none } kind = Kind::none;
+    uint16_t length = 0;
+    RoleFit fit;
+    // One byte longer or shorter reads as a good frame too, a 0x00 the frame's or a glitch.
+    bool ambiguous_end = false;
+  };
+  static Match need_more() { return {Match::Kind::need_more, 0, {}}; }
+  struct CrcHits {
+    uint64_t at = UINT64_MAX;
+    size_t first = 0;
+    size_t limit = 0;
+    size_t count = 0;
+    std::array<uint16_t, max_rtu_adu> lengths;
+  };
+  struct TimeMark {  // one per chunk: the bytes [first, end) ended at end_ns
+    uint64_t first;
+    uint64_t end;
+    int64_t end_ns;
+    bool continues_read;  // Chunk::continues_read
+    uint64_t read;        // its number (Frame::start_read)
+  };
+
+  void resolve(bool final);
+  // `search` is how many variable-length frames in a row may be found by CRC search.
+  Match match_at(uint64_t at, bool final, int search) const;
+  enum class Verdict : uint8_t { keep, refuse, wait, other_reading };
+  Verdict judge_found(uint64_t at, Role role, uint16_t length, const Role* other, bool final,
+                      int search) const;
+  std::optional<bool> cut_before_frame(uint64_t at, uint16_t length, bool final) const;
+  bool read_starts_inside(uint64_t at) const;
+  bool begins_as_awaited(uint64_t at) const;
+  bool first_after_request(uint64_t at) const;
+  bool answer_may_copy_request(uint64_t at, uint16_t length, uint16_t awaited) const;
+  Match match_role(Role role, uint64_t at, bool final, int search) const;
+  // The lengths in [first, limit] that give the bytes from `at` a good CRC, ascending.
+  size_t good_lengths(uint64_t at, size_t first, size_t limit,
+                      std::array<uint16_t, max_rtu_adu>& lengths) const;
+  void index_span(uint64_t begin, uint64_t end) const;
+  Match search_end(uint64_t at, size_t first, RoleFit fit, bool final, int search) const;
+  Match first_confirmed_end(uint64_t at, size_t first, size_t limit, RoleFit fit, bool final,
+                            int search) const;
+  bool glitch_appended(uint64_t begin, uint64_t end, bool final, int search) const;
+  bool glitch_then_frame(uint64_t at, bool final, int search) const;
+  bool shorter_reading_holds(uint64_t end, bool final, int search) const;
+  bool zero_glitches_common() const;
+  bool may_be_glitch(uint64_t offset) const;
+  bool fits_role(Role role, uint64_t at, uint16_t length) const;
+  bool confirmed_end(uint64_t begin, uint64_t end, bool final, int search, bool allow_glitch) const;
+  bool blocked_by_gap(uint64_t at, bool final) const;
+  bool copy_follows(uint64_t begin, uint64_t end) const;
+  // Whether a frame a bus carries (public function code, standard exception), of known length
+  // and good CRC, starts inside [begin, end), wherever it ends.
+  bool swallows_known_frame(uint64_t begin, uint64_t end) const;
+  bool swallows_exchange(uint64_t begin, uint64_t end, bool final) const;
+  std::optional<bool> answer_follows(uint64_t at, uint64_t end, bool final) const;
+  // First position >= from that starts a good frame; `decided` false if one is still open.
+  uint64_t next_start(uint64_t from, bool final, bool& decided);
+  uint64_t awaited_end(uint64_t at) const;
+  bool standard_frame(uint64_t at) const;
+  Frame frame_of(uint64_t begin, uint64_t end, RoleFit fit) const;
+  bool paused_inside(uint64_t begin, uint64_t end) const;
+  const TimeMark& mark_of(uint64_t offset) const;
+  bool starts_untimed(const TimeMark& mark, uint64_t offset) const;
+  bool paused_before(uint64_t offset) const;
+  void emit_frame(uint64_t at, const Match& match);
+  void emit_unframed(uint64_t begin, uint64_t end);
+  // `glitch_after`: the byte after the piece was just taken for a turnaround's glitch, so the
+  // piece's own last byte is no glitch (one driver turning on puts one on the line).
+  void emit_piece(uint64_t begin, uint64_t end, uint32_t findings = finding_none,
+                  bool glitch_after = false);
+  std::optional<uint16_t> awaited_length(uint64_t begin, uint64_t size) const;
+  std::optional<bool> awaited_byte(uint64_t begin, uint64_t pos) const;
+  bool starts_awaited(uint64_t begin, uint64_t size) const;
+  bool copies_request(uint64_t at, uint64_t size) const;
+  bool starts_request_copy(uint64_t at, uint64_t size) const;
+  bool too_soon_for_retry(uint64_t at) const;
+  void emit_damaged(uint64_t begin, uint64_t end, Damage damage, uint32_t findings);
+  void emit_noise(uint64_t begin, uint64_t end, NoiseReason reason);
+  void consume(uint64_t to);
+
+  bool gap_at(uint64_t offset) const;
+  uint64_t first_gap_after(uint64_t offset) const;  // end_ if none
+  int64_t end_time(uint64_t offset) const;
+  const uint8_t* at_ptr(uint64_t offset) const { return buf_.data() + (offset - base_); }
+
+  uint16_t channel_;
+  RtuFramerOptions options_;
+  FrameSink& sink_;
+  const Expectation& expected_;
+  int64_t char_ns_;
+  int64_t t15_ns_;
+  int64_t gap_threshold_ns_;
+
+  std::vector<uint8_t> buf_;    // bytes from stream offset base_ on
+  uint64_t base_ = 0;           // stream offset of buf_[0]
+  uint64_t head_ = 0;           // stream offset of the first unresolved byte
+  uint64_t end_ = 0;            // stream offset one past the last byte
+  uint64_t answer_start_ = 0;   // where the last frame (and a lone glitch after it) ended
+  uint64_t scanned_to_ = 0;     // positions below this are known not to start a frame
+  mutable CrcIndex crc_index_;  // over the searched part of buf_
+  mutable CrcHits last_hits_;
+  FlatQueue<TimeMark> marks_;
+  FlatQueue<uint64_t> gaps_;  // stream offsets preceded by a boundary-sized silence
+  int64_t last_end_ns_ = 0;
+  uint64_t good_frames_ = 0;    // emitted with a good CRC
+  uint64_t zero_glitches_ = 0;  // lone 0x00 bytes between frames
+  uint64_t glitches_ = 0;       // lone 0x00 or 0xFF bytes between frames
+  bool have_time_ = false;
+  uint64_t reads_ = 0;  // chunks pushed, those that continue a read aside
+};
+
+}  // namespace modtap

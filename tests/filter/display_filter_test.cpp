@@ -1,0 +1,181 @@
+#include "filter/display_filter.hpp"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "models/register_meaning.hpp"
+
+namespace modtap {
+namespace {
+
+// A read of 2523H answered with 6000 (60.00 Hz), 4 ms late, with a fast turnaround.
+struct Sample {
+  const uint8_t adu[7] = {0x01, 0x03, 0x02, 0x17, 0x70, 0xB6, 0x50};
+  const uint8_t request[5] = {0x03, 0x25, 0x23, 0x00, 0x01};
+  Frame frame;
+  DecodedPdu pdu;
+  DeviceModel model;
+  Meaning meaning;
+
+  Sample() {
+    frame.raw = frame.adu = adu;
+    frame.role = Role::response;
+    frame.check_ok = true;
+    frame.request = 7;
+    frame.request_pdu = request;
+    frame.latency_ns = 4'000'000;
+    frame.findings = finding_fast_turnaround;
+    pdu = decode_pdu(frame.role, frame.pdu(), frame.request_pdu);
+    model.name = "nta5000";
+    meaning.model = &model;
+    meaning.registers.push_back(
+        {Table::holding, 0x2523, "frequency_command_monitor", "", 6000, 60.0, 2, "Hz", "", false});
+    frame.meaning = &meaning;
+  }
+};
+
+bool is_register(std::string_view name) {
+  return name == "frequency_command_monitor";
+}
+
+bool matches(const std::string& text) {
+  static const Sample sample;
+  return DisplayFilter(text, is_register).matches(sample.frame, sample.pdu);
+}
+
+TEST(DisplayFilter, ComparesTheRecordsFieldsByTheirJsonNames) {
+  EXPECT_TRUE(matches("slave == 1 && fc == 3"));
+  EXPECT_FALSE(matches("slave == 2"));
+  EXPECT_TRUE(matches("latency_us > 3999.5 && latency_us <= 4000"));
+  EXPECT_TRUE(matches("role == response"));
+  EXPECT_TRUE(matches("role == \"RESPONSE\""));  // names compare regardless of case
+  EXPECT_TRUE(matches("check == ok and request == 7"));
+  EXPECT_TRUE(matches("function == \"Read Holding Registers\""));
+  EXPECT_TRUE(matches("raw == \"0103021770b650\""));
+  EXPECT_TRUE(matches("type == frame"));
+}
+
+TEST(DisplayFilter, ReadsThePduAndAnyOfSeveralValues) {
+  EXPECT_TRUE(matches("address == 2523H"));
+  EXPECT_TRUE(matches("address == 0x2523"));
+  EXPECT_TRUE(matches("values == 6000"));
+  EXPECT_FALSE(matches("values == 6001"));
+  EXPECT_TRUE(matches("values != 6001"));
+  EXPECT_FALSE(matches("quantity"));  // a response's byte count is there, its quantity is not
+  EXPECT_TRUE(matches("byte_count == 2"));
+}
+
+TEST(DisplayFilter, AbsentValuesAreAbsent) {
+  EXPECT_FALSE(matches("exception"));
+  EXPECT_FALSE(matches("exception == 0"));
+  EXPECT_TRUE(matches("!exception"));
+  EXPECT_FALSE(matches("damage"));
+  EXPECT_TRUE(matches("latency_us"));
+}
+
+TEST(DisplayFilter, FindsFindingsByNameOrAtAll) {
+  EXPECT_TRUE(matches("finding"));
+  EXPECT_TRUE(matches("fast-turnaround"));
+  EXPECT_TRUE(matches("findings == \"fast-turnaround\""));
+  EXPECT_FALSE(matches("retry"));
+  EXPECT_TRUE(matches("retry || fast-turnaround"));
+}
+
+TEST(DisplayFilter, ReadsRegistersThroughTheModel) {
+  EXPECT_TRUE(matches("register.name == \"frequency_command_monitor\""));
+  EXPECT_TRUE(matches("frequency_command_monitor > 59.9"));
+  EXPECT_TRUE(matches("register.unit == Hz && register.addr == 2523H"));
+  EXPECT_TRUE(matches("register.raw == 6000 && register.value == 60"));
+  EXPECT_TRUE(matches("model == nta5000"));
+}
+
+TEST(DisplayFilter, GroupsAsWrittenAndBindsAndBeforeOr) {
+  EXPECT_TRUE(matches("slave == 2 && fc == 3 || slave == 1"));
+  EXPECT_FALSE(matches("slave == 2 && (fc == 3 || slave == 1)"));
+  EXPECT_TRUE(matches("!(slave == 2)"));
+  EXPECT_TRUE(matches("not not slave == 1"));
+}
+
+TEST(DisplayFilter, NoiseAndTimeOutsHaveTheirOwnFields) {
+  const uint8_t junk[] = {0xFF};
+  Noise noise;
+  noise.raw = junk;
+  noise.reason = NoiseReason::glitch;
+  EXPECT_TRUE(DisplayFilter("type == noise && reason == glitch", {}).matches(noise));
+  EXPECT_FALSE(DisplayFilter("slave == 0", {}).matches(noise));
+  Timeout timeout;
+  timeout.slave = 9;
+  timeout.waited_ns = 1'500'000;
+  EXPECT_TRUE(
+      DisplayFilter("type == timeout && slave == 9 && waited_us == 1500", {}).matches(timeout));
+}
+
+TEST(DisplayFilter, ChannelsByTheirNames) {
+  DisplayFilter filter("channel == master", {});
+  filter.set_channel_names({"master", "slave"});
+  Noise noise;
+  EXPECT_TRUE(filter.matches(noise));
+  noise.channel = 1;
+  EXPECT_FALSE(filter.matches(noise));
+}
+
+size_t error_column(const std::string& text) {
+  try {
+    DisplayFilter(text, is_register);
+  } catch (const FilterError& e) {
+    return e.column();
+  }
+  return 0;
+}
+
+TEST(DisplayFilter, SyntaxErrorsNameTheirColumn) {
+  EXPECT_EQ(error_column("slave == 3 &&"), 14u);
+  EXPECT_EQ(error_column("slavee == 3"), 1u);
+  EXPECT_EQ(error_column("slave == 3 && fc =="), 20u);
+  EXPECT_EQ(error_column("(slave == 3"), 12u);
+  EXPECT_EQ(error_column("slave == 3 )"), 12u);
+  EXPECT_EQ(error_column("slave == \"3"), 10u);
+  EXPECT_EQ(error_column("slave == 12x"), 10u);
+  EXPECT_EQ(error_column("slave # 3"), 7u);
+  EXPECT_EQ(error_column(""), 1u);
+  EXPECT_EQ(error_column("frequency_command_monitor > 1"), 0u);
+}
+
+// Nesting deeper than a person writes is refused before it can exhaust the stack; a long
+// list of alternatives is fine.
+TEST(DisplayFilter, RefusesNestingDeeperThanAPersonWrites) {
+  EXPECT_EQ(error_column(std::string(3000, '(') + "slave"), 257u);
+  EXPECT_EQ(error_column(std::string(3000, '!') + "slave"), 257u);
+  std::string alternatives = "slave == 0";
+  for (int i = 1; i < 200; ++i) alternatives += " || slave == " + std::to_string(i);
+  EXPECT_TRUE(matches(alternatives));
+}
+
+// Random texts from the filter's own alphabet: each parses or says where it went wrong.
+TEST(DisplayFilter, RandomTextsParseOrFailCleanly) {
+  static const char* const pieces[] = {
+      "slave",      "fc",     "==",  "!=", "<",    ">=",    "&&",    "||",
+      "!",          "(",      ")",   "3",  "0x1F", "2502H", "\"x\"", "finding",
+      "latency_us", "values", "and", "or", "not",  "@",     "-",     "register.name",
+      "1e999",      "\"",     ".5"};
+  std::mt19937 random(3);
+  size_t parsed = 0;
+  for (int i = 0; i < 20000; ++i) {
+    std::string text;
+    for (int n = random() % 8; n >= 0; --n) text += std::string(pieces[random() % 27]) + " ";
+    try {
+      const DisplayFilter filter(text, is_register);
+      static const Sample sample;
+      (void)filter.matches(sample.frame, sample.pdu);
+      ++parsed;
+    } catch (const FilterError& e) {
+      EXPECT_GE(e.column(), 1u);
+      EXPECT_LE(e.column(), text.size() + 1) << text;
+    }
+  }
+  EXPECT_GT(parsed, 100u);
+}
+
+}  // namespace
+}  // namespace modtap

@@ -1,0 +1,111 @@
+#include "protocol/checksum.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "tests/support/collector.hpp"
+
+namespace modtap {
+namespace {
+
+using testing::hex;
+
+TEST(Crc16, MatchesTheCatalogueCheckValue) {
+  // CRC-16/MODBUS in the CRC catalogue: check("123456789") = 0x4B37.
+  const std::string text = "123456789";
+  EXPECT_EQ(crc16({reinterpret_cast<const uint8_t*>(text.data()), text.size()}), 0x4B37);
+}
+
+TEST(Crc16, MatchesTheStandardsExample) {
+  // Modbus over Serial Line V1.02, appendix B: 02 07 gives CRC 0x1241 (41 12 on the wire).
+  EXPECT_EQ(crc16(hex("0207")), 0x1241);
+}
+
+TEST(Crc16, StepwiseEqualsWhole) {
+  const auto bytes = hex("01 03 00 00 00 0a");
+  uint16_t crc = 0xFFFF;
+  for (uint8_t b : bytes) crc = crc16_step(crc, b);
+  EXPECT_EQ(crc, crc16(bytes));
+  EXPECT_EQ(crc, 0xCDC5);
+}
+
+TEST(Crc16, SlicedFormEqualsBytewiseAtEveryLength) {
+  std::vector<uint8_t> bytes;
+  uint32_t x = 7;
+  for (int i = 0; i < 300; ++i) {
+    x = x * 1664525 + 1013904223;
+    bytes.push_back(static_cast<uint8_t>(x >> 24));
+  }
+  for (size_t n = 0; n <= bytes.size(); ++n) {
+    uint16_t bytewise = 0xFFFF;
+    for (size_t i = 0; i < n; ++i) bytewise = crc16_step(bytewise, bytes[i]);
+    ASSERT_EQ(crc16({bytes.data(), n}), bytewise) << n;
+  }
+}
+
+TEST(Crc16, ResidueOfAGoodFrameStaysZeroWithATrailingZero) {
+  // Why the framer never trusts a zero residue alone.
+  auto frame = hex("01 03 00 00 00 0a c5 cd");
+  EXPECT_EQ(crc16(frame), 0);
+  frame.push_back(0);
+  EXPECT_EQ(crc16(frame), 0);
+}
+
+// Random bytes with good frames planted at random places, and a run of zeros after one of them
+// (every zero keeps its residue zero: one value repeated, the index's longest chain).
+std::vector<uint8_t> bytes_with_planted_frames(size_t size, uint32_t seed) {
+  std::vector<uint8_t> bytes;
+  uint32_t x = seed;
+  auto next = [&x] { return x = x * 1664525 + 1013904223; };
+  for (size_t i = 0; i < size; ++i) bytes.push_back(static_cast<uint8_t>(next() >> 24));
+  auto plant = [&bytes](size_t at, size_t length) {
+    const uint16_t crc = crc16({bytes.data() + at, length});
+    bytes[at + length] = static_cast<uint8_t>(crc & 0xFF);
+    bytes[at + length + 1] = static_cast<uint8_t>(crc >> 8);
+  };
+  for (int planted = 0; planted < 40; ++planted) {
+    const size_t length = 2 + next() % 250;
+    plant(next() % (size - length - 2), length);
+  }
+  plant(size / 2, 6);
+  std::fill_n(bytes.begin() + size / 2 + 8, 300, 0);
+  return bytes;
+}
+
+TEST(CrcIndex, TellsEveryGoodSpanAsTheCrcDoes) {
+  const auto bytes = bytes_with_planted_frames(3000, 11);
+  CrcIndex index;
+  // Fed in uneven pieces, forgetting what lies behind as a framer does.
+  size_t fed = 0;
+  uint64_t dropped = 0;
+  size_t good_spans = 0;
+  for (size_t piece = 1; fed < bytes.size(); piece = piece * 3 % 701 + 1) {
+    const size_t n = std::min(piece, bytes.size() - fed);
+    index.append({bytes.data() + fed, n});
+    fed += n;
+    for (uint64_t begin = dropped; begin + 4 <= fed; ++begin) {
+      const uint64_t last = std::min<uint64_t>(fed, begin + 256);
+      std::vector<uint64_t> expected;
+      for (uint64_t end = begin + 4; end <= last; ++end)
+        if (crc16({bytes.data() + begin, end - begin}) == 0) expected.push_back(end);
+      std::vector<uint64_t> found;
+      index.good_ends(begin, begin + 4, last, [&](uint64_t end) { found.push_back(end); });
+      ASSERT_EQ(found, expected) << "from " << begin << " with " << fed << " bytes";
+      good_spans += expected.size();
+    }
+    dropped = fed > 600 ? fed - 600 : 0;
+    index.drop_before(dropped);
+  }
+  EXPECT_GT(good_spans, 300u);  // the zero run alone gives one per zero
+}
+
+TEST(Lrc, MatchesTheManualsExample) {
+  // NTA5000 manual 2.1: 01 03 01 00 00 0A gives LRC F1.
+  EXPECT_EQ(lrc(hex("01 03 01 00 00 0a")), 0xF1);
+}
+
+}  // namespace
+}  // namespace modtap

@@ -1,0 +1,389 @@
+#include "protocol/matcher.hpp"
+
+#include <gtest/gtest.h>
+
+#include "tests/support/collector.hpp"
+
+namespace modtap {
+namespace {
+
+using testing::analyze_untimed;
+using testing::Collector;
+using testing::hex;
+
+std::vector<uint8_t> text_bytes(std::string_view text) {
+  return {text.begin(), text.end()};
+}
+
+std::vector<uint8_t> join(std::initializer_list<const char*> frames) {
+  std::vector<uint8_t> out;
+  for (const char* f : frames) {
+    auto b = hex(f);
+    out.insert(out.end(), b.begin(), b.end());
+  }
+  return out;
+}
+
+// Reads stamped with their time (a clock per read, 30 ms late at most), each `at_ms` after the
+// capture's start, or 10 ms after the one before.
+struct Read {
+  std::vector<uint8_t> bytes;
+  int64_t at_ms = -1;
+};
+Collector analyze_reads(const std::vector<Read>& reads, ModeChoice mode = ModeChoice::rtu) {
+  Collector out;
+  AnalyzerOptions options;
+  options.mode = mode;
+  options.clock = ClockQuality::per_chunk;
+  Analyzer analyzer(options, {{"test", ChannelRole::bus}}, out);
+  constexpr int64_t start = 1'000'000'000;
+  int64_t t = start;
+  for (const auto& read : reads) {
+    t = read.at_ms < 0 ? t + 10'000'000 : start + read.at_ms * 1'000'000;
+    analyzer.push({0, t, {read.bytes.data(), read.bytes.size()}});
+  }
+  analyzer.finish();
+  return out;
+}
+
+// A request and its answer in one read (a sniffer's packet, a hex log's block) are placed back
+// to back: the turnaround between them is unknown, not zero. In reads of their own it is timed.
+TEST(Matcher, AnAnswerInTheRequestsReadHasNoLatency) {
+  const auto request = hex("01 03 00 00 00 01 84 0a"), answer = hex("01 03 02 00 07 f9 86");
+  const auto ascii_request = text_bytes(":010300000001FB\r\n");
+  const auto ascii_answer = text_bytes(":0103020007F3\r\n");
+  struct Case {
+    ModeChoice mode;
+    std::vector<uint8_t> request, answer;
+  };
+  for (const Case& c : {Case{ModeChoice::rtu, request, answer},
+                        Case{ModeChoice::ascii, ascii_request, ascii_answer}}) {
+    std::vector<uint8_t> both = c.request;
+    both.insert(both.end(), c.answer.begin(), c.answer.end());
+    const auto one_read = analyze_reads({{both}}, c.mode).frames();
+    ASSERT_EQ(one_read.size(), 2u);
+    EXPECT_EQ(one_read[1].request, one_read[0].index);
+    EXPECT_FALSE(one_read[1].latency_ns.has_value()) << *one_read[1].latency_ns;
+    const auto two_reads = analyze_reads({{c.request}, {c.answer}}, c.mode).frames();
+    ASSERT_EQ(two_reads.size(), 2u);
+    EXPECT_TRUE(two_reads[1].latency_ns.has_value());
+  }
+}
+
+TEST(Matcher, TellsAnEchoRequestFromItsResponseByOrder) {
+  // FC06 request and response are the same bytes: the second is the answer.
+  const auto out = analyze_untimed(join({"01 06 25 02 17 70 2d 12", "01 06 25 02 17 70 2d 12"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].role, Role::request);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+}
+
+// Where the awaited answer belongs, a frame with a bad check is that answer even when the
+// damage hit its address (D5H for 03H), and bytes past reading are the answer garbled: the
+// slave answered, so no time-out, and both count for the slave that was asked. Both are still
+// garbage after the request: nothing in them reads as its answer. Without a clock nothing
+// tells them from junk after the master gave up.
+TEST(Matcher, ADamagedAnswerIsTheAwaitedSlavesAnswerNotATimeout) {
+  const auto request = hex("03 03 00 00 00 01 85 e8"), next = hex("04 03 00 00 00 01 84 5f");
+  const auto bad_address = analyze_reads({{request}, {hex("d5 03 02 00 07 80 46")}, {next}});
+  EXPECT_EQ(bad_address.timeouts().size(), 1u);  // the last request, at the capture's end
+  const auto frames = bad_address.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_FALSE(frames[1].check_ok);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[1].device, 3);
+  EXPECT_NE(frames[1].findings & finding_garbage_after_request, 0u);
+
+  const auto garbled = analyze_reads({{request}, {hex("9f 41")}, {next}});
+  EXPECT_EQ(garbled.timeouts().size(), 1u);
+  ASSERT_EQ(garbled.noise().size(), 1u);
+  EXPECT_TRUE(garbled.noise()[0].damaged_answer);
+  EXPECT_EQ(garbled.noise()[0].device, 3);
+  EXPECT_EQ(garbled.noise()[0].request, garbled.frames()[0].index);
+
+  std::vector<uint8_t> untimed = request;
+  for (const auto& part : {hex("9f 41"), next})
+    untimed.insert(untimed.end(), part.begin(), part.end());
+  EXPECT_EQ(analyze_untimed(untimed).timeouts().size(), 2u);
+}
+
+TEST(Matcher, ReportsATimeoutWhenTheMasterMovesOn) {
+  const auto out = analyze_untimed(join({"01 03 00 00 00 0a c5 cd", "01 03 00 00 00 0a c5 cd"}));
+  const auto timeouts = out.timeouts();
+  ASSERT_EQ(timeouts.size(), 2u);
+  EXPECT_EQ(timeouts[0].request, 1u);
+  EXPECT_EQ(timeouts[0].timeout_reason, TimeoutReason::next_request);
+  EXPECT_EQ(timeouts[1].timeout_reason, TimeoutReason::end_of_capture);
+}
+
+TEST(Matcher, MarksBroadcastsAndExpectsNoResponse) {
+  const auto out = analyze_untimed(join({"00 06 00 01 00 03 99 da"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_TRUE(frames[0].findings & finding_broadcast);
+  EXPECT_TRUE(out.timeouts().empty());
+}
+
+TEST(Matcher, FlagsAResponseWithNoRequest) {
+  const auto out = analyze_untimed(join({"01 03 02 07 d0 bb e8"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_EQ(frames[0].role, Role::response);
+  EXPECT_TRUE(frames[0].findings & finding_unsolicited);
+  EXPECT_FALSE(frames[0].request.has_value());
+}
+
+TEST(Matcher, FlagsAByteCountThatDoesNotFitTheRequest) {
+  // Asked for 10 registers, got 1.
+  const auto out = analyze_untimed(join({"01 03 00 00 00 0a c5 cd", "01 03 02 07 d0 bb e8"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_TRUE(frames[1].findings & finding_length_mismatch);
+}
+
+TEST(Matcher, PairsAnExceptionWithItsRequest) {
+  const auto out = analyze_untimed(join({"01 03 25 23 00 01 7e cc", "01 83 02 c0 f1"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+}
+
+TEST(Matcher, TakesAnExceptionForAResponseEvenWithABadCheckFromAnotherSlave) {
+  // N3's RTU error example: 02 83 52 printed with the CRC of 01 83 52, after a request to 01.
+  const auto out = analyze_untimed(join({"01 03 25 23 00 01 7e cc", "02 83 52 c0 cd"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_FALSE(frames[1].check_ok);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].expected_check, 0xCD30);  // wire order 30 CD, as 000 prints it
+}
+
+TEST(Matcher, CountsTheSameRequestAfterNoAnswerAsARetry) {
+  const auto out = analyze_untimed(join({"01 03 00 00 00 0a c5 cd", "01 03 00 00 00 0a c5 cd",
+                                         "01 03 00 00 00 0a c5 cd", "01 03 00 01 00 0a 94 0d"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 4u);
+  EXPECT_FALSE(frames[0].findings & finding_retry);
+  EXPECT_TRUE(frames[1].findings & finding_retry);
+  EXPECT_TRUE(frames[2].findings & finding_retry);
+  EXPECT_FALSE(frames[3].findings & finding_retry);  // another request: the next poll
+}
+
+TEST(Matcher, AnAnsweredRequestAskedAgainIsNoRetry) {
+  const auto out = analyze_untimed(
+      join({"01 03 00 00 00 01 84 0a", "01 03 02 00 05 78 47", "01 03 00 00 00 01 84 0a"}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_FALSE(frames[2].findings & finding_retry);
+}
+
+// Frames at given times through a timed matcher on one bus channel; returns them with their
+// verdicts, and the time-outs in `timeouts`.
+struct Timed {
+  const char* bytes;
+  int64_t t_ms;
+};
+std::vector<Frame> match_timed(std::initializer_list<Timed> frames, std::vector<Timeout>& timeouts,
+                               std::vector<std::vector<uint8_t>>& keep, int64_t clock_lag_ns = 0) {
+  MatcherOptions options;
+  options.clock_lag_ns = clock_lag_ns;
+  Matcher matcher(options, [&](const Timeout& t) { timeouts.push_back(t); });
+  std::vector<Frame> out;
+  uint64_t index = 0;
+  for (const Timed& f : frames) {
+    keep.push_back(hex(f.bytes));
+    Frame frame;
+    frame.index = ++index;
+    frame.adu = frame.raw = keep.back();
+    frame.check_ok = true;
+    frame.fit = {true, true};  // the echo codes read both ways
+    frame.t_ns = f.t_ms * 1'000'000;
+    frame.end_ns = frame.t_ns + static_cast<int64_t>(frame.adu.size()) * 573'000;  // 19200 8E1
+    matcher.on_frame(frame, ChannelRole::bus);
+    out.push_back(frame);
+  }
+  matcher.finish(out.back().end_ns);
+  return out;
+}
+
+// A slave that answers in 41 ms on a clock 30 ms late at most: a copy of an echo request
+// 106 ms after it may be the answer or the master's retry, as far as its turnaround tells. The
+// master's retry of a read, which no echo can fake, showed it retries 107 ms after a request:
+// the copy is that retry, and the echo after it its answer.
+TEST(Matcher, TheMastersRetryIntervalFromReadsTellsAnEchoFromARetry) {
+  const auto read = hex("01 03 00 00 00 01 84 0a"), write = hex("01 06 00 01 00 03 98 0b");
+  const auto frames = analyze_reads({{read, 0},
+                                     {hex("01 03 02 00 05 78 47"), 45},
+                                     {read, 300},
+                                     {read, 412},  // its retry
+                                     {hex("01 03 02 00 05 78 47"), 420},
+                                     {write, 600},
+                                     {write, 711},  // its retry, or its echo?
+                                     {write, 720}})
+                          .frames();
+  ASSERT_EQ(frames.size(), 8u);
+  EXPECT_TRUE(frames[3].findings & finding_retry);
+  EXPECT_EQ(frames[6].role, Role::request);
+  EXPECT_TRUE(frames[6].findings & finding_retry);
+  EXPECT_FALSE(frames[6].findings & finding_ambiguous_echo);
+  EXPECT_EQ(frames[7].role, Role::response);
+  EXPECT_EQ(frames[7].request, frames[6].index);
+}
+
+TEST(Matcher, AnEchoCopyLongAfterTheSlavesTurnaroundIsARetry) {
+  // Slave 1 answers a read in 5 ms; then a write goes unanswered and the master, after its
+  // 100 ms time-out, sends it again, byte for byte what the echo would have been.
+  std::vector<Timeout> timeouts;
+  std::vector<std::vector<uint8_t>> keep;
+  const auto frames = match_timed({{"01 03 00 00 00 01 84 0a", 0},
+                                   {"01 03 02 00 05 78 47", 10},
+                                   {"01 06 00 01 00 03 98 0b", 100},
+                                   {"01 06 00 01 00 03 98 0b", 205},
+                                   {"01 06 00 01 00 03 98 0b", 215}},
+                                  timeouts, keep);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[2].role, Role::request);
+  EXPECT_EQ(frames[3].role, Role::request);  // the retry, not the slave coming alive
+  EXPECT_TRUE(frames[3].findings & finding_retry);
+  ASSERT_EQ(timeouts.size(), 1u);
+  EXPECT_EQ(timeouts[0].request, frames[2].index);
+  EXPECT_EQ(frames[4].role, Role::response);  // 5 ms after the retry: the answer
+  EXPECT_EQ(frames[4].request, frames[3].index);
+  EXPECT_FALSE(frames[4].findings & finding_ambiguous_echo);
+}
+
+TEST(Matcher, AnEchoCopyOnAClockThatStampsReadsLateMayStillBeTheAnswer) {
+  // Slave 1 once answered within half a millisecond. A read stamped when the frame after it
+  // ended (a USB adapter's latency timer) puts the echo of a write 23 ms on: with reads that
+  // may be 30 ms late that is the answer, marked as possibly the retry; on a clock that times
+  // each byte, a retry. Past 51 ms (twice the turnaround, 20 ms, 30 ms) it is a retry either way.
+  std::vector<Timeout> timeouts;
+  std::vector<std::vector<uint8_t>> keep;
+  const auto bus = [&](int64_t copy_ms, int64_t clock_lag_ns) {
+    return match_timed({{"01 03 00 00 00 01 84 0a", 0},
+                        {"01 03 02 00 05 78 47", 5},
+                        {"01 06 00 01 00 03 98 0b", 100},
+                        {"01 06 00 01 00 03 98 0b", copy_ms}},
+                       timeouts, keep, clock_lag_ns);
+  };
+  const auto per_read = bus(128, 30'000'000);
+  EXPECT_EQ(per_read[3].role, Role::response);
+  EXPECT_EQ(per_read[3].request, per_read[2].index);
+  EXPECT_TRUE(per_read[3].findings & finding_ambiguous_echo);
+  const auto per_byte = bus(128, 0);
+  EXPECT_EQ(per_byte[3].role, Role::request);
+  EXPECT_TRUE(per_byte[3].findings & finding_retry);
+  const auto late = bus(160, 30'000'000);
+  EXPECT_EQ(late[3].role, Role::request);
+  EXPECT_TRUE(late[3].findings & finding_retry);
+}
+
+TEST(Matcher, AnotherWriteLongAfterAnAnswerWasDueIsTheMastersNextRequest) {
+  // Slave 1 answers in 5 ms. A write of 3 goes unanswered; 220 ms on, the master writes 4:
+  // the same slave and function, read both ways, but no answer comes that late.
+  std::vector<Timeout> timeouts;
+  std::vector<std::vector<uint8_t>> keep;
+  const auto frames = match_timed({{"01 03 00 00 00 01 84 0a", 0},
+                                   {"01 03 02 00 05 78 47", 10},
+                                   {"01 06 00 01 00 03 98 0b", 100},
+                                   {"01 06 00 01 00 04 d9 c9", 320},
+                                   {"01 06 00 01 00 04 d9 c9", 330}},
+                                  timeouts, keep);
+  EXPECT_EQ(frames[3].role, Role::request);
+  ASSERT_EQ(timeouts.size(), 1u);
+  EXPECT_EQ(timeouts[0].request, frames[2].index);
+  EXPECT_EQ(frames[4].role, Role::response);
+  EXPECT_EQ(frames[4].request, frames[3].index);
+  // The same with FC21, whose answer echoes its request whole: other file records 220 ms on
+  // are the master's next write.
+  const auto files = match_timed({{"01 03 00 00 00 01 84 0a", 0},
+                                  {"01 03 02 00 05 78 47", 10},
+                                  {"01 15 09 06 00 04 00 01 00 01 12 34 03 f5", 100},
+                                  {"01 15 09 06 00 04 00 01 00 01 56 79 f0 c0", 320},
+                                  {"01 15 09 06 00 04 00 01 00 01 56 79 f0 c0", 330}},
+                                 timeouts, keep);
+  EXPECT_EQ(files[3].role, Role::request);
+  EXPECT_EQ(files[4].role, Role::response);
+  EXPECT_EQ(files[4].request, files[3].index);
+  // Within the slave's time, a reply that does not echo is still its answer, unfit.
+  const auto soon = match_timed({{"01 03 00 00 00 01 84 0a", 0},
+                                 {"01 03 02 00 05 78 47", 10},
+                                 {"01 06 00 01 00 03 98 0b", 100},
+                                 {"01 06 00 01 00 04 d9 c9", 110}},
+                                timeouts, keep);
+  EXPECT_EQ(soon[3].role, Role::response);
+  EXPECT_EQ(soon[3].request, soon[2].index);
+  // A late answer that fits its request (a FC08 counter, as long as its request) stays the
+  // answer, however late.
+  const auto counter = match_timed({{"01 03 00 00 00 01 84 0a", 0},
+                                    {"01 03 02 00 05 78 47", 10},
+                                    {"01 08 00 0b 00 00 91 c9", 100},
+                                    {"01 08 00 0b 00 05 51 ca", 320}},
+                                   timeouts, keep);
+  EXPECT_EQ(counter[3].role, Role::response);
+  EXPECT_EQ(counter[3].request, counter[2].index);
+}
+
+TEST(Matcher, AnEchoCopyWithNothingToJudgeByIsAResponseMarkedAmbiguous) {
+  std::vector<Timeout> timeouts;
+  std::vector<std::vector<uint8_t>> keep;
+  // No answer learned yet: a copy 5 ms on is the response, a copy 120 ms on may be a retry.
+  const auto soon = match_timed({{"01 06 00 01 00 03 98 0b", 0}, {"01 06 00 01 00 03 98 0b", 10}},
+                                timeouts, keep);
+  EXPECT_EQ(soon[1].role, Role::response);
+  EXPECT_FALSE(soon[1].findings & finding_ambiguous_echo);
+  const auto late = match_timed({{"01 06 00 01 00 03 98 0b", 0}, {"01 06 00 01 00 03 98 0b", 125}},
+                                timeouts, keep);
+  EXPECT_EQ(late[1].role, Role::response);
+  EXPECT_TRUE(late[1].findings & finding_ambiguous_echo);
+  // With no clock at all (a raw file), every echo pair is ambiguous.
+  const auto out = analyze_untimed(join({"01 06 25 02 17 70 2d 12", "01 06 25 02 17 70 2d 12"}));
+  EXPECT_TRUE(out.frames()[1].findings & finding_ambiguous_echo);
+}
+
+// Right after an ambiguous echo, with no clock: a third copy may be the retry's echo or the
+// master's next request, and says so; an answer only an answer can be (an exception) shows the
+// echo was the retry, and answers it.
+TEST(Matcher, WhatFollowsAnAmbiguousEchoSaysWhatItCanOfIt) {
+  const char* write = "01 06 25 02 17 70 2d 12";
+  const auto three = analyze_untimed(join({write, write, write})).frames();
+  ASSERT_EQ(three.size(), 3u);
+  EXPECT_EQ(three[2].role, Role::request);
+  EXPECT_TRUE(three[2].findings & finding_ambiguous_echo);
+  const auto refused = analyze_untimed(join({write, write, "01 86 02 c3 a1"})).frames();
+  ASSERT_EQ(refused.size(), 3u);
+  EXPECT_EQ(refused[2].role, Role::response);
+  EXPECT_EQ(refused[2].request, refused[1].index);
+  EXPECT_FALSE(refused[2].findings & finding_unsolicited);
+  // Another write after the pair is no answer to it: the master's next request, unmarked.
+  const auto next = analyze_untimed(join({write, write, "01 06 25 02 00 05 e3 05"})).frames();
+  ASSERT_EQ(next.size(), 3u);
+  EXPECT_EQ(next[2].role, Role::request);
+  EXPECT_FALSE(next[2].findings & finding_ambiguous_echo);
+}
+
+// FC21's answer is its request again (Modbus application protocol 6.15): other file records
+// are no answer to it, but a write the master sends next.
+TEST(ResponseFit, AFileRecordWriteIsAnsweredByItsEcho) {
+  const auto write = hex("15 09 06 00 04 00 01 00 01 12 34");
+  EXPECT_EQ(check_response_fit(write, write), finding_none);
+  EXPECT_EQ(check_response_fit(write, hex("15 09 06 00 04 00 01 00 01 56 79")),
+            finding_echo_mismatch);
+}
+
+TEST(ResponseFit, CountersOfDiagnosticsNeedNotEcho) {
+  EXPECT_EQ(check_response_fit(hex("08 00 0b 00 00"), hex("08 00 0b 01 23")), finding_none);
+  EXPECT_EQ(check_response_fit(hex("08 00 00 12 ab"), hex("08 00 00 12 ac")),
+            finding_echo_mismatch);
+  EXPECT_EQ(check_response_fit(hex("01 00 00 00 0a"), hex("01 02 ff 03")), finding_none);
+  EXPECT_EQ(check_response_fit(hex("01 00 00 00 0a"), hex("01 01 ff")), finding_length_mismatch);
+}
+
+}  // namespace
+}  // namespace modtap

@@ -1,0 +1,787 @@
+#include "protocol/rtu_framer.hpp"
+
+#include <gtest/gtest.h>
+
+#include "protocol/analyzer.hpp"
+#include "protocol/checksum.hpp"
+#include "tests/support/collector.hpp"
+
+namespace modtap {
+namespace {
+
+using testing::analyze_untimed;
+using testing::Collector;
+using testing::expect_same_at_every_split;
+using testing::hex;
+using testing::Record;
+
+const auto read_request = hex("01 03 00 00 00 0a c5 cd");
+const auto read_response =
+    hex("01 03 14 00 01 00 02 00 03 00 04 00 05 00 06 00 07 00 08 00 09 00 0a 8f 16");
+
+std::vector<uint8_t> concat(std::initializer_list<std::vector<uint8_t>> parts) {
+  std::vector<uint8_t> out;
+  for (const auto& p : parts) out.insert(out.end(), p.begin(), p.end());
+  return out;
+}
+
+std::vector<uint8_t> with_crc(std::vector<uint8_t> body) {
+  const uint16_t crc = crc16(body);
+  body.push_back(static_cast<uint8_t>(crc & 0xFF));
+  body.push_back(static_cast<uint8_t>(crc >> 8));
+  return body;
+}
+
+TEST(RtuFramer, SplitsARequestAndItsResponseWithNoGapBetweenThem) {
+  const auto bytes = concat({read_request, read_response});
+  const auto out = analyze_untimed(bytes);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].raw, read_request);
+  EXPECT_EQ(frames[0].role, Role::request);
+  EXPECT_EQ(frames[1].raw, read_response);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_TRUE(out.noise().empty());
+}
+
+TEST(RtuFramer, ARequestOutsideTheSpecsLimitsIsARequestWithAFinding) {
+  // What mbpoll and pymodbus send for 126 registers, and a pymodbus slave's exception 03.
+  const auto asked = hex("01 03 00 00 00 7e c5 ea"), refused = hex("01 83 03 01 31");
+  // 10 coils in one byte, and FC10 with an odd byte count: the byte count still says the length.
+  const auto coils = with_crc(hex("01 0f 00 00 00 0a 01 ff"));
+  const auto odd = with_crc(hex("01 10 00 00 00 02 05 00 01 00 02 00"));
+  const auto bytes = concat({asked, refused, coils, odd});
+  const auto out = analyze_untimed(bytes);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 4u);
+  EXPECT_TRUE(out.noise().empty());
+  EXPECT_EQ(frames[0].role, Role::request);
+  EXPECT_EQ(frames[0].findings, finding_quantity_out_of_spec);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[2].raw, coils);
+  EXPECT_EQ(frames[2].findings, finding_byte_count_mismatch);
+  EXPECT_EQ(frames[3].raw, odd);
+  EXPECT_EQ(frames[3].findings, finding_byte_count_mismatch);
+  expect_same_at_every_split(bytes);
+}
+
+TEST(RtuFramer, AnAwaitedResponseCutShortIsABadFrameInItsSlavesPicture) {
+  // The response broke off after 6 of its 25 bytes; the master moved on.
+  const auto cut = std::vector<uint8_t>(read_response.begin(), read_response.begin() + 6);
+  const auto out = analyze_untimed(concat({read_request, cut, read_request}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].raw, cut);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_FALSE(frames[1].check_ok);
+  EXPECT_EQ(frames[1].damage, Damage::cut);
+  EXPECT_TRUE(out.noise().empty());
+}
+
+// A bus whose drivers put a 0x00 before every other frame, then a write whose response breaks
+// off with `cut`, right before the next request.
+std::vector<uint8_t> glitchy_bus_then_cut(
+    const std::vector<uint8_t>& cut,
+    const std::vector<uint8_t>& write = with_crc(hex("01 10 00 05 00 02 04 00 0a 01 02"))) {
+  std::vector<uint8_t> bytes;
+  for (int i = 0; i < 16; ++i) bytes = concat({bytes, hex("00"), read_request, read_response});
+  return concat({bytes, write, cut, read_request, read_response});
+}
+
+TEST(RtuFramer, ACutResponseKeepsTheByteItsRequestSaysComesThere) {
+  // FC10 echoes address and quantity: the 0x00 after the address is the quantity's high byte,
+  // not a glitch, however many glitches the bus has.
+  const auto cut = hex("01 10 00 05 00");
+  const auto out = analyze_untimed(glitchy_bus_then_cut(cut));
+  const auto frames = out.frames();
+  ASSERT_GE(frames.size(), 3u);
+  const auto& broken = frames[frames.size() - 3];
+  EXPECT_EQ(broken.raw, cut);
+  EXPECT_EQ(broken.damage, Damage::cut);
+  EXPECT_EQ(broken.role, Role::response);
+  EXPECT_TRUE(broken.findings & finding_ambiguous_end);  // a glitch could repeat the 0x00
+  EXPECT_EQ(out.noise().size(), 16u);  // the glitches before the reads, none after the cut
+}
+
+TEST(RtuFramer, ACutResponsesLastByteThatItsRequestRulesOutIsAGlitch) {
+  // 0xFF cannot be the quantity's high byte of an answer to a write of 2 registers.
+  const auto out = analyze_untimed(glitchy_bus_then_cut(hex("01 10 00 05 ff")));
+  const auto frames = out.frames();
+  ASSERT_GE(frames.size(), 3u);
+  EXPECT_EQ(frames[frames.size() - 3].raw, hex("01 10 00 05"));
+  EXPECT_FALSE(frames[frames.size() - 3].findings & finding_ambiguous_end);
+  ASSERT_EQ(out.noise().size(), 17u);
+  EXPECT_EQ(out.noise().back().raw, hex("ff"));
+  EXPECT_EQ(out.noise().back().reason, NoiseReason::glitch);
+}
+
+TEST(RtuFramer, ACutEchoKeepsTheRequestsCrcByte) {
+  // Mask Write Register echoes its request whole, CRC and all: its CRC's first byte is 0xFF.
+  const auto mask_write = hex("01 16 00 04 ff f2 60 07 ff e3");
+  const auto cut = std::vector<uint8_t>(mask_write.begin(), mask_write.begin() + 9);
+  const auto out = analyze_untimed(glitchy_bus_then_cut(cut, mask_write));
+  const auto frames = out.frames();
+  ASSERT_GE(frames.size(), 3u);
+  EXPECT_EQ(frames[frames.size() - 3].raw, cut);
+  EXPECT_EQ(frames[frames.size() - 3].damage, Damage::cut);
+  EXPECT_EQ(out.noise().size(), 16u);
+}
+
+TEST(RtuFramer, ARetryWhoseCrcEndsInZeroIsNotAShorterResponse) {
+  // 3711 coils, over the limit; the CRC ends in 0x00, so the first 7 bytes read as a response
+  // of 2 bytes with a good CRC. Sent again after a silent time-out, the copy is the request.
+  const auto asked = hex("01 01 02 f5 0e 7f 68 00");
+  const auto refused = with_crc(hex("01 81 03"));
+  const auto bytes = concat({asked, hex("ff"), asked, refused});
+  const auto out = analyze_untimed(bytes);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[0].raw, asked);
+  EXPECT_EQ(frames[1].raw, asked);
+  EXPECT_EQ(frames[2].raw, refused);
+  expect_same_at_every_split(bytes);  // also when a read ends right before the copy's last byte
+}
+
+TEST(RtuFramer, AnAwaitedResponseRunIntoEndsWhereItsStructureSays) {
+  // Another device talked over the tail: its bytes follow the response, whose CRC broke.
+  auto hit = read_response;
+  hit[24] ^= 0x5A;  // the last CRC byte
+  const auto bytes = concat({read_request, hit, hex("a5 5a 33"), read_request});
+  const auto out = analyze_untimed(bytes);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].raw, hit);
+  EXPECT_EQ(frames[1].damage, Damage::collision);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[1].expected_check, 0x168F);  // the response's own CRC, 8F 16 on the wire
+  ASSERT_EQ(out.noise().size(), 1u);
+  EXPECT_EQ(out.noise()[0].raw, hex("a5 5a 33"));
+  EXPECT_EQ(out.bytes_of(0), bytes);
+}
+
+TEST(RtuFramer, GivesTheSameRecordsWhereverTheInputIsCut) {
+  expect_same_at_every_split(concat({read_request, read_response, hex("00"), read_request,
+                                     hex("11 22"), read_request, read_response}));
+}
+
+TEST(RtuFramer, KeepsAGlitchByteBeforeAResponseAsNoise) {
+  const auto bytes = concat({read_request, hex("00"), read_response});
+  const auto out = analyze_untimed(bytes);
+  ASSERT_EQ(out.stream().size(), 3u);
+  EXPECT_EQ(out.stream()[1].type, Record::Type::noise);
+  EXPECT_EQ(out.stream()[1].reason, NoiseReason::glitch);
+  EXPECT_EQ(out.stream()[2].raw, read_response);
+  EXPECT_EQ(out.stream()[2].request, out.stream()[0].index);
+}
+
+TEST(RtuFramer, DoesNotSwallowATrailingZeroIntoTheFrame) {
+  const auto bytes = concat({read_request, hex("00")});
+  const auto out = analyze_untimed(bytes);
+  ASSERT_EQ(out.stream().size(), 2u);
+  EXPECT_EQ(out.stream()[0].raw, read_request);
+  EXPECT_EQ(out.stream()[1].raw, hex("00"));
+}
+
+TEST(RtuFramer, ReportsABadCrcFrameWithTheExpectedValue) {
+  auto damaged = read_request;
+  damaged[5] = 0x0b;  // quantity 11, CRC still that of quantity 10
+  const auto bytes = concat({damaged, read_request});
+  const auto out = analyze_untimed(bytes);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_FALSE(frames[0].check_ok);
+  EXPECT_EQ(frames[0].raw, damaged);
+  EXPECT_EQ(frames[0].expected_check, 0x0D04);  // CRC of 01 03 00 00 00 0b
+  EXPECT_TRUE(frames[1].check_ok);
+}
+
+TEST(RtuFramer, TurnsATruncatedFrameIntoNoiseAndFindsTheNextOne) {
+  const auto bytes = concat({hex("01 03 00 00"), read_request});
+  const auto out = analyze_untimed(bytes);
+  ASSERT_EQ(out.stream().size(), 2u);
+  EXPECT_EQ(out.stream()[0].type, Record::Type::noise);
+  EXPECT_EQ(out.stream()[0].reason, NoiseReason::truncated);
+  EXPECT_EQ(out.stream()[1].raw, read_request);
+}
+
+TEST(RtuFramer, KeepsEveryByteOfEndlessJunkInBoundedNoiseRecords) {
+  std::vector<uint8_t> junk(1 << 20);
+  uint32_t x = 12345;
+  for (auto& b : junk) {
+    x = x * 1103515245 + 12345;
+    b = static_cast<uint8_t>(x >> 24);
+  }
+  const auto out = analyze_untimed(junk, {1000, 70000, 500000});
+  EXPECT_EQ(out.bytes_of(0), junk);
+  for (const auto& r : out.records) EXPECT_LE(r.raw.size(), 256u);
+  // Random bytes can hold a CRC-good frame by chance; it must stay rare.
+  EXPECT_LT(out.frames().size(), 20u);
+}
+
+TEST(RtuFramer, FramesReservedAddressesWithPublicFunctionCodes) {
+  // N3 answers to stations up to 254 (FEH): "Max to No. 254 (FEH)".
+  const auto bytes = concat({hex("fe 03 01 20 00 01 90 33"), hex("fe 03 02 00 05 6c 53")});
+  const auto frames = analyze_untimed(bytes).frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].role, Role::request);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  expect_same_at_every_split(bytes);
+}
+
+TEST(RtuFramer, StartsNoCrcSearchAtAReservedAddress) {
+  // FFH then an unknown function code: a glitch and junk, not a frame found by CRC search.
+  const auto junk = hex("ff 41 00 00 00 00 00 00 00 00");
+  const auto frames = analyze_untimed(concat({junk, read_request})).frames();
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_EQ(frames[0].raw, read_request);
+}
+
+TEST(RtuFramer, FindsAnUnknownFunctionCodeByCrcWhenTheNextFrameConfirmsIt) {
+  const auto vendor = hex("05 41 01 02 03");
+  std::vector<uint8_t> frame = vendor;
+  const uint16_t crc = crc16(vendor);
+  frame.push_back(static_cast<uint8_t>(crc & 0xFF));
+  frame.push_back(static_cast<uint8_t>(crc >> 8));
+  const auto out = analyze_untimed(concat({frame, read_request}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].raw, frame);
+  EXPECT_EQ(frames[1].raw, read_request);
+}
+
+// A bus at 9600 8N1, read in `mode` with `clock`.
+AnalyzerOptions at_9600(ModeChoice mode, ClockQuality clock) {
+  AnalyzerOptions options;
+  options.mode = mode;
+  options.clock = clock;
+  options.format = {9600, 8, Parity::none, 1};
+  return options;
+}
+
+// Bytes of unknown length ahead of a response keep the framer waiting for their end; the
+// matcher's clock must not run past them, or the request times out before its response
+// comes out, however soon the slave answered.
+TEST(Analyzer, DoesNotTimeARequestOutWhileItsResponseIsStillHeld) {
+  const AnalyzerOptions options = at_9600(ModeChoice::rtu, ClockQuality::per_byte);
+  Collector out;
+  Analyzer analyzer(options, {{"bus", ChannelRole::bus}}, out);
+  const int64_t char_ns = options.format.char_time_ns();
+  int64_t t = 0;
+  auto send = [&](const std::vector<uint8_t>& bytes, int64_t gap_ns) {
+    t += gap_ns;
+    for (uint8_t b : bytes) analyzer.push({0, t += char_ns, {&b, 1}});
+  };
+  send(with_crc(hex("01 03 00 00 00 01")), 0);
+  // A broadcast of vendor code 41H has no length rule: it may run on until a silence and a
+  // frame after it say where it ended.
+  send(hex("00 41"), 5'000'000);
+  send(with_crc(hex("01 03 02 00 2a")), 0);
+  send(with_crc(hex("02 03 00 00 00 01")), 2'000'000'000);
+  analyzer.finish();
+
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  for (const auto& timeout : out.timeouts()) EXPECT_NE(timeout.request, frames[0].index);
+}
+
+TEST(Analyzer, AQuietLiveBusShowsItsFirstFrameAtTheSilenceInAutomaticMode) {
+  // One request a second: waiting for three good frames before choosing RTU or ASCII would
+  // show nothing for three seconds. The silence after one frame, good only as RTU, decides.
+  const AnalyzerOptions options = at_9600(ModeChoice::automatic, ClockQuality::per_chunk);
+  Collector out;
+  Analyzer analyzer(options, {{"bus", ChannelRole::bus}}, out);
+  analyzer.push({0, 1'000'000'000, read_request});
+  analyzer.flush(1'100'000'000);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_EQ(frames[0].raw, read_request);
+}
+
+class GapCollector : public ::testing::Test {
+ protected:
+  // Pushes each byte with its own exact time: bytes of a frame back to back, then `gap_ns`.
+  Collector run_per_byte(const std::vector<std::vector<uint8_t>>& frames, int64_t gap_ns) {
+    std::vector<Piece> pieces;
+    for (const auto& f : frames) pieces.push_back({gap_ns, f});
+    return run(pieces, ClockQuality::per_byte);
+  }
+
+  // Bytes sent back to back after `silence_ns`; a clock per byte times each, one per chunk
+  // stamps the piece as one read.
+  struct Piece {
+    int64_t silence_ns;
+    std::vector<uint8_t> bytes;
+  };
+  // 16 transactions, each after a 0x00 glitch: a bus where 0x00 glitches are common.
+  static std::vector<Piece> glitchy_history() {
+    std::vector<Piece> pieces;
+    for (int i = 0; i < 16; ++i) {
+      pieces.push_back({20'000'000, hex("00")});
+      pieces.push_back({1'000'000, read_request});
+      pieces.push_back({2'000'000, read_response});
+    }
+    return pieces;
+  }
+
+  // `finish`: end the input after the pieces, or leave the analyzer holding what it holds.
+  Collector run(const std::vector<Piece>& pieces, ClockQuality clock, bool finish = true) {
+    Collector out;
+    const AnalyzerOptions options = at_9600(ModeChoice::rtu, clock);
+    Analyzer analyzer(options, {{"bus", ChannelRole::bus}}, out);
+    const int64_t char_ns = options.format.char_time_ns();
+    int64_t t = 0;
+    for (const auto& piece : pieces) {
+      t += piece.silence_ns;
+      for (const uint8_t& b : piece.bytes) {
+        t += char_ns;
+        if (clock == ClockQuality::per_byte) analyzer.push({0, t, {&b, 1}});
+      }
+      if (clock != ClockQuality::per_byte) analyzer.push({0, t, piece.bytes});
+    }
+    if (finish) analyzer.finish();
+    return out;
+  }
+};
+
+// At 9600 baud a character is 1.04 ms: t1.5 is 1.56 ms and t3.5 3.65 ms.
+
+// A read's answer cut after a data byte 0x00, the next request right behind it, on a bus of
+// 0x00 glitches: the 0x00 is the answer's own or the next driver's glitch. A clock per byte
+// sees it sent with no pause before it; a clock per read cannot, and the frame says so.
+TEST_F(GapCollector, ACutResponsesLastByteThatMayBeAGlitchIsSaidToBeEither) {
+  std::vector<Piece> pieces = glitchy_history();
+  const auto cut = hex("01 03 14 00 01 00");
+  pieces.push_back({20'000'000, read_request});
+  pieces.push_back({2'000'000, concat({cut, read_request})});
+  pieces.push_back({2'000'000, read_response});
+  for (ClockQuality clock : {ClockQuality::per_byte, ClockQuality::per_chunk}) {
+    const auto out = run(pieces, clock);
+    const auto frames = out.frames();
+    ASSERT_EQ(frames.size(), 36u);
+    const auto& broken = frames[33];
+    EXPECT_EQ(broken.damage, Damage::cut);
+    EXPECT_EQ(broken.role, Role::response);
+    if (clock == ClockQuality::per_byte) {
+      EXPECT_EQ(broken.raw, cut);
+      EXPECT_FALSE(broken.findings & finding_ambiguous_end);
+    } else {
+      EXPECT_EQ(broken.raw, hex("01 03 14 00 01"));
+      EXPECT_TRUE(broken.findings & finding_ambiguous_end);
+      EXPECT_EQ(out.noise().back().raw, hex("00"));
+    }
+  }
+  // A clock per byte that sees the line quiet before the 0x00 cannot rule a glitch out either.
+  pieces.end()[-2] = {2'000'000, hex("01 03 14 00 01")};
+  pieces.insert(pieces.end() - 1, {3'000'000, concat({hex("00"), read_request})});
+  const auto frames = run(pieces, ClockQuality::per_byte).frames();
+  ASSERT_EQ(frames.size(), 36u);
+  EXPECT_EQ(frames[33].raw, hex("01 03 14 00 01"));
+  EXPECT_TRUE(frames[33].findings & finding_ambiguous_end);
+}
+
+TEST_F(GapCollector, APauseOverT15InsideAFrameIsAFindingNotABoundary) {
+  const auto head = hex("01 03 00"), tail = hex("00 00 0a c5 cd");
+  for (ClockQuality clock : {ClockQuality::per_byte, ClockQuality::per_chunk}) {
+    const auto paused = run({{0, head}, {2'500'000, tail}}, clock).frames();
+    ASSERT_EQ(paused.size(), 1u);
+    EXPECT_TRUE(paused[0].check_ok);
+    EXPECT_EQ(paused[0].raw, read_request);
+    // A clock per read cannot time a pause of a character or two.
+    EXPECT_EQ(paused[0].findings & finding_gap_in_frame,
+              clock == ClockQuality::per_byte ? finding_gap_in_frame : 0u);
+  }
+  const auto steady = run({{0, head}, {1'000'000, tail}}, ClockQuality::per_byte).frames();
+  ASSERT_EQ(steady.size(), 1u);
+  EXPECT_EQ(steady[0].findings & finding_gap_in_frame, 0u);
+}
+
+// FC08 Return Query Data has no fixed length: its CRC needs something after it to confirm its
+// end. A pause over t1.5 does, so junk right after it (a slave at another baud rate) is no
+// part of it.
+TEST_F(GapCollector, APauseAfterAGoodCrcEndsAFrameOfNoFixedLength) {
+  const auto query = with_crc(hex("35 08 00 00 dc 49"));
+  const auto junk = hex("81 7b 3c 20 97 01 f2 04 63");
+  const auto out =
+      run({{0, query}, {2'000'000, junk}, {10'000'000, read_request}}, ClockQuality::per_byte);
+  const auto stream = out.stream();
+  ASSERT_EQ(stream.size(), 3u);
+  EXPECT_EQ(stream[0].raw, query);
+  EXPECT_TRUE(stream[0].check_ok);
+  EXPECT_EQ(stream[0].role, Role::request);
+  EXPECT_EQ(stream[1].raw, junk);
+  EXPECT_EQ(stream[1].findings & finding_garbage_after_request, finding_garbage_after_request);
+  EXPECT_EQ(stream[2].raw, read_request);
+}
+
+// Noise while a request waits is marked with that request; a glitch, or noise once the request
+// was answered, is not.
+TEST_F(GapCollector, NoiseWhereAnAnswerWasAwaitedIsGarbageAfterTheRequest) {
+  const auto junk = hex("f3 81 7b");
+  const auto out = run({{0, read_request},
+                        {5'000'000, hex("00")},
+                        {5'000'000, junk},
+                        {10'000'000, read_request},
+                        {5'000'000, read_response},
+                        {5'000'000, junk}},
+                       ClockQuality::per_byte);
+  const auto noise = out.noise();
+  ASSERT_EQ(noise.size(), 3u);
+  EXPECT_EQ(noise[0].reason, NoiseReason::glitch);
+  EXPECT_EQ(noise[0].findings, 0u);
+  EXPECT_EQ(noise[1].raw, junk);
+  EXPECT_EQ(noise[1].findings, finding_garbage_after_request);
+  EXPECT_EQ(noise[1].request, out.frames()[0].index);
+  EXPECT_EQ(noise[2].findings, 0u);
+  EXPECT_FALSE(noise[2].request.has_value());
+}
+
+TEST_F(GapCollector, CutsATruncatedFrameAtASilence) {
+  const auto out = run_per_byte({hex("01 03 00 00 00"), read_request}, 10'000'000);
+  ASSERT_EQ(out.stream().size(), 2u);
+  EXPECT_EQ(out.stream()[0].type, Record::Type::noise);
+  EXPECT_EQ(out.stream()[0].raw, hex("01 03 00 00 00"));
+  EXPECT_EQ(out.stream()[1].raw, read_request);
+}
+
+TEST_F(GapCollector, MeasuresLatencyFromRequestEndToResponseStart) {
+  const auto out = run_per_byte({read_request, read_response}, 5'000'000);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  ASSERT_TRUE(frames[1].latency_ns.has_value());
+  EXPECT_EQ(*frames[1].latency_ns, 5'000'000);
+}
+
+TEST_F(GapCollector, ReportsATimeoutAfterSilence) {
+  const auto out = run_per_byte({read_request, read_request}, 1'500'000'000);
+  const auto timeouts = out.timeouts();
+  ASSERT_EQ(timeouts.size(), 2u);
+  EXPECT_EQ(timeouts[0].timeout_reason, TimeoutReason::silence);
+  EXPECT_EQ(timeouts[1].timeout_reason, TimeoutReason::end_of_capture);
+}
+
+// One driver turning on puts one glitch on the line: a read's answer cut after "01 03 14 00 01
+// 00 00", the next request right behind it on a bus of 0x00 glitches, keeps the first 0x00 (the
+// second may be the next driver's glitch; both cannot be).
+TEST_F(GapCollector, ACutResponseLosesAtMostOneTrailingByteToAGlitch) {
+  std::vector<Piece> pieces = glitchy_history();
+  pieces.push_back({20'000'000, read_request});
+  pieces.push_back({2'000'000, concat({hex("01 03 14 00 01 00 00"), read_request})});
+  pieces.push_back({2'000'000, read_response});
+  const auto out = run(pieces, ClockQuality::per_chunk);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 36u);
+  EXPECT_EQ(frames[33].raw, hex("01 03 14 00 01 00"));
+  EXPECT_EQ(frames[33].damage, Damage::cut);
+  EXPECT_TRUE(frames[33].findings & finding_ambiguous_end);
+  EXPECT_EQ(out.noise().back().raw, hex("00"));
+}
+
+// A collision's junk can hold bytes that pass a CRC. Inside the span the awaited answer's
+// structure claims, a vendor code's frame is not taken: the bytes are the answer, talked over.
+TEST(RtuFramer, AVendorCodeInsideACollidedAnswerIsPartOfTheAnswer) {
+  const auto write = with_crc(hex("0d 06 00 01 00 05"));
+  const auto junk = with_crc(hex("30 44 07"));  // FC 44H, no public code, and a good CRC
+  const auto next = with_crc(hex("14 03 00 00 00 01"));
+  const auto bytes = concat({write, hex("0d 06 00 01"), junk, next});
+  const auto out = analyze_untimed(bytes);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].raw, hex("0d 06 00 01 30 44 07 03"));
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].damage, Damage::collision);
+  EXPECT_EQ(frames[2].raw, next);
+  expect_same_at_every_split(bytes);
+}
+
+// A FC08 Return Query Data request whose CRC ends in 0x00, and its echo, on a bus of 0x00
+// glitches where one read holds them: each is a good frame one byte shorter with a glitch after
+// it, or itself; both say so.
+TEST_F(GapCollector, AnEchoPairWhoseCrcEndsInZeroSaysItsEndIsInDoubt) {
+  std::vector<Piece> pieces = glitchy_history();
+  const auto query = hex("11 08 00 00 00 da 63 00");
+  pieces.push_back({20'000'000, concat({query, query, read_request})});
+  pieces.push_back({2'000'000, read_response});
+  const auto out = run(pieces, ClockQuality::per_chunk);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 36u);
+  EXPECT_EQ(frames[32].role, Role::request);
+  EXPECT_TRUE(frames[32].findings & finding_ambiguous_end);
+  EXPECT_EQ(frames[33].role, Role::response);
+  EXPECT_EQ(frames[33].request, frames[32].index);
+  EXPECT_TRUE(frames[33].findings & finding_ambiguous_end);
+}
+
+// FC07's answer whose status equals the request's CRC low byte starts with a copy of the
+// request; its last byte talked over, the copy came too soon to be the master's retry and runs
+// on into a byte no frame explains: it is the answer, damaged. Read in one piece, or with the
+// answer's five bytes in a read of their own (an adapter's read a frame), so that the byte
+// after the copy is all there is of what follows when it is first judged.
+TEST_F(GapCollector, AnAnswerThatStartsAsACopyOfItsRequestIsNotARetry) {
+  const auto status = hex("07 07 42 42");  // the request; its good answer is it and a 0x00
+  const auto damaged = concat({status, hex("5a")});
+  const std::vector<std::vector<Piece>> readings{{{2'000'000, concat({damaged, read_request})}},
+                                                 {{2'000'000, damaged}, {0, read_request}}};
+  for (size_t r = 0; r < readings.size(); ++r) {
+    std::vector<Piece> pieces{{20'000'000, status}};
+    pieces.insert(pieces.end(), readings[r].begin(), readings[r].end());
+    pieces.push_back({2'000'000, read_response});
+    const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+    ASSERT_EQ(frames.size(), 4u) << r;
+    EXPECT_EQ(frames[1].raw, damaged) << r;
+    EXPECT_EQ(frames[1].role, Role::response) << r;
+    EXPECT_FALSE(frames[1].check_ok) << r;
+    EXPECT_EQ(frames[1].request, frames[0].index) << r;
+    EXPECT_EQ(frames[2].raw, read_request) << r;
+  }
+  // Cut right after the copy, with a frame after it: the answer cut short while it was due, a
+  // retry only long after.
+  for (const int64_t after_ns : {3'000'000, 300'000'000}) {
+    const std::vector<Piece> pieces{{20'000'000, status},
+                                    {after_ns, concat({status, read_request})}};
+    const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+    const bool due = after_ns < 50'000'000;
+    ASSERT_EQ(frames.size(), 3u) << after_ns;
+    EXPECT_EQ(frames[1].raw, status) << after_ns;
+    EXPECT_EQ(frames[1].role, due ? Role::response : Role::request) << after_ns;
+    EXPECT_EQ(frames[1].damage, due ? Damage::cut : Damage::none) << after_ns;
+    EXPECT_EQ(frames[1].check_ok, !due) << after_ns;
+    EXPECT_EQ(frames[2].raw, read_request) << after_ns;
+  }
+}
+
+// An FC07 answer cut one byte short, and the next request's slave address (142) is its missing
+// CRC byte: the bytes read as the whole answer and a request one byte short. What follows
+// tells: nothing starts after the longer answer, and a whole request starts at its last byte.
+// Read in one piece, in two, or with the request's first byte read apart (as modtap's pcapng
+// reader reads a packet, to time its first byte), the answer is the damaged one and the
+// request is whole.
+TEST_F(GapCollector, AResponseCutOneByteShortGivesTheNextRequestBackItsSlaveAddress) {
+  const auto request = hex("d6 07 1e 12");
+  const auto cut = hex("d6 07 f7 d3");  // its answer, without the CRC's last byte 8e
+  const auto next = hex("8e 07 25 d2");
+  const auto answer = with_crc({0x8e, 0x07, 0x55});
+  ASSERT_EQ(crc16(hex("d6 07 f7")), 0x8ed3);
+  const std::vector<std::vector<Piece>> readings{
+      {{2'000'000, concat({cut, next})}},
+      {{2'000'000, cut}, {5'000'000, next}},
+      {{2'000'000, cut}, {5'000'000, hex("8e")}, {0, hex("07 25 d2")}},
+      // A timer's reads, which end wherever the bytes do: one that began before the response
+      // (with a turnaround's glitch) ends right after the next request's slave address.
+      {{2'000'000, concat({hex("ff"), cut, hex("8e")})}, {0, hex("07 25 d2")}},
+      {{2'000'000, hex("ff d6")}, {0, hex("07 f7 d3 8e")}, {0, hex("07 25 d2")}}};
+  for (size_t r = 0; r < readings.size(); ++r) {
+    std::vector<Piece> pieces{{20'000'000, request}};
+    pieces.insert(pieces.end(), readings[r].begin(), readings[r].end());
+    pieces.push_back({2'000'000, answer});
+    const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+    ASSERT_EQ(frames.size(), 4u) << r;
+    EXPECT_EQ(frames[1].raw, cut);
+    EXPECT_EQ(frames[1].role, Role::response);
+    EXPECT_EQ(frames[1].damage, Damage::cut);
+    EXPECT_EQ(frames[2].raw, next);
+    EXPECT_EQ(frames[2].role, Role::request);
+    EXPECT_TRUE(frames[2].check_ok);
+    EXPECT_EQ(frames[3].request, frames[2].index);
+  }
+  // Its last byte read alone and nothing after it: the answer, whole, once the capture ends.
+  const std::vector<Piece> last{{20'000'000, request}, {2'000'000, cut}, {5'000'000, hex("8e")}};
+  const auto whole = run(last, ClockQuality::per_chunk).frames();
+  ASSERT_EQ(whole.size(), 2u);
+  EXPECT_EQ(whole[1].raw, concat({cut, hex("8e")}));
+  EXPECT_TRUE(whole[1].check_ok);
+  EXPECT_EQ(whole[1].request, whole[0].index);
+}
+
+// FC08 Return Query Data ends where its CRC says only if something confirms it. Here a glitch
+// and its exception, talked over, follow it, then the master's next request after its
+// time-out: that silence bounds the junk as the end of the input would, and the request's own
+// header and CRC have to do. Before, all of it up to the silence was one damaged request.
+TEST_F(GapCollector, AQueryFollowedByJunkUpToASilenceIsAFrame) {
+  const auto query = with_crc({0x5f, 0x08, 0x00, 0x00, 0x29, 0x73, 0xc1, 0xe6, 0xe9, 0x63});
+  const auto damaged = hex("5f 88 02 a6 00");  // its exception, the CRC's last byte 13 lost
+  const std::vector<Piece> pieces{{20'000'000, concat({query, hex("ff"), damaged})},
+                                  {60'000'000, read_request},
+                                  {2'000'000, read_response}};
+  const auto out = run(pieces, ClockQuality::per_chunk);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 4u);
+  EXPECT_EQ(frames[0].raw, query);
+  EXPECT_TRUE(frames[0].check_ok);
+  EXPECT_EQ(frames[0].role, Role::request);
+  EXPECT_EQ(frames[1].raw, damaged);
+  EXPECT_FALSE(frames[1].check_ok);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[2].raw, read_request);
+}
+
+// A frame whose CRC is good before a silence keeps that reading, whatever the silence is
+// followed by: FC07's retry (four bytes) and the 0x00 of the broadcast after the master's
+// time-out read as the five-byte answer the pending request awaits, which the silence breaks.
+TEST_F(GapCollector, AFrameEndingBeforeASilenceIsReadThereWhateverFollows) {
+  const auto status = hex("61 07 69 e2");
+  const auto broadcast = with_crc({0x00, 0x06, 0x00, 0x01, 0x00, 0x03});
+  const std::vector<Piece> pieces{{20'000'000, read_request},
+                                  {2'000'000, read_response},
+                                  {20'000'000, status},
+                                  {230'000'000, status},
+                                  {230'000'000, broadcast}};
+  const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+  ASSERT_EQ(frames.size(), 5u);
+  EXPECT_EQ(frames[3].raw, status);
+  EXPECT_TRUE(frames[3].check_ok);
+  EXPECT_EQ(frames[3].role, Role::request);
+  EXPECT_EQ(frames[4].raw, broadcast);
+}
+
+// FC07's answer whose first four bytes are its request again, its status talked over: inside
+// the answer's span, "07 12 ..." starts a vendor code whose end only a CRC search could tell.
+// It cannot stand there, so it does not hold the damaged answer and the next request back
+// until 256 bytes have come.
+TEST_F(GapCollector, AVendorStartInsideTheAwaitedAnswerHoldsNothingBack) {
+  const auto request = hex("c4 07 12 b2");
+  const std::vector<Piece> pieces{{20'000'000, request},
+                                  {2'000'000, concat({request, hex("0f"), read_request})}};
+  const auto frames = run(pieces, ClockQuality::per_chunk, false).frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].raw, concat({request, hex("0f")}));
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_FALSE(frames[1].check_ok);
+  EXPECT_EQ(frames[2].raw, read_request);
+}
+
+// An exception talked over, "32 81 03 14 5b": from its second byte on, its bytes, the next
+// request and part of that request's answer read as a 25-byte FC03 answer of slave 129 whose
+// CRC holds (here made to, with two of the answer's data bytes; 1 start in 65,536 on a bus).
+// Nobody asked slave 129, and the reading swallows a request and answer whose length rules
+// and CRC agree: it is refused, and the exception is the damaged answer.
+TEST_F(GapCollector, AnAnswerNobodyAwaitsSwallowsNoGoodFrame) {
+  const auto request = with_crc(hex("32 01 00 00 00 10"));
+  const auto damaged = hex("32 81 03 14 5b");
+  const auto next = with_crc(hex("07 03 00 00 00 0a"));
+  std::vector<uint8_t> data(20, 0x11);
+  std::vector<uint8_t> false_frame =
+      concat({std::vector<uint8_t>(damaged.begin() + 1, damaged.end()), next, hex("07 03 14"),
+              std::vector<uint8_t>(data.begin(), data.begin() + 8)});
+  const uint16_t crc = crc16(false_frame);
+  data[8] = static_cast<uint8_t>(crc & 0xff);
+  data[9] = static_cast<uint8_t>(crc >> 8);
+  const auto answer = with_crc(concat({hex("07 03 14"), data}));
+  ASSERT_NE(crc16(hex("32 81 03")), 0x5b14);
+  ASSERT_EQ(crc16(concat({std::vector<uint8_t>(damaged.begin() + 1, damaged.end()), next,
+                          std::vector<uint8_t>(answer.begin(), answer.begin() + 13)})),
+            0);
+  const std::vector<Piece> pieces{{20'000'000, request},
+                                  {3'000'000, concat({damaged, next, answer})},
+                                  {20'000'000, read_request}};
+  const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+  ASSERT_EQ(frames.size(), 5u);
+  EXPECT_EQ(frames[1].raw, damaged);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_FALSE(frames[1].check_ok);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[2].raw, next);
+  EXPECT_EQ(frames[3].raw, answer);
+  EXPECT_EQ(frames[3].request, frames[2].index);
+}
+
+// A read of 32 coils, and its answer talked over: "37 01 04" as due, then junk whose first
+// eight bytes pass a CRC as a read of 0xFFC9 coils (here made to). Where the answer was due,
+// too soon for the master's next request, they are the answer, damaged; long after, with
+// nothing in between, the same bytes are the master's request (over the limits).
+TEST_F(GapCollector, JunkThatBeginsAsTheAwaitedAnswerIsNotARequestWhileItIsDue) {
+  const auto request = with_crc(hex("37 01 df 2f 00 20"));
+  const auto junk = concat({with_crc(hex("37 01 04 69 ff c9")), hex("06")});
+  ASSERT_NE(crc16(junk), 0);  // no good answer of 4 bytes of coils
+  for (const int64_t after_ns : {3'000'000, 300'000'000}) {
+    const std::vector<Piece> pieces{
+        {20'000'000, request}, {after_ns, junk}, {20'000'000, read_request}};
+    const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+    const bool due = after_ns < 50'000'000;
+    ASSERT_EQ(frames.size(), 3u) << after_ns;
+    EXPECT_EQ(frames[1].raw.size(), due ? junk.size() : junk.size() - 1) << after_ns;
+    EXPECT_EQ(frames[1].role, due ? Role::response : Role::request) << after_ns;
+    EXPECT_EQ(frames[1].check_ok, !due) << after_ns;
+    EXPECT_EQ(frames.back().raw, read_request) << after_ns;
+  }
+}
+
+// Slave 3's answer to FC0C after its driver's 0xFF, whose first bytes after the glitch pass a
+// CRC as a read for slave 255 (`ff 03 0c 15 de 10 1a ec`): a glitch with the awaited answer's
+// slave and function code after it, where the answer is due, starts no request.
+TEST_F(GapCollector, AGlitchBeforeTheAwaitedAnswerStartsNoRequest) {
+  const auto request = hex("03 0c 01 45");
+  const auto answer =
+      hex("03 0c 15 de 10 1a ec 41 31 c6 88 17 63 bf 1d 11 67 a0 45 dd cb a7 a3 25 c5 fe");
+  ASSERT_EQ(crc16(answer), 0);
+  ASSERT_EQ(crc16(concat({hex("ff"), std::vector<uint8_t>(answer.begin(), answer.begin() + 7)})),
+            0);
+  // With the request, in a timer's reads that end anywhere: no silence to tell by.
+  const auto bytes = concat({request, hex("ff"), answer});
+  for (size_t split = 1; split < bytes.size(); ++split) {
+    const std::vector<Piece> pieces{
+        {20'000'000, std::vector<uint8_t>(bytes.begin(), bytes.begin() + split)},
+        {0, std::vector<uint8_t>(bytes.begin() + split, bytes.end())},
+        {20'000'000, read_request}};
+    const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+    ASSERT_EQ(frames.size(), 3u) << split;
+    EXPECT_EQ(frames[1].raw, answer) << split;
+    EXPECT_EQ(frames[1].role, Role::response) << split;
+    EXPECT_TRUE(frames[1].check_ok) << split;
+    EXPECT_EQ(frames[1].request, frames[0].index) << split;
+    EXPECT_EQ(frames[2].raw, read_request) << split;
+  }
+}
+
+// FC08 Return Query Data, whose end only its CRC tells, holds bytes that pass a CRC as a frame
+// of vendor code CDH with an exception no standard names: "52 cd d5 45 1e". A frame a bus
+// would not carry does not count against the query that holds it, nor against its echo.
+TEST_F(GapCollector, ANonStandardFrameInsideAQueryDoesNotCutIt) {
+  const auto query = hex("ba 08 00 00 58 a9 54 52 cd d5 45 1e");
+  ASSERT_EQ(crc16(query), 0);
+  ASSERT_EQ(crc16(hex("52 cd d5 45 1e")), 0);
+  const std::vector<Piece> pieces{
+      {20'000'000, query}, {3'000'000, query}, {20'000'000, read_request}};
+  const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[0].raw, query);
+  EXPECT_EQ(frames[0].role, Role::request);
+  EXPECT_EQ(frames[1].raw, query);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[2].raw, read_request);
+}
+
+// A master whose time-out is shorter than modtap's retry threshold (50 ms with no turnaround
+// learned) sends its retry, or its next write of the same block, 30 ms after a silent slave.
+// A read at 0400H of 2 registers begins as its own answer would (byte count 04), and a write
+// of new values as its echo would: each stays the master's request, and the answer after it
+// answers it.
+TEST_F(GapCollector, AQuickRetryOrNextWriteAfterASilentSlaveStaysARequest) {
+  const auto read = with_crc(hex("01 03 04 00 00 02"));
+  const auto read_answer = with_crc(hex("01 03 04 00 0a 00 0b"));
+  const auto write = with_crc(hex("01 10 00 05 00 02 04 00 0a 01 02"));
+  const auto next_write = with_crc(hex("01 10 00 05 00 02 04 00 0b 01 03"));
+  const auto write_echo = with_crc(hex("01 10 00 05 00 02"));
+  const std::vector<std::array<std::vector<uint8_t>, 3>> cases{{read, read, read_answer},
+                                                               {write, next_write, write_echo}};
+  for (size_t c = 0; c < cases.size(); ++c) {
+    const auto& [first, second, answer] = cases[c];
+    const std::vector<Piece> pieces{{20'000'000, first}, {30'000'000, second}, {3'000'000, answer}};
+    const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+    ASSERT_EQ(frames.size(), 3u) << c;
+    EXPECT_EQ(frames[1].raw, second) << c;
+    EXPECT_EQ(frames[1].role, Role::request) << c;
+    EXPECT_TRUE(frames[1].check_ok) << c;
+    EXPECT_EQ(frames[2].raw, answer) << c;
+    EXPECT_EQ(frames[2].request, frames[1].index) << c;
+  }
+}
+
+}  // namespace
+}  // namespace modtap
