@@ -8,14 +8,14 @@
 #include <new>
 
 #include "analysis/bus_statistics.hpp"
-#include "captures/pcapng_sink.hpp"
 #include "models/model_interpreter.hpp"
+#include "output/csv_sink.hpp"
+#include "output/json_sink.hpp"
+#include "output/pcapng_sink.hpp"
+#include "output/text_sink.hpp"
 #include "protocol/analyzer.hpp"
 #include "tools/busgen/bus_simulator.hpp"
-#include "tools/modtap/csv_sink.hpp"
-#include "tools/modtap/json_sink.hpp"
 #include "tools/modtap/model_catalog.hpp"
-#include "tools/modtap/text_sink.hpp"
 
 // Every allocation of the process is counted, so a benchmark can say how many a frame costs.
 namespace {
@@ -115,18 +115,18 @@ void BM_Output(benchmark::State& state, Sink kind, const char* model) {
   uint64_t allocated = 0;
   for (auto _ : state) {
     captures::OutputFile file("/dev/null");
-    tools::Output out(file);
+    output::Output out(file);
     captures::PcapngWriter writer("/dev/null");
     std::unique_ptr<RecordSink> sink;
-    if (kind == Sink::text) sink = std::make_unique<tools::TextSink>(out, channels);
-    if (kind == Sink::json) sink = std::make_unique<tools::JsonSink>(out, channels);
+    if (kind == Sink::text) sink = std::make_unique<output::TextSink>(out, channels);
+    if (kind == Sink::json) sink = std::make_unique<output::JsonSink>(out, channels);
     if (kind == Sink::csv)  // every register read or written a row
-      sink = std::make_unique<tools::CsvSink>(out, std::vector<tools::FollowedRegister>{},
-                                              tools::TimeFormat::relative);
+      sink = std::make_unique<output::CsvSink>(out, std::vector<output::FollowedRegister>{},
+                                               output::TimeFormat::relative);
     if (kind == Sink::stats)
       sink = std::make_unique<BusStatistics>(SerialFormat{}, ClockQuality::none);
     if (kind == Sink::pcapng)
-      sink = std::make_unique<captures::PcapngSink>(writer, channels, captures::PcapngOptions{});
+      sink = std::make_unique<output::PcapngSink>(writer, channels, output::PcapngOptions{});
     ModelInterpreter interpreter(catalog.all(), catalog.choose({model}), ClockQuality::none, *sink);
     const uint64_t before = allocations.load();
     analyze(interpreter);

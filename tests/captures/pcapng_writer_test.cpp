@@ -7,7 +7,7 @@
 #include <fstream>
 #include <iterator>
 
-#include "captures/pcapng_sink.hpp"
+#include "output/pcapng_sink.hpp"
 #include "tests/support/collector.hpp"
 
 namespace modtap::captures {
@@ -135,9 +135,9 @@ TEST(PcapngSink, ExportedPduNamesMbrtuAndPutsTheSlaveOnPort502) {
   const std::vector<ChannelInfo> channels{{"bus", ChannelRole::bus}};
   {
     PcapngWriter writer(path);
-    PcapngOptions options;
-    options.link = PcapngLink::exported_pdu;
-    PcapngSink sink(writer, channels, options);
+    output::PcapngOptions options;
+    options.link = output::PcapngLink::exported_pdu;
+    output::PcapngSink sink(writer, channels, options);
     const auto raw = hex("01 03 02 07 d0 bb e8");
     Frame frame;
     frame.raw = frame.adu = raw;
@@ -174,7 +174,7 @@ TEST(PcapngSink, CommentsCarryTheVerdictsForTheLuaDissector) {
   frame.t_ns = 1'000'000;
   frame.end_ns = 4'645'833;  // 7 bytes at 19200 8E1: what a reread needs to time it again
   EXPECT_EQ(
-      frame_comment(frame),
+      output::frame_comment(frame),
       "modtap index=7 mode=rtu role=response check=bad duration_ns=3645833 "
       "expected_check=0xe8bb function=\"Read Holding Registers\" request=6 latency_us=2500.000 "
       "finding=bad-check");
@@ -182,7 +182,7 @@ TEST(PcapngSink, CommentsCarryTheVerdictsForTheLuaDissector) {
   frame.raw = frame.adu = exception;
   frame.check_ok = true;
   frame.findings = 0;
-  EXPECT_EQ(frame_comment(frame),
+  EXPECT_EQ(output::frame_comment(frame),
             "modtap index=7 mode=rtu role=response check=ok duration_ns=3645833 "
             "function=\"Read Holding Registers\" exception=2 exception_name=\"Illegal Data "
             "Address\" request=6 latency_us=2500.000");
@@ -206,7 +206,7 @@ TEST(PcapngSink, ARequestThatTimedOutSaysSoAndOrderIsKept) {
   };
   {
     PcapngWriter writer(path);
-    PcapngSink sink(writer, channels, {});
+    output::PcapngSink sink(writer, channels, {});
     sink.on_frame(frame(1, Role::request, request));  // slave 1 never answers
     Noise noise;
     noise.index = 2;

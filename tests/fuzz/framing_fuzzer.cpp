@@ -10,13 +10,13 @@
 
 #include "captures/output_file.hpp"
 #include "models/model_interpreter.hpp"
+#include "output/json_sink.hpp"
+#include "output/output.hpp"
+#include "output/text_sink.hpp"
 #include "protocol/analyzer.hpp"
 #include "protocol/checksum.hpp"
 #include "tests/fuzz/fuzz_input.hpp"
-#include "tools/modtap/json_sink.hpp"
 #include "tools/modtap/model_catalog.hpp"
-#include "tools/modtap/output.hpp"
-#include "tools/modtap/text_sink.hpp"
 
 namespace modtap::fuzz {
 namespace {
@@ -112,9 +112,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   uint64_t pushed[2] = {0, 0};
   {
     captures::OutputFile json_file(json_stream, "json"), text_file(null_stream, "text");
-    tools::Output json_out(json_file), text_out(text_file);
-    tools::JsonSink json(json_out, channels);
-    tools::TextSink text(text_out, channels, {.verbose = (setup & 8) != 0});
+    output::Output json_out(json_file), text_out(text_file);
+    output::JsonSink json(json_out, channels);
+    output::TextSink text(text_out, channels, {.verbose = (setup & 8) != 0});
     fuzz::PropertySink properties({&json, &text});
     // Every frame read through one of the drives' models too, as --model does.
     const auto models = fuzz::catalog().all();

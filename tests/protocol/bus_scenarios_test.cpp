@@ -15,8 +15,8 @@
 #include "captures/hexlog_writer.hpp"
 #include "captures/open_capture.hpp"
 #include "captures/pcap_chunk_writer.hpp"
-#include "captures/pcapng_sink.hpp"
 #include "captures/pcapng_writer.hpp"
+#include "output/pcapng_sink.hpp"
 #include "protocol/analyzer.hpp"
 #include "tests/support/collector.hpp"
 #include "tools/busgen/bus_simulator.hpp"
@@ -154,10 +154,10 @@ TEST_P(BusScenario, WrittenAsPcapngReadsBackToTheSameRecords) {
   {
     const std::vector<ChannelInfo> channels{{"bus", ChannelRole::bus}};
     captures::PcapngWriter writer(path);
-    captures::PcapngOptions options;
+    output::PcapngOptions options;
     // As main does: the clock of the source (pcap and hex log files time each packet).
     options.clock = s.via == Via::direct ? busgen::clock_of(s.delivery) : ClockQuality::per_chunk;
-    captures::PcapngSink sink(writer, channels, options);
+    output::PcapngSink sink(writer, channels, options);
     first = run(capture, s, &sink);
     writer.close();
   }

@@ -15,9 +15,9 @@
 
 #include "captures/output_file.hpp"
 #include "filter/display_filter.hpp"
+#include "output/csv_sink.hpp"
 #include "protocol/field_registry.hpp"
 #include "tools/modtap/capture_conditions.hpp"
-#include "tools/modtap/csv_sink.hpp"
 #include "tools/modtap/enum_option.hpp"
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/run.hpp"
@@ -126,7 +126,7 @@ std::optional<std::string> refuse_follow(const RunOptions& o) {
   if (o.follow.empty()) return std::nullopt;
   const tools::ModelCatalog catalog = tools::load_models(o);
   const auto models = catalog.all();
-  for (const auto& item : tools::parse_follow(o.follow, o.register_base)) {
+  for (const auto& item : output::parse_follow(o.follow, o.register_base)) {
     if (item.number || std::any_of(models.begin(), models.end(),
                                    [&](const auto* m) { return names_register(*m, item.name); }))
       continue;

@@ -2,25 +2,27 @@
 
 #include <algorithm>
 
-#include "tools/modtap/csv_sink.hpp"
-#include "tools/modtap/json_sink.hpp"
-#include "tools/modtap/render.hpp"
-#include "tools/modtap/text_sink.hpp"
+#include "output/csv_sink.hpp"
+#include "output/json_sink.hpp"
+#include "output/render.hpp"
+#include "output/text_sink.hpp"
 
 namespace modtap::tools {
 namespace {
 
-std::unique_ptr<RecordSink> make_sink(const RunOptions& o, Output& out,
+std::unique_ptr<RecordSink> make_sink(const RunOptions& o, output::Output& out,
                                       const std::vector<ChannelInfo>& channels,
                                       const RecordClock& clock) {
-  if (o.output == OutputKind::json) return std::make_unique<JsonSink>(out, channels);
+  if (o.output == OutputKind::json) return std::make_unique<output::JsonSink>(out, channels);
   const RecordClock* clock_before_filter = o.display_filter.empty() ? nullptr : &clock;
   if (o.output == OutputKind::csv)
-    return std::make_unique<CsvSink>(out, parse_follow_or_all(o.follow, o.register_base),
-                                     o.time_format, o.register_base, clock_before_filter);
+    return std::make_unique<output::CsvSink>(out,
+                                             output::parse_follow_or_all(o.follow, o.register_base),
+                                             o.time_format, o.register_base, clock_before_filter);
   if (o.output == OutputKind::text)
-    return std::make_unique<TextSink>(
-        out, channels, TextOptions{o.verbose, o.time_format, o.register_base, clock_before_filter});
+    return std::make_unique<output::TextSink>(
+        out, channels,
+        output::TextOptions{o.verbose, o.time_format, o.register_base, clock_before_filter});
   return std::make_unique<NullSink>();  // stats: the statistics print at the end
 }
 
@@ -33,8 +35,8 @@ bool wants_statistics(const RunOptions& o) {
 std::function<bool(const RegisterValue&)> report_follow(const RunOptions& o) {
   if (o.follow.empty()) return {};
   const auto base = o.register_base;
-  return [follow = parse_follow(o.follow, base)](const RegisterValue& reg) {
-    return follows(follow, reg);
+  return [follow = output::parse_follow(o.follow, base)](const RegisterValue& reg) {
+    return output::follows(follow, reg);
   };
 }
 
@@ -73,7 +75,7 @@ ModelCatalog load_models(const RunOptions& o) {
   return catalog;
 }
 
-Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output& out,
+Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output::Output& out,
                    const std::vector<ChannelInfo>& channels, const SerialFormat& format,
                    ClockQuality clock)
     : terminal_(make_sink(o, out, channels, clock_)) {
@@ -83,8 +85,8 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output
     evidence_ = std::make_unique<ProblemEvidence>();
     problem_options_.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
     if (!o.report_file.empty()) {  // the report shows the lines of the records problems cite
-      cited_ = std::make_unique<CitedRecords>(*evidence_, channels, o.register_base,
-                                              o.display_filter.empty() ? nullptr : &clock_);
+      cited_ = std::make_unique<output::CitedRecords>(*evidence_, channels, o.register_base,
+                                                      o.display_filter.empty() ? nullptr : &clock_);
       health_.add(*cited_);
     } else {
       health_.add(*evidence_);
@@ -93,7 +95,7 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output
     if (o.metrics_address.empty()) {
       fan_out_.add(health_);
     } else {  // read by the metrics server's thread while records come in
-      shared_statistics_ = std::make_unique<SharedStatistics>(health_);
+      shared_statistics_ = std::make_unique<output::SharedStatistics>(health_);
       fan_out_.add(*shared_statistics_);
     }
   }
@@ -107,7 +109,7 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output
   const bool lines =
       o.output == OutputKind::text || o.output == OutputKind::json || o.output == OutputKind::csv;
   const bool interpret = lines || wants_statistics(o) ||  // the registers' last values
-                         (!o.write_file.empty() && o.link != captures::PcapngLink::bare) ||
+                         (!o.write_file.empty() && o.link != output::PcapngLink::bare) ||
                          !o.display_filter.empty();
   ModelChoice choice;
   if (interpret || !o.models.empty() || !o.models_dir.empty()) {
@@ -135,14 +137,14 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output
 
 void Pipeline::write_pcapng(const RunOptions& o, const captures::RingLimits& ring,
                             const std::vector<ChannelInfo>& channels, ClockQuality clock) {
-  captures::PcapngOptions options;
+  output::PcapngOptions options;
   options.link = o.link;
   options.dlt = o.dlt;
   options.clock = clock;
   // On a port, someone may read the file as it grows (Wireshark through the extcap's FIFO,
   // `-w -` into a pipe): each packet is flushed when it is written.
   options.live = !o.interfaces.empty();
-  pcapng_ = std::make_unique<captures::PcapngFiles>(o.write_file, ring, channels, options);
+  pcapng_ = std::make_unique<output::PcapngFiles>(o.write_file, ring, channels, options);
   fan_out_.add(*pcapng_);
 }
 
@@ -157,9 +159,10 @@ void Pipeline::limit_records(uint64_t max_records, std::function<void()> on_reac
   limit_ = std::make_unique<RecordLimit>(max_records, next, std::move(on_reached));
 }
 
-MqttPublisher& Pipeline::publish(MessageBroker& broker, MqttOptions options) {
-  mqtt_ = std::make_unique<MqttPublisher>(broker, *statistics_, std::move(options),
-                                          [this] { return problems(); });
+output::MqttPublisher& Pipeline::publish(output::MessageBroker& broker,
+                                         output::MqttOptions options) {
+  mqtt_ = std::make_unique<output::MqttPublisher>(broker, *statistics_, std::move(options),
+                                                  [this] { return problems(); });
   fan_out_.add(*mqtt_);
   return *mqtt_;
 }
@@ -178,19 +181,19 @@ RecordSink& Pipeline::before_filter() {
 RecordSink& Pipeline::watch_follow(const RunOptions& o, RecordSink& next) {
   if (o.follow.empty()) return next;
   const auto base = o.register_base;
-  follow_watch_ = std::make_unique<FollowWatch>(parse_follow(o.follow, base), next);
+  follow_watch_ = std::make_unique<FollowWatch>(output::parse_follow(o.follow, base), next);
   return *follow_watch_;
 }
 
-FollowWatch::FollowWatch(const std::vector<FollowedRegister>& follow, RecordSink& next)
+FollowWatch::FollowWatch(const std::vector<output::FollowedRegister>& follow, RecordSink& next)
     : next_(next) {
-  for (const FollowedRegister& item : follow) unseen_.push_back({item});
+  for (const output::FollowedRegister& item : follow) unseen_.push_back({item});
 }
 
 void FollowWatch::on_frame(const Frame& frame) {
   if (frame.meaning && !unseen_.empty())
     for (const RegisterValue& reg : frame.meaning->registers)
-      std::erase_if(unseen_, [&](const auto& item) { return follows(item, reg); });
+      std::erase_if(unseen_, [&](const auto& item) { return output::follows(item, reg); });
   next_.on_frame(frame);
 }
 

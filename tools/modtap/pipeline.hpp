@@ -17,18 +17,18 @@
 #include "analysis/bus_timeline.hpp"
 #include "captures/file_ring.hpp"
 #include "captures/open_capture.hpp"
-#include "captures/pcapng_sink.hpp"
 #include "filter/display_filter.hpp"
 #include "models/model_interpreter.hpp"
+#include "output/cited_records.hpp"
+#include "output/csv_sink.hpp"
+#include "output/metrics.hpp"
+#include "output/mqtt_publisher.hpp"
+#include "output/output.hpp"
+#include "output/pcapng_sink.hpp"
+#include "output/text_sink.hpp"
 #include "protocol/analyzer.hpp"
 #include "protocol/record_sink.hpp"
-#include "tools/modtap/cited_records.hpp"
-#include "tools/modtap/csv_sink.hpp"
-#include "tools/modtap/metrics.hpp"
 #include "tools/modtap/model_catalog.hpp"
-#include "tools/modtap/mqtt_publisher.hpp"
-#include "tools/modtap/output.hpp"
-#include "tools/modtap/text_sink.hpp"
 
 namespace modtap::tools {
 
@@ -71,7 +71,7 @@ struct RunOptions {
   std::string sigrok_channels;
   bool sigrok_invert = false;
   std::string write_file;
-  captures::PcapngLink link = captures::PcapngLink::user;
+  output::PcapngLink link = output::PcapngLink::user;
   int dlt = 147;
   std::vector<std::string> models;
   std::string models_dir;
@@ -79,7 +79,7 @@ struct RunOptions {
   std::string save_raw;
   std::string stats_file;
   std::string report_file;
-  TimeFormat time_format = TimeFormat::relative;
+  output::TimeFormat time_format = output::TimeFormat::relative;
   uint64_t max_records = 0;  // -c: frames and noise; 0: no limit
   bool quiet = false;
   std::string display_filter;
@@ -105,14 +105,15 @@ ModelCatalog load_models(const RunOptions& o);
 // name those none did (a mistyped address, a register the master never touches).
 class FollowWatch final : public RecordSink {
  public:
-  FollowWatch(const std::vector<FollowedRegister>& follow, RecordSink& next);
+  FollowWatch(const std::vector<output::FollowedRegister>& follow, RecordSink& next);
   void on_frame(const Frame& frame) override;
   void on_noise(const Noise& noise) override { next_.on_noise(noise); }
   void on_timeout(const Timeout& timeout) override { next_.on_timeout(timeout); }
   std::vector<std::string> unseen() const;  // as --follow wrote them
 
  private:
-  std::vector<std::vector<FollowedRegister>> unseen_;  // one item each, as follows() takes them
+  std::vector<std::vector<output::FollowedRegister>>
+      unseen_;  // one item each, as follows() takes them
   RecordSink& next_;
 };
 
@@ -122,7 +123,7 @@ class FollowWatch final : public RecordSink {
 // MQTT and the pcapng files of -w.
 class Pipeline {
  public:
-  Pipeline(const RunOptions& o, const captures::RingLimits& ring, Output& out,
+  Pipeline(const RunOptions& o, const captures::RingLimits& ring, output::Output& out,
            const std::vector<ChannelInfo>& channels, const SerialFormat& format,
            ClockQuality clock);
   // Where records enter.
@@ -135,7 +136,7 @@ class Pipeline {
   void limit_records(uint64_t max_records, std::function<void()> on_reached = {});
   bool limit_reached() const { return limit_ && limit_->reached(); }
   // --mqtt: the register values and the statistics' summary, to `broker`.
-  MqttPublisher& publish(MessageBroker& broker, MqttOptions options);
+  output::MqttPublisher& publish(output::MessageBroker& broker, output::MqttOptions options);
   // How much the -w files hold so far (0 without -w).
   uint64_t pcapng_bytes() const { return pcapng_ ? pcapng_->bytes_written() : 0; }
   const BusStatistics* statistics() const { return statistics_.get(); }
@@ -143,8 +144,8 @@ class Pipeline {
   // With --metrics, call it under shared_statistics()'s lock.
   std::vector<Problem> problems() const;
   // With --report: the lines of the records the problems cite.
-  const CitedRecords* cited_records() const { return cited_.get(); }
-  SharedStatistics* shared_statistics() { return shared_statistics_.get(); }
+  const output::CitedRecords* cited_records() const { return cited_.get(); }
+  output::SharedStatistics* shared_statistics() { return shared_statistics_.get(); }
   const BusTimeline* timeline() const { return timeline_.get(); }
   // The --follow items no frame read or wrote, so far.
   std::vector<std::string> unseen_follow() const {
@@ -170,10 +171,10 @@ class Pipeline {
   std::unique_ptr<RecordSink> terminal_;
   std::unique_ptr<BusStatistics> statistics_;
   std::unique_ptr<ProblemEvidence> evidence_;
-  std::unique_ptr<CitedRecords> cited_;  // in front of the evidence, with --report
-  FanOut health_;                        // the evidence, then the statistics
+  std::unique_ptr<output::CitedRecords> cited_;  // in front of the evidence, with --report
+  FanOut health_;                                // the evidence, then the statistics
   ProblemOptions problem_options_;
-  std::unique_ptr<SharedStatistics> shared_statistics_;
+  std::unique_ptr<output::SharedStatistics> shared_statistics_;
   std::unique_ptr<BusTimeline> timeline_;
   ModelCatalog catalog_;
   std::unique_ptr<FilterStage> filter_;
@@ -182,9 +183,9 @@ class Pipeline {
   std::unique_ptr<BusDiagnostics> diagnostics_;
   std::unique_ptr<ModelInterpreter> interpreter_;
   std::map<uint8_t, int64_t> model_timeouts_;
-  std::unique_ptr<captures::PcapngFiles> pcapng_;
+  std::unique_ptr<output::PcapngFiles> pcapng_;
   std::unique_ptr<RecordLimit> limit_;
-  std::unique_ptr<MqttPublisher> mqtt_;
+  std::unique_ptr<output::MqttPublisher> mqtt_;
 };
 
 }  // namespace modtap::tools

@@ -10,14 +10,14 @@
 #include "captures/open_capture.hpp"
 #include "captures/piped_input.hpp"
 #include "captures/raw_recorder.hpp"
+#include "output/mosquitto_broker.hpp"
+#include "output/report.hpp"
+#include "output/statistics_output.hpp"
 #include "protocol/format_probe.hpp"
 #include "tools/live/live_capture.hpp"
 #include "tools/modtap/auto_format.hpp"
 #include "tools/modtap/enum_option.hpp"
-#include "tools/modtap/mosquitto_broker.hpp"
 #include "tools/modtap/progress.hpp"
-#include "tools/modtap/report.hpp"
-#include "tools/modtap/statistics_output.hpp"
 
 namespace modtap::tools {
 namespace {
@@ -30,16 +30,16 @@ void write_whole(const std::string& path, const fmt::memory_buffer& content) {
 
 // The end of a run: -T stats prints the statistics, --stats and --report write them
 // (`complete` false when the input broke off: they cover what was read).
-void summarise(const RunOptions& o, Output& out, const Pipeline& pipeline, bool complete) {
+void summarise(const RunOptions& o, output::Output& out, const Pipeline& pipeline, bool complete) {
   const BusStatistics* statistics = pipeline.statistics();
   if (!statistics) return;
   const auto base = o.register_base;
   const auto problems = pipeline.problems();
   if (o.output == OutputKind::stats)
-    print_statistics(out, *statistics, pipeline.diagnostics(), problems, base);
+    output::print_statistics(out, *statistics, pipeline.diagnostics(), problems, base);
   if (!o.stats_file.empty()) {
     fmt::memory_buffer json;
-    append_statistics_json(json, *statistics, pipeline.diagnostics(), problems, complete);
+    output::append_statistics_json(json, *statistics, pipeline.diagnostics(), problems, complete);
     write_whole(o.stats_file, json);
   }
   if (!o.report_file.empty()) {
@@ -48,9 +48,9 @@ void summarise(const RunOptions& o, Output& out, const Pipeline& pipeline, bool 
                                     ? fmt::format("{}", fmt::join(o.interfaces, " "))
                                 : o.read_file == "-" ? "standard input"
                                                      : o.read_file;
-    append_report(html, *statistics, pipeline.diagnostics(), *pipeline.timeline(), problems,
-                  pipeline.cited_records()->lines(),
-                  {capture, MODTAP_VERSION, complete, base, pipeline.unseen_follow()});
+    output::append_report(html, *statistics, pipeline.diagnostics(), *pipeline.timeline(), problems,
+                          pipeline.cited_records()->lines(),
+                          {capture, MODTAP_VERSION, complete, base, pipeline.unseen_follow()});
     write_whole(o.report_file, html);
   }
 }
@@ -85,13 +85,14 @@ std::string bus_name(const std::string& path) {
 }
 
 // --metrics: /metrics served from the statistics while the run goes on.
-std::unique_ptr<MetricsServer> serve_metrics(const RunOptions& o, Pipeline& pipeline,
-                                             const PortHealth& ports) {
+std::unique_ptr<output::MetricsServer> serve_metrics(const RunOptions& o, Pipeline& pipeline,
+                                                     const output::PortHealth& ports) {
   if (o.metrics_address.empty()) return nullptr;
-  SharedStatistics& shared = *pipeline.shared_statistics();
-  return std::make_unique<MetricsServer>(o.metrics_address, [&shared, &pipeline, &ports] {
+  output::SharedStatistics& shared = *pipeline.shared_statistics();
+  return std::make_unique<output::MetricsServer>(o.metrics_address, [&shared, &pipeline, &ports] {
     fmt::memory_buffer text;
-    shared.read([&] { append_metrics(text, *pipeline.statistics(), pipeline.problems(), ports); });
+    shared.read(
+        [&] { output::append_metrics(text, *pipeline.statistics(), pipeline.problems(), ports); });
     return fmt::to_string(text);
   });
 }
@@ -110,16 +111,16 @@ std::unique_ptr<captures::RawRecorder> raw_recorder(const RunOptions& o,
 class MqttOutput {
  public:
   MqttOutput(const RunOptions& o, Pipeline& pipeline, const std::string& bus, bool live) {
-    const MqttUrl url = parse_mqtt_url(o.mqtt_url);
-    MqttOptions options;
+    const output::MqttUrl url = output::parse_mqtt_url(o.mqtt_url);
+    output::MqttOptions options;
     options.prefix = url.prefix;
     options.bus = o.mqtt_bus.empty() ? bus : o.mqtt_bus;
     options.interval_ns = static_cast<int64_t>(o.mqtt_interval_s * 1e9);
     const auto base = o.register_base;
-    options.follow = parse_follow_or_all(o.follow, base);
+    options.follow = output::parse_follow_or_all(o.follow, base);
     options.base = base;
     if (!o.mqtt_discovery.empty()) options.discovery_prefix = o.mqtt_discovery;
-    broker_ = std::make_unique<MosquittoBroker>(url, status_topic(options));
+    broker_ = std::make_unique<output::MosquittoBroker>(url, output::status_topic(options));
     if (!broker_->wait_connected(live ? 3 : 10)) {
       const std::string why =
           fmt::format("{}: cannot connect: {}", broker_->name(), broker_->connect_error());
@@ -139,8 +140,8 @@ class MqttOutput {
   }
 
  private:
-  std::unique_ptr<MosquittoBroker> broker_;
-  MqttPublisher* publisher_ = nullptr;
+  std::unique_ptr<output::MosquittoBroker> broker_;
+  output::MqttPublisher* publisher_ = nullptr;
 };
 
 std::unique_ptr<MqttOutput> mqtt_output(const RunOptions& o, Pipeline& pipeline,
@@ -196,7 +197,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
                       : captures::open_capture(o.read_file, open);
 
   captures::OutputFile standard_output(stdout, "standard output");
-  Output out(standard_output);
+  output::Output out(standard_output);
   Pipeline pipeline(o, ring, out, source->channels(), open.serial, source->clock());
   pipeline.limit_records(o.max_records);
   LineHealth health(&pipeline.all());
@@ -211,7 +212,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   // break, in every output, and then the error.
   std::optional<captures::CaptureError> broken;
   auto progress = progress_bar(o, *source, piped);
-  const PortHealth no_ports;
+  const output::PortHealth no_ports;
   auto metrics = serve_metrics(o, pipeline, no_ports);
   auto mqtt = mqtt_output(o, pipeline, bus_name(o.read_file), false);
   try {
@@ -260,7 +261,7 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
   }
   const auto& stop = live::stop_on_signals();
   captures::OutputFile standard_output(stdout, "standard output");
-  Output out(standard_output);
+  output::Output out(standard_output);
   out.set_line_buffered(true);
   live::LiveOptions options;
   options.analyzer = analyzer_options(o, ClockQuality::per_chunk);
@@ -285,7 +286,7 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
     };
   options.reconnect = o.reconnect;
   options.announce = o.announce;
-  PortHealth port_health;
+  output::PortHealth port_health;
   options.on_port_event = [&port_health](live::PortEvent event) {
     ++(event == live::PortEvent::read_failed ? port_health.read_errors : port_health.reconnects);
   };

@@ -1,0 +1,55 @@
+#include "output/cited_records.hpp"
+
+namespace modtap::output {
+
+CitedRecords::CitedRecords(ProblemEvidence& evidence, const std::vector<ChannelInfo>& channels,
+                           RegisterBase base, const RecordClock* clock)
+    : evidence_(evidence),
+      own_clock_used_(clock == nullptr),
+      text_(text_out_, channels,
+            TextOptions{false, TimeFormat::relative, base, clock ? clock : &own_clock_}) {}
+
+template <typename Render>
+void CitedRecords::keep(std::optional<uint64_t> request, Render render) {
+  const auto index = evidence_.cited();
+  if (!index || lines_.size() >= max_kept) return;
+  if (request && request_.index == *request && *request != 0 && !request_raw_.empty())
+    text_.on_frame(request_);
+  render();
+  fmt::memory_buffer& line = text_out_.buffer();
+  lines_[*index].append(line.data(), line.size());
+  line.clear();
+}
+
+// A copy that outlives the framer's buffer, without what points into other stages' storage.
+void CitedRecords::remember_request(const Frame& frame) {
+  request_raw_.assign(frame.raw.begin(), frame.raw.end());
+  request_adu_.assign(frame.adu.begin(), frame.adu.end());
+  request_ = frame;
+  request_.raw = request_raw_;
+  request_.adu = request_adu_;
+  request_.request_pdu = {};
+  request_.meaning = nullptr;
+  request_.decoded = nullptr;
+}
+
+void CitedRecords::on_frame(const Frame& frame) {
+  if (own_clock_used_) own_clock_.see(frame.t_ns);
+  evidence_.on_frame(frame);
+  keep(frame.request, [&] { text_.on_frame(frame); });
+  if (frame.role == Role::request && frame.check_ok) remember_request(frame);
+}
+
+void CitedRecords::on_noise(const Noise& noise) {
+  if (own_clock_used_) own_clock_.see(noise.t_ns);
+  evidence_.on_noise(noise);
+  keep(noise.request, [&] { text_.on_noise(noise); });
+}
+
+void CitedRecords::on_timeout(const Timeout& timeout) {
+  if (own_clock_used_) own_clock_.see(timeout.t_ns);
+  evidence_.on_timeout(timeout);
+  keep(timeout.request, [&] { text_.on_timeout(timeout); });
+}
+
+}  // namespace modtap::output

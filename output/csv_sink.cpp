@@ -1,0 +1,86 @@
+#include "output/csv_sink.hpp"
+
+#include <stdexcept>
+
+#include "output/render.hpp"
+
+namespace modtap::output {
+
+namespace {
+
+// A CSV field: quoted when it holds a comma, a quote or a line break (RFC 4180).
+void append_field(fmt::memory_buffer& out, std::string_view text) {
+  if (text.find_first_of(",\"\r\n") == std::string_view::npos) {
+    out.append(text);
+    return;
+  }
+  out.push_back('"');
+  for (char c : text) {
+    if (c == '"') out.push_back('"');
+    out.push_back(c);
+  }
+  out.push_back('"');
+}
+
+}  // namespace
+
+std::vector<FollowedRegister> parse_follow(const std::string& list, RegisterBase base) {
+  std::vector<FollowedRegister> follow;
+  size_t at = 0;
+  while (at <= list.size()) {
+    const size_t comma = std::min(list.find(',', at), list.size());
+    const std::string item = list.substr(at, comma - at);
+    if (item.empty()) throw std::invalid_argument("--follow: an empty name in \"" + list + "\"");
+    follow.push_back({item, parse_register_number(item, base)});
+    at = comma + 1;
+  }
+  return follow;
+}
+
+CsvSink::CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat time_format,
+                 RegisterBase base, const RecordClock* clock)
+    : out_(out), follow_(std::move(follow)), time_format_(time_format), base_(base), clock_(clock) {
+  out_.print("t,slave,address,name,value,unit,raw\n");
+}
+
+bool follows(const std::vector<FollowedRegister>& follow, const RegisterValue& reg) {
+  if (follow.empty()) return true;
+  for (const FollowedRegister& f : follow)
+    if (f.name == reg.name || (f.number && f.number->address == reg.address &&
+                               f.number->table.value_or(reg.table) == reg.table))
+      return true;
+  return false;
+}
+
+// Seconds since the capture's first record (the text's time column), or with -t a or ad since
+// the Unix epoch: numbers a spreadsheet or a plotting tool takes as they are.
+void CsvSink::time(int64_t t_ns) {
+  if (time_format_ == TimeFormat::absolute || time_format_ == TimeFormat::absolute_date) {
+    out_.print(FMT_COMPILE("{}"), Fixed{t_ns, 9, 6});
+    return;
+  }
+  const RecordClock& clock = clock_ ? *clock_ : own_clock_;
+  out_.print(FMT_COMPILE("{}"), Fixed{t_ns - clock.first_ns.value_or(t_ns), 9, 6});
+}
+
+void CsvSink::on_frame(const Frame& frame) {
+  see(frame.t_ns);
+  const Meaning* meaning = frame.meaning;
+  if (!states_values(frame)) return;
+  auto& buf = out_.buffer();
+  for (const RegisterValue& reg : meaning->registers) {
+    if (!follows(follow_, reg)) continue;
+    time(frame.t_ns);
+    out_.print(FMT_COMPILE(",{},{},"), frame.slave(),
+               RegisterNumber{reg.table, reg.address, base_});
+    append_field(buf, reg.name);
+    buf.push_back(',');
+    append_number(buf, reg.value, reg.decimals);
+    buf.push_back(',');
+    append_field(buf, reg.unit);
+    out_.print(FMT_COMPILE(",{}\n"), reg.raw);
+  }
+  out_.end_record();
+}
+
+}  // namespace modtap::output

@@ -1,0 +1,62 @@
+// -T csv: register values over time, as the master reads and writes them, one row per value:
+// what ModbusScope plots, from a bus modtap only listens to. --follow picks registers by name or
+// address; without it every register read or written is a row. A write's echo response adds no
+// row (its values are the request's).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "models/register_meaning.hpp"
+#include "output/output.hpp"
+#include "output/text_sink.hpp"
+#include "protocol/record_sink.hpp"
+#include "protocol/register_numbering.hpp"
+
+namespace modtap::output {
+
+// One --follow item: a register's name (frequency_command, P00.04) or number (2502H, 0x2502,
+// or a decimal number in the --register-base convention: 9474, 9475, 49475).
+struct FollowedRegister {
+  std::string name;
+  std::optional<NamedRegister> number;
+};
+// "frequency_command,2503H"; throws std::invalid_argument for an empty item.
+std::vector<FollowedRegister> parse_follow(const std::string& list,
+                                           RegisterBase base = RegisterBase::hex);
+// The same, where an empty list follows every register.
+inline std::vector<FollowedRegister> parse_follow_or_all(const std::string& list,
+                                                         RegisterBase base) {
+  return list.empty() ? std::vector<FollowedRegister>{} : parse_follow(list, base);
+}
+
+// Whether `reg` is one of `follow` (by name or address); an empty list follows every register.
+bool follows(const std::vector<FollowedRegister>& follow, const RegisterValue& reg);
+
+class CsvSink final : public RecordSink {
+ public:
+  // `clock`: every record's, kept before a filter, so `t` counts from the capture's first
+  // record as without the filter; none: the sink keeps the clock of the records it is given.
+  CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat time_format,
+          RegisterBase base = RegisterBase::hex, const RecordClock* clock = nullptr);
+
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override { see(noise.t_ns); }
+  void on_timeout(const Timeout& timeout) override { see(timeout.t_ns); }
+
+ private:
+  void see(int64_t t_ns) {
+    if (!clock_) own_clock_.see(t_ns);
+  }
+  void time(int64_t t_ns);
+
+  Output& out_;
+  std::vector<FollowedRegister> follow_;
+  TimeFormat time_format_;
+  RegisterBase base_;
+  const RecordClock* clock_;
+  RecordClock own_clock_;  // without clock_
+};
+
+}  // namespace modtap::output

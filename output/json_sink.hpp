@@ -1,0 +1,45 @@
+// JSON Lines: one object per record. docs/output.md lists every key.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "models/register_meaning.hpp"
+#include "output/output.hpp"
+#include "protocol/buffer_put.hpp"
+#include "protocol/pdu_fields.hpp"
+#include "protocol/record_sink.hpp"
+
+namespace modtap::output {
+
+class JsonSink final : public RecordSink {
+ public:
+  JsonSink(Output& out, const std::vector<ChannelInfo>& channels);
+
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override;
+  void on_timeout(const Timeout& timeout) override;
+
+ private:
+  void channel(uint16_t id);
+  void meaning(const Meaning& meaning);
+  bool finding_names(uint32_t bits);
+
+  Output& out_;
+  const std::vector<ChannelInfo>& channels_;  // may grow and be renamed as it goes
+  // Each channel's `,"channel":"NAME"` as last made, and the name it was made from.
+  struct ChannelKey {
+    std::string name;
+    fmt::memory_buffer json;
+  };
+  std::vector<ChannelKey> channel_keys_;
+  // `,"model":"NAME"` of the model it was last made for (models do not change in a run).
+  const DeviceModel* model_key_for_ = nullptr;
+  fmt::memory_buffer model_key_;
+  NanosecondsText time_text_;
+  DecodedPdu decoded_;  // the frame's fields, its capacity kept from frame to frame
+};
+
+}  // namespace modtap::output

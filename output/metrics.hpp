@@ -1,0 +1,79 @@
+// Bus health for Prometheus: the statistics --stats writes, in the text exposition format,
+// served on /metrics while modtap runs. The counters are BusStatistics', read under the same
+// lock the pipeline adds records with; nothing here counts on its own but the ports' troubles.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "analysis/bus_problems.hpp"
+#include "analysis/bus_statistics.hpp"
+
+namespace modtap::output {
+
+// What the live loop knows of its own ports: reads that failed (an unplugged adapter) and
+// ports that came back (--reconnect). Written by the pipeline, read by the server.
+struct PortHealth {
+  std::atomic<uint64_t> read_errors{0};
+  std::atomic<uint64_t> reconnects{0};
+};
+
+// The exposition (version 0.0.4) of the statistics, the problems and the ports' health.
+void append_metrics(fmt::memory_buffer& out, const BusStatistics& statistics,
+                    std::span<const Problem> problems, const PortHealth& ports);
+
+// The statistics and the problems' evidence (`health`), fed by the pipeline and read by the
+// server's thread, one at a time.
+class SharedStatistics final : public RecordSink {
+ public:
+  explicit SharedStatistics(RecordSink& health) : health_(health) {}
+
+  void on_frame(const Frame& frame) override {
+    std::lock_guard lock(mutex_);
+    health_.on_frame(frame);
+  }
+  void on_noise(const Noise& noise) override {
+    std::lock_guard lock(mutex_);
+    health_.on_noise(noise);
+  }
+  void on_timeout(const Timeout& timeout) override {
+    std::lock_guard lock(mutex_);
+    health_.on_timeout(timeout);
+  }
+  // Runs `reader` while no record comes in.
+  void read(const std::function<void()>& reader) {
+    std::lock_guard lock(mutex_);
+    reader();
+  }
+
+ private:
+  std::mutex mutex_;
+  RecordSink& health_;
+};
+
+// An HTTP server (libmicrohttpd, on its own thread) that answers GET /metrics with what
+// `render` returns. `address` is HOST:PORT, [IPV6]:PORT, or :PORT for every interface.
+// Throws std::runtime_error naming the address when it cannot listen there.
+class MetricsServer {
+ public:
+  MetricsServer(const std::string& address, std::function<std::string()> render);
+  ~MetricsServer();
+  MetricsServer(const MetricsServer&) = delete;
+  MetricsServer& operator=(const MetricsServer&) = delete;
+
+  const std::function<std::string()>& render() const { return render_; }
+
+ private:
+  struct Daemon;
+  std::function<std::string()> render_;
+  std::unique_ptr<Daemon> daemon_;
+};
+
+}  // namespace modtap::output

@@ -1,0 +1,114 @@
+// Writes modtap's records as pcapng for Wireshark: one packet per frame and per noise record,
+// one interface per channel, the direction in epb_flags and the verdicts in a comment.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "captures/file_ring.hpp"
+#include "captures/pcapng_writer.hpp"
+#include "protocol/record_sink.hpp"
+
+namespace modtap::output {
+
+enum class PcapngLink {
+  user,          // DLT_USER: the wire bytes, verdicts in the comment (for plugins/wireshark)
+  exported_pdu,  // link type 252: stock Wireshark's mbrtu dissector, classified by port
+  bare,          // DLT_USER with frames only and no comments, as other sniffers write
+};
+}  // namespace modtap::output
+
+namespace modtap {
+template <>
+struct EnumNames<output::PcapngLink> {
+  static constexpr std::array<std::string_view, 3> names{"user", "exported-pdu", "bare"};
+};
+}  // namespace modtap
+
+namespace modtap::output {
+
+struct PcapngOptions {
+  PcapngLink link = PcapngLink::user;
+  int dlt = 147;
+  // Exported PDU: the slave side of every frame sits on this TCP port, so that
+  // `-o mbrtu.tcp.port:502` tells Wireshark which frames are requests.
+  uint32_t slave_port = 502;
+  uint32_t master_port = 50200;
+  // How well the source knew each byte's time: said in the file, so a reread times alike.
+  ClockQuality clock = ClockQuality::per_chunk;
+  // Someone reads the file as it grows (a port's capture into Wireshark's FIFO or a pipe):
+  // every packet is flushed as it is written.
+  bool live = false;
+};
+
+// Parses "user", "exported-pdu" or "bare"; throws std::invalid_argument.
+
+class PcapngSink final : public RecordSink {
+ public:
+  PcapngSink(captures::PcapngWriter& writer, const std::vector<ChannelInfo>& channels,
+             const PcapngOptions& options);
+
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override;
+  // A request that timed out gets "timeout=REASON waited_us=N" in its comment.
+  void on_timeout(const Timeout& timeout) override;
+  // Writes what is held (requests still waiting, and what came after them).
+  void finish();
+
+ private:
+  uint32_t interface_for(uint16_t channel);
+  std::span<const uint8_t> exported_pdu(std::string_view protocol, bool from_master,
+                                        std::span<const uint8_t> payload);
+
+  captures::PcapngWriter& writer_;
+  const std::vector<ChannelInfo>& channels_;
+  PcapngOptions options_;
+  std::vector<int64_t> interface_of_channel_;  // -1 until its interface block is written
+  std::vector<uint8_t> payload_;
+  fmt::memory_buffer comment_;  // the packet's comment, its storage kept from frame to frame
+};
+
+// -w: the pcapng file, or with -b a ring of them. Each file is whole (its own section and
+// interfaces), and a record is never split between two.
+class PcapngFiles final : public RecordSink {
+ public:
+  // Without rotation the file is created at once (an empty capture leaves an empty pcapng);
+  // with it, each file when its first record comes.
+  PcapngFiles(const std::string& path, const captures::RingLimits& limits,
+              const std::vector<ChannelInfo>& channels, const PcapngOptions& options);
+
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override;
+  void on_timeout(const Timeout& timeout) override;
+
+  uint64_t bytes_written() const;  // by all its files together
+  uint64_t files_begun() const { return ring_.files_begun(); }
+  // Completes the last file (or the one file of a run that saw no record), reporting failures.
+  void close();
+
+ private:
+  PcapngSink& sink_at(int64_t t_ns);
+  void begin_file(const std::string& path);
+
+  captures::FileRing ring_;
+  const std::vector<ChannelInfo>& channels_;
+  PcapngOptions options_;
+  uint64_t closed_bytes_ = 0;  // what the files before the current one hold
+  std::unique_ptr<captures::PcapngWriter> writer_;
+  std::unique_ptr<PcapngSink> sink_;
+};
+
+// The comment modtap writes on a frame: "modtap key=value ...", parsed by modtap.lua.
+// What modtap says of each interface it writes: the time convention (pcapng_format.hpp),
+// the channel's role (a split tap) and the source's clock.
+std::string interface_comment(ChannelRole role, ClockQuality clock);
+
+std::string frame_comment(const Frame& frame);
+void append_frame_comment(fmt::memory_buffer& out, const Frame& frame);
+std::string noise_comment(const Noise& noise);
+void append_noise_comment(fmt::memory_buffer& out, const Noise& noise);
+
+}  // namespace modtap::output

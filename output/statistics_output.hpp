@@ -1,0 +1,30 @@
+// The statistics as a technician reads them (-T stats) and as a program does (--stats FILE,
+// one JSON object; docs/output.md lists its keys).
+#pragma once
+
+#include <fmt/format.h>
+
+#include <span>
+
+#include "analysis/bus_diagnostics.hpp"
+#include "analysis/bus_problems.hpp"
+#include "analysis/bus_statistics.hpp"
+#include "output/output.hpp"
+#include "protocol/register_numbering.hpp"
+
+namespace modtap::output {
+
+// The outages (slaves that went silent) come from the diagnostics stage; the problems, first,
+// from find_problems.
+void print_statistics(Output& out, const BusStatistics& stats, const BusDiagnostics& diagnostics,
+                      std::span<const Problem> problems, RegisterBase base = RegisterBase::hex);
+
+// `complete` is false when the input ended in an error: the numbers cover what was read.
+void append_statistics_json(fmt::memory_buffer& out, const BusStatistics& stats,
+                            const BusDiagnostics& diagnostics, std::span<const Problem> problems,
+                            bool complete);
+
+// The problems as a JSON array, as --stats, the metrics and MQTT give them.
+void append_problems_json(fmt::memory_buffer& out, std::span<const Problem> problems);
+
+}  // namespace modtap::output

@@ -1,0 +1,71 @@
+// One line per record, as tshark prints packets; -V adds each frame's field tree.
+#pragma once
+
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "models/register_meaning.hpp"
+#include "output/output.hpp"
+#include "output/render.hpp"
+#include "protocol/pdu_fields.hpp"
+#include "protocol/record_sink.hpp"
+#include "protocol/register_numbering.hpp"
+
+namespace modtap::output {
+
+// How the time column reads, as tshark's -t: since the capture's first record (r), the time of
+// day (a), date and time (ad), since the record before, shown or not (d), since the line shown
+// before (dd). Absolute times are local, as tshark's.
+enum class TimeFormat : uint8_t { relative, absolute, absolute_date, delta, delta_displayed };
+}  // namespace modtap::output
+
+namespace modtap {
+template <>
+struct EnumNames<output::TimeFormat> {
+  static constexpr std::array<std::string_view, 5> names{"r", "a", "ad", "d", "dd"};
+};
+}  // namespace modtap
+
+namespace modtap::output {
+
+struct TextOptions {
+  bool verbose = false;  // -V: each frame's field tree
+  TimeFormat time = TimeFormat::relative;
+  RegisterBase register_base = RegisterBase::hex;
+  // The clock of every record, kept before a filter (ClockStage): -t r and -t d count
+  // over the whole capture. None: the sink keeps its own, of the records it is given.
+  const RecordClock* clock = nullptr;
+};
+
+class TextSink final : public RecordSink {
+ public:
+  TextSink(Output& out, const std::vector<ChannelInfo>& channels, TextOptions options = {});
+
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override;
+  void on_timeout(const Timeout& timeout) override;
+
+ private:
+  void time_column(int64_t t_ns);
+  const RecordClock& clock() const { return options_.clock ? *options_.clock : own_clock_; }
+  void seconds_column(int64_t ns);
+  void absolute_time(int64_t t_ns);
+  void channel_column(uint16_t channel);
+  AddressNumbering numbering_of(const Frame& frame) const;
+  void tree(const Frame& frame, const DecodedPdu& pdu, AddressNumbering numbering);
+  void registers_line(const Meaning& meaning);
+  void registers_tree(const Meaning& meaning);
+
+  Output& out_;
+  const std::vector<ChannelInfo>& channels_;
+  TextOptions options_;
+  RecordClock own_clock_;                     // without options_.clock
+  std::optional<int64_t> previous_shown_ns_;  // -t dd counts from here
+  int64_t shown_second_ = -1;                 // the second whose date and time `shown_` holds
+  KeptDecimal seconds_;                       // relative and delta times' whole seconds
+  fmt::memory_buffer shown_;
+  DecodedPdu decoded_;  // the frame's fields, its capacity kept from frame to frame
+};
+
+}  // namespace modtap::output
