@@ -9,57 +9,15 @@
 
 #include "captures/open_capture.hpp"
 #include "captures/piped_input.hpp"
-#include "captures/raw_recorder.hpp"
-#include "output/mosquitto_broker.hpp"
-#include "output/report.hpp"
-#include "output/statistics_output.hpp"
 #include "protocol/format_probe.hpp"
 #include "tools/live/live_capture.hpp"
 #include "tools/modtap/auto_format.hpp"
 #include "tools/modtap/enum_option.hpp"
 #include "tools/modtap/progress.hpp"
+#include "tools/modtap/session.hpp"
 
 namespace modtap::tools {
 namespace {
-
-void write_whole(const std::string& path, const fmt::memory_buffer& content) {
-  captures::OutputFile file(path);
-  file.write(std::string_view(content.data(), content.size()));
-  file.close();
-}
-
-// The end of a run: -T stats prints the statistics, --stats and --report write them
-// (`complete` false when the input broke off: they cover what was read).
-void summarise(const RunOptions& o, output::Output& out, const Pipeline& pipeline, bool complete) {
-  const BusStatistics* statistics = pipeline.statistics();
-  if (!statistics) return;
-  const auto base = o.register_base;
-  const auto problems = pipeline.problems();
-  if (o.output == OutputKind::stats)
-    output::print_statistics(out, *statistics, pipeline.diagnostics(), problems, base);
-  if (!o.stats_file.empty()) {
-    fmt::memory_buffer json;
-    output::append_statistics_json(json, *statistics, pipeline.diagnostics(), problems, complete);
-    write_whole(o.stats_file, json);
-  }
-  if (!o.report_file.empty()) {
-    fmt::memory_buffer html;
-    const std::string capture = o.read_file.empty()
-                                    ? fmt::format("{}", fmt::join(o.interfaces, " "))
-                                : o.read_file == "-" ? "standard input"
-                                                     : o.read_file;
-    output::append_report(html, *statistics, pipeline.diagnostics(), *pipeline.timeline(), problems,
-                          pipeline.cited_records()->lines(),
-                          {capture, MODTAP_VERSION, complete, base, pipeline.unseen_follow()});
-    write_whole(o.report_file, html);
-  }
-}
-
-// --follow items no frame carried: a mistyped address, or a register the master never touched.
-void say_unseen(const Pipeline& pipeline) {
-  for (const std::string& item : pipeline.unseen_follow())
-    fmt::print(stderr, "modtap: --follow {}: no frame read or wrote it\n", item);
-}
 
 // Whether the terminal is free for a status or progress line: standard error is one, and
 // frame lines are not printed on that same terminal.
@@ -76,78 +34,6 @@ std::unique_ptr<ProgressBar> progress_bar(const RunOptions& o, const captures::C
   const auto size = std::filesystem::file_size(o.read_file, error);
   if (error) return nullptr;
   return std::make_unique<ProgressBar>(stderr, size);
-}
-
-// What names the bus in MQTT topics unless --mqtt-bus does: the port's or the file's name.
-std::string bus_name(const std::string& path) {
-  if (path == "-") return "stdin";
-  return std::filesystem::path(path).stem().string();
-}
-
-// --metrics: /metrics served from the statistics while the run goes on.
-std::unique_ptr<output::MetricsServer> serve_metrics(const RunOptions& o, Pipeline& pipeline,
-                                                     const output::PortHealth& ports) {
-  if (o.metrics_address.empty()) return nullptr;
-  output::SharedStatistics& shared = *pipeline.shared_statistics();
-  return std::make_unique<output::MetricsServer>(o.metrics_address, [&shared, &pipeline, &ports] {
-    fmt::memory_buffer text;
-    shared.read(
-        [&] { output::append_metrics(text, *pipeline.statistics(), pipeline.problems(), ports); });
-    return fmt::to_string(text);
-  });
-}
-
-std::unique_ptr<captures::RawRecorder> raw_recorder(const RunOptions& o,
-                                                    const captures::RingLimits& ring,
-                                                    const std::vector<ChannelInfo>& channels,
-                                                    const SerialFormat& format) {
-  if (o.save_raw.empty()) return nullptr;
-  return std::make_unique<captures::RawRecorder>(o.save_raw, channels, format.char_time_ns(), ring);
-}
-
-// --mqtt: the publisher and its broker, connected. A file read waits for the broker and fails
-// without it; a port goes on listening while the client keeps trying (a service may start
-// before its broker).
-class MqttOutput {
- public:
-  MqttOutput(const RunOptions& o, Pipeline& pipeline, const std::string& bus, bool live) {
-    const output::MqttUrl url = output::parse_mqtt_url(o.mqtt_url);
-    output::MqttOptions options;
-    options.prefix = url.prefix;
-    options.bus = o.mqtt_bus.empty() ? bus : o.mqtt_bus;
-    options.interval_ns = static_cast<int64_t>(o.mqtt_interval_s * 1e9);
-    const auto base = o.register_base;
-    options.follow = output::parse_follow_or_all(o.follow, base);
-    options.base = base;
-    if (!o.mqtt_discovery.empty()) options.discovery_prefix = o.mqtt_discovery;
-    broker_ = std::make_unique<output::MosquittoBroker>(url, output::status_topic(options));
-    if (!broker_->wait_connected(live ? 3 : 10)) {
-      const std::string why =
-          fmt::format("{}: cannot connect: {}", broker_->name(), broker_->connect_error());
-      if (!live) throw std::runtime_error(why);
-      fmt::print(stderr, "modtap: {}; trying again while listening\n", why);
-    }
-    publisher_ = &pipeline.publish(*broker_, std::move(options));
-  }
-  void tick(int64_t now_ns) { publisher_->tick(now_ns); }
-  // The last values and summary, status offline, and what the broker missed.
-  void finish() {
-    publisher_->finish();
-    broker_->close();
-    if (broker_->dropped())
-      fmt::print(stderr, "modtap: {}: {} messages not sent while the broker was away\n",
-                 broker_->name(), broker_->dropped());
-  }
-
- private:
-  std::unique_ptr<output::MosquittoBroker> broker_;
-  output::MqttPublisher* publisher_ = nullptr;
-};
-
-std::unique_ptr<MqttOutput> mqtt_output(const RunOptions& o, Pipeline& pipeline,
-                                        const std::string& bus, bool live) {
-  if (o.mqtt_url.empty()) return nullptr;
-  return std::make_unique<MqttOutput>(o, pipeline, bus, live);
 }
 
 // After a run whose traffic made little sense, or came faster than the baud allows, say so.
@@ -196,34 +82,27 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   auto source = piped ? captures::open_piped_capture(o.read_file, open)
                       : captures::open_capture(o.read_file, open);
 
-  captures::OutputFile standard_output(stdout, "standard output");
-  output::Output out(standard_output);
-  Pipeline pipeline(o, ring, out, source->channels(), open.serial, source->clock());
-  pipeline.limit_records(o.max_records);
-  LineHealth health(&pipeline.all());
+  Session session(o, ring, {source->channels(), open.serial, source->clock(), o.read_file, false});
+  LineHealth health(&session.records());
   AnalyzerOptions options = analyzer_options(o, source->clock());
   options.format = open.serial;
-  options.slave_timeout_ns = pipeline.model_timeouts();
+  options.slave_timeout_ns = session.model_timeouts();
   Analyzer bus(options, source->channels(), health);
   ChunkPace pace(open.serial);
-  auto raw = raw_recorder(o, ring, source->channels(), open.serial);
   Chunk chunk;
   // A capture that breaks off (a truncated file) still gives everything read before the
   // break, in every output, and then the error.
   std::optional<captures::CaptureError> broken;
   auto progress = progress_bar(o, *source, piped);
-  const output::PortHealth no_ports;
-  auto metrics = serve_metrics(o, pipeline, no_ports);
-  auto mqtt = mqtt_output(o, pipeline, bus_name(o.read_file), false);
   try {
     std::optional<int64_t> first_ns;
-    while (!pipeline.limit_reached() && source->next(chunk)) {
+    while (!session.limit_reached() && source->next(chunk)) {
       if (!first_ns) first_ns = chunk.t_ns;
       if (autostop.duration_ns && chunk.t_ns - *first_ns >= *autostop.duration_ns) break;
-      if (autostop.filesize_bytes && pipeline.pcapng_bytes() >= *autostop.filesize_bytes) break;
+      if (autostop.filesize_bytes && session.pcapng_bytes() >= *autostop.filesize_bytes) break;
       if (progress) progress->update(*source->file_position());
       if (source->clock() == ClockQuality::per_chunk) pace.add(chunk);
-      if (raw) raw->write(chunk, bus.between_frames());
+      if (session.keeps_raw()) session.keep_raw(chunk, bus.between_frames());
       bus.push(chunk);
     }
   } catch (const captures::CaptureError& e) {
@@ -231,13 +110,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   }
   progress.reset();  // wiped before anything else reaches the terminal
   bus.finish();
-  metrics.reset();
-  if (mqtt) mqtt->finish();
-  summarise(o, out, pipeline, !broken);
-  out.flush();
-  say_unseen(pipeline);
-  pipeline.close();
-  if (raw) raw->close();
+  session.finish(!broken);
   if (bus.clock_steps_back())
     fmt::print(stderr,
                "modtap: warning: {}: the time stamps go backwards {} times; latencies across "
@@ -260,9 +133,6 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
     channels.push_back({ports.back().name, ports.back().role});
   }
   const auto& stop = live::stop_on_signals();
-  captures::OutputFile standard_output(stdout, "standard output");
-  output::Output out(standard_output);
-  out.set_line_buffered(true);
   live::LiveOptions options;
   options.analyzer = analyzer_options(o, ClockQuality::per_chunk);
   if (!o.baud || !o.parity) {
@@ -271,39 +141,32 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
     options.analyzer.format = probed.format;
     options.replay = std::move(probed.read);  // the winning setting's bytes are analysed too
   }
-  Pipeline pipeline(o, ring, out, channels, options.analyzer.format, ClockQuality::per_chunk);
-  pipeline.limit_records(o.max_records, live::request_stop);
+  Session session(
+      o, ring,
+      {channels, options.analyzer.format, ClockQuality::per_chunk, ports.front().path, true},
+      live::request_stop);
   const int64_t started_ns = live::wall_clock_ns();
   options.done = [&](int64_t now_ns) {
     return (autostop.duration_ns && now_ns - started_ns >= *autostop.duration_ns) ||
-           (autostop.filesize_bytes && pipeline.pcapng_bytes() >= *autostop.filesize_bytes);
+           (autostop.filesize_bytes && session.pcapng_bytes() >= *autostop.filesize_bytes);
   };
-  options.analyzer.slave_timeout_ns = pipeline.model_timeouts();
-  auto raw = raw_recorder(o, ring, channels, options.analyzer.format);
-  if (raw)
+  options.analyzer.slave_timeout_ns = session.model_timeouts();
+  if (session.keeps_raw())
     options.on_read = [&](const Chunk& chunk, bool between_frames) {
-      raw->write(chunk, between_frames);
+      session.keep_raw(chunk, between_frames);
     };
   options.reconnect = o.reconnect;
   options.announce = o.announce;
-  output::PortHealth port_health;
+  output::PortHealth& port_health = session.port_health();
   options.on_port_event = [&port_health](live::PortEvent event) {
     ++(event == live::PortEvent::read_failed ? port_health.read_errors : port_health.reconnects);
   };
-  auto metrics = serve_metrics(o, pipeline, port_health);
-  auto mqtt = mqtt_output(o, pipeline, bus_name(ports.front().path), true);
-  if (mqtt) options.on_wake = [&](int64_t now_ns) { mqtt->tick(now_ns); };
+  if (session.publishes()) options.on_wake = [&](int64_t now_ns) { session.tick(now_ns); };
   // A status line on the terminal, unless frame lines are printed on that same terminal.
   options.status_line = o.announce && terminal_free_for_status(o);
-  const int status = live::run_live(ports, options, pipeline.all(), stop);
-  metrics.reset();
-  if (mqtt) mqtt->finish();
+  const int status = live::run_live(ports, options, session.records(), stop);
   // Ctrl-C, -c and -a end a live run whole; a port gone (status 1) breaks it off.
-  summarise(o, out, pipeline, status == 0);
-  out.flush();
-  say_unseen(pipeline);
-  pipeline.close();
-  if (raw) raw->close();
+  session.finish(status == 0);
   return status;
 }
 

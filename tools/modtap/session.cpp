@@ -1,0 +1,154 @@
+#include "tools/modtap/session.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "output/mosquitto_broker.hpp"
+#include "output/mqtt_publisher.hpp"
+#include "output/report.hpp"
+#include "output/statistics_output.hpp"
+
+namespace modtap::tools {
+namespace {
+
+void write_whole(const std::string& path, const fmt::memory_buffer& content) {
+  captures::OutputFile file(path);
+  file.write(std::string_view(content.data(), content.size()));
+  file.close();
+}
+
+// The end of a run: -T stats prints the statistics, --stats and --report write them
+// (`complete` false when the input broke off: they cover what was read).
+void summarise(const RunOptions& o, output::Output& out, const Pipeline& pipeline, bool complete) {
+  const BusStatistics* statistics = pipeline.statistics();
+  if (!statistics) return;
+  const auto base = o.register_base;
+  const auto problems = pipeline.problems();
+  if (o.output == OutputKind::stats)
+    output::print_statistics(out, *statistics, pipeline.diagnostics(), problems, base);
+  if (!o.stats_file.empty()) {
+    fmt::memory_buffer json;
+    output::append_statistics_json(json, *statistics, pipeline.diagnostics(), problems, complete);
+    write_whole(o.stats_file, json);
+  }
+  if (!o.report_file.empty()) {
+    fmt::memory_buffer html;
+    const std::string capture = o.read_file.empty()
+                                    ? fmt::format("{}", fmt::join(o.interfaces, " "))
+                                : o.read_file == "-" ? "standard input"
+                                                     : o.read_file;
+    output::append_report(html, *statistics, pipeline.diagnostics(), *pipeline.timeline(), problems,
+                          pipeline.cited_records()->lines(),
+                          {capture, MODTAP_VERSION, complete, base, pipeline.unseen_follow()});
+    write_whole(o.report_file, html);
+  }
+}
+
+// --follow items no frame carried: a mistyped address, or a register the master never touched.
+void say_unseen(const Pipeline& pipeline) {
+  for (const std::string& item : pipeline.unseen_follow())
+    fmt::print(stderr, "modtap: --follow {}: no frame read or wrote it\n", item);
+}
+
+// What names the bus in MQTT topics unless --mqtt-bus does: the port's or the file's name.
+std::string bus_name(const std::string& path) {
+  if (path == "-") return "stdin";
+  return std::filesystem::path(path).stem().string();
+}
+
+// --metrics: /metrics served from the statistics while the run goes on.
+std::unique_ptr<output::MetricsServer> serve_metrics(const RunOptions& o, Pipeline& pipeline,
+                                                     const output::PortHealth& ports) {
+  if (o.metrics_address.empty()) return nullptr;
+  output::SharedStatistics& shared = *pipeline.shared_statistics();
+  return std::make_unique<output::MetricsServer>(o.metrics_address, [&shared, &pipeline, &ports] {
+    fmt::memory_buffer text;
+    shared.read(
+        [&] { output::append_metrics(text, *pipeline.statistics(), pipeline.problems(), ports); });
+    return fmt::to_string(text);
+  });
+}
+
+std::unique_ptr<captures::RawRecorder> raw_recorder(const RunOptions& o,
+                                                    const captures::RingLimits& ring,
+                                                    const std::vector<ChannelInfo>& channels,
+                                                    const SerialFormat& format) {
+  if (o.save_raw.empty()) return nullptr;
+  return std::make_unique<captures::RawRecorder>(o.save_raw, channels, format.char_time_ns(), ring);
+}
+
+}  // namespace
+
+// --mqtt: the publisher and its broker, connected. A file read waits for the broker and fails
+// without it; a port goes on listening while the client keeps trying (a service may start
+// before its broker).
+class MqttOutput {
+ public:
+  MqttOutput(const RunOptions& o, Pipeline& pipeline, const std::string& bus, bool live) {
+    const output::MqttUrl url = output::parse_mqtt_url(o.mqtt_url);
+    output::MqttOptions options;
+    options.prefix = url.prefix;
+    options.bus = o.mqtt_bus.empty() ? bus : o.mqtt_bus;
+    options.interval_ns = static_cast<int64_t>(o.mqtt_interval_s * 1e9);
+    const auto base = o.register_base;
+    options.follow = output::parse_follow_or_all(o.follow, base);
+    options.base = base;
+    if (!o.mqtt_discovery.empty()) options.discovery_prefix = o.mqtt_discovery;
+    broker_ = std::make_unique<output::MosquittoBroker>(url, output::status_topic(options));
+    if (!broker_->wait_connected(live ? 3 : 10)) {
+      const std::string why =
+          fmt::format("{}: cannot connect: {}", broker_->name(), broker_->connect_error());
+      if (!live) throw std::runtime_error(why);
+      fmt::print(stderr, "modtap: {}; trying again while listening\n", why);
+    }
+    publisher_ = &pipeline.publish(*broker_, std::move(options));
+  }
+  void tick(int64_t now_ns) { publisher_->tick(now_ns); }
+  // The last values and summary, status offline, and what the broker missed.
+  void finish() {
+    publisher_->finish();
+    broker_->close();
+    if (broker_->dropped())
+      fmt::print(stderr, "modtap: {}: {} messages not sent while the broker was away\n",
+                 broker_->name(), broker_->dropped());
+  }
+
+ private:
+  std::unique_ptr<output::MosquittoBroker> broker_;
+  output::MqttPublisher* publisher_ = nullptr;
+};
+
+Session::Session(const RunOptions& o, const captures::RingLimits& ring, const SessionSource& source,
+                 std::function<void()> on_limit)
+    : o_(o),
+      standard_output_(stdout, "standard output"),
+      out_(standard_output_),
+      pipeline_(o, ring, out_, source.channels, source.format, source.clock) {
+  out_.set_line_buffered(source.live);
+  pipeline_.limit_records(o.max_records, std::move(on_limit));
+  raw_ = raw_recorder(o, ring, source.channels, source.format);
+  metrics_ = serve_metrics(o, pipeline_, port_health_);
+  if (!o.mqtt_url.empty())
+    mqtt_ = std::make_unique<MqttOutput>(o, pipeline_, bus_name(source.path), source.live);
+}
+
+Session::~Session() = default;
+
+void Session::tick(int64_t now_ns) {
+  if (mqtt_) mqtt_->tick(now_ns);
+}
+
+void Session::finish(bool complete) {
+  metrics_.reset();
+  if (mqtt_) mqtt_->finish();
+  summarise(o_, out_, pipeline_, complete);
+  out_.flush();
+  say_unseen(pipeline_);
+  pipeline_.close();
+  if (raw_) raw_->close();
+}
+
+}  // namespace modtap::tools

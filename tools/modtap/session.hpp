@@ -1,0 +1,72 @@
+// One run's outputs, the same whether the bytes come from a file or from ports: the pipeline of
+// stages and sinks, the --save-raw recorder, the metrics server, MQTT, and the end of the run
+// (the statistics and report written, MQTT's last messages, every file closed). read_capture
+// and listen (run.hpp) only feed it.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "captures/file_ring.hpp"
+#include "captures/output_file.hpp"
+#include "captures/raw_recorder.hpp"
+#include "output/metrics.hpp"
+#include "output/output.hpp"
+#include "protocol/records.hpp"
+#include "protocol/serial_format.hpp"
+#include "tools/modtap/pipeline.hpp"
+
+namespace modtap::tools {
+
+class MqttOutput;
+
+// Where a session's bytes come from.
+struct SessionSource {
+  const std::vector<ChannelInfo>& channels;
+  SerialFormat format;
+  ClockQuality clock = ClockQuality::per_chunk;
+  std::string path;   // the file or the first port: names the bus in MQTT topics
+  bool live = false;  // ports: lines written as they come, MQTT retries a broker away
+};
+
+class Session {
+ public:
+  // `on_limit`: what stops the source when -c is reached (a live loop's stop).
+  Session(const RunOptions& o, const captures::RingLimits& ring, const SessionSource& source,
+          std::function<void()> on_limit = {});
+  ~Session();
+
+  // Where the analyzer's records go.
+  RecordSink& records() { return pipeline_.all(); }
+  const Pipeline& pipeline() const { return pipeline_; }
+  bool limit_reached() const { return pipeline_.limit_reached(); }
+  uint64_t pcapng_bytes() const { return pipeline_.pcapng_bytes(); }
+  const std::map<uint8_t, int64_t>& model_timeouts() const { return pipeline_.model_timeouts(); }
+  // The ports' troubles, counted by the live loop for the metrics.
+  output::PortHealth& port_health() { return port_health_; }
+
+  // A read as it came, for --save-raw.
+  bool keeps_raw() const { return raw_ != nullptr; }
+  void keep_raw(const Chunk& chunk, bool between_frames) { raw_->write(chunk, between_frames); }
+  // Time passing on a quiet bus: MQTT's held values and summary.
+  bool publishes() const { return mqtt_ != nullptr; }
+  void tick(int64_t now_ns);
+
+  // The end of the run; `complete` false when the input broke off.
+  void finish(bool complete);
+
+ private:
+  const RunOptions& o_;
+  captures::OutputFile standard_output_;
+  output::Output out_;
+  Pipeline pipeline_;
+  std::unique_ptr<captures::RawRecorder> raw_;
+  output::PortHealth port_health_;
+  std::unique_ptr<output::MetricsServer> metrics_;
+  std::unique_ptr<MqttOutput> mqtt_;
+};
+
+}  // namespace modtap::tools
