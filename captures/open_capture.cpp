@@ -1,65 +1,119 @@
 #include "captures/open_capture.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
+#include <string_view>
+#include <vector>
 
 #include <fmt/format.h>
 
 #include "captures/hexlog_reader.hpp"
 #include "captures/pcap_reader.hpp"
+#include "captures/pcapng_format.hpp"
 #include "captures/pcapng_reader.hpp"
 #include "captures/raw_reader.hpp"
 
 namespace modtap::captures {
 namespace {
 
-bool ends_with(const std::string& s, const char* suffix) {
-  const size_t n = std::strlen(suffix);
-  return s.size() >= n && s.compare(s.size() - n, n, suffix) == 0;
+bool starts_with(std::span<const uint8_t> head, std::initializer_list<uint8_t> bytes) {
+  return head.size() >= bytes.size() && std::equal(bytes.begin(), bytes.end(), head.begin());
 }
 
+bool classic_pcap(std::span<const uint8_t> head) {  // microseconds or nanoseconds, either order
+  return starts_with(head, {0xD4, 0xC3, 0xB2, 0xA1}) ||
+         starts_with(head, {0xA1, 0xB2, 0xC3, 0xD4}) ||
+         starts_with(head, {0x4D, 0x3C, 0xB2, 0xA1}) || starts_with(head, {0xA1, 0xB2, 0x3C, 0x4D});
+}
+
+bool pcapng(std::span<const uint8_t> head) {  // a section header block (a palindrome: any order)
+  uint32_t block_type = 0;
+  if (head.size() >= sizeof block_type) std::memcpy(&block_type, head.data(), sizeof block_type);
+  return block_type == pcapng::section_header_block;
+}
+
+bool zip(std::span<const uint8_t> head) {  // a .sr file is a zip
+  return starts_with(head, {'P', 'K', 0x03, 0x04});
+}
+
+bool hexlog_header(std::span<const uint8_t> head) {
+  const std::string text(head.begin(), head.end());
+  return HexlogReader::is_header(text.substr(0, text.find_first_of("\r\n")));
+}
+
+bool nothing(std::span<const uint8_t>) {
+  return false;  // raw bytes have no mark of their own
+}
+
+std::unique_ptr<ChunkSource> open_pcap(const std::string& path, const OpenOptions&) {
+  return std::make_unique<PcapReader>(path);
+}
+
+std::unique_ptr<ChunkSource> open_pcapng(const std::string& path, const OpenOptions& options) {
+  return std::make_unique<PcapngReader>(path, options.serial.char_time_ns());
+}
+
+std::unique_ptr<ChunkSource> open_sigrok(const std::string& path, const OpenOptions& options) {
+  SigrokOptions sigrok = options.sigrok;
+  sigrok.format = options.serial;
+  return std::make_unique<SigrokReader>(path, sigrok);
+}
+
+std::unique_ptr<ChunkSource> open_hexlog(const std::string& path, const OpenOptions& options) {
+  return std::make_unique<HexlogReader>(path, options.serial.char_time_ns());
+}
+
+std::unique_ptr<ChunkSource> open_raw(const std::string& path, const OpenOptions&) {
+  return std::make_unique<RawReader>(path);
+}
+
+// Each kind of capture: its --format, how its first bytes tell it, the names that tell it
+// when they do not, and its reader. Where --format names a format, its first kind whose
+// bytes match is read, else its first kind (which then says what is wrong with the file).
+struct CaptureKind {
+  Format format;
+  bool (*recognises)(std::span<const uint8_t> head);
+  std::array<std::string_view, 2> extensions;
+  std::unique_ptr<ChunkSource> (*open)(const std::string& path, const OpenOptions& options);
+};
+
+constexpr CaptureKind capture_kinds[] = {
+    {Format::pcap, classic_pcap, {".pcap", ".pcapng"}, open_pcap},
+    {Format::pcap, pcapng, {}, open_pcapng},
+    {Format::sigrok, zip, {".sr"}, open_sigrok},
+    {Format::hexlog, hexlog_header, {".log"}, open_hexlog},
+    {Format::raw, nothing, {".bin", ".raw"}, open_raw},
+};
+
 Format by_extension(const std::string& path) {
-  if (ends_with(path, ".pcap") || ends_with(path, ".pcapng")) return Format::pcap;
-  if (ends_with(path, ".sr")) return Format::sigrok;
-  if (ends_with(path, ".log")) return Format::hexlog;
-  if (ends_with(path, ".bin") || ends_with(path, ".raw")) return Format::raw;
+  for (const CaptureKind& kind : capture_kinds)
+    for (std::string_view extension : kind.extensions)
+      if (!extension.empty() && path.ends_with(extension)) return kind.format;
   return Format::automatic;
 }
 
-}  // namespace
+const CaptureKind& kind_of(Format format, std::span<const uint8_t> head) {
+  const CaptureKind* first = nullptr;
+  for (const CaptureKind& kind : capture_kinds) {
+    if (kind.format != format) continue;
+    if (kind.recognises(head)) return kind;
+    if (!first) first = &kind;
+  }
+  return *first;
+}
 
-Format detect_format(const std::string& path) {
+std::vector<uint8_t> file_head(const std::string& path) {
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) throw CaptureError(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
-  std::array<uint8_t, 64> head{};
-  const size_t n = std::fread(head.data(), 1, head.size(), file.get());
-  return detect_format({head.data(), n}, path);
+  std::vector<uint8_t> head(capture_head_size);
+  head.resize(std::fread(head.data(), 1, head.size(), file.get()));
+  return head;
 }
-
-Format detect_format(std::span<const uint8_t> head, const std::string& path) {
-  auto magic = [&](std::initializer_list<uint8_t> bytes) {
-    return head.size() >= bytes.size() && std::equal(bytes.begin(), bytes.end(), head.begin());
-  };
-  if (magic({0xD4, 0xC3, 0xB2, 0xA1}) || magic({0xA1, 0xB2, 0xC3, 0xD4}) ||
-      magic({0x4D, 0x3C, 0xB2, 0xA1}) || magic({0xA1, 0xB2, 0x3C, 0x4D}) ||
-      magic({0x0A, 0x0D, 0x0D, 0x0A}))
-    return Format::pcap;
-  if (magic({'P', 'K', 0x03, 0x04})) return Format::sigrok;  // a .sr file is a zip
-  const std::string text(head.begin(), head.end());
-  if (HexlogReader::is_header(text.substr(0, text.find_first_of("\r\n")))) return Format::hexlog;
-  const Format guess = by_extension(path);
-  if (guess != Format::automatic) return guess;
-  throw CaptureError(
-      fmt::format("{}: offset 0: cannot tell the capture format from its content or name; "
-                  "give --format raw|hexlog|pcap|sigrok",
-                  path));
-}
-
-namespace {
 
 // What no reader can take, said plainly before any reader tries.
 void check_readable(const std::string& path) {
@@ -71,36 +125,34 @@ void check_readable(const std::string& path) {
     throw CaptureError(fmt::format("{}: the file is empty", path));
 }
 
-bool is_pcapng(const std::string& path) {
-  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
-  uint8_t magic[4] = {};
-  return file && std::fread(magic, 1, 4, file.get()) == 4 && magic[0] == 0x0A && magic[1] == 0x0D &&
-         magic[2] == 0x0D && magic[3] == 0x0A;
+}  // namespace
+
+Format detect_format(const std::string& path) {
+  return detect_format(file_head(path), path);
 }
 
-}  // namespace
+Format detect_format(std::span<const uint8_t> head, const std::string& path) {
+  for (const CaptureKind& kind : capture_kinds)
+    if (kind.recognises(head)) return kind.format;
+  const Format guess = by_extension(path);
+  if (guess != Format::automatic) return guess;
+  throw CaptureError(
+      fmt::format("{}: offset 0: cannot tell the capture format from its content or name; "
+                  "give --format raw|hexlog|pcap|sigrok",
+                  path));
+}
+
+std::unique_ptr<ChunkSource> open_reader(const std::string& path, std::span<const uint8_t> head,
+                                         Format format, const OpenOptions& options) {
+  return kind_of(format, head).open(path, options);
+}
 
 std::unique_ptr<ChunkSource> open_capture(const std::string& path, const OpenOptions& options) {
   check_readable(path);
-  const Format format = options.format == Format::automatic ? detect_format(path) : options.format;
-  switch (format) {
-    case Format::raw:
-      return std::make_unique<RawReader>(path);
-    case Format::hexlog:
-      return std::make_unique<HexlogReader>(path, options.serial.char_time_ns());
-    case Format::pcap:
-      if (is_pcapng(path))
-        return std::make_unique<PcapngReader>(path, options.serial.char_time_ns());
-      return std::make_unique<PcapReader>(path);
-    case Format::sigrok: {
-      SigrokOptions sigrok = options.sigrok;
-      sigrok.format = options.serial;
-      return std::make_unique<SigrokReader>(path, sigrok);
-    }
-    case Format::automatic:
-      break;
-  }
-  throw CaptureError(path + ": no reader");
+  const std::vector<uint8_t> head = file_head(path);
+  const Format format =
+      options.format == Format::automatic ? detect_format(head, path) : options.format;
+  return open_reader(path, head, format, options);
 }
 
 }  // namespace modtap::captures

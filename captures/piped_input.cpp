@@ -10,20 +10,13 @@
 
 #include <fmt/format.h>
 
-#include "captures/hexlog_reader.hpp"
-#include "captures/pcap_reader.hpp"
-#include "captures/pcapng_reader.hpp"
-#include "captures/raw_reader.hpp"
-
 namespace modtap::captures {
 
 namespace {
 
-constexpr size_t head_size = 64;  // what format detection reads
-
 // The first bytes of the stream, as many as arrive before its end.
 std::vector<uint8_t> read_head(int fd, const std::string& name) {
-  std::vector<uint8_t> head(head_size);
+  std::vector<uint8_t> head(capture_head_size);
   size_t got = 0;
   while (got < head.size()) {
     const ssize_t n = ::read(fd, head.data() + got, head.size() - got);
@@ -48,11 +41,6 @@ bool write_all(int fd, const uint8_t* data, size_t size) {
   return true;
 }
 
-bool is_pcapng(std::span<const uint8_t> head) {
-  return head.size() >= 4 && head[0] == 0x0A && head[1] == 0x0D && head[2] == 0x0D &&
-         head[3] == 0x0A;
-}
-
 // The reader reads `/dev/fd/N` of a pipe this source fills: the head first, then the rest of
 // the input as it comes. Messages and channels name the stream as the user did.
 class PipedSource final : public ChunkSource {
@@ -64,7 +52,7 @@ class PipedSource final : public ChunkSource {
         options.format == Format::automatic ? detect_format(head, name_) : options.format;
     if (format == Format::sigrok)
       throw CaptureError(fmt::format("{}: a sigrok capture is a zip file: give its name", name_));
-    const bool pcapng = is_pcapng(head);
+    const std::vector<uint8_t> kept_head = head;
     int ends[2];
     if (::pipe2(ends, O_CLOEXEC) != 0)
       throw CaptureError(fmt::format("{}: {}", name_, std::strerror(errno)));
@@ -74,7 +62,7 @@ class PipedSource final : public ChunkSource {
       pump(input, write_end, head);
     });
     try {
-      source_ = open_reader(format, pcapng, options);
+      source_ = open_reader(inner_path_, kept_head, format, options);
     } catch (const CaptureError& e) {
       stop();
       throw CaptureError(renamed(e.what()));
@@ -105,21 +93,6 @@ class PipedSource final : public ChunkSource {
     for (size_t i = channels_.size(); i < inner.size(); ++i) {
       channels_.push_back(inner[i]);
       if (channels_.back().name == inner_path_) channels_.back().name = name_;
-    }
-  }
-
-  // As open_capture, but without looking at the file first: its first bytes are gone.
-  std::unique_ptr<ChunkSource> open_reader(Format format, bool pcapng,
-                                           const OpenOptions& options) const {
-    const int64_t char_ns = options.serial.char_time_ns();
-    switch (format) {
-      case Format::hexlog:
-        return std::make_unique<HexlogReader>(inner_path_, char_ns);
-      case Format::pcap:
-        if (pcapng) return std::make_unique<PcapngReader>(inner_path_, char_ns);
-        return std::make_unique<PcapReader>(inner_path_);
-      default:
-        return std::make_unique<RawReader>(inner_path_);
     }
   }
 
