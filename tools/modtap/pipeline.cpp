@@ -26,9 +26,44 @@ std::unique_ptr<RecordSink> make_sink(const RunOptions& o, output::Output& out,
   return std::make_unique<NullSink>();  // stats: the statistics print at the end
 }
 
-bool wants_statistics(const RunOptions& o) {
-  return o.output == OutputKind::stats || !o.stats_file.empty() || !o.report_file.empty() ||
-         !o.metrics_address.empty() || !o.mqtt_url.empty();
+// What an output needs of the stages before it.
+struct Needs {
+  bool statistics = false;         // the statistics and the problems' evidence
+  bool meanings = false;           // frames read through the device models
+  bool unnamed_registers = false;  // with the registers no model names
+
+  void add(const Needs& more) {
+    statistics |= more.statistics;
+    meanings |= more.meanings;
+    unnamed_registers |= more.unnamed_registers;
+  }
+};
+
+// Each output a run may ask for, and what it needs: the stages a run builds are those its
+// outputs need, so a run that asks less does less (no model is read for -T none alone).
+Needs needs_of(const RunOptions& o) {
+  constexpr Needs statistics{true, true, true};  // last values, the report's registers
+  const struct {
+    bool asked;
+    Needs needs;
+  } outputs[] = {
+      {o.output == OutputKind::text, {false, true, o.verbose}},  // -V lists every register
+      {o.output == OutputKind::json, {false, true, true}},
+      {o.output == OutputKind::csv, {false, true, true}},
+      {o.output == OutputKind::stats, statistics},
+      {!o.stats_file.empty(), statistics},
+      {!o.report_file.empty(), statistics},
+      {!o.metrics_address.empty(), statistics},
+      {!o.mqtt_url.empty(), statistics},
+      // The pcapng comments carry the models' verdicts, but a bare file has no comments.
+      {!o.write_file.empty() && o.link != output::PcapngLink::bare, {false, true, false}},
+      {!o.display_filter.empty(), {false, true, true}},  // a filter may name any register
+      {!o.follow.empty(), {false, false, true}},         // --follow may name an unnamed one
+  };
+  Needs needs;
+  for (const auto& [asked, more] : outputs)
+    if (asked) needs.add(more);
+  return needs;
 }
 
 // The report's registers over time: those --follow names, none without it.
@@ -80,7 +115,8 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
                    ClockQuality clock)
     : terminal_(make_sink(o, out, channels, clock_)) {
   fan_out_.add(*terminal_);
-  if (wants_statistics(o)) {
+  const Needs needs = needs_of(o);
+  if (needs.statistics) {
     statistics_ = std::make_unique<BusStatistics>(format, clock);
     evidence_ = std::make_unique<ProblemEvidence>();
     problem_options_.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
@@ -103,16 +139,9 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
     timeline_ = std::make_unique<BusTimeline>(report_follow(o));
     fan_out_.add(*timeline_);
   }
-  // Only text, JSON, CSV, MQTT, pcapng comments and statistics show what the models say;
-  // the other outputs skip the work, and the YAML is not read unless models are asked for.
-  // A filter may name registers, so it reads frames through the models too.
-  const bool lines =
-      o.output == OutputKind::text || o.output == OutputKind::json || o.output == OutputKind::csv;
-  const bool interpret = lines || wants_statistics(o) ||  // the registers' last values
-                         (!o.write_file.empty() && o.link != output::PcapngLink::bare) ||
-                         !o.display_filter.empty();
+  // The YAML is not read unless an output needs the models' meanings or models are named.
   ModelChoice choice;
-  if (interpret || !o.models.empty() || !o.models_dir.empty()) {
+  if (needs.meanings || !o.models.empty() || !o.models_dir.empty()) {
     catalog_ = load_models(o);
     choice = catalog_.choose(o.models);
     if (!o.timeout_given) model_timeouts_ = modtap::model_timeouts(choice);
@@ -121,15 +150,9 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
   // Every record's time is kept before the filter picks some: the time column counts over the
   // whole capture, as without the filter.
   if (filter_) clock_stage_ = std::make_unique<ClockStage>(clock_, *filter_);
-  if (interpret) {
-    // Registers the model does not name show only in JSON, CSV, statistics, -V and filters,
-    // and are watched for --follow.
-    const bool list_unnamed = o.output == OutputKind::json || o.output == OutputKind::csv ||
-                              wants_statistics(o) || (o.output == OutputKind::text && o.verbose) ||
-                              !o.display_filter.empty() || !o.follow.empty();
+  if (needs.meanings)
     interpreter_ = std::make_unique<ModelInterpreter>(
-        catalog_.all(), choice, clock, watch_follow(o, before_filter()), list_unnamed);
-  }
+        catalog_.all(), choice, clock, watch_follow(o, before_filter()), needs.unnamed_registers);
   diagnostics_ =
       std::make_unique<BusDiagnostics>(format, clock, after_diagnostics(), read_jitter_ns(o));
   if (!o.write_file.empty()) write_pcapng(o, ring, channels, clock);
