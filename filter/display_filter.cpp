@@ -5,11 +5,17 @@
 #include <charconv>
 #include <cmath>
 
+#include <string_view>
+#include <utility>
+#include <vector>
+
 #include <fmt/format.h>
 
 #include "models/register_meaning.hpp"
+#include "protocol/field_registry.hpp"
 #include "protocol/findings.hpp"
 #include "protocol/function_codes.hpp"
+#include "protocol/nearest_name.hpp"
 #include "protocol/number_text.hpp"
 
 namespace modtap {
@@ -209,6 +215,74 @@ class Lexer {
 
 constexpr std::string_view register_prefix = "register.";
 
+template <typename Enum>
+constexpr auto names_of() {
+  return std::vector<std::string_view>(EnumNames<Enum>::names.begin(),
+                                       EnumNames<Enum>::names.end());
+}
+
+// The fields whose values are a fixed set, and the other words the outputs use for them.
+struct FixedValues {
+  FieldId id;
+  std::vector<std::string_view> values;
+  std::vector<std::pair<std::string_view, std::string_view>> aliases;
+};
+const std::vector<FixedValues> fixed_values = [] {
+  std::vector<std::string_view> reasons = names_of<NoiseReason>();
+  for (std::string_view reason : EnumNames<TimeoutReason>::names) reasons.push_back(reason);
+  std::vector<std::string_view> damages = names_of<Damage>();
+  damages.erase(damages.begin());  // none: a frame without damage has no damage field
+  return std::vector<FixedValues>{
+      {FieldId::type, {"frame", "noise", "timeout", "unanswered"}, {}},
+      {FieldId::role, names_of<Role>(), {{"req", "request"}, {"rsp", "response"}}},
+      {FieldId::mode, names_of<Mode>(), {}},
+      {FieldId::check, {"ok", "bad"}, {}},
+      {FieldId::damage, damages, {}},
+      {FieldId::reason, reasons, {}},
+  };
+}();
+
+// "request, response or unknown".
+std::string one_of(const std::vector<std::string_view>& values) {
+  std::string text;
+  for (size_t i = 0; i < values.size(); ++i)
+    text += fmt::format("{}{}", i == 0 ? "" : i + 1 == values.size() ? " or " : ", ", values[i]);
+  return text;
+}
+
+// Names people bring from Wireshark's Modbus dissector or from the outputs' words, and what
+// modtap calls them.
+constexpr std::pair<std::string_view, std::string_view> familiar_names[] = {
+    {"modbus.func_code", "fc"},
+    {"mbrtu.unit_id", "slave"},
+    {"modbus.exception_code", "exception"},
+    {"modbus.reference_num", "address"},
+    {"modbus.word_cnt", "quantity"},
+    {"modbus.bit_cnt", "quantity"},
+    {"modbus.byte_cnt", "byte_count"},
+    {"crc", "check"},
+    {"lrc", "check"},
+    {"timeout", "type == \"timeout\""},
+    {"noise", "type == \"noise\""},
+    {"request", "role == request"},
+    {"response", "role == response"},
+};
+
+// What an unknown name likely meant: a familiar name's modtap name, a field it begins, or the
+// nearest field or finding.
+std::string suggestion(std::string_view word) {
+  for (const auto& [familiar, ours] : familiar_names)
+    if (word == familiar) return fmt::format("; modtap calls it {}", ours);
+  NearestName nearest(word);
+  for (const FieldInfo& field : field_registry()) {
+    if (field.name.starts_with(word)) return fmt::format("; did you mean {}?", field.name);
+    nearest.consider(field.name);
+  }
+  for (const FindingInfo& finding : finding_registry()) nearest.consider(finding.name);
+  if (nearest.best()) return nearest.suggestion();
+  return " (docs/output.md lists the names; register names need their --model)";
+}
+
 class Parser {
  public:
   Parser(std::string_view text, const std::function<bool(std::string_view)>& is_register_name,
@@ -307,8 +381,25 @@ class Parser {
     const Token op = token_;
     advance();
     node.literal = literal(op);
+    check_fixed_value(node.name, node.literal);
     advance();
     return add(std::move(node));
+  }
+
+  // A field of a fixed set of values compares with one of them, or with what the text output
+  // prints for it (role == req): anything else would match nothing, so it is refused.
+  void check_fixed_value(const Name& name, Literal& literal) const {
+    if (name.kind != NameKind::field || literal.is_number) return;
+    for (const FixedValues& field : fixed_values) {
+      if (std::find(name.ids.begin(), name.ids.end(), field.id) == name.ids.end()) continue;
+      for (const auto& [alias, value] : field.aliases)
+        if (equal_ignoring_case(literal.text, alias)) literal.text = value;
+      for (std::string_view value : field.values)
+        if (equal_ignoring_case(literal.text, value)) return;
+      throw FilterError(token_.column,
+                        fmt::format("{} is {}, not \"{}\"", field_info(field.id).name,
+                                    one_of(field.values), literal.text));
+    }
   }
 
   Literal literal(const Token& op) {
@@ -360,9 +451,7 @@ class Parser {
       name.register_name = std::string(word);
       return name;
     }
-    throw FilterError(t.column, fmt::format("unknown name \"{}\" (docs/output.md lists the names; "
-                                            "register names need their --model)",
-                                            word));
+    throw FilterError(t.column, fmt::format("unknown name \"{}\"{}", word, suggestion(word)));
   }
 
   Lexer lexer_;

@@ -144,6 +144,52 @@ TEST(DisplayFilter, SyntaxErrorsNameTheirColumn) {
 
 // Nesting deeper than a person writes is refused before it can exhaust the stack; a long
 // list of alternatives is fine.
+// A field of a fixed set of values takes what the text output prints for them, and refuses a
+// value it never has rather than match nothing.
+TEST(DisplayFilter, FixedValuesAsTheOutputsWriteThemAndNoOthers) {
+  EXPECT_TRUE(matches("role == rsp"));
+  EXPECT_FALSE(matches("role == req"));
+  EXPECT_TRUE(matches("role != req"));
+  EXPECT_TRUE(matches("check == OK && mode == rtu"));
+  const auto refusal = [](const std::string& text) {
+    try {
+      DisplayFilter filter(text, is_register);
+    } catch (const FilterError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(refusal("role == reply"),
+            "column 9: role is request, response or unknown, not \"reply\"");
+  EXPECT_EQ(refusal("type == frames"),
+            "column 9: type is frame, noise, timeout or unanswered, not \"frames\"");
+  EXPECT_EQ(refusal("damage == none"),
+            "column 11: damage is corrupted, cut or collision, not \"none\"");
+}
+
+// An unknown name says what it likely meant: Wireshark's name for it, the field it begins, or
+// the nearest field or finding.
+TEST(DisplayFilter, AnUnknownNameSaysWhatItMeant) {
+  const auto refusal = [](const std::string& text) {
+    try {
+      DisplayFilter filter(text, is_register);
+    } catch (const FilterError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(refusal("modbus.func_code == 3"),
+            "column 1: unknown name \"modbus.func_code\"; modtap calls it fc");
+  EXPECT_EQ(refusal("timeout"),
+            "column 1: unknown name \"timeout\"; modtap calls it type == \"timeout\"");
+  EXPECT_EQ(refusal("latency > 5"), "column 1: unknown name \"latency\"; did you mean latency_us?");
+  EXPECT_EQ(refusal("slav == 1"), "column 1: unknown name \"slav\"; did you mean slave?");
+  EXPECT_EQ(refusal("retyr"), "column 1: unknown name \"retyr\"; did you mean retry?");
+  EXPECT_EQ(refusal("zzzzzzzz"),
+            "column 1: unknown name \"zzzzzzzz\" (docs/output.md lists the names; register "
+            "names need their --model)");
+}
+
 TEST(DisplayFilter, RefusesNestingDeeperThanAPersonWrites) {
   EXPECT_EQ(error_column(std::string(3000, '(') + "slave"), 257u);
   EXPECT_EQ(error_column(std::string(3000, '!') + "slave"), 257u);

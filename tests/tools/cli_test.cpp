@@ -293,6 +293,14 @@ TEST(Cli, FilterLeavesTheTimeColumnAsWithoutIt) {
                                              "    0.006678"}));
 }
 
+// A filter of blanks filters nothing, as an empty one does.
+TEST(Cli, ABlankFilterFiltersNothing) {
+  const Outcome all = run(brainchild);
+  const Outcome blank = run(brainchild + " -Y '  '");
+  EXPECT_EQ(blank.status, 0);
+  EXPECT_EQ(blank.lines, all.lines);
+}
+
 // -c N counts records as tshark counts packets: noise too (random bytes read as RTU are nearly
 // all noise), time-outs not (modtap makes them; the one before the limit is shown). Reading
 // stops at the limit: an endless pipe ends.

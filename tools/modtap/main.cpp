@@ -17,6 +17,7 @@
 #include "filter/display_filter.hpp"
 #include "output/csv_sink.hpp"
 #include "protocol/field_registry.hpp"
+#include "protocol/nearest_name.hpp"
 #include "tools/modtap/capture_conditions.hpp"
 #include "tools/modtap/enum_option.hpp"
 #include "tools/modtap/model_catalog.hpp"
@@ -90,33 +91,12 @@ int list_models(const RunOptions& o) {
   return 0;
 }
 
-// How many single-character edits turn `a` into `b` (Levenshtein's distance).
-size_t edits(std::string_view a, std::string_view b) {
-  std::vector<size_t> row(b.size() + 1);
-  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (size_t i = 1; i <= a.size(); ++i) {
-    size_t diagonal = row[0];
-    row[0] = i;
-    for (size_t j = 1; j <= b.size(); ++j) {
-      const size_t above = row[j];
-      row[j] = std::min({above + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1])});
-      diagonal = above;
-    }
-  }
-  return row[b.size()];
-}
-
 // "; did you mean NAME?" for the models' register name nearest `name`, if one is near.
 std::string nearest_register(const std::vector<const DeviceModel*>& models, std::string_view name) {
-  std::string best;
-  size_t best_edits = std::max<size_t>(2, name.size() / 3) + 1;  // farther is no typo
+  NearestName nearest(name);
   for (const DeviceModel* model : models)
-    for (const auto& [key, def] : model->registers)
-      if (const size_t n = edits(name, def.name); n < best_edits) {
-        best = def.name;
-        best_edits = n;
-      }
-  return best.empty() ? "" : fmt::format("; did you mean {}?", best);
+    for (const auto& [key, def] : model->registers) nearest.consider(def.name);
+  return nearest.suggestion();
 }
 
 // --follow names a register of a loaded model (any of them, as -Y does: a slave may identify
@@ -272,6 +252,8 @@ void add_subcommands(CLI::App& app, Command& command) {
 // What options left at their defaults mean beside the others given: -w alone writes nothing
 // to the terminal (as tshark -w), --follow alone the values over time, -q only statistics.
 void settle_implied(RunOptions& o, const Command& command) {
+  // -Y ' ' filters nothing, as -Y '' does.
+  if (o.display_filter.find_first_not_of(" \t\r\n") == std::string::npos) o.display_filter.clear();
   if (!command.named_capture.empty()) o.read_file = command.named_capture;
   o.timeout_given = command.timeout->count() > 0;
   if (!o.write_file.empty() && command.output->count() == 0) o.output = OutputKind::none;
