@@ -293,6 +293,27 @@ TEST(Cli, FilterLeavesTheTimeColumnAsWithoutIt) {
                                              "    0.006678"}));
 }
 
+// Every error speaks as modtap and exits 2, the command line's own too, in words a person
+// reads; --help says what the line's settings are when none are given.
+TEST(Cli, OptionErrorsSpeakAsModtapAndExitTwo) {
+  const Outcome zero = run("-r x -c 0");
+  EXPECT_EQ(zero.status >> 8, 2);
+  EXPECT_EQ(zero.lines, std::vector<std::string>{
+                            "modtap: -c: needs at least 1 (modtap --help lists the options)"});
+  for (const std::string args : {"--bogus", "-r x -T xml", "-r x --timeout 0", "-r x --parity 9"}) {
+    const Outcome refused = run(args);
+    EXPECT_EQ(refused.status >> 8, 2) << args;
+    ASSERT_EQ(refused.lines.size(), 1u) << args;
+    EXPECT_EQ(refused.lines[0].rfind("modtap: ", 0), 0u) << refused.lines[0];
+  }
+  const Outcome help = run("--help");
+  EXPECT_EQ(help.status, 0);
+  const std::string text = fmt::format("{}", fmt::join(help.lines, "\n"));
+  for (const char* shown :
+       {"(default 19200)", "even (default)", "Stop bits (default 1)", "Data bits (default 8)"})
+    EXPECT_THAT(text, ::testing::HasSubstr(shown));
+}
+
 // A filter of blanks filters nothing, as an empty one does.
 TEST(Cli, ABlankFilterFiltersNothing) {
   const Outcome all = run(brainchild);

@@ -59,4 +59,15 @@ CLI::Option* add_enum_or_auto_option(CLI::App& app, const std::string& name,
       ->check(CLI::IsMember(accepted));
 }
 
+// A number that must be positive (-c, the time-outs): `refusal` says so in words a person
+// reads ("needs at least 1"), not as CLI11's range up to its largest double.
+inline CLI::Validator positive(const std::string& refusal) {
+  return CLI::Validator(
+      [refusal](std::string& text) -> std::string {
+        double value = 0;
+        return CLI::detail::lexical_cast(text, value) && value > 0 ? std::string() : refusal;
+      },
+      "> 0");
+}
+
 }  // namespace modtap::tools

@@ -206,7 +206,7 @@ void add_output_options(CLI::App& app, RunOptions& o, Command& command) {
                  "'latency_us > 50000', 'finding', 'register.name == \"fault\"' (docs/output.md)");
   app.add_option("-c", o.max_records,
                  "Stop after this many records read: frames and noise (time-outs do not count)")
-      ->check(CLI::PositiveNumber);
+      ->check(tools::positive("needs at least 1"));
   app.add_option("-a,--autostop", o.autostop,
                  "Stop after duration:SECONDS (capture time of a file, wall time on a port), "
                  "filesize:KB (the -w files), or frames:N; repeatable, the first reached wins");
@@ -222,13 +222,13 @@ void add_analysis_options(CLI::App& app, RunOptions& o, Command& command) {
   tools::add_line_options(app, o);
   app.add_option("--probe-time", o.probe_s,
                  "With --baud auto on a port: seconds to listen under each setting")
-      ->check(CLI::PositiveNumber);
+      ->check(tools::positive("needs a number of seconds above 0"));
   command.timeout = app.add_option("--timeout", o.timeout_s,
                                    "Seconds of silence before a request times out (1, or what the "
                                    "slave's model says)")
-                        ->check(CLI::PositiveNumber);
+                        ->check(tools::positive("needs a number of seconds above 0"));
   app.add_option("--ascii-timeout", o.ascii_timeout_s, "ASCII inter-character time-out, seconds")
-      ->check(CLI::PositiveNumber);
+      ->check(tools::positive("needs a number of seconds above 0"));
   app.add_option("--chunk-jitter", o.jitter_ms,
                  "For sources timed per read: milliseconds an adapter may hold bytes back")
       ->check(CLI::NonNegativeNumber);
@@ -323,7 +323,14 @@ int main(int argc, char** argv) {
   add_output_options(app, o, command);
   add_analysis_options(app, o, command);
   add_subcommands(app, command);
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {  // --help, --version
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    fmt::print(stderr, "modtap: {} (modtap --help lists the options)\n", e.what());
+    return 2;
+  }
   signal(SIGPIPE, SIG_IGN);  // a closed pipe is a failed write (EPIPE), handled in run_command
   settle_implied(o, command);
   return run_command(o, command);

@@ -171,18 +171,21 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
 }
 
 void add_line_options(CLI::App& app, RunOptions& o) {
-  add_enum_option(app, "--mode", o.mode, "Transmission mode");
+  add_enum_option(app, "--mode", o.mode,
+                  "Transmission mode: rtu, ascii, or auto to tell it from the traffic (default)");
   app.add_option_function<std::string>(
          "--baud",
          [&o](const std::string& text) {
            o.baud.reset();
            if (text != "auto") o.baud = static_cast<uint32_t>(std::stoul(text));
          },
-         "Baud rate, or auto to tell it from the traffic")
+         "Baud rate, or auto to tell it from the traffic (default 19200)")
       ->check(CLI::IsMember({"auto"}) | CLI::Range(50u, 4'000'000u));
-  add_enum_or_auto_option(app, "--parity", o.parity, "Parity: none, even, odd, or auto");
-  app.add_option("--stop-bits", o.stop_bits, "Stop bits")->check(CLI::IsMember({1u, 2u}));
-  app.add_option("--data-bits", o.data_bits, "Data bits")->check(CLI::IsMember({7u, 8u}));
+  add_enum_or_auto_option(app, "--parity", o.parity, "Parity: none, even (default), odd, or auto");
+  app.add_option("--stop-bits", o.stop_bits, "Stop bits (default 1)")
+      ->check(CLI::IsMember({1u, 2u}));
+  app.add_option("--data-bits", o.data_bits, "Data bits (default 8)")
+      ->check(CLI::IsMember({7u, 8u}));
   app.add_option("--model", o.models,
                  "Device model for the bus (MODEL) or one slave (SLAVE=MODEL); repeatable");
 }
