@@ -201,12 +201,46 @@ namespace {
 
 using Slave = ProblemEvidence::Slave;
 
+// A value's median over every slave but one, for each slave: the values sorted once and each
+// slave's own left out by its place, so a bus of 247 slaves costs no more than a sort.
+class MedianOfOthers {
+ public:
+  void add(uint8_t slave, double value) { sorted_.emplace_back(value, slave); }
+  void sort() { std::sort(sorted_.begin(), sorted_.end()); }
+  // The upper median of the others' values; none when no other slave has one.
+  std::optional<double> without(uint8_t slave) const {
+    const auto own = std::find_if(sorted_.begin(), sorted_.end(),
+                                  [&](const auto& entry) { return entry.second == slave; });
+    const size_t others = sorted_.size() - (own != sorted_.end());
+    if (others == 0) return std::nullopt;
+    const size_t at = others / 2;
+    const auto skipped = static_cast<size_t>(own - sorted_.begin());
+    return sorted_[at < skipped ? at : at + 1].first;
+  }
+
+ private:
+  std::vector<std::pair<double, uint8_t>> sorted_;
+};
+
 // Reads the statistics and the evidence into problems, one rule a kind.
 class Diagnosis {
  public:
   Diagnosis(const BusStatistics& statistics, const ProblemEvidence& evidence,
             const ProblemOptions& options)
-      : statistics_(statistics), evidence_(evidence), options_(options) {}
+      : statistics_(statistics), evidence_(evidence), options_(options) {
+    statistics_.for_each_slave([&](uint8_t address, const SlaveStatistics& s) {
+      if (s.latency_ns.count() >= some)
+        latency_medians_.add(address, static_cast<double>(s.latency_ns.percentile(50)));
+    });
+    latency_medians_.sort();
+    for (const auto& [address, s] : evidence_.slaves()) {
+      if (s.requests < some) continue;
+      damaged_rates_.add(address, damaged_rate(s));
+      missed_rates_.add(address, share(s.timeouts.count, s.requests));
+    }
+    damaged_rates_.sort();
+    missed_rates_.sort();
+  }
 
   std::vector<Problem> run() {
     for (const auto& [address, slave] : evidence_.slaves()) {
@@ -299,29 +333,14 @@ class Diagnosis {
   // The median of the other slaves' shares of time-outs: a master whose time-out is too short
   // for all of them is no one slave's fault.
   double others_missed_rate(uint8_t address) const {
-    std::vector<double> rates;
-    for (const auto& [other, s] : evidence_.slaves())
-      if (other != address && s.requests >= some)
-        rates.push_back(share(s.timeouts.count, s.requests));
-    return median(rates);
-  }
-
-  static double median(std::vector<double> values) {
-    if (values.empty()) return 0;
-    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-    return values[values.size() / 2];
+    return missed_rates_.without(address).value_or(0);
   }
 
   // The median of the other slaves' median latencies: what this bus's slaves take.
   std::optional<uint64_t> others_latency(uint8_t address) const {
-    std::vector<uint64_t> medians;
-    statistics_.for_each_slave([&](uint8_t other, const SlaveStatistics& s) {
-      if (other != address && s.latency_ns.count() >= some)
-        medians.push_back(s.latency_ns.percentile(50));
-    });
-    if (medians.empty()) return std::nullopt;
-    std::nth_element(medians.begin(), medians.begin() + medians.size() / 2, medians.end());
-    return medians[medians.size() / 2];
+    const auto others = latency_medians_.without(address);
+    if (!others) return std::nullopt;
+    return static_cast<uint64_t>(*others);
   }
 
   const SlaveStatistics* statistics_of(uint8_t address) const {
@@ -363,10 +382,7 @@ class Diagnosis {
   // Each slave's share of damaged answers, for telling one bad device from a bad line.
   double damaged_rate(const Slave& s) const { return share(s.damaged.count, s.requests); }
   double others_damaged_rate(uint8_t address) const {
-    std::vector<double> rates;
-    for (const auto& [other, s] : evidence_.slaves())
-      if (other != address && s.requests >= some) rates.push_back(damaged_rate(s));
-    return median(rates);
+    return damaged_rates_.without(address).value_or(0);
   }
 
   // Two devices answering at once also make frames with bad checks (begun within a bit of each
@@ -382,8 +398,10 @@ class Diagnosis {
           s.overlapping.count, s.requests, 100 * overlap_rate);
       return;
     }
-    const double rate = damaged_rate(s), others = others_damaged_rate(address);
-    if (s.damaged.count < some || rate < damaged_share || rate < concentrated * others) return;
+    const double rate = damaged_rate(s);
+    if (s.damaged.count < some || rate < damaged_share) return;
+    const double others = others_damaged_rate(address);
+    if (rate < concentrated * others) return;
     Problem& p = add(ProblemKind::corrupted_responses, address,
                      rate >= damaged_share_error ? Severity::error : Severity::warning,
                      *s.damaged.first_ns, s.damaged.first);
@@ -508,6 +526,7 @@ class Diagnosis {
     }
   }
 
+  MedianOfOthers latency_medians_, damaged_rates_, missed_rates_;
   const BusStatistics& statistics_;
   const ProblemEvidence& evidence_;
   const ProblemOptions& options_;

@@ -314,6 +314,30 @@ TEST(Cli, OptionErrorsSpeakAsModtapAndExitTwo) {
     EXPECT_THAT(text, ::testing::HasSubstr(shown));
 }
 
+// An option this run would not use is said, never ignored in silence; a model for the
+// broadcast address or a misspelt model name is refused, the latter with the name it likely
+// meant.
+TEST(Cli, OptionsThatDoNothingAreSaid) {
+  const Outcome idle = run(brainchild + " -c 1 --link bare -V -T stats");
+  EXPECT_EQ(idle.status, 0);
+  EXPECT_THAT(idle.lines, ::testing::Contains("modtap: warning: --link sets the link type of -w; "
+                                              "this run has none, so it does nothing"));
+  EXPECT_THAT(idle.lines,
+              ::testing::Contains("modtap: warning: -V adds the field tree to the text output "
+                                  "(-T text); this run has none, so it does nothing"));
+  const Outcome used = run(brainchild + " -c 1 -V");
+  EXPECT_THAT(used.lines, ::testing::Not(::testing::Contains(::testing::HasSubstr("warning"))));
+  const Outcome broadcast = run(brainchild + " --model 0=gd20");
+  EXPECT_EQ(broadcast.status >> 8, 2);
+  EXPECT_EQ(broadcast.lines,
+            std::vector<std::string>{"modtap: --model 0=gd20: slave 0 is the broadcast address, "
+                                     "which no device answers as: give the device's own address"});
+  EXPECT_EQ(
+      run(brainchild + " --model 2=nta500").lines,
+      std::vector<std::string>{
+          "modtap: no model named 'nta500'; did you mean nta5000? (modtap models lists them)"});
+}
+
 // A filter of blanks filters nothing, as an empty one does.
 TEST(Cli, ABlankFilterFiltersNothing) {
   const Outcome all = run(brainchild);

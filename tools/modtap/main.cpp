@@ -128,6 +128,10 @@ struct Command {
   std::string named_capture;  // `modtap FILE`, as -r FILE
   CLI::Option* output = nullptr;
   CLI::Option* timeout = nullptr;
+  CLI::Option* link = nullptr;
+  CLI::Option* dlt = nullptr;
+  CLI::Option* reconnect = nullptr;
+  CLI::Option* probe_time = nullptr;
   CLI::App* fields = nullptr;
   CLI::App* models = nullptr;
   CLI::App* check = nullptr;
@@ -144,7 +148,8 @@ void add_input_options(CLI::App& app, RunOptions& o, Command& command) {
                                    "Serial port to listen on (read-only): PATH, or master=PATH and "
                                    "slave=PATH for a tap that splits the directions");
   read->excludes(listen_on);
-  app.add_flag("--reconnect", o.reconnect, "Wait for an unplugged port to come back");
+  command.reconnect =
+      app.add_flag("--reconnect", o.reconnect, "Wait for an unplugged port to come back");
   tools::add_enum_option(app, "--format", o.format, "Capture format",
                          {{"pcapng", captures::Format::pcap}});
 }
@@ -192,10 +197,10 @@ void add_output_options(CLI::App& app, RunOptions& o, Command& command) {
                "Announce each register to Home Assistant (--mqtt-discovery=PREFIX for another "
                "discovery prefix than homeassistant)")
       ->needs(mqtt);
-  tools::add_enum_option(app, "--link", o.link,
-                         "pcapng link: user (DLT_USER + modtap.lua), exported-pdu, bare");
-  app.add_option("--dlt", o.dlt, "DLT_USER link type for --link user or bare")
-      ->check(CLI::Range(147, 162));
+  command.link = tools::add_enum_option(
+      app, "--link", o.link, "pcapng link: user (DLT_USER + modtap.lua), exported-pdu, bare");
+  command.dlt = app.add_option("--dlt", o.dlt, "DLT_USER link type for --link user or bare")
+                    ->check(CLI::Range(147, 162));
   app.add_flag("-V,--verbose", o.verbose, "Print each frame's field tree");
   tools::add_enum_option(app, "-t", o.time_format,
                          "Text time column: r (since the capture's first record), a (local time "
@@ -220,9 +225,10 @@ void add_output_options(CLI::App& app, RunOptions& o, Command& command) {
 void add_analysis_options(CLI::App& app, RunOptions& o, Command& command) {
   app.set_version_flag("--version", std::string("modtap ") + MODTAP_VERSION);
   tools::add_line_options(app, o);
-  app.add_option("--probe-time", o.probe_s,
-                 "With --baud auto on a port: seconds to listen under each setting")
-      ->check(tools::positive("needs a number of seconds above 0"));
+  command.probe_time =
+      app.add_option("--probe-time", o.probe_s,
+                     "With --baud auto on a port: seconds to listen under each setting")
+          ->check(tools::positive("needs a number of seconds above 0"));
   command.timeout = app.add_option("--timeout", o.timeout_s,
                                    "Seconds of silence before a request times out (1, or what the "
                                    "slave's model says)")
@@ -280,6 +286,31 @@ std::optional<std::string> refuse(const RunOptions& o, const Autostop& autostop,
   return refuse_follow(o);
 }
 
+// Options given that this run would not use: said, never ignored in silence. Each row: whether
+// it was given, whether the run uses it, and what it is for.
+void warn_idle_options(const RunOptions& o, const Command& command) {
+  const bool lines = o.output == OutputKind::text;
+  const bool values_over_time =
+      o.output == OutputKind::csv || !o.report_file.empty() || !o.mqtt_url.empty();
+  const struct {
+    bool given, used;
+    const char* what;
+  } options[] = {
+      {command.link->count() > 0, !o.write_file.empty(), "--link sets the link type of -w"},
+      {command.dlt->count() > 0, !o.write_file.empty(), "--dlt sets the link type of -w"},
+      {o.reconnect, !o.interfaces.empty(), "--reconnect waits for a port (-i) to come back"},
+      {command.probe_time->count() > 0, !o.interfaces.empty() && (!o.baud || !o.parity),
+       "--probe-time is how long --baud auto listens on a port (-i)"},
+      {!o.follow.empty(), values_over_time,
+       "--follow picks the registers of -T csv, --report and --mqtt"},
+      {o.verbose, lines, "-V adds the field tree to the text output (-T text)"},
+  };
+  for (const auto& option : options)
+    if (option.given && !option.used)
+      fmt::print(stderr, "modtap: warning: {}; this run has none, so it does nothing\n",
+                 option.what);
+}
+
 int run_command(RunOptions& o, const Command& command) {
   try {
     if (command.check->parsed()) return tools::check_model_files(command.check_files);
@@ -289,6 +320,7 @@ int run_command(RunOptions& o, const Command& command) {
       fmt::print(stderr, "modtap: {}\n", *refusal);
       return 2;
     }
+    warn_idle_options(o, command);
     const Autostop autostop = tools::parse_autostop(o.autostop);
     const captures::RingLimits ring = tools::parse_ring_buffer(o.ring_buffer);
     o.max_records = record_limit(o, autostop);

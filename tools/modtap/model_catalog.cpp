@@ -10,6 +10,7 @@
 
 #include "models/model_yaml.hpp"
 #include "plugins/models/builtin_models.hpp"
+#include "protocol/nearest_name.hpp"
 
 namespace modtap::tools {
 
@@ -93,9 +94,11 @@ ModelChoice ModelCatalog::choose(const std::vector<std::string>& specs) const {
   ModelChoice choice;
   auto model_named = [&](const std::string& name) {
     const DeviceModel* model = find(name);
-    if (!model)
-      throw std::runtime_error(fmt::format("no model named '{}' (modtap models lists them)", name));
-    return model;
+    if (model) return model;
+    NearestName nearest(name);
+    for (const auto& entry : entries()) nearest.consider(entry.model.name);
+    throw std::runtime_error(fmt::format("no model named '{}'{} (modtap models lists them)", name,
+                                         nearest.suggestion()));
   };
   for (const auto& spec : specs) {
     const auto eq = spec.find('=');
@@ -107,7 +110,12 @@ ModelChoice ModelCatalog::choose(const std::vector<std::string>& specs) const {
     const std::string number = spec.substr(0, eq);
     if (number.empty() || number.find_first_not_of("0123456789") != std::string::npos ||
         (slave = static_cast<unsigned>(std::stoul(number))) > 255)
-      throw std::runtime_error(fmt::format("--model {}: expected SLAVE=MODEL, SLAVE 0-255", spec));
+      throw std::runtime_error(fmt::format("--model {}: expected SLAVE=MODEL, SLAVE 1-255", spec));
+    if (slave == 0)
+      throw std::runtime_error(fmt::format(
+          "--model {}: slave 0 is the broadcast address, which no device answers as: give the "
+          "device's own address",
+          spec));
     choice.by_slave[static_cast<uint8_t>(slave)] = model_named(spec.substr(eq + 1));
   }
   if (!choice.bus) choice.bus = find("generic");
