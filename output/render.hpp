@@ -47,6 +47,11 @@ struct FunctionLabel {
   uint8_t fc;
 };
 void put_function_label(fmt::memory_buffer& out, uint8_t fc);
+
+// "1 bad check", "2 bad checks": a count with its noun in the number it takes.
+inline std::string counted(uint64_t n, std::string_view one, std::string_view many) {
+  return fmt::format("{} {}", n, n == 1 ? one : many);
+}
 // The same into `unnamed`'s room, for fmt's formatter.
 std::string_view function_label(uint8_t fc, char (&unnamed)[16]);
 

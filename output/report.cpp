@@ -345,9 +345,10 @@ void append_slaves(fmt::memory_buffer& out, const BusStatistics& s,
   if (const size_t stray = s.stray_addresses())
     fmt::format_to(fmt::appender(out),
                    "<p class=\"meta\">{} more {} appeared only in frames with a bad check "
-                   "(<span data-stat=\"stray_bad_checks\">{}</span> bad checks): not counted as "
+                   "(<span data-stat=\"stray_bad_checks\">{}</span> {}): not counted as "
                    "slaves.</p>\n",
-                   stray, stray == 1 ? "address" : "addresses", s.stray_bad_checks());
+                   stray, stray == 1 ? "address" : "addresses", s.stray_bad_checks(),
+                   s.stray_bad_checks() == 1 ? "bad check" : "bad checks");
 }
 
 // One slave's response times: bars over a linear axis, or a logarithmic one when the slowest

@@ -85,8 +85,9 @@ void print_slaves(Output& out, const BusStatistics& s) {
     out.print("\n");
   });
   if (const size_t stray = s.stray_addresses())
-    out.print("{} {} only in frames with a bad check ({} bad checks): not counted as slaves\n",
-              stray, stray == 1 ? "address" : "addresses", s.stray_bad_checks());
+    out.print("{} only in frames with a bad check ({}): not counted as slaves\n",
+              counted(stray, "address", "addresses"),
+              counted(s.stray_bad_checks(), "bad check", "bad checks"));
 }
 
 void print_findings(Output& out, const BusStatistics& s) {
@@ -192,7 +193,8 @@ void print_statistics(Output& out, const BusStatistics& s, const BusDiagnostics&
   print_breakdown(out, damages, s.damaged);
   out.print("\n{:<16}{}\n", "timeouts", s.timeouts);
   if (s.unanswered) out.print("unanswered at end of capture  {}\n", s.unanswered);
-  out.print("{:<16}{} records, {} bytes", "noise", s.noise_records, s.noise_bytes);
+  out.print("{:<16}{}, {}", "noise", counted(s.noise_records, "record", "records"),
+            counted(s.noise_bytes, "byte", "bytes"));
   print_breakdown(out, noise_reasons, s.noise_by_reason);
   const uint64_t bytes = s.frame_bytes + s.noise_bytes;
   out.print("\n{:<16}{} ({:.3f}% in frames)\n", "bytes", bytes, 100 * share(s.frame_bytes, bytes));

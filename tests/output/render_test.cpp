@@ -112,6 +112,13 @@ TEST(JsonString, EscapesWhatJsonAndTerminalsNeed) {
 namespace modtap::output {
 namespace {
 
+// A count takes its noun in the number it needs: "1 bad check", "2 bad checks", "0 bytes".
+TEST(Render, ACountTakesItsNounInItsNumber) {
+  EXPECT_EQ(counted(1, "bad check", "bad checks"), "1 bad check");
+  EXPECT_EQ(counted(2, "bad check", "bad checks"), "2 bad checks");
+  EXPECT_EQ(counted(0, "byte", "bytes"), "0 bytes");
+}
+
 TEST(ProgressBar, SaysHowFarHowFastAndHowLongIsLeft) {
   EXPECT_EQ(tools::ProgressBar::line(0, 1'200'000'000, 0, 10), "[----------]   0% of 1.20 GB");
   EXPECT_EQ(tools::ProgressBar::line(300'000'000, 1'200'000'000, 10, 10),

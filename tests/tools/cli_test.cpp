@@ -778,7 +778,7 @@ TEST(Cli, TimeStampsThatGoBackwardsWarnOnceAndGiveNoNegativeLatency) {
   ASSERT_EQ(r.status, 0);
   ASSERT_EQ(r.lines.size(), 3u);  // the warning (standard error) and two frames
   EXPECT_THAT(r.lines, ::testing::Contains("modtap: warning: " + log +
-                                           ": the time stamps go backwards 1 times; latencies "
+                                           ": the time stamps go backwards 1 time; latencies "
                                            "across those steps are not measured"));
   for (const auto& line : r.lines)
     if (line.find("\"role\":\"response\"") != std::string::npos) {

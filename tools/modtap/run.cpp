@@ -113,9 +113,9 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   session.finish(!broken);
   if (bus.clock_steps_back())
     fmt::print(stderr,
-               "modtap: warning: {}: the time stamps go backwards {} times; latencies across "
+               "modtap: warning: {}: the time stamps go backwards {}; latencies across "
                "those steps are not measured\n",
-               o.read_file, bus.clock_steps_back());
+               o.read_file, output::counted(bus.clock_steps_back(), "time", "times"));
   if (broken) throw *broken;
   // A pipe is not read again: it holds no logic-analyzer capture anyway.
   const captures::Format format = open.format != captures::Format::automatic ? open.format
