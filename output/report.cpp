@@ -159,7 +159,7 @@ void append_summary(fmt::memory_buffer& out, const BusStatistics& s) {
   const double duration = s.duration_s();
   card(out, "duration_s", "seconds of traffic", fmt::format("{:.3f}", duration), false);
   card(out, "frames", "frames", fmt::format("{}", s.frames), false);
-  if (duration > 0)
+  if (duration > 0 && s.clock() != ClockQuality::none)  // without a clock, time is nominal
     card(out, "frames_per_s", "frames a second",
          fmt::format("{:.1f}", static_cast<double>(s.frames) / duration), false);
   if (auto load = s.bus_load())

@@ -30,6 +30,11 @@ Fixed microseconds(uint64_t ns) {
 // "2023-11-14 22:13:20 UTC" for times that are dates; a raw file's nominal times start at 0.
 void print_span(Output& out, const BusStatistics& s) {
   if (!s.first_t_ns) return;
+  if (s.clock() == ClockQuality::none) {
+    out.print("{:<16}no clock (raw bytes): {:.3f} s of bytes laid end to end at {}\n", "capture",
+              s.duration_s(), describe(s.format()));
+    return;
+  }
   out.print("{:<16}{:.3f} s", "capture", s.duration_s());
   if (s.dated()) {
     const std::time_t first = static_cast<std::time_t>(*s.first_t_ns / 1'000'000'000);
@@ -181,7 +186,7 @@ void print_statistics(Output& out, const BusStatistics& s, const BusDiagnostics&
   print_problems(out, problems);
   print_span(out, s);
   out.print("{:<16}{}", "frames", s.frames);
-  if (s.duration_s() > 0)
+  if (s.duration_s() > 0 && s.clock() != ClockQuality::none)
     out.print(" ({:.1f} a second)", static_cast<double>(s.frames) / s.duration_s());
   if (auto load = s.bus_load()) out.print(", bus load {:.1f}%", 100 * *load);
   out.print("\n  {:<14}{} (broadcasts {}, retries {})\n", "requests", s.requests, s.broadcasts,
@@ -390,9 +395,10 @@ void append_statistics_json(fmt::memory_buffer& out, const BusStatistics& s,
   append_breakdown(out, "noise", noise_reasons, s.noise_by_reason);
   append_breakdown(out, "damaged", damages, s.damaged);
   append_optional(out, "bus_load", s.bus_load());
-  append_optional(
-      out, "frames_per_s",
-      duration > 0 ? std::optional(static_cast<double>(s.frames) / duration) : std::nullopt);
+  append_optional(out, "frames_per_s",
+                  duration > 0 && s.clock() != ClockQuality::none
+                      ? std::optional(static_cast<double>(s.frames) / duration)
+                      : std::nullopt);
   fmt::format_to(put, ",\"latency_us\":");
   append_latency(out, s.latency_ns);
   fmt::format_to(put, ",\"slaves\":[");

@@ -338,6 +338,21 @@ TEST(Cli, OptionsThatDoNothingAreSaid) {
           "modtap: no model named 'nta500'; did you mean nta5000? (modtap models lists them)"});
 }
 
+// Raw bytes have no clock: no time of day to show (-t ad counts from the first byte, and says
+// so), and no frames a second in the statistics, whose span says the time is nominal.
+TEST(Cli, RawBytesHaveNoClockToShow) {
+  const std::string raw =
+      "-r " + raw_capture("modtap-no-clock.raw", {{1, 3, 0, 0, 0, 1}, {1, 3, 2, 0, 5}});
+  const Outcome dated = run(raw + " -t ad");
+  EXPECT_EQ(dated.status, 0);
+  EXPECT_THAT(dated.lines, ::testing::Contains(::testing::HasSubstr("has no clock (raw bytes)")));
+  EXPECT_THAT(dated.lines, ::testing::Not(::testing::Contains(::testing::HasSubstr("1970"))));
+  const Outcome stats = run(raw + " -T stats");
+  EXPECT_THAT(stats.lines,
+              ::testing::Contains(::testing::StartsWith("capture         no clock (raw bytes): ")));
+  EXPECT_THAT(stats.lines, ::testing::Contains("frames          2"));
+}
+
 // A filter of blanks filters nothing, as an empty one does.
 TEST(Cli, ABlankFilterFiltersNothing) {
   const Outcome all = run(brainchild);

@@ -12,17 +12,18 @@ namespace {
 
 std::unique_ptr<RecordSink> make_sink(const RunOptions& o, output::Output& out,
                                       const std::vector<ChannelInfo>& channels,
-                                      const RecordClock& clock) {
+                                      const RecordClock& clock, ClockQuality quality) {
+  const output::TimeFormat time_format = time_format_for(o, quality);
   if (o.output == OutputKind::json) return std::make_unique<output::JsonSink>(out, channels);
   const RecordClock* clock_before_filter = o.display_filter.empty() ? nullptr : &clock;
   if (o.output == OutputKind::csv)
     return std::make_unique<output::CsvSink>(out,
                                              output::parse_follow_or_all(o.follow, o.register_base),
-                                             o.time_format, o.register_base, clock_before_filter);
+                                             time_format, o.register_base, clock_before_filter);
   if (o.output == OutputKind::text)
     return std::make_unique<output::TextSink>(
         out, channels,
-        output::TextOptions{o.verbose, o.time_format, o.register_base, clock_before_filter});
+        output::TextOptions{o.verbose, time_format, o.register_base, clock_before_filter});
   return std::make_unique<NullSink>();  // stats: the statistics print at the end
 }
 
@@ -77,6 +78,12 @@ std::function<bool(const RegisterValue&)> report_follow(const RunOptions& o) {
 
 }  // namespace
 
+output::TimeFormat time_format_for(const RunOptions& o, ClockQuality clock) {
+  const bool absolute = o.time_format == output::TimeFormat::absolute ||
+                        o.time_format == output::TimeFormat::absolute_date;
+  return clock == ClockQuality::none && absolute ? output::TimeFormat::relative : o.time_format;
+}
+
 SerialFormat serial_format(const RunOptions& o) {
   return {o.baud.value_or(19200), static_cast<uint8_t>(o.data_bits),
           o.parity.value_or(Parity::even), static_cast<uint8_t>(o.stop_bits)};
@@ -113,7 +120,7 @@ ModelCatalog load_models(const RunOptions& o) {
 Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output::Output& out,
                    const std::vector<ChannelInfo>& channels, const SerialFormat& format,
                    ClockQuality clock)
-    : terminal_(make_sink(o, out, channels, clock_)) {
+    : terminal_(make_sink(o, out, channels, clock_, clock)) {
   fan_out_.add(*terminal_);
   const Needs needs = needs_of(o);
   if (needs.statistics) {

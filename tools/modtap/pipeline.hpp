@@ -98,6 +98,9 @@ struct RunOptions {
 };
 
 SerialFormat serial_format(const RunOptions& o);
+// The time column's format: -t a and ad count from the first record on a capture without a
+// clock (raw bytes), which has no time of day to show.
+output::TimeFormat time_format_for(const RunOptions& o, ClockQuality clock);
 AnalyzerOptions analyzer_options(const RunOptions& o, ClockQuality clock);
 ModelCatalog load_models(const RunOptions& o);
 

@@ -128,6 +128,11 @@ Session::Session(const RunOptions& o, const captures::RingLimits& ring, const Se
       out_(standard_output_),
       pipeline_(o, ring, out_, source.channels, source.format, source.clock) {
   out_.set_line_buffered(source.live);
+  if (time_format_for(o, source.clock) != o.time_format)
+    fmt::print(stderr,
+               "modtap: warning: {} has no clock (raw bytes): the time column counts seconds "
+               "from the first byte, the bytes laid end to end at the line's speed\n",
+               source.path);
   pipeline_.limit_records(o.max_records, std::move(on_limit));
   raw_ = raw_recorder(o, ring, source.channels, source.format);
   metrics_ = serve_metrics(o, pipeline_, port_health_);
