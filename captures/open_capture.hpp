@@ -13,16 +13,6 @@
 namespace modtap::captures {
 
 enum class Format { automatic, raw, hexlog, pcap, sigrok };
-}  // namespace modtap::captures
-
-namespace modtap {
-template <>
-struct EnumNames<captures::Format> {
-  static constexpr std::array<std::string_view, 5> names{"auto", "raw", "hexlog", "pcap", "sigrok"};
-};
-}  // namespace modtap
-
-namespace modtap::captures {
 
 struct OpenOptions {
   Format format = Format::automatic;
@@ -47,3 +37,8 @@ std::unique_ptr<ChunkSource> open_reader(const std::string& path, std::span<cons
 std::unique_ptr<ChunkSource> open_capture(const std::string& path, const OpenOptions& options);
 
 }  // namespace modtap::captures
+
+template <>
+struct modtap::EnumNames<modtap::captures::Format> {
+  static constexpr std::array<std::string_view, 5> names{"auto", "raw", "hexlog", "pcap", "sigrok"};
+};

@@ -232,15 +232,11 @@ void problems_family(Exposition& e, std::span<const Problem> problems) {
            "A problem the diagnosis finds now, per kind and slave (none: the whole bus); "
            "1 while found (docs/output.md)");
   for (const Problem& p : problems) {
-    const std::string_view kind = problem_info(p.kind).name;
-    const std::string_view severity = to_string(p.severity);
-    if (p.slave) {
-      e.sample("modtap_problem",
-               fmt::format("kind=\"{}\",slave=\"{}\",severity=\"{}\"", kind, *p.slave, severity),
-               1);
-    } else {
-      e.sample("modtap_problem", fmt::format("kind=\"{}\",severity=\"{}\"", kind, severity), 1);
-    }
+    const std::string slave = p.slave ? fmt::format("slave=\"{}\",", *p.slave) : "";
+    e.sample("modtap_problem",
+             fmt::format("kind=\"{}\",{}severity=\"{}\"", problem_info(p.kind).name, slave,
+                         to_string(p.severity)),
+             1);
   }
 }
 

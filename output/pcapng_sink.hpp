@@ -19,16 +19,6 @@ enum class PcapngLink {
   exported_pdu,  // link type 252: stock Wireshark's mbrtu dissector, classified by port
   bare,          // DLT_USER with frames only and no comments, as other sniffers write
 };
-}  // namespace modtap::output
-
-namespace modtap {
-template <>
-struct EnumNames<output::PcapngLink> {
-  static constexpr std::array<std::string_view, 3> names{"user", "exported-pdu", "bare"};
-};
-}  // namespace modtap
-
-namespace modtap::output {
 
 struct PcapngOptions {
   PcapngLink link = PcapngLink::user;
@@ -112,3 +102,8 @@ std::string noise_comment(const Noise& noise);
 void append_noise_comment(fmt::memory_buffer& out, const Noise& noise);
 
 }  // namespace modtap::output
+
+template <>
+struct modtap::EnumNames<modtap::output::PcapngLink> {
+  static constexpr std::array<std::string_view, 3> names{"user", "exported-pdu", "bare"};
+};

@@ -18,16 +18,6 @@ namespace modtap::output {
 // day (a), date and time (ad), since the record before, shown or not (d), since the line shown
 // before (dd). Absolute times are local, as tshark's.
 enum class TimeFormat : uint8_t { relative, absolute, absolute_date, delta, delta_displayed };
-}  // namespace modtap::output
-
-namespace modtap {
-template <>
-struct EnumNames<output::TimeFormat> {
-  static constexpr std::array<std::string_view, 5> names{"r", "a", "ad", "d", "dd"};
-};
-}  // namespace modtap
-
-namespace modtap::output {
 
 struct TextOptions {
   bool verbose = false;  // -V: each frame's field tree
@@ -69,3 +59,8 @@ class TextSink final : public RecordSink {
 };
 
 }  // namespace modtap::output
+
+template <>
+struct modtap::EnumNames<modtap::output::TimeFormat> {
+  static constexpr std::array<std::string_view, 5> names{"r", "a", "ad", "d", "dd"};
+};

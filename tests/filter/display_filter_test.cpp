@@ -39,6 +39,16 @@ bool is_register(std::string_view name) {
   return name == "frequency_command_monitor";
 }
 
+// Why a filter is refused, or "accepted".
+std::string refusal(const std::string& text) {
+  try {
+    DisplayFilter filter(text, is_register);
+  } catch (const FilterError& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
 bool matches(const std::string& text) {
   static const Sample sample;
   return DisplayFilter(text, is_register).matches(sample.frame, sample.pdu);
@@ -151,14 +161,6 @@ TEST(DisplayFilter, FixedValuesAsTheOutputsWriteThemAndNoOthers) {
   EXPECT_FALSE(matches("role == req"));
   EXPECT_TRUE(matches("role != req"));
   EXPECT_TRUE(matches("check == OK && mode == rtu"));
-  const auto refusal = [](const std::string& text) {
-    try {
-      DisplayFilter filter(text, is_register);
-    } catch (const FilterError& e) {
-      return std::string(e.what());
-    }
-    return std::string("accepted");
-  };
   EXPECT_EQ(refusal("role == reply"),
             "column 9: role is request, response or unknown, not \"reply\"");
   EXPECT_EQ(refusal("type == frames"),
@@ -170,14 +172,6 @@ TEST(DisplayFilter, FixedValuesAsTheOutputsWriteThemAndNoOthers) {
 // An unknown name says what it likely meant: Wireshark's name for it, the field it begins, or
 // the nearest field or finding.
 TEST(DisplayFilter, AnUnknownNameSaysWhatItMeant) {
-  const auto refusal = [](const std::string& text) {
-    try {
-      DisplayFilter filter(text, is_register);
-    } catch (const FilterError& e) {
-      return std::string(e.what());
-    }
-    return std::string("accepted");
-  };
   EXPECT_EQ(refusal("modbus.func_code == 3"),
             "column 1: unknown name \"modbus.func_code\"; modtap calls it fc");
   EXPECT_EQ(refusal("timeout"),

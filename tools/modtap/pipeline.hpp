@@ -34,16 +34,6 @@ namespace modtap::tools {
 
 // What prints a line per record on standard output, or nothing (-T).
 enum class OutputKind : uint8_t { text, json, stats, csv, none };
-}  // namespace modtap::tools
-
-namespace modtap {
-template <>
-struct EnumNames<tools::OutputKind> {
-  static constexpr std::array<std::string_view, 5> names{"text", "json", "stats", "csv", "none"};
-};
-}  // namespace modtap
-
-namespace modtap::tools {
 
 // Whether the output prints records (or the statistics) on standard output.
 constexpr bool prints_to_terminal(OutputKind output) {
@@ -192,3 +182,8 @@ class Pipeline {
 };
 
 }  // namespace modtap::tools
+
+template <>
+struct modtap::EnumNames<modtap::tools::OutputKind> {
+  static constexpr std::array<std::string_view, 5> names{"text", "json", "stats", "csv", "none"};
+};
