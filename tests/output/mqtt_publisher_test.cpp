@@ -159,6 +159,21 @@ TEST(MqttPublisher, AWriteRequestIsNoValue) {
   EXPECT_THAT(broker.raws(topic), ElementsAre(5000));
 }
 
+// A broadcast write (slave 0) is a request no device answers: no topic, and no Home Assistant
+// device for a slave 0 that does not exist.
+TEST(MqttPublisher, ABroadcastMakesNoTopicAndNoDevice) {
+  RecordingBroker broker;
+  MqttOptions o = options(0);
+  o.discovery_prefix = "homeassistant";
+  Bus bus(broker, o);
+  bus.ask(frequency(6000), 1.0, 0);
+  bus.publisher().finish();
+  for (const Message& m : broker.messages) {
+    EXPECT_EQ(m.topic.find("/0/"), std::string::npos) << m.topic;
+    EXPECT_EQ(m.topic.find("homeassistant/"), std::string::npos) << m.topic;
+  }
+}
+
 TEST(MqttPublisher, AValueChangingFasterThanTheIntervalGoesOutOncePerIntervalAndLastAtTheEnd) {
   RecordingBroker broker;
   Bus bus(broker, options(1));
