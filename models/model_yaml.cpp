@@ -381,6 +381,8 @@ class ModelReader {
     if (map["access"]) read_access(map["access"], def.access);
     if (map["min"]) read_number(map["min"], problems_, def.min.emplace());
     if (map["max"]) read_number(map["max"], problems_, def.max.emplace());
+    if (def.min && def.max && *def.min > *def.max)
+      problems_.add(map["min"], fmt::format("min {:g} is above max {:g}", *def.min, *def.max));
     if (map["enum"]) read_named_enum(map["enum"], def);
     if (map["values"]) def.values = read_enum(map["values"], problems_);
     if (map["bits"]) read_bits(map["bits"], def);
@@ -392,7 +394,7 @@ class ModelReader {
       RegisterDef one = def;
       one.address = static_cast<uint16_t>(address);
       if (one.name.empty()) one.name = fmt::format("reserved_{:04X}", address);
-      model_.registers[{one.table, one.address}] = std::move(one);
+      define(node, std::move(one));
     }
   }
 
@@ -453,15 +455,24 @@ class ModelReader {
       RegisterDef def;
       if (!read_integer(key, problems_, def.address, 0, 0xFFFF)) continue;
       def.name = read_text(name, problems_);
-      if (model_.registers.count({def.table, def.address}))
-        problems_.add(key, fmt::format("{:04X}H is defined twice", def.address));
-      model_.registers[{def.table, def.address}] = std::move(def);
+      define(key, std::move(def));
     }
+  }
+
+  // A register this file defines: once only (a model that extends another may redefine the
+  // base's registers, but not its own).
+  void define(const YamlNode& node, RegisterDef def) {
+    const std::pair<Table, uint16_t> key{def.table, def.address};
+    if (!defined_here_.insert(key).second)
+      problems_.add(node,
+                    fmt::format("{} {:04X}H is defined twice", to_string(def.table), def.address));
+    model_.registers[key] = std::move(def);
   }
 
   DeviceModel& model_;
   Problems& problems_;
   std::map<std::string, std::shared_ptr<const EnumTable>> enums_;
+  std::set<std::pair<Table, uint16_t>> defined_here_;
 };
 
 YamlNode load(std::string_view yaml, const std::string& file) {

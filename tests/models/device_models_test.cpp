@@ -720,6 +720,25 @@ TEST(ModelFiles, AKeyWrittenTwiceIsAProblem) {
   }
 }
 
+// A register whose minimum is above its maximum, or an address defined twice in one file, is
+// a mistake in the model: refused with the file and line.
+TEST(ModelFiles, ALimitUpsideDownOrARegisterTwiceIsAProblem) {
+  try {
+    parse_model(
+        "model: x\n"
+        "registers:\n"
+        "  - {address: 1, name: a, min: 10, max: 5}\n"
+        "  - {address: 2, name: b}\n"
+        "  - {address: 2, name: c}\n",
+        "limits.yaml");
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_THAT(e.problems(),
+                ::testing::ElementsAre(HasSubstr("limits.yaml:3: min 10 is above max 5"),
+                                       HasSubstr("limits.yaml:5: holding 0002H is defined twice")));
+  }
+}
+
 TEST(ModelFiles, FlagsAreYamlsWordsForTrueAndFalse) {
   const auto reserved = [](const std::string& word) {
     const DeviceModel model = parse_model(
