@@ -1,9 +1,11 @@
 #!/bin/sh
 # cmake --install puts the program, the models, the Lua plugin and the extcap in their places
 # under the prefix (docs/wireshark.md: with --prefix /usr these are where Wireshark looks).
-# Usage: install_test.sh BUILD_DIR LIBDIR WORK_DIR
+# A build configured first for CMake's default prefix and then for /usr installs the plugin and
+# the extcap where Wireshark looks under /usr: the library folder follows the prefix.
+# Usage: install_test.sh BUILD_DIR LIBDIR WORK_DIR SOURCE_DIR
 set -eu
-build=$1 libdir=$2 stage=$3/prefix
+build=$1 libdir=$2 stage=$3/prefix source=$4
 rm -rf "$stage"
 cmake --install "$build" --prefix "$stage" >/dev/null
 for f in bin/modtap share/modtap/models/nta5000.yaml share/modtap/models/gd20.yaml \
@@ -19,3 +21,14 @@ done
   { echo "the installed extcap does not answer"; exit 1; }
 echo "installed: bin/modtap, share/modtap/models, $libdir/wireshark/{plugins,extcap}," \
      "share/wireshark/profiles/modtap, lib/systemd/system/modtap@.service"
+
+scratch=$3/reconfigured
+rm -rf "$scratch"
+cmake -S "$source" -B "$scratch" -DMODTAP_TESTS=OFF -DMODTAP_BENCHMARKS=OFF >/dev/null
+cmake -S "$source" -B "$scratch" -DCMAKE_INSTALL_PREFIX=/usr >/dev/null
+usr_libdir=$(sed -n 's/^CMAKE_INSTALL_LIBDIR:PATH=//p' "$scratch/CMakeCache.txt")
+for piece in plugins/cmake_install.cmake:plugins tools/extcap/cmake_install.cmake:extcap; do
+  grep -q "}/$usr_libdir/wireshark/${piece#*:}\"" "$scratch/${piece%%:*}" ||
+    { echo "reconfigured for /usr, the ${piece#*:} do not go to /usr/$usr_libdir/wireshark"; exit 1; }
+done
+echo "reconfigured for /usr: the plugin and the extcap go to /usr/$usr_libdir/wireshark"
