@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <ctime>
 
 #include <fmt/format.h>
 
@@ -280,17 +279,7 @@ class Diagnosis {
     if (!slave.model || maps_no_register(*slave.model)) return fmt::format("Slave {}", address);
     return fmt::format("Slave {} ({})", address, slave.model->name);
   }
-  // "10:01:12 UTC" on a dated capture, "12.345 s" into one that is not.
-  std::string when(int64_t t_ns) const {
-    if (!statistics_.dated()) {
-      const int64_t from = statistics_.first_t_ns.value_or(0);
-      return fmt::format("{:.3f} s", static_cast<double>(t_ns - from) / 1e9);
-    }
-    const std::time_t seconds = static_cast<std::time_t>(t_ns / 1'000'000'000);
-    std::tm utc{};
-    gmtime_r(&seconds, &utc);
-    return fmt::format("{:02}:{:02}:{:02} UTC", utc.tm_hour, utc.tm_min, utc.tm_sec);
-  }
+
   static double percent(uint64_t part, uint64_t whole) { return 100 * share(part, whole); }
 
   bool no_response(uint8_t address, const Slave& s) {
@@ -312,8 +301,9 @@ class Diagnosis {
       Problem& p = add(ProblemKind::stopped_responding, address, Severity::error, s.silent_since_ns,
                        {s.silent_since_request});
       p.evidence = {{"answered_before", s.answers}, {"timeouts_since", s.silent_timeouts}};
-      p.text = fmt::format("{} stopped answering at {}: its last {} requests timed out",
-                           who(address, s), when(s.silent_since_ns), s.silent_timeouts);
+      p.text =
+          fmt::format("{} stopped answering at {}: its last {} requests timed out", who(address, s),
+                      moment_text(statistics_, s.silent_since_ns), s.silent_timeouts);
     }
     // Time-outs its late answers explain are late-responses; those after it stopped, stopped.
     const uint64_t explained =
@@ -328,9 +318,9 @@ class Diagnosis {
                      missed_rate >= missed_share_error ? Severity::error : Severity::warning,
                      *s.timeouts.first_ns, s.timeouts.first);
     p.evidence = {{"requests", asked}, {"timeouts", missed}, {"share", missed_rate}};
-    p.text =
-        fmt::format("{} fails to answer {:.0f}% of requests ({} of {}) since {}", who(address, s),
-                    100 * missed_rate, missed, asked, when(*s.timeouts.first_ns));
+    p.text = fmt::format("{} fails to answer {:.0f}% of requests ({} of {}) since {}",
+                         who(address, s), 100 * missed_rate, missed, asked,
+                         moment_text(statistics_, *s.timeouts.first_ns));
   }
 
   // The median of the other slaves' shares of time-outs: a master whose time-out is too short

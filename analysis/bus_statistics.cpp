@@ -1,6 +1,10 @@
 #include "analysis/bus_statistics.hpp"
 
 #include <algorithm>
+#include <ctime>
+
+#include <fmt/chrono.h>
+#include <fmt/format.h>
 
 #include "models/register_meaning.hpp"
 
@@ -164,6 +168,16 @@ std::optional<double> BusStatistics::bus_load() const {
   const double busy_ns =
       static_cast<double>(frame_bytes + noise_bytes) * static_cast<double>(format_.char_time_ns());
   return std::min(1.0, busy_ns / duration_ns);
+}
+
+std::string moment_text(const BusStatistics& s, int64_t t_ns) {
+  if (!s.dated())
+    return fmt::format("{:.3f} s into the capture",
+                       static_cast<double>(t_ns - s.first_t_ns.value_or(0)) / 1e9);
+  constexpr int64_t day_ns = 86'400'000'000'000;
+  const auto utc = fmt::gmtime(static_cast<std::time_t>(t_ns / 1'000'000'000));
+  if (*s.first_t_ns / day_ns == *s.last_t_ns / day_ns) return fmt::format("{:%H:%M:%S} UTC", utc);
+  return fmt::format("{:%Y-%m-%d %H:%M:%S} UTC", utc);
 }
 
 }  // namespace modtap

@@ -137,4 +137,9 @@ class BusStatistics final : public RecordSink {
   std::array<std::optional<int64_t>, 256> last_request_ns_{};
 };
 
+// When `t_ns` was, as a person reads it of this capture: the time of day (UTC) in a dated
+// capture of one day, with the date in one of more, else seconds into the capture. The
+// problems' sentences and the report say times so.
+std::string moment_text(const BusStatistics& statistics, int64_t t_ns);
+
 }  // namespace modtap

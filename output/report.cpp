@@ -99,16 +99,6 @@ std::string clock_time(int64_t t_ns, const char* format = "%Y-%m-%d %H:%M:%S") {
   return fmt::format(fmt::runtime(fmt::format("{{:{}}}", format)), fmt::gmtime(seconds));
 }
 
-// "22:13:21 UTC" in a dated capture of one day (the page's header has the date), the date too
-// in one of more, "12.345 s into the capture" in one that is not dated.
-std::string when(const BusStatistics& s, int64_t t_ns) {
-  constexpr int64_t day_ns = 86'400'000'000'000;
-  if (s.dated() && *s.first_t_ns / day_ns == *s.last_t_ns / day_ns)
-    return clock_time(t_ns, "%H:%M:%S") + " UTC";
-  if (s.dated()) return clock_time(t_ns) + " UTC";
-  return fmt::format("{} s into the capture", Fixed{t_ns - s.first_t_ns.value_or(0), 9, 3});
-}
-
 // A number the statistics hold, as an element that names the key --stats gives it; `scale`
 // turns what is shown into the statistic's unit (a millisecond shown is 1000 of latency_us).
 void stat_element(fmt::memory_buffer& out, std::string_view tag, std::string_view css_class,
@@ -211,7 +201,7 @@ void append_problems(fmt::memory_buffer& out, const BusStatistics& s,
     append_html(out, p.text);
     out.append(std::string_view("</div>\n<div class=\"advice\"><b>What to check:</b> "));
     append_html(out, p.advice);
-    fmt::format_to(put, "</div>\n<div class=\"seen\">First seen {}", when(s, p.since_ns));
+    fmt::format_to(put, "</div>\n<div class=\"seen\">First seen {}", moment_text(s, p.since_ns));
     if (!p.first_records.empty()) {
       out.append(std::string_view("; records "));
       for (uint64_t index : p.first_records) append_record_link(out, index, lines);
@@ -552,10 +542,10 @@ void append_outages(fmt::memory_buffer& out, const BusStatistics& s, const BusDi
     fmt::format_to(put,
                    "<tr><td>{}</td><td class=\"text\">{}</td><td>#{}</td><td>{}</td><td "
                    "class=\"text\">",
-                   outage.slave, when(s, outage.silent_from_ns), outage.first_request,
+                   outage.slave, moment_text(s, outage.silent_from_ns), outage.first_request,
                    outage.timeouts);
     if (outage.back_ns) {
-      fmt::format_to(put, "{}</td></tr>\n", when(s, *outage.back_ns));
+      fmt::format_to(put, "{}</td></tr>\n", moment_text(s, *outage.back_ns));
     } else {
       out.append(std::string_view("not by the end</td></tr>\n"));
     }
