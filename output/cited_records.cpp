@@ -5,9 +5,8 @@ namespace modtap::output {
 CitedRecords::CitedRecords(ProblemEvidence& evidence, const std::vector<ChannelInfo>& channels,
                            RegisterBase base, const RecordClock* clock)
     : evidence_(evidence),
-      own_clock_used_(clock == nullptr),
-      text_(text_out_, channels,
-            TextOptions{false, TimeFormat::relative, base, clock ? clock : &own_clock_}) {}
+      clock_(clock),
+      text_(text_out_, channels, TextOptions{false, TimeFormat::relative, base, &clock_.get()}) {}
 
 template <typename Render>
 void CitedRecords::keep(std::optional<uint64_t> request, Render render) {
@@ -34,20 +33,20 @@ void CitedRecords::remember_request(const Frame& frame) {
 }
 
 void CitedRecords::on_frame(const Frame& frame) {
-  if (own_clock_used_) own_clock_.see(frame.t_ns);
+  clock_.see(frame.t_ns);
   evidence_.on_frame(frame);
   keep(frame.request, [&] { text_.on_frame(frame); });
   if (frame.role == Role::request && frame.check_ok) remember_request(frame);
 }
 
 void CitedRecords::on_noise(const Noise& noise) {
-  if (own_clock_used_) own_clock_.see(noise.t_ns);
+  clock_.see(noise.t_ns);
   evidence_.on_noise(noise);
   keep(noise.request, [&] { text_.on_noise(noise); });
 }
 
 void CitedRecords::on_timeout(const Timeout& timeout) {
-  if (own_clock_used_) own_clock_.see(timeout.t_ns);
+  clock_.see(timeout.t_ns);
   evidence_.on_timeout(timeout);
   keep(timeout.request, [&] { text_.on_timeout(timeout); });
 }

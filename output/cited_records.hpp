@@ -42,8 +42,7 @@ class CitedRecords final : public RecordSink {
   void remember_request(const Frame& frame);
 
   ProblemEvidence& evidence_;
-  RecordClock own_clock_;
-  bool own_clock_used_;
+  SinkClock clock_;
   Output text_out_;
   TextSink text_;
   std::map<uint64_t, std::string> lines_;

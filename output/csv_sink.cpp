@@ -59,7 +59,7 @@ void CsvSink::time(int64_t t_ns) {
     out_.print(FMT_COMPILE("{}"), Fixed{t_ns, 9, 6});
     return;
   }
-  const RecordClock& clock = clock_ ? *clock_ : own_clock_;
+  const RecordClock& clock = clock_.get();
   out_.print(FMT_COMPILE("{}"), Fixed{t_ns - clock.first_ns.value_or(t_ns), 9, 6});
 }
 

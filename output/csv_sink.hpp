@@ -46,17 +46,14 @@ class CsvSink final : public RecordSink {
   void on_timeout(const Timeout& timeout) override { see(timeout.t_ns); }
 
  private:
-  void see(int64_t t_ns) {
-    if (!clock_) own_clock_.see(t_ns);
-  }
+  void see(int64_t t_ns) { clock_.see(t_ns); }
   void time(int64_t t_ns);
 
   Output& out_;
   std::vector<FollowedRegister> follow_;
   TimeFormat time_format_;
   RegisterBase base_;
-  const RecordClock* clock_;
-  RecordClock own_clock_;  // without clock_
+  SinkClock clock_;
 };
 
 }  // namespace modtap::output

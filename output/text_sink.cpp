@@ -70,11 +70,11 @@ void append_bad_check(fmt::memory_buffer& buf, const Frame& frame) {
 }  // namespace
 
 TextSink::TextSink(Output& out, const std::vector<ChannelInfo>& channels, TextOptions options)
-    : out_(out), channels_(channels), options_(options) {}
+    : out_(out), channels_(channels), options_(options), clock_(options.clock) {}
 
 // The clock has seen this record already (kept before the filter), or sees it now.
 void TextSink::time_column(int64_t t_ns) {
-  if (!options_.clock) own_clock_.see(t_ns);
+  clock_.see(t_ns);
   switch (options_.time) {
     case TimeFormat::relative:
       seconds_column(t_ns - clock().first_ns.value_or(t_ns));

@@ -38,7 +38,7 @@ class TextSink final : public RecordSink {
 
  private:
   void time_column(int64_t t_ns);
-  const RecordClock& clock() const { return options_.clock ? *options_.clock : own_clock_; }
+  const RecordClock& clock() const { return clock_.get(); }
   void seconds_column(int64_t ns);
   void absolute_time(int64_t t_ns);
   void channel_column(uint16_t channel);
@@ -50,7 +50,7 @@ class TextSink final : public RecordSink {
   Output& out_;
   const std::vector<ChannelInfo>& channels_;
   TextOptions options_;
-  RecordClock own_clock_;                     // without options_.clock
+  SinkClock clock_;
   std::optional<int64_t> previous_shown_ns_;  // -t dd counts from here
   int64_t shown_second_ = -1;                 // the second whose date and time `shown_` holds
   KeptDecimal seconds_;                       // relative and delta times' whole seconds

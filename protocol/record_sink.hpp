@@ -87,6 +87,21 @@ struct RecordClock {
   }
 };
 
+// The clock a sink's time column counts by: every record's, kept before a filter (shared), or
+// its own, of the records the sink is given.
+class SinkClock {
+ public:
+  explicit SinkClock(const RecordClock* shared) : shared_(shared) {}
+  void see(int64_t t_ns) {
+    if (!shared_) own_.see(t_ns);
+  }
+  const RecordClock& get() const { return shared_ ? *shared_ : own_; }
+
+ private:
+  const RecordClock* shared_;
+  RecordClock own_;
+};
+
 // Keeps `clock` of every record going through, then hands it on. Set before the filter, it lets
 // the sinks behind count time over the whole capture as tshark does (-t r from the first
 // packet, -t d from the packet before, shown or not): a filter picks lines, it does not move
