@@ -12,7 +12,9 @@ struct Expectation {
   bool pending = false;
   uint8_t slave = 0;
   uint8_t function = 0;
-  uint16_t echo_size = 0;  // ADU size of an echo whose length its header does not tell, or 0
+  // The request's ADU size where every good answer is the request again (ResponsePrefix::
+  // echoes_request), else 0: the answer's length where its own header does not tell it.
+  uint16_t echo_size = 0;
   // The request's end was in doubt (`ambiguous-end`, a byte longer or shorter): its echo's is.
   bool echo_end_in_doubt = false;
   std::span<const uint8_t> request_pdu;  // the pending request's PDU, valid while it is pending

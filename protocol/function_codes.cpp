@@ -163,6 +163,7 @@ ResponsePrefix echo_prefix(Bytes req) {
 ResponsePrefix whole_echo_prefix(Bytes req) {
   ResponsePrefix prefix = prefix_of(req);
   prefix.whole_echo = prefix.size == req.size();
+  prefix.echoes_request = true;
   return prefix;
 }
 

@@ -72,6 +72,9 @@ struct ResponsePrefix {
   std::array<uint8_t, 8> pdu{};
   uint8_t size = 0;
   bool whole_echo = false;  // the response repeats the whole request, CRC and all
+  // Every good response is the request again, whatever its length: where the response's own
+  // header does not tell its length (FC08 Return Query Data), the request's does.
+  bool echoes_request = false;
 };
 
 struct FunctionCode {

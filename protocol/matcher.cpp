@@ -15,14 +15,12 @@ void Matcher::set_pending(Pending* pending) {
     expectation_ = {};
     return;
   }
-  // FC08 Return Query Data: the response is the request again, so its length is known.
-  const bool query_echo =
-      pending->pdu[0] == 0x08 && pending->size >= 3 && pending->pdu[1] == 0 && pending->pdu[2] == 0;
+  const bool echoed = response_prefix({pending->pdu.data(), pending->size}).echoes_request;
   expectation_ = {true,
                   pending->slave,
                   pending->pdu[0],
-                  static_cast<uint16_t>(query_echo ? pending->adu_size : 0),
-                  query_echo && pending->ambiguous_end,
+                  static_cast<uint16_t>(echoed ? pending->adu_size : 0),
+                  echoed && pending->ambiguous_end,
                   {pending->pdu.data(), pending->size},
                   options_.timed ? pending->end_ns + retry_from_ns(pending->slave) : 0};
 }

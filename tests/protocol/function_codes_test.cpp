@@ -110,6 +110,19 @@ TEST(ResponsePrefix, IsWhatTheRequestTellsOfItsAnswer) {
   EXPECT_EQ(prefix("41 01 02"), hex("41"));  // a code the standard does not define
 }
 
+// Whether the answer is the request again is the table's to say, not the prefix's size: a long
+// query's echo is more than the prefix keeps.
+TEST(ResponsePrefix, SaysWhenTheAnswerIsTheRequestAgain) {
+  EXPECT_TRUE(response_prefix(hex("08 00 00 ab cd ef 01 02 03")).echoes_request);
+  EXPECT_FALSE(response_prefix(hex("08 00 00 ab cd ef 01 02 03")).whole_echo);
+  EXPECT_TRUE(response_prefix(hex("08 00 00 ab cd")).whole_echo);
+  EXPECT_FALSE(response_prefix(hex("08 00 0b 00 00")).echoes_request);  // a counter
+  EXPECT_TRUE(response_prefix(hex("05 00 05 ff 00")).echoes_request);
+  EXPECT_TRUE(response_prefix(hex("06 00 05 12 34")).echoes_request);
+  EXPECT_FALSE(response_prefix(hex("10 00 05 00 02 04 00 0a 01 02")).echoes_request);
+  EXPECT_FALSE(response_prefix(hex("03 00 10 00 0a")).echoes_request);
+}
+
 TEST(FunctionTable, NamesThePublicCodesOnly) {
   EXPECT_EQ(function_name(0x03), "Read Holding Registers");
   EXPECT_EQ(function_name(0x83), "Read Holding Registers");

@@ -212,6 +212,31 @@ std::vector<Frame> match_timed(std::initializer_list<Timed> frames, std::vector<
   return out;
 }
 
+// The framer learns an answer's length from its request where every good answer is the
+// request again: Return Query Data's header does not tell its length, whatever the query's.
+TEST(Matcher, TellsTheFramerTheLengthOfAnAnswerThatIsTheRequestAgain) {
+  struct Case {
+    const char* request;
+    bool echoed;
+  };
+  for (const Case& c : {
+           Case{"11 08 00 00 a5 37 00 00", true},  // Return Query Data
+           Case{"11 08 00 00 01 02 03 04 05 06 07 08 09 0a 0b 0c 00 00", true},  // past 8 bytes
+           Case{"11 08 00 0b 00 00 00 00", false},  // a counter: its answer carries the count
+           Case{"11 06 00 01 00 03 00 00", true},   // a write's echo, whose length is fixed
+           Case{"11 03 00 6b 00 03 00 00", false},
+       }) {
+    Matcher matcher(MatcherOptions{}, [](const Timeout&) {});
+    const auto bytes = hex(c.request);
+    Frame frame;
+    frame.adu = frame.raw = bytes;
+    frame.check_ok = true;
+    frame.fit = {true, false};
+    matcher.on_frame(frame, ChannelRole::bus);
+    EXPECT_EQ(matcher.expectation().echo_size, c.echoed ? bytes.size() : 0u) << c.request;
+  }
+}
+
 // A slave that answers in 41 ms on a clock 30 ms late at most: a copy of an echo request
 // 106 ms after it may be the answer or the master's retry, as far as its turnaround tells. The
 // master's retry of a read, which no echo can fake, showed it retries 107 ms after a request:
