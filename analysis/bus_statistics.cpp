@@ -6,6 +6,7 @@
 #include <fmt/chrono.h>
 #include <fmt/format.h>
 
+#include "models/record_fields.hpp"
 #include "models/register_meaning.hpp"
 
 namespace modtap {
@@ -52,10 +53,7 @@ void BusStatistics::on_frame(const Frame& frame) {
   unsolicited += (frame.findings & finding_unsolicited) != 0;
   retries += (frame.findings & finding_retry) != 0;
   ++damaged[static_cast<size_t>(frame.damage)];
-  for_each_frame_finding(frame.findings, [&](size_t slot) { count_finding(slot, frame.index); });
-  if (frame.meaning)
-    for (const RuleFinding& finding : frame.meaning->findings)
-      count_finding(finding_slot(finding.kind), frame.index);
+  findings_of(frame).each([&](size_t slot) { count_finding(slot, frame.index); });
   // Latency of good responses only; a negative one (a clock that stepped back) never counts.
   if (frame.check_ok && frame.latency_ns && *frame.latency_ns >= 0)
     latency_ns.add(static_cast<uint64_t>(*frame.latency_ns));

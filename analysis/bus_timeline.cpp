@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "models/register_meaning.hpp"
+#include "models/record_fields.hpp"
 
 namespace modtap {
 
@@ -12,12 +12,8 @@ namespace {
 bool warns(const Frame& frame) {
   const auto registry = finding_registry();
   bool found = false;
-  for_each_frame_finding(frame.findings, [&](size_t slot) {
-    found = found || registry[slot].severity != Severity::note;
-  });
-  if (frame.meaning)
-    for (const RuleFinding& finding : frame.meaning->findings)
-      found = found || finding_info(finding.kind).severity != Severity::note;
+  findings_of(frame).each(
+      [&](size_t slot) { found = found || registry[slot].severity != Severity::note; });
   return found;
 }
 

@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include "models/record_fields.hpp"
 #include "models/register_meaning.hpp"
 #include "protocol/field_registry.hpp"
 #include "protocol/findings.hpp"
@@ -510,9 +511,8 @@ bool pdu_values(const Name& name, const DecodedPdu& pdu, std::string& scratch, V
 }
 
 template <typename Visit>
-bool register_values(const Name& name, const Meaning* meaning, Visit&& visit) {
-  if (!meaning) return false;
-  for (const RegisterValue& reg : meaning->registers) {
+bool register_values(const Name& name, std::span<const RegisterValue> registers, Visit&& visit) {
+  for (const RegisterValue& reg : registers) {
     if (name.kind == NameKind::register_named) {
       if (reg.name != name.register_name) continue;
       if (visit(Value{true, reg.value, !reg.text.empty(), reg.text})) return true;
@@ -544,201 +544,106 @@ bool register_values(const Name& name, const Meaning* meaning, Visit&& visit) {
   return false;
 }
 
+// Evaluates the walk over a record's fields (models/record_fields.hpp): hands the values of one
+// name to `visit` until one satisfies it, which `found` then says.
 template <typename Visit>
-bool finding_names(uint32_t bits, Visit&& visit) {
-  const auto names = frame_findings();
-  bool stop = false;
-  for_each_frame_finding(bits, [&](size_t slot) { stop = stop || visit(text(names[slot].name)); });
-  return stop;
-}
+class NameValues {
+ public:
+  NameValues(const Name& name, const std::vector<std::string>& channels, std::string& scratch,
+             Visit& visit)
+      : name_(name), channels_(channels), scratch_(scratch), visit_(visit) {}
+  bool found = false;
 
-template <typename Visit>
-bool finding_values(const Frame& frame, Visit&& visit) {
-  if (finding_names(frame.findings, visit)) return true;
-  if (!frame.meaning) return false;
-  for (const RuleFinding& finding : frame.meaning->findings)
-    if (visit(text(to_string(finding.kind)))) return true;
-  return false;
-}
-
-bool has_finding(const Frame& frame, size_t slot) {
-  if (slot < frame_finding_count) return (frame.findings >> slot) & 1;
-  if (!frame.meaning) return false;
-  return std::any_of(frame.meaning->findings.begin(), frame.meaning->findings.end(),
-                     [&](const RuleFinding& f) { return finding_slot(f.kind) == slot; });
-}
-
-// The record-level fields of a frame, as JSON gives them.
-template <typename Visit>
-bool frame_field(FieldId id, const Frame& frame, const DecodedPdu& pdu, std::string& scratch,
-                 Visit&& visit) {
-  switch (id) {
-    case FieldId::type:
-      return visit(text("frame"));
-    case FieldId::index:
-      return visit(number(static_cast<double>(frame.index)));
-    case FieldId::t_ns:
-      return visit(number(static_cast<double>(frame.t_ns)));
-    case FieldId::end_ns:
-      return visit(number(static_cast<double>(frame.end_ns)));
-    case FieldId::offset:
-      return visit(number(static_cast<double>(frame.offset)));
-    case FieldId::mode:
-      return visit(text(to_string(frame.mode)));
-    case FieldId::raw:
-      return visit(text(hex(frame.raw, scratch)));
-    case FieldId::role:
-      return visit(text(to_string(frame.role)));
-    case FieldId::slave:
-      return visit(number(frame.slave()));
-    case FieldId::fc:
-      return visit(number(frame.function() & 0x7F));
-    case FieldId::function: {
-      const std::string_view standard = function_name(frame.function());
-      if (!standard.empty()) return visit(text(standard));
-      scratch = fmt::format("Function 0x{:02X}", frame.function() & 0x7F);
-      return visit(text(scratch));
+  void name(FieldId id, std::string_view t) {
+    offer(id, [&] { return text(t); });
+  }
+  template <NamedEnum Enum>
+  void choice(FieldId id, Enum value) {
+    name(id, to_string(value));
+  }
+  void function_code(FieldId fc, FieldId function, uint8_t byte) {
+    number(fc, byte & 0x7F);
+    name(function, function_label(byte));
+  }
+  void number(FieldId id, uint64_t n) {
+    offer(id, [&] { return modtap::number(static_cast<double>(n)); });
+  }
+  void time(FieldId id, int64_t ns) {
+    offer(id, [&] { return modtap::number(static_cast<double>(ns)); });
+  }
+  void micros(FieldId id, int64_t ns) {
+    offer(id, [&] { return modtap::number(static_cast<double>(ns) / 1000); });
+  }
+  void channel(FieldId id, uint16_t number) {
+    offer(id, [&] {
+      return text(number < channels_.size() ? std::string_view(channels_[number]) : "");
+    });
+  }
+  void bytes(FieldId id, std::span<const uint8_t> bytes) {
+    offer(id, [&] { return text(hex(bytes, scratch_)); });
+  }
+  void boolean(FieldId id, bool value) {
+    if (value) flag(id);  // as a flag: present where true
+  }
+  void flag(FieldId id) {
+    offer(id, [] { return modtap::number(1); });
+  }
+  void absent(FieldId) {}
+  void findings(FieldId id, FindingSlots slots) {
+    if (found) return;
+    if (name_.kind == NameKind::finding) {
+      found = slots.has(name_.finding) && visit_(modtap::number(1));
+      return;
     }
-    case FieldId::check:
-      return visit(text(frame.check_ok ? "ok" : "bad"));
-    case FieldId::check_value:
-      return visit(number(frame.wire_check()));
-    case FieldId::expected_check:
-      return frame.damage != Damage::cut && visit(number(frame.expected_check));
-    case FieldId::damage:
-      return frame.damage != Damage::none && visit(text(to_string(frame.damage)));
-    case FieldId::exception:
-      return frame.is_exception() && frame.adu.size() > 2 && visit(number(frame.adu[2]));
-    case FieldId::request:
-      return frame.request && visit(number(static_cast<double>(*frame.request)));
-    case FieldId::latency_us:
-      return frame.latency_ns && visit(number(static_cast<double>(*frame.latency_ns) / 1000));
-    case FieldId::findings:
-      return finding_values(frame, visit);
-    case FieldId::model:
-      return frame.meaning && visit(text(frame.meaning->model->name));
-    case FieldId::registers:
-      return frame.meaning && !frame.meaning->registers.empty() &&
-             visit(number(static_cast<double>(frame.meaning->registers.size())));
-    case FieldId::notes:
-      return frame.meaning && !frame.meaning->findings.empty() &&
-             visit(number(static_cast<double>(frame.meaning->findings.size())));
-    case FieldId::truncated:
-      return pdu.truncated && visit(number(1));
-    default:
-      return false;  // noise and time-out fields; the channel is the record's caller's
+    if (!wants(id)) return;
+    const auto names = finding_registry();
+    slots.each([&](size_t slot) { found = found || visit_(text(names[slot].name)); });
   }
-}
-
-template <typename Visit>
-bool noise_field(FieldId id, const Noise& noise, std::string& scratch, Visit&& visit) {
-  switch (id) {
-    case FieldId::type:
-      return visit(text("noise"));
-    case FieldId::index:
-      return visit(number(static_cast<double>(noise.index)));
-    case FieldId::t_ns:
-      return visit(number(static_cast<double>(noise.t_ns)));
-    case FieldId::end_ns:
-      return visit(number(static_cast<double>(noise.end_ns)));
-    case FieldId::offset:
-      return visit(number(static_cast<double>(noise.offset)));
-    case FieldId::mode:
-      return visit(text(to_string(noise.mode)));
-    case FieldId::raw:
-      return visit(text(hex(noise.raw, scratch)));
-    case FieldId::reason:
-      return visit(text(to_string(noise.reason)));
-    case FieldId::request:
-      return noise.request && visit(number(static_cast<double>(*noise.request)));
-    case FieldId::findings:
-      return finding_names(noise.findings, visit);
-    default:
-      return false;
+  void registers(FieldId id, std::span<const RegisterValue> registers) {
+    if (found) return;
+    if (name_.kind == NameKind::register_attribute || name_.kind == NameKind::register_named) {
+      found = register_values(name_, registers, visit_);
+      return;
+    }
+    if (!registers.empty()) offer(id, [&] { return modtap::number(registers.size()); });
   }
-}
-
-template <typename Visit>
-bool timeout_field(FieldId id, const Timeout& t, Visit&& visit) {
-  switch (id) {
-    case FieldId::type:
-      return visit(text(t.timed_out() ? "timeout" : "unanswered"));
-    case FieldId::request:
-      return visit(number(static_cast<double>(t.request)));
-    case FieldId::t_ns:
-      return visit(number(static_cast<double>(t.t_ns)));
-    case FieldId::slave:
-      return visit(number(t.slave));
-    case FieldId::fc:
-      return visit(number(t.function));
-    case FieldId::waited_us:
-      return visit(number(static_cast<double>(t.waited_ns) / 1000));
-    case FieldId::reason:
-      return visit(text(to_string(t.reason)));
-    default:
-      return false;
+  void notes(FieldId id, std::span<const RuleFinding> notes) {
+    if (!notes.empty()) offer(id, [&] { return modtap::number(notes.size()); });
   }
-}
+  void pdu(const DecodedPdu& pdu) {
+    if (!found && name_.kind == NameKind::field) found = pdu_values(name_, pdu, scratch_, visit_);
+  }
 
-// What a node needs of a record: whether any value of a name satisfies a test.
-// A record's channel, by the name JSON gives it.
-template <typename Visit>
-bool channel_value(const Name& name, uint16_t channel, const std::vector<std::string>& channels,
-                   Visit&& visit) {
-  if (std::find(name.ids.begin(), name.ids.end(), FieldId::channel) == name.ids.end()) return false;
-  return visit(text(channel < channels.size() ? std::string_view(channels[channel]) : ""));
-}
+ private:
+  bool wants(FieldId id) const {
+    return name_.kind == NameKind::field &&
+           std::find(name_.ids.begin(), name_.ids.end(), id) != name_.ids.end();
+  }
+  template <typename Make>
+  void offer(FieldId id, Make&& make) {
+    if (!found && wants(id)) found = visit_(make());
+  }
 
-struct FrameRecord {
-  const Frame& frame;
-  const DecodedPdu& pdu;
+  const Name& name_;
+  const std::vector<std::string>& channels_;
+  std::string& scratch_;
+  Visit& visit_;
+};
+
+// A record as the filter sees it: the walk over its fields.
+template <typename Walk>
+struct WalkedRecord {
+  Walk walk;
   const std::vector<std::string>& channels;
   template <typename Visit>
   bool any(const Name& name, std::string& scratch, Visit&& visit) const {
-    if (channel_value(name, frame.channel, channels, visit)) return true;
-    switch (name.kind) {
-      case NameKind::finding:
-        return has_finding(frame, name.finding) && visit(number(1));
-      case NameKind::register_attribute:
-      case NameKind::register_named:
-        return register_values(name, frame.meaning, visit);
-      case NameKind::field:
-        break;
-    }
-    for (FieldId id : name.ids)
-      if (frame_field(id, frame, pdu, scratch, visit)) return true;
-    return pdu_values(name, pdu, scratch, visit);
+    NameValues<std::remove_reference_t<Visit>> values(name, channels, scratch, visit);
+    walk(values);
+    return values.found;
   }
 };
-
-struct NoiseRecord {
-  const Noise& noise;
-  const std::vector<std::string>& channels;
-  template <typename Visit>
-  bool any(const Name& name, std::string& scratch, Visit&& visit) const {
-    if (name.kind == NameKind::finding)
-      return name.finding < frame_finding_count && ((noise.findings >> name.finding) & 1) &&
-             visit(number(1));
-    if (name.kind != NameKind::field) return false;
-    if (channel_value(name, noise.channel, channels, visit)) return true;
-    for (FieldId id : name.ids)
-      if (noise_field(id, noise, scratch, visit)) return true;
-    return false;
-  }
-};
-
-struct TimeoutRecord {
-  const Timeout& timeout;
-  const std::vector<std::string>& channels;
-  template <typename Visit>
-  bool any(const Name& name, std::string&, Visit&& visit) const {
-    if (name.kind != NameKind::field) return false;
-    if (channel_value(name, timeout.channel, channels, visit)) return true;
-    for (FieldId id : name.ids)
-      if (timeout_field(id, timeout, visit)) return true;
-    return false;
-  }
-};
+template <typename Walk>
+WalkedRecord(Walk, const std::vector<std::string>&) -> WalkedRecord<Walk>;
 
 template <typename Record>
 bool evaluate(const std::vector<FilterNode>& nodes, size_t at, const Record& record,
@@ -775,13 +680,16 @@ DisplayFilter::~DisplayFilter() = default;
 DisplayFilter::DisplayFilter(DisplayFilter&&) noexcept = default;
 
 bool DisplayFilter::matches(const Frame& frame, const DecodedPdu& pdu) const {
-  return evaluate(nodes_, 0, FrameRecord{frame, pdu, channels_}, scratch_);
+  const WalkedRecord record{[&](auto& fields) { walk_fields(frame, pdu, fields); }, channels_};
+  return evaluate(nodes_, 0, record, scratch_);
 }
 bool DisplayFilter::matches(const Noise& noise) const {
-  return evaluate(nodes_, 0, NoiseRecord{noise, channels_}, scratch_);
+  const WalkedRecord record{[&](auto& fields) { walk_fields(noise, fields); }, channels_};
+  return evaluate(nodes_, 0, record, scratch_);
 }
 bool DisplayFilter::matches(const Timeout& timeout) const {
-  return evaluate(nodes_, 0, TimeoutRecord{timeout, channels_}, scratch_);
+  const WalkedRecord record{[&](auto& fields) { walk_fields(timeout, fields); }, channels_};
+  return evaluate(nodes_, 0, record, scratch_);
 }
 
 FilterStage::FilterStage(DisplayFilter filter, RecordSink& next)

@@ -1,8 +1,10 @@
 #include "output/json_sink.hpp"
 
+#include <algorithm>
 #include <array>
 #include <string>
 
+#include "models/record_fields.hpp"
 #include "output/render.hpp"
 #include "protocol/pdu_fields.hpp"
 
@@ -27,184 +29,233 @@ void JsonSink::channel(uint16_t id) {
 
 namespace {
 
-// `,"mode":"rtu","role":"request","slave":` for each mode and role, made once: one copy a line.
-std::string_view mode_and_role(Mode mode, Role role) {
-  static const auto pieces = [] {
-    std::array<std::array<std::string, 3>, 2> made;
-    for (const Mode m : {Mode::rtu, Mode::ascii})
-      for (const Role r : {Role::request, Role::response, Role::unknown})
-        made[static_cast<size_t>(m)][static_cast<size_t>(r)] =
-            fmt::format(",\"mode\":\"{}\",\"role\":\"{}\",\"slave\":", to_string(m), to_string(r));
-    return made;
-  }();
-  return pieces[static_cast<size_t>(mode)][static_cast<size_t>(role)];
+// `,"name":` of each field, made at compile time from the registry; a record's first field,
+// always its type, opens the object instead. Keys are most of a JSON line's pieces.
+template <FieldId id>
+constexpr auto json_key = [] {
+  constexpr std::string_view name = field_info(id).name;
+  std::array<char, name.size() + 4> key{};
+  key[0] = id == FieldId::type ? '{' : ',';
+  key[1] = '"';
+  std::copy(name.begin(), name.end(), key.begin() + 2);
+  key[name.size() + 2] = '"';
+  key[name.size() + 3] = ':';
+  return key;
+}();
+
+// A field's key and a value that never changes, made at compile time.
+template <FieldId id, size_t size>
+constexpr auto keyed(const char (&value)[size]) {
+  std::array<char, json_key<id>.size() + size - 1> piece{};
+  std::copy(json_key<id>.begin(), json_key<id>.end(), piece.begin());
+  std::copy(value, value + size - 1, piece.begin() + json_key<id>.size());
+  return piece;
+}
+template <FieldId id>
+constexpr auto json_null = keyed<id>("null");
+template <FieldId id>
+constexpr auto json_true = keyed<id>("true");
+
+template <size_t size>
+void put_piece(fmt::memory_buffer& out, const std::array<char, size>& piece) {
+  put(out, {piece.data(), size});
+}
+template <FieldId id>
+void put_key(fmt::memory_buffer& out) {
+  put_piece(out, json_key<id>);
 }
 
-// `,"fc":3,"function":"Read Holding Registers","raw":"` for each function code byte, made once.
-std::string_view function_and_raw(uint8_t function) {
-  static const auto pieces = texts_per_byte([](fmt::memory_buffer& piece, uint8_t fc) {
-    put(piece, ",\"fc\":");
-    put_uint(piece, fc & 0x7F);
-    put(piece, ",\"function\":\"");
-    put_function_label(piece, fc);
-    put(piece, "\",\"raw\":\"");
+// `,"mode":"rtu"` for each value of a field's enumeration, made at compile time.
+template <FieldId id, NamedEnum Enum>
+struct JsonChoices {
+  static constexpr const auto& names = EnumNames<Enum>::names;
+  static constexpr size_t longest = std::ranges::max(names, {}, &std::string_view::size).size();
+  struct Piece {
+    std::array<char, json_key<id>.size() + longest + 2> text{};
+    size_t size = 0;
+  };
+  static constexpr auto pieces = [] {
+    std::array<Piece, names.size()> made{};
+    for (size_t i = 0; i < names.size(); ++i) {
+      Piece& piece = made[i];
+      for (const char c : json_key<id>) piece.text[piece.size++] = c;
+      piece.text[piece.size++] = '"';
+      for (const char c : names[i]) piece.text[piece.size++] = c;
+      piece.text[piece.size++] = '"';
+    }
+    return made;
+  }();
+};
+
+// `,"fc":3,"function":"Read Holding Registers"` for each function code byte, made once.
+std::string_view function_code_piece(uint8_t byte) {
+  static const auto pieces = texts_per_byte([](fmt::memory_buffer& piece, uint8_t code) {
+    put_key<FieldId::fc>(piece);
+    put_uint(piece, code & 0x7F);
+    put_key<FieldId::function>(piece);
+    piece.push_back('"');
+    put(piece, function_label(code));
+    piece.push_back('"');
   });
-  return pieces[function];
+  return pieces[byte];
 }
 
 }  // namespace
 
-void JsonSink::on_frame(const Frame& frame) {
-  auto& buf = out_.buffer();
-  put(buf, "{\"type\":\"frame\",\"index\":");
-  put_uint(buf, frame.index);
-  put(buf, ",\"t_ns\":");
-  time_text_.put(buf, frame.t_ns);
-  put(buf, ",\"end_ns\":");
-  time_text_.put(buf, frame.end_ns);
-  channel(frame.channel);
-  put(buf, ",\"offset\":");
-  put_uint(buf, frame.offset);
-  put(buf, mode_and_role(frame.mode, frame.role));
-  put_uint(buf, frame.slave());
-  put(buf, function_and_raw(frame.function()));
-  append_hex(buf, frame.raw, false);
-  put(buf, frame.check_ok ? "\",\"check\":\"ok\",\"check_value\":"
-                          : "\",\"check\":\"bad\",\"check_value\":");
-  const uint16_t check = frame.wire_check();
-  const size_t check_at = buf.size();
-  put_uint(buf, check);
-  const size_t check_end = buf.size();
-  put(buf, ",\"expected_check\":");
-  if (frame.damage == Damage::cut) {
-    put(buf, "null");
-  } else if (frame.expected_check == check) {  // a good check: the same digits
-    put_again(buf, check_at, check_end);
-  } else {
-    put_uint(buf, frame.expected_check);
-  }
-  // The usual nulls with the keys around them, in one copy each.
-  if (frame.damage != Damage::none) {
-    put(buf, ",\"damage\":\"");
-    put(buf, to_string(frame.damage));
-    put(buf, "\",\"exception\":");
-  } else {
-    put(buf, ",\"damage\":null,\"exception\":");
-  }
-  if (frame.is_exception() && frame.adu.size() > 2) {
-    put_uint(buf, frame.adu[2]);
-    put(buf, ",\"request\":");
-  } else {
-    put(buf, "null,\"request\":");
-  }
-  if (frame.request) {
-    put_uint(buf, *frame.request);
-  } else {
-    put(buf, "null");
-  }
-  if (frame.latency_ns) {
-    put(out_.buffer(), ",\"latency_us\":");
-    put_fixed(out_.buffer(), Fixed{*frame.latency_ns, 3, 3});
-  } else {
-    put(buf, ",\"latency_us\":null");
-  }
-  put(buf, ",\"findings\":[");
-  bool first = finding_names(frame.findings);
-  if (frame.meaning) {
-    for (const RuleFinding& finding : frame.meaning->findings) {
-      if (!first) buf.push_back(',');
-      buf.push_back('"');
-      put(buf, to_string(finding.kind));
-      buf.push_back('"');
-      first = false;
-    }
-  }
-  buf.push_back(']');
-  if (frame.meaning) meaning(*frame.meaning);
-  const DecodedPdu& pdu = fields_of(frame, decoded_);
-  for (size_t at = 0; at < pdu.fields.size();) {
-    buf.push_back(',');
-    at = append_json_field(buf, pdu, at);
-  }
-  if (pdu.truncated) put(buf, ",\"truncated\":true");
-  put(buf, "}\n");
-  out_.end_record();
-}
+// Renders the walk over a record's fields (models/record_fields.hpp) as one JSON object.
+class JsonSink::Fields {
+ public:
+  explicit Fields(JsonSink& sink) : sink_(sink), buf_(sink.out_.buffer()) {}
 
-// The names of the findings in `bits`, comma-separated; true if there were none.
-bool JsonSink::finding_names(uint32_t bits) {
-  bool none = true;
-  auto& buf = out_.buffer();
-  for_each_frame_finding(bits, [&](size_t slot) {
-    if (!none) buf.push_back(',');
-    buf.push_back('"');
-    put(buf, frame_findings()[slot].name);
-    buf.push_back('"');
-    none = false;
-  });
-  return none;
-}
-
-// "model", "registers" and "notes": each model finding's kind, address and explanation.
-void JsonSink::meaning(const Meaning& meaning) {
-  auto& buf = out_.buffer();
-  if (meaning.model != model_key_for_) {  // escaped once per model, not for every record
-    model_key_for_ = meaning.model;
-    model_key_.clear();
-    put(model_key_, ",\"model\":");
-    append_json_string(model_key_, meaning.model->name);
-  }
-  put(buf, {model_key_.data(), model_key_.size()});
-  put(buf, ",\"registers\":[");
-  for (size_t i = 0; i < meaning.registers.size(); ++i) {
-    if (i) buf.push_back(',');
-    append_register_json(buf, meaning.registers[i]);
-  }
-  put(buf, "],\"notes\":[");
-  for (size_t i = 0; i < meaning.findings.size(); ++i) {
-    const RuleFinding& finding = meaning.findings[i];
-    if (i) buf.push_back(',');
-    put(buf, "{\"finding\":\"");
-    put(buf, to_string(finding.kind));
-    put(buf, "\",\"addr\":");
-    if (finding.address) {
-      put_uint(buf, *finding.address);
+  template <FieldId id>
+  void name(FieldTag<id>, std::string_view text) {
+    if constexpr (id == FieldId::model) {
+      sink_.model_key(text);  // a name from a YAML file, escaped once
     } else {
-      put(buf, "null");
+      put_key<id>(buf_);
+      buf_.push_back('"');
+      put(buf_, text);
+      buf_.push_back('"');
     }
-    put(buf, ",\"text\":");
-    append_json_string(buf, finding.text);
-    buf.push_back('}');
   }
-  buf.push_back(']');
+  template <FieldId id, NamedEnum Enum>
+  void choice(FieldTag<id>, Enum value) {
+    const auto& piece = JsonChoices<id, Enum>::pieces[static_cast<size_t>(value)];
+    put(buf_, {piece.text.data(), piece.size});
+  }
+  template <FieldId fc, FieldId function>
+  void function_code(FieldTag<fc>, FieldTag<function>, uint8_t byte) {
+    put(buf_, function_code_piece(byte));
+  }
+  template <FieldId id>
+  void number(FieldTag<id>, uint64_t n) {
+    put_key<id>(buf_);
+    put_uint(buf_, n);
+  }
+  template <FieldId id>
+  void time(FieldTag<id>, int64_t ns) {
+    put_key<id>(buf_);
+    sink_.time_text_.put(buf_, ns);
+  }
+  template <FieldId id>
+  void micros(FieldTag<id>, int64_t ns) {
+    put_key<id>(buf_);
+    put_fixed(buf_, Fixed{ns, 3, 3});
+  }
+  void channel(FieldId, uint16_t number) { sink_.channel(number); }
+  template <FieldId id>
+  void bytes(FieldTag<id>, std::span<const uint8_t> bytes) {
+    put_key<id>(buf_);
+    buf_.push_back('"');
+    append_hex(buf_, bytes, false);
+    buf_.push_back('"');
+  }
+  template <FieldId id>
+  void boolean(FieldTag<id>, bool value) {
+    put_key<id>(buf_);
+    put(buf_, value ? "true" : "false");
+  }
+  template <FieldId id>
+  void absent(FieldTag<id>) {
+    put_piece(buf_, json_null<id>);
+  }
+  template <FieldId id>
+  void flag(FieldTag<id>) {
+    put_piece(buf_, json_true<id>);
+  }
+  template <FieldId id>
+  void findings(FieldTag<id>, FindingSlots slots) {
+    put_key<id>(buf_);
+    buf_.push_back('[');
+    const auto names = finding_registry();
+    bool first = true;
+    slots.each([&](size_t slot) {
+      if (!first) buf_.push_back(',');
+      first = false;
+      buf_.push_back('"');
+      put(buf_, names[slot].name);
+      buf_.push_back('"');
+    });
+    buf_.push_back(']');
+  }
+  template <FieldId id>
+  void registers(FieldTag<id>, std::span<const RegisterValue> values) {
+    put_key<id>(buf_);
+    buf_.push_back('[');
+    for (size_t i = 0; i < values.size(); ++i) {
+      if (i) buf_.push_back(',');
+      append_register_json(buf_, values[i]);
+    }
+    buf_.push_back(']');
+  }
+  template <FieldId id>
+  void notes(FieldTag<id>, std::span<const RuleFinding> notes) {
+    put_key<id>(buf_);
+    append_notes(notes);
+  }
+  void pdu(const DecodedPdu& pdu) {
+    for (size_t at = 0; at < pdu.fields.size();) {
+      buf_.push_back(',');
+      at = append_json_field(buf_, pdu, at);
+    }
+  }
+
+ private:
+  // Each model finding's kind, address and explanation.
+  void append_notes(std::span<const RuleFinding> notes) {
+    buf_.push_back('[');
+    for (size_t i = 0; i < notes.size(); ++i) {
+      const RuleFinding& finding = notes[i];
+      if (i) buf_.push_back(',');
+      put(buf_, "{\"finding\":\"");
+      put(buf_, to_string(finding.kind));
+      put(buf_, "\",\"addr\":");
+      if (finding.address) {
+        put_uint(buf_, *finding.address);
+      } else {
+        put(buf_, "null");
+      }
+      put(buf_, ",\"text\":");
+      append_json_string(buf_, finding.text);
+      buf_.push_back('}');
+    }
+    buf_.push_back(']');
+  }
+
+  JsonSink& sink_;
+  fmt::memory_buffer& buf_;
+};
+
+// `,"model":"NAME"`, escaped once per model rather than for every record.
+void JsonSink::model_key(std::string_view name) {
+  if (model_key_.size() == 0 || name.data() != model_name_.data() ||
+      name.size() != model_name_.size()) {
+    model_name_ = name;
+    model_key_.clear();
+    put_key<FieldId::model>(model_key_);
+    append_json_string(model_key_, name);
+  }
+  put(out_.buffer(), {model_key_.data(), model_key_.size()});
+}
+
+void JsonSink::on_frame(const Frame& frame) {
+  Fields fields(*this);
+  walk_fields(frame, fields_of(frame, decoded_), fields);
+  put(out_.buffer(), "}\n");
+  out_.end_record();
 }
 
 void JsonSink::on_noise(const Noise& noise) {
-  out_.print(FMT_COMPILE("{{\"type\":\"noise\",\"index\":{},\"t_ns\":{},\"end_ns\":{}"),
-             noise.index, noise.t_ns, noise.end_ns);
-  channel(noise.channel);
-  out_.print(FMT_COMPILE(",\"offset\":{},\"mode\":\"{}\",\"raw\":\""), noise.offset,
-             to_string(noise.mode));
-  append_hex(out_.buffer(), noise.raw, false);
-  out_.print(FMT_COMPILE("\",\"reason\":\"{}\""), to_string(noise.reason));
-  if (noise.request) {
-    out_.print(FMT_COMPILE(",\"request\":{}"), *noise.request);
-  } else {
-    out_.print(FMT_COMPILE(",\"request\":null"));
-  }
-  out_.print(FMT_COMPILE(",\"damaged_answer\":{}"), noise.damaged_answer);
-  out_.print(FMT_COMPILE(",\"findings\":["));
-  finding_names(noise.findings);
-  out_.print(FMT_COMPILE("]}}\n"));
+  Fields fields(*this);
+  walk_fields(noise, fields);
+  put(out_.buffer(), "}\n");
   out_.end_record();
 }
 
-void JsonSink::on_timeout(const Timeout& t) {
-  out_.print(FMT_COMPILE("{{\"type\":\"{}\",\"request\":{},\"t_ns\":{}"),
-             t.timed_out() ? "timeout" : "unanswered", t.request, t.t_ns);
-  channel(t.channel);
-  out_.print(FMT_COMPILE(",\"slave\":{},\"fc\":{},\"waited_us\":{},\"reason\":\"{}\"}}\n"), t.slave,
-             t.function, Fixed{t.waited_ns, 3, 3}, to_string(t.reason));
+void JsonSink::on_timeout(const Timeout& timeout) {
+  Fields fields(*this);
+  walk_fields(timeout, fields);
+  put(out_.buffer(), "}\n");
   out_.end_record();
 }
 

@@ -23,9 +23,9 @@ class JsonSink final : public RecordSink {
   void on_timeout(const Timeout& timeout) override;
 
  private:
+  class Fields;
   void channel(uint16_t id);
-  void meaning(const Meaning& meaning);
-  bool finding_names(uint32_t bits);
+  void model_key(std::string_view name);
 
   Output& out_;
   const std::vector<ChannelInfo>& channels_;  // may grow and be renamed as it goes
@@ -35,8 +35,8 @@ class JsonSink final : public RecordSink {
     fmt::memory_buffer json;
   };
   std::vector<ChannelKey> channel_keys_;
-  // `,"model":"NAME"` of the model it was last made for (models do not change in a run).
-  const DeviceModel* model_key_for_ = nullptr;
+  // `,"model":"NAME"` as last made, and the name it was made from (a model's name stays put).
+  std::string_view model_name_;
   fmt::memory_buffer model_key_;
   NanosecondsText time_text_;
   DecodedPdu decoded_;  // the frame's fields, its capacity kept from frame to frame

@@ -290,17 +290,8 @@ void append_register_keys(fmt::memory_buffer& out, const RegisterValue& reg) {
   optional_string(reg.text);
 }
 
-// The label in `unnamed`'s room when the standard has no name for the code.
-std::string_view function_label(uint8_t fc, char (&unnamed)[16]) {
-  const std::string_view name = function_name(fc);
-  if (!name.empty()) return name;
-  const auto end = fmt::format_to(unnamed, FMT_COMPILE("Function 0x{:02X}"), fc & 0x7F);
-  return {unnamed, static_cast<size_t>(end - unnamed)};
-}
-
 void put_function_label(fmt::memory_buffer& out, uint8_t fc) {
-  char unnamed[16];
-  put(out, function_label(fc, unnamed));
+  put(out, function_label(fc));
 }
 
 }  // namespace modtap::output
@@ -308,8 +299,7 @@ void put_function_label(fmt::memory_buffer& out, uint8_t fc) {
 auto fmt::formatter<modtap::output::FunctionLabel>::format(modtap::output::FunctionLabel label,
                                                            format_context& ctx) const
     -> decltype(ctx.out()) {
-  char unnamed[16];
-  return write(ctx.out(), modtap::output::function_label(label.fc, unnamed));
+  return write(ctx.out(), modtap::function_label(label.fc));
 }
 
 auto fmt::formatter<modtap::output::Fixed>::format(modtap::output::Fixed number,

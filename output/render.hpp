@@ -52,8 +52,6 @@ void put_function_label(fmt::memory_buffer& out, uint8_t fc);
 inline std::string counted(uint64_t n, std::string_view one, std::string_view many) {
   return fmt::format("{} {}", n, n == 1 ? one : many);
 }
-// The same into `unnamed`'s room, for fmt's formatter.
-std::string_view function_label(uint8_t fc, char (&unnamed)[16]);
 
 // `count` spaces in one piece (a push_back each checked the room every time).
 inline void put_spaces(fmt::memory_buffer& out, size_t count) {

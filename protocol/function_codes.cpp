@@ -1,6 +1,10 @@
 #include "protocol/function_codes.hpp"
 
 #include <algorithm>
+#include <array>
+#include <string>
+
+#include <fmt/format.h>
 
 namespace modtap {
 namespace {
@@ -855,6 +859,18 @@ std::string_view diagnostic_name(uint16_t sub) {
     default:
       return {};
   }
+}
+
+std::string_view function_label(uint8_t fc) {
+  static const std::array<std::string, 256> labels = [] {
+    std::array<std::string, 256> made;
+    for (size_t code = 0; code < made.size(); ++code) {
+      const std::string_view name = function_name(static_cast<uint8_t>(code));
+      made[code] = name.empty() ? fmt::format("Function 0x{:02X}", code & 0x7F) : std::string(name);
+    }
+    return made;
+  }();
+  return labels[fc];
 }
 
 }  // namespace modtap

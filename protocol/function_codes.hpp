@@ -129,6 +129,9 @@ inline bool may_broadcast(uint8_t fc) {
 inline std::string_view function_name(uint8_t fc) {
   return function_code(fc).name;
 }
+// The standard's name, or "Function 0x41" for a code it does not name (the exception bit
+// left off).
+std::string_view function_label(uint8_t fc);
 // Names from the Modbus Application Protocol, or empty where it has none.
 std::string_view exception_name(uint8_t code);
 std::string_view diagnostic_name(uint16_t sub);  // FC08 sub-function

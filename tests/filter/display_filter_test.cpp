@@ -114,6 +114,9 @@ TEST(DisplayFilter, NoiseAndTimeOutsHaveTheirOwnFields) {
   noise.reason = NoiseReason::glitch;
   EXPECT_TRUE(DisplayFilter("type == noise && reason == glitch", {}).matches(noise));
   EXPECT_FALSE(DisplayFilter("slave == 0", {}).matches(noise));
+  EXPECT_FALSE(DisplayFilter("damaged_answer", {}).matches(noise));  // a flag: present if true
+  noise.damaged_answer = true;
+  EXPECT_TRUE(DisplayFilter("damaged_answer", {}).matches(noise));
   Timeout timeout;
   timeout.slave = 9;
   timeout.waited_ns = 1'500'000;

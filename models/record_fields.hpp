@@ -1,0 +1,153 @@
+// A record's fields, walked in one place: which fields each kind of record has, in the order
+// JSON writes them, and what each holds. Outputs render the walk and the display filter
+// evaluates it; none of them reads a record's members for a field itself. It sits beside the
+// models because a frame's fields include the model's reading.
+//
+// A visitor has these calls, each given the field's id as a FieldTag, which converts to a
+// FieldId (the registry says its name and type) or gives it at compile time:
+//   name(id, text)          a fixed name: the standard's, a model's
+//   choice(id, value)       a value of an enumeration; to_string gives its name
+//   function_code(fc, function, byte)
+//                           the function code's byte: its number (exception bit off) and label
+//   number(id, n)           an unsigned integer
+//   time(id, ns)            a moment in nanoseconds
+//   micros(id, ns)          a duration, shown in microseconds
+//   channel(id, number)     the record's channel; its name is the visitor's to know
+//   bytes(id, bytes)
+//   boolean(id, value)
+//   absent(id)              a field this kind of record has and this record lacks (JSON's null)
+//   findings(id, findings)  a FindingSlots
+//   registers(id, values)   the model's reading, span<const RegisterValue>
+//   notes(id, findings)     the model's findings with their texts, span<const RuleFinding>
+//   pdu(fields)             the PDU's fields, in the order the function-code table decodes them
+//   flag(id)                a flag that is set; one that is not is not walked
+// A field that only some records have (the model's, `truncated`) is walked only where present.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "models/register_meaning.hpp"
+#include "protocol/field_registry.hpp"
+#include "protocol/findings.hpp"
+#include "protocol/function_codes.hpp"
+#include "protocol/pdu_fields.hpp"
+#include "protocol/records.hpp"
+
+namespace modtap {
+
+// What `type` says of a record, and `check` of a frame.
+enum class RecordType : uint8_t { frame, noise, timeout, unanswered };
+template <>
+struct EnumNames<RecordType> {
+  static constexpr std::array<std::string_view, 4> names{"frame", "noise", "timeout", "unanswered"};
+};
+enum class CheckResult : uint8_t { bad, ok };
+template <>
+struct EnumNames<CheckResult> {
+  static constexpr std::array<std::string_view, 2> names{"bad", "ok"};
+};
+
+// A record's findings from both places they are kept (the frame's bit set, the model's rules)
+// as one sequence of finding_registry() slots, the frame's first.
+struct FindingSlots {
+  uint32_t bits = finding_none;
+  const Meaning* meaning = nullptr;
+
+  template <typename Visit>
+  void each(Visit&& visit) const {
+    for_each_frame_finding(bits, visit);
+    if (meaning)
+      for (const RuleFinding& finding : meaning->findings) visit(finding_slot(finding.kind));
+  }
+  bool has(size_t slot) const {
+    bool found = false;
+    each([&](size_t s) { found = found || s == slot; });
+    return found;
+  }
+};
+
+inline FindingSlots findings_of(const Frame& frame) {
+  return {frame.findings, frame.meaning};
+}
+
+template <typename Visitor>
+void walk_fields(const Frame& frame, const DecodedPdu& pdu, Visitor& v) {
+  using enum FieldId;
+  v.choice(field<type>, RecordType::frame);
+  v.number(field<index>, frame.index);
+  v.time(field<t_ns>, frame.t_ns);
+  v.time(field<end_ns>, frame.end_ns);
+  v.channel(field<channel>, frame.channel);
+  v.number(field<offset>, frame.offset);
+  v.choice(field<mode>, frame.mode);
+  v.choice(field<role>, frame.role);
+  v.number(field<slave>, frame.slave());
+  v.function_code(field<fc>, field<function>, frame.function());
+  v.bytes(field<raw>, frame.raw);
+  v.choice(field<check>, frame.check_ok ? CheckResult::ok : CheckResult::bad);
+  v.number(field<check_value>, frame.wire_check());
+  if (frame.damage == Damage::cut)
+    v.absent(field<expected_check>);  // the frame ended before its check
+  else
+    v.number(field<expected_check>, frame.expected_check);
+  if (frame.damage != Damage::none)
+    v.choice(field<damage>, frame.damage);
+  else
+    v.absent(field<damage>);
+  if (frame.is_exception())
+    v.number(field<exception>, frame.adu[2]);
+  else
+    v.absent(field<exception>);
+  if (frame.request)
+    v.number(field<request>, *frame.request);
+  else
+    v.absent(field<request>);
+  if (frame.latency_ns)
+    v.micros(field<latency_us>, *frame.latency_ns);
+  else
+    v.absent(field<latency_us>);
+  v.findings(field<findings>, findings_of(frame));
+  if (const Meaning* meaning = frame.meaning) {
+    v.name(field<model>, meaning->model->name);
+    v.registers(field<registers>, std::span<const RegisterValue>(meaning->registers));
+    v.notes(field<notes>, std::span<const RuleFinding>(meaning->findings));
+  }
+  v.pdu(pdu);
+  if (pdu.truncated) v.flag(field<truncated>);
+}
+
+template <typename Visitor>
+void walk_fields(const Noise& noise, Visitor& v) {
+  using enum FieldId;
+  v.choice(field<type>, RecordType::noise);
+  v.number(field<index>, noise.index);
+  v.time(field<t_ns>, noise.t_ns);
+  v.time(field<end_ns>, noise.end_ns);
+  v.channel(field<channel>, noise.channel);
+  v.number(field<offset>, noise.offset);
+  v.choice(field<mode>, noise.mode);
+  v.bytes(field<raw>, noise.raw);
+  v.choice(field<reason>, noise.reason);
+  if (noise.request)
+    v.number(field<request>, *noise.request);
+  else
+    v.absent(field<request>);
+  v.boolean(field<damaged_answer>, noise.damaged_answer);
+  v.findings(field<findings>, FindingSlots{noise.findings, nullptr});
+}
+
+template <typename Visitor>
+void walk_fields(const Timeout& timeout, Visitor& v) {
+  using enum FieldId;
+  v.choice(field<type>, timeout.timed_out() ? RecordType::timeout : RecordType::unanswered);
+  v.number(field<request>, timeout.request);
+  v.time(field<t_ns>, timeout.t_ns);
+  v.channel(field<channel>, timeout.channel);
+  v.number(field<slave>, timeout.slave);
+  v.number(field<fc>, timeout.function);
+  v.micros(field<waited_us>, timeout.waited_ns);
+  v.choice(field<reason>, timeout.reason);
+}
+
+}  // namespace modtap
