@@ -1,7 +1,10 @@
 #include "captures/hexlog_reader.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <ctime>
+#include <limits>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -26,6 +29,12 @@ std::string printable(const std::string& s) {
   for (unsigned char c : s)
     out += std::isprint(c) ? std::string(1, static_cast<char>(c)) : fmt::format("\\x{:02x}", c);
   return out;
+}
+
+bool all_hex(const std::string& s, size_t at, size_t n) {
+  for (size_t i = at; i < at + n; ++i)
+    if (!std::isxdigit(static_cast<unsigned char>(s[i]))) return false;
+  return true;
 }
 
 int hex_digit(char c) {
@@ -55,6 +64,7 @@ uint16_t HexlogReader::channel_for(const std::string& name) {
                 : name == "slave" ? ChannelRole::slave
                                   : ChannelRole::bus;
     channels_.push_back({name.empty() ? lines_.path() : name, role});
+    last_blocks_.emplace_back();
   }
   return it->second;
 }
@@ -78,45 +88,94 @@ void HexlogReader::start_block(const std::string& s) {
   tm.tm_sec = number(s, 17, 2);
   tm.tm_isdst = -1;
   const std::time_t seconds = std::mktime(&tm);
-  block_start_ns_ = static_cast<int64_t>(seconds) * 1'000'000'000 + number(s, 20, 6) * 1000LL;
-  channel_ = channel_for(s.size() > stamp_size ? s.substr(stamp_size + 1) : std::string());
-  block_bytes_ = 0;
-  in_block_ = true;
+  block_.stamp_ns = static_cast<int64_t>(seconds) * 1'000'000'000 + number(s, 20, 6) * 1000LL;
+  block_.channel = channel_for(s.size() > stamp_size ? s.substr(stamp_size + 1) : std::string());
 }
 
-bool HexlogReader::next(Chunk& chunk) {
+// Appends a line's bytes to the block: the hex after --byte-count's eight digits and a tab,
+// before --ascii's tab and text column.
+void HexlogReader::add_line(const std::string& line) {
+  size_t at = 0;
+  if (line.size() > 8 && line[8] == '\t' && all_hex(line, 0, 8)) at = 9;
+  const size_t end = std::min(line.find('\t', at), line.size());
+  const size_t before = block_.bytes.size();
+  for (size_t i = at; i < end;) {
+    if (line[i] == ' ') {
+      ++i;
+      continue;
+    }
+    const int hi = hex_digit(line[i]);
+    const int lo = i + 1 < end ? hex_digit(line[i + 1]) : -1;
+    if (hi < 0 || lo < 0 || (i + 2 < end && line[i + 2] != ' '))
+      throw CaptureError(fmt::format("{}: line {}, column {}: expected a hex byte, found \"{}\"",
+                                     lines_.path(), lines_.line_number(), i + 1,
+                                     printable(line.substr(i, std::min<size_t>(8, end - i)))));
+    block_.bytes.push_back(static_cast<uint8_t>(hi << 4 | lo));
+    i += 2;
+  }
+  if (block_.bytes.size() > before) block_.line_ends.push_back(block_.bytes.size());
+}
+
+// The next block's stamp: the line that ended the block before, or the next stamp line. False
+// at the end of the file.
+bool HexlogReader::begin_block() {
+  block_.bytes.clear();
+  block_.line_ends.clear();
+  block_.next_line = 0;
+  if (std::exchange(block_continues_, false)) return true;
+  if (next_header_) {
+    start_block(*next_header_);
+    next_header_.reset();
+    return true;
+  }
   while (lines_.next(line_)) {
     if (is_header(line_)) {
       start_block(line_);
-      continue;
+      return true;
     }
-    // With --ascii the hex is followed by a tab and a printable column.
-    const std::string hex = line_.substr(0, line_.find('\t'));
-    bytes_.clear();
-    for (size_t i = 0; i < hex.size();) {
-      if (hex[i] == ' ') {
-        ++i;
-        continue;
-      }
-      const int hi = hex_digit(hex[i]);
-      const int lo = i + 1 < hex.size() ? hex_digit(hex[i + 1]) : -1;
-      if (hi < 0 || lo < 0 || (i + 2 < hex.size() && hex[i + 2] != ' '))
-        throw CaptureError(fmt::format("{}: line {}, column {}: expected a hex byte, found \"{}\"",
-                                       lines_.path(), lines_.line_number(), i + 1,
-                                       printable(hex.substr(i, 8))));
-      bytes_.push_back(static_cast<uint8_t>(hi << 4 | lo));
-      i += 2;
-    }
-    if (bytes_.empty()) continue;
-    if (!in_block_)
+    add_line(line_);
+    if (!block_.bytes.empty())
       throw CaptureError(fmt::format("{}: line {}: bytes before the first time stamp line",
                                      lines_.path(), lines_.line_number()));
-    block_bytes_ += bytes_.size();
-    chunk = {channel_, block_start_ns_ + static_cast<int64_t>(block_bytes_) * char_time_ns_,
-             bytes_};
-    return true;
   }
   return false;
+}
+
+// Reads a block's lines, up to the next stamp line, the end of the file or max_block_bytes,
+// and places them in time: see the header.
+bool HexlogReader::read_block() {
+  bool continued = false;
+  do {
+    continued = block_continues_;
+    if (!begin_block()) return false;
+    while (block_.bytes.size() < max_block_bytes && lines_.next(line_)) {
+      if (is_header(line_)) {
+        next_header_ = line_;
+        break;
+      }
+      add_line(line_);
+    }
+    block_continues_ = block_.bytes.size() >= max_block_bytes;
+  } while (block_.bytes.empty());
+  const int64_t duration_ns = static_cast<int64_t>(block_.bytes.size()) * char_time_ns_;
+  LastBlock& last = last_blocks_[block_.channel];
+  block_.start_ns = block_.stamp_ns - duration_ns;
+  block_.follows_unknown_silence =
+      continued || (block_.stamp_ns >= last.stamp_ns && block_.start_ns < last.end_ns);
+  if (block_.follows_unknown_silence) block_.start_ns = last.end_ns;
+  last = {block_.stamp_ns, block_.start_ns + duration_ns};
+  return true;
+}
+
+bool HexlogReader::next(Chunk& chunk) {
+  if (block_.next_line == block_.line_ends.size() && !read_block()) return false;
+  const size_t line = block_.next_line++;
+  const size_t from = line == 0 ? 0 : block_.line_ends[line - 1];
+  const size_t to = block_.line_ends[line];
+  chunk = {block_.channel, block_.start_ns + static_cast<int64_t>(to) * char_time_ns_,
+           std::span<const uint8_t>(block_.bytes).subspan(from, to - from),
+           line > 0 || block_.follows_unknown_silence};
+  return true;
 }
 
 }  // namespace modtap::captures

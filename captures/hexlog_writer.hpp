@@ -13,8 +13,8 @@ namespace modtap::captures {
 
 class HexlogWriter {
  public:
-  // `char_time_ns` lets the stamp name the block's first byte, as jpnevulator's read does.
-  HexlogWriter(const std::string& path, int64_t char_time_ns);
+  // Each chunk is a block stamped with its end, as jpnevulator stamps a read when it returns.
+  explicit HexlogWriter(const std::string& path);
   void write(const Chunk& chunk, const std::string& tty = {});
   void close() { file_.close(); }
   uint64_t bytes_written() const { return file_.bytes_written(); }
@@ -22,7 +22,6 @@ class HexlogWriter {
  private:
   OutputFile file_;
   fmt::memory_buffer line_;
-  int64_t char_time_ns_;
 };
 
 }  // namespace modtap::captures

@@ -13,11 +13,8 @@ constexpr int raw_dlt = 147;  // DLT_USER0: what modtap -r reads as timed chunks
 }  // namespace
 
 RawRecorder::RawRecorder(const std::string& path, std::vector<ChannelInfo> channels,
-                         int64_t char_time_ns, const RingLimits& limits)
-    : channels_(std::move(channels)),
-      as_pcapng_(ends_with(path, ".pcapng")),
-      char_time_ns_(char_time_ns),
-      ring_(path, limits) {
+                         const RingLimits& limits)
+    : channels_(std::move(channels)), as_pcapng_(ends_with(path, ".pcapng")), ring_(path, limits) {
   if (!limits.rotates()) begin_file(ring_.begin(0));
 }
 
@@ -42,7 +39,7 @@ void RawRecorder::begin_file(const std::string& path) {
     for (const auto& channel : channels_)
       interfaces_.push_back(pcapng_->add_interface(raw_dlt, channel.name));
   } else {
-    hexlog_ = std::make_unique<HexlogWriter>(path, char_time_ns_);
+    hexlog_ = std::make_unique<HexlogWriter>(path);
   }
 }
 

@@ -19,7 +19,7 @@ namespace modtap::captures {
 class RawRecorder {
  public:
   // Throws WriteError when the file cannot be created or written.
-  RawRecorder(const std::string& path, std::vector<ChannelInfo> channels, int64_t char_time_ns,
+  RawRecorder(const std::string& path, std::vector<ChannelInfo> channels,
               const RingLimits& limits = {});
   // `between_frames`: the analyzer holds no byte of an unfinished frame, so a new file of the
   // ring may begin here. On a bus that never pauses, one does after twice the limits anyway.
@@ -34,7 +34,6 @@ class RawRecorder {
 
   std::vector<ChannelInfo> channels_;
   bool as_pcapng_;  // else a timed hex log
-  int64_t char_time_ns_;
   FileRing ring_;
   std::unique_ptr<PcapngWriter> pcapng_;
   std::vector<uint32_t> interfaces_;

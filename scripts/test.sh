@@ -7,7 +7,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 export EXTRA_PACKAGES="libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
   nlohmann-json3-dev python3 python3-pil python3-pymodbus libmodbus-dev mbpoll tshark wireshark
-  xvfb chromium prometheus mosquitto mosquitto-clients strace systemd"
+  xvfb chromium prometheus mosquitto mosquitto-clients strace systemd jpnevulator"
 export CMAKE_ARGS="-DMODTAP_TESTS=ON -DMODTAP_BENCHMARKS=ON"
 if [ "${1:-}" = "--sanitize" ]; then
   export BUILD_DIR=build-sanitize BUILD_TYPE=Debug

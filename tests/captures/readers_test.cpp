@@ -88,10 +88,48 @@ TEST_F(TempDir, HexlogReadsJpnevulatorBlocksAndTtyNames) {
   const int64_t first = chunk.t_ns;
   ASSERT_TRUE(reader.next(chunk));
   EXPECT_EQ(chunk.channel, 1);
-  EXPECT_EQ(chunk.t_ns - first, 201'428'000 + 7000 - 8000);
+  EXPECT_EQ(chunk.t_ns - first, 201'428'000);  // each block ends at its stamp
   EXPECT_FALSE(reader.next(chunk));
   ASSERT_EQ(reader.channels().size(), 2u);
   EXPECT_EQ(reader.channels()[1].name, "/dev/ttyUSB1");
+}
+
+// jpnevulator stamps a block when its first read returns, after the bytes: a block is read as
+// one read ending at its stamp, its lines continuing it (no silence known inside).
+TEST_F(TempDir, HexlogBlockIsOneReadEndingAtItsStamp) {
+  const auto path = write("block.log",
+                          "2026-11-22 10:57:33.000100:\n"
+                          "00000000\t01 03 00 00 00 0A C5 CD 01 03 14 00 00 00 00 00\t........\n"
+                          "00000010\t00 00\t..\n");
+  HexlogReader reader(path, 1000);
+  Chunk first, second;
+  ASSERT_TRUE(reader.next(first));
+  ASSERT_TRUE(reader.next(second));
+  EXPECT_EQ(first.bytes.size(), 16u);  // --byte-count's and --ascii's columns left out
+  EXPECT_EQ(second.bytes.size(), 2u);
+  EXPECT_EQ(second.t_ns - first.t_ns, 2000);
+  EXPECT_EQ(second.t_ns % 1'000'000'000, 100'000);
+  EXPECT_FALSE(first.continues_read);
+  EXPECT_TRUE(second.continues_read);
+}
+
+// With jpnevulator's default --timing-delta, a block gathers every read within 100 ms of the one
+// before: placed to end at its stamp it would begin before the block before it ended. It
+// follows that block instead, the silence between them unknown.
+TEST_F(TempDir, HexlogBlockOfSeveralReadsFollowsTheOneBefore) {
+  const auto path = write("merged.log",
+                          "2026-11-22 10:57:33.000100:\n"
+                          "01 03 00 00 00 0A C5 CD\n"
+                          "2026-11-22 10:57:33.000105:\n"
+                          "01 03 14 00 00 00 00 00 00 00 00 00 00 00 00 00\n");
+  HexlogReader reader(path, 1000);
+  Chunk request, answer;
+  ASSERT_TRUE(reader.next(request));
+  ASSERT_TRUE(reader.next(answer));
+  EXPECT_EQ(request.t_ns % 1'000'000'000, 100'000);
+  EXPECT_FALSE(request.continues_read);
+  EXPECT_EQ(answer.t_ns - request.t_ns, 16'000);
+  EXPECT_TRUE(answer.continues_read);
 }
 
 TEST_F(TempDir, HexlogWithABrokenLineNamesTheLine) {

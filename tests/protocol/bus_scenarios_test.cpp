@@ -64,7 +64,7 @@ std::string write_file(const BusCapture& capture, const Scenario& s) {
     captures::PcapChunkWriter writer(path, 147);
     for (const auto& c : chunks) writer.write(chunk_at(c));
   } else {
-    captures::HexlogWriter writer(path, s.bus.format.char_time_ns());
+    captures::HexlogWriter writer(path);
     for (const auto& c : chunks) writer.write(chunk_at(c));
   }
   return path;

@@ -19,7 +19,7 @@ using namespace modtap;
 constexpr int64_t epoch_ns = 1'700'000'000'000'000'000;
 
 int write(const busgen::BusCapture& capture, const std::string& format, busgen::Delivery delivery,
-          uint64_t seed, const std::string& path, int64_t char_ns) {
+          uint64_t seed, const std::string& path) {
   const auto chunks = busgen::deliver(capture, delivery, seed);
   auto chunk = [&](const busgen::DeliveredChunk& c) {
     return Chunk{0, epoch_ns + c.t_ns, {capture.bytes.data() + c.offset, c.size}};
@@ -28,7 +28,7 @@ int write(const busgen::BusCapture& capture, const std::string& format, busgen::
     captures::PcapChunkWriter writer(path, 147);
     for (const auto& c : chunks) writer.write(chunk(c));
   } else if (format == "hexlog") {
-    captures::HexlogWriter writer(path, char_ns);
+    captures::HexlogWriter writer(path);
     for (const auto& c : chunks) writer.write(chunk(c));
     writer.close();
   } else {
@@ -106,8 +106,7 @@ int main(int argc, char** argv) {
   const auto capture = busgen::simulate(o);
   std::fprintf(stderr, "%zu frames, %zu bytes\n", capture.frames.size(), capture.bytes.size());
   try {
-    return write(capture, format, deliveries.at(delivery_name), o.seed, out,
-                 o.format.char_time_ns());
+    return write(capture, format, deliveries.at(delivery_name), o.seed, out);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "modtap-busgen: %s\n", e.what());
     return 2;

@@ -74,10 +74,9 @@ std::unique_ptr<output::MetricsServer> serve_metrics(const RunOptions& o, Pipeli
 
 std::unique_ptr<captures::RawRecorder> raw_recorder(const RunOptions& o,
                                                     const captures::RingLimits& ring,
-                                                    const std::vector<ChannelInfo>& channels,
-                                                    const SerialFormat& format) {
+                                                    const std::vector<ChannelInfo>& channels) {
   if (o.save_raw.empty()) return nullptr;
-  return std::make_unique<captures::RawRecorder>(o.save_raw, channels, format.char_time_ns(), ring);
+  return std::make_unique<captures::RawRecorder>(o.save_raw, channels, ring);
 }
 
 }  // namespace
@@ -134,7 +133,7 @@ Session::Session(const RunOptions& o, const captures::RingLimits& ring, const Se
                "from the first byte, the bytes laid end to end at the line's speed\n",
                source.path);
   pipeline_.limit_records(o.max_records, std::move(on_limit));
-  raw_ = raw_recorder(o, ring, source.channels, source.format);
+  raw_ = raw_recorder(o, ring, source.channels);
   metrics_ = serve_metrics(o, pipeline_, port_health_);
   if (!o.mqtt_url.empty())
     mqtt_ = std::make_unique<MqttOutput>(o, pipeline_, bus_name(source.path), source.live);
