@@ -788,13 +788,18 @@ bool RtuFramer::too_soon_for_retry(uint64_t at) const {
 
 // A damaged response: reported as a frame with a bad check, so it stays in the slave's
 // picture. Cut short, it has no check to expect; run on, its end is where its structure says.
+// A response its structure says is damaged; one whose CRC holds over the length its structure
+// gives is not (an unnamed exception code and a glitch after it), whatever else came with it.
 void RtuFramer::emit_damaged(uint64_t begin, uint64_t end, Damage damage, uint32_t findings) {
   Frame frame = frame_of(begin, end, {false, true});
-  frame.damage = damage;
   if (damage != Damage::cut)
     frame.expected_check = crc16(frame.adu.first(frame.adu.size() - crc_size));
-  frame.check_ok = false;
-  frame.findings |= finding_bad_check | findings;
+  frame.check_ok = damage != Damage::cut && frame.expected_check == wire_crc(frame.adu);
+  frame.findings |= findings;
+  if (!frame.check_ok) {
+    frame.damage = damage;
+    frame.findings |= finding_bad_check;
+  }
   sink_.on_frame(frame);
   answer_start_ = end;
   consume(end);

@@ -32,6 +32,29 @@ std::vector<uint8_t> with_crc(std::vector<uint8_t> body) {
   return body;
 }
 
+// NTA5000 and N3 answer errors with their own exception codes (51H-55H), which the standard
+// does not name. Between a request's glitch and one after the answer, an answer whose CRC
+// holds is a good frame: a CRC that holds is never printed bad.
+TEST(RtuFramer, AnAnswerWhoseCrcHoldsIsNeverDamaged) {
+  std::vector<uint8_t> bytes;
+  for (const uint8_t code : {0x51, 0x52, 0x53, 0x54, 0x55}) {
+    const auto exception = with_crc({0x01, 0x83, code});
+    for (const auto& part : {read_request, hex("00"), exception, hex("ff")})
+      bytes.insert(bytes.end(), part.begin(), part.end());
+  }
+  const auto out = analyze_untimed(bytes);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 10u);
+  for (const auto& frame : frames) {
+    EXPECT_TRUE(frame.check_ok) << frame.index;
+    EXPECT_EQ(frame.damage, Damage::none) << frame.index;
+    EXPECT_EQ(frame.findings & finding_bad_check, 0u) << frame.index;
+  }
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  for (const auto& glitch : out.noise()) EXPECT_EQ(glitch.reason, NoiseReason::glitch);
+}
+
 TEST(RtuFramer, SplitsARequestAndItsResponseWithNoGapBetweenThem) {
   const auto bytes = concat({read_request, read_response});
   const auto out = analyze_untimed(bytes);
