@@ -689,6 +689,30 @@ TEST(Cli, ModelsDirAddsTheUsersModels) {
   EXPECT_NE(r.lines[1].find("| pump_speed=10.0 rpm"), std::string::npos) << r.lines[1];
 }
 
+// One broken file among the user's models is said, naming it, and the good ones stay usable.
+TEST(Cli, ABrokenModelFileIsLeftOutAndSaid) {
+  const auto dir = std::filesystem::temp_directory_path() / "modtap-broken-models";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "pump.yaml")
+      << "model: pump\nextends: gd20\nregisters:\n"
+         "  - {address: 0x3000, name: pump_speed, scale: 0.1, unit: rpm}\n";
+  std::ofstream(dir / "broken.yaml") << "model: [\n";
+  std::ofstream(dir / "orphan.yaml") << "model: orphan\nextends: broken\n";
+  const std::string capture = raw_capture(
+      "modtap-pump2.raw", {{0x07, 0x03, 0x30, 0x00, 0x00, 0x01}, {0x07, 0x03, 0x02, 0x00, 0x64}});
+  const Outcome r = run("-r " + capture + " --format raw --mode rtu --models-dir " + dir.string() +
+                        " --model 7=pump");
+  ASSERT_EQ(r.status, 0);
+  EXPECT_THAT(r.lines,
+              ::testing::Contains(::testing::AllOf(
+                  ::testing::HasSubstr("modtap: warning: " + (dir / "broken.yaml").string()),
+                  ::testing::HasSubstr("left out of --models-dir"))));
+  EXPECT_THAT(r.lines, ::testing::Contains(::testing::HasSubstr("extends 'broken'")));
+  EXPECT_THAT(r.lines, ::testing::Contains(::testing::HasSubstr("| pump_speed=10.0 rpm")));
+  EXPECT_NE(run("models check " + (dir / "broken.yaml").string()).status, 0);
+}
+
 // A timed hex log: one "time:" line, then the frame's bytes, per frame.
 std::string hexlog(const std::string& name, const std::vector<std::string>& timed_frames) {
   const auto path = std::filesystem::temp_directory_path() / name;

@@ -42,12 +42,23 @@ void ModelCatalog::load_dir(const std::string& dir) {
       paths.push_back(item.path().string());
   std::sort(paths.begin(), paths.end());
   std::vector<ModelFile> files;
-  for (const auto& path : paths) files.emplace_back(read_text(path), path);
+  for (const auto& path : paths) {
+    try {
+      files.emplace_back(read_text(path), path);
+    } catch (const ModelError& e) {
+      left_out_.insert(left_out_.end(), e.problems().begin(), e.problems().end());
+    } catch (const std::runtime_error& e) {
+      left_out_.emplace_back(e.what());
+    }
+  }
   load(std::move(files), dir);
 }
 
 // Models that extend another load after it, so bases are loaded in passes until none is left.
+// A problem in a built-in model is an error; a user's file with one is left out, and said.
 void ModelCatalog::load(std::vector<ModelFile> files, const std::string& origin) {
+  const bool builtin = origin == "built-in";
+  std::vector<std::string> problems;
   while (!files.empty()) {
     std::vector<ModelFile> waiting;
     for (auto& file : files) {
@@ -56,17 +67,22 @@ void ModelCatalog::load(std::vector<ModelFile> files, const std::string& origin)
         waiting.push_back(std::move(file));
         continue;
       }
-      add(file.model(base), origin == "built-in" ? origin : file.file());
+      try {
+        add(file.model(base), builtin ? origin : file.file());
+      } catch (const ModelError& e) {
+        problems.insert(problems.end(), e.problems().begin(), e.problems().end());
+      }
     }
     if (waiting.size() == files.size()) {
-      std::vector<std::string> problems;
       for (const auto& file : waiting)
         problems.push_back(
             fmt::format("{}: extends '{}', which is not a known model", file.file(), file.base()));
-      throw ModelError(problems);
+      break;
     }
     files = std::move(waiting);
   }
+  if (builtin && !problems.empty()) throw ModelError(problems);
+  left_out_.insert(left_out_.end(), problems.begin(), problems.end());
 }
 
 void ModelCatalog::add(DeviceModel model, std::string origin) {

@@ -21,7 +21,10 @@ class ModelCatalog {
 
   // Throws ModelError naming the file and line of each problem.
   void load_builtin();
-  void load_dir(const std::string& dir);  // every *.yaml in it; a name may replace a built-in
+  // Every *.yaml in it; a name may replace a built-in. A file with a problem is left out.
+  void load_dir(const std::string& dir);
+  // The problems of the files load_dir left out, each naming the file (and line).
+  const std::vector<std::string>& left_out() const { return left_out_; }
 
   const DeviceModel* find(std::string_view name) const;
   const std::deque<Entry>& entries() const { return entries_; }
@@ -35,6 +38,7 @@ class ModelCatalog {
   void add(DeviceModel model, std::string origin);
 
   std::deque<Entry> entries_;  // a deque: ModelChoice holds pointers into it
+  std::vector<std::string> left_out_;
 };
 
 // `modtap models check FILE...`: loads each file against the built-in models and prints what

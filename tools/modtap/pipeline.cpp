@@ -114,6 +114,8 @@ ModelCatalog load_models(const RunOptions& o) {
   ModelCatalog catalog;
   catalog.load_builtin();
   if (!o.models_dir.empty()) catalog.load_dir(o.models_dir);
+  for (const std::string& problem : catalog.left_out())
+    fmt::print(stderr, "modtap: warning: {}; the file is left out of --models-dir\n", problem);
   return catalog;
 }
 
