@@ -279,9 +279,13 @@ void explain_exception(const DeviceModel& model, const Frame& frame, RuleFinding
   if (it != model.exceptions.end())
     found.add(RuleKind::exception, std::nullopt, "{}exception {:02X}H: {} ({})",
               model.vendor_exceptions ? "vendor " : "", code, it->second, model.name);
+  else if (maps_no_register(model))  // no device knowledge: the standard's table is all there is
+    found.add(RuleKind::exception, std::nullopt,
+              "exception {:02X}H is not a standard Modbus exception code (no model for slave {})",
+              code, frame.device());
   else
-    found.add(RuleKind::exception, std::nullopt, "exception {:02X}H is not one {} documents", code,
-              model.name);
+    found.add(RuleKind::exception, std::nullopt,
+              "exception {:02X}H is in neither the standard's table nor {}'s", code, model.name);
 }
 
 // Coils and discrete inputs, LSB of the first byte first. Only the bits the model names are

@@ -161,6 +161,20 @@ TEST_F(Models, Nta5000ExceptionIsExplainedWithTheVendorsMeaning) {
   EXPECT_EQ(m.findings[0].text, "vendor exception 52H: Address error (nta5000)");
 }
 
+// A code in no table: said as what it is, for the bus with no model and for a drive's.
+TEST_F(Models, AnExceptionCodeInNoTableSaysWhoseTablesWereRead) {
+  const auto req = rtu("01 06 25 02 17 70");
+  const auto answer = rtu("01 86 5a");
+  const Meaning generic = response("generic", req, answer);
+  ASSERT_THAT(kinds(generic), ElementsAre(RuleKind::exception));
+  EXPECT_EQ(generic.findings[0].text,
+            "exception 5AH is not a standard Modbus exception code (no model for slave 1)");
+  const Meaning drive = response("nta5000", req, answer);
+  ASSERT_THAT(kinds(drive), ElementsAre(RuleKind::exception));
+  EXPECT_EQ(drive.findings[0].text,
+            "exception 5AH is in neither the standard's table nor nta5000's");
+}
+
 TEST_F(Models, Nta5000StatusBitsAndFaultCodeHaveTheirNames) {
   const auto req = rtu("01 03 25 20 00 03");
   const Meaning m = response("nta5000", req, rtu("01 03 06 00 0B 00 0D 00 41"));
