@@ -242,12 +242,20 @@ void problems_family(Exposition& e, std::span<const Problem> problems) {
 
 }  // namespace
 
-void append_metrics(fmt::memory_buffer& out, const BusStatistics& statistics,
-                    std::span<const Problem> problems, const PortHealth& ports) {
+void append_metrics(fmt::memory_buffer& out, std::string_view version,
+                    const BusStatistics& statistics, std::span<const Problem> problems,
+                    const PortHealth& ports) {
   Exposition e(out);
+  e.family("modtap_build_info", "gauge", "modtap's version, as a label; always 1");
+  e.sample("modtap_build_info", fmt::format("version=\"{}\"", version), 1);
   bus_wide(e, statistics);
   per_slave(e, statistics);
   problems_family(e, problems);
+  if (ports.ports.load() > 0) {
+    e.family("modtap_ports_open", "gauge",
+             "Ports modtap reads now, of those it listens on (an unplugged one is not)");
+    e.sample("modtap_ports_open", "", ports.open.load());
+  }
   e.family("modtap_port_read_errors_total", "counter",
            "Reads from a port that failed (an adapter unplugged)");
   e.sample("modtap_port_read_errors_total", "", ports.read_errors.load());

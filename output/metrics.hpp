@@ -18,16 +18,21 @@
 
 namespace modtap::output {
 
-// What the live loop knows of its own ports: reads that failed (an unplugged adapter) and
-// ports that came back (--reconnect). Written by the pipeline, read by the server.
+// What the live loop knows of its own ports: how many it listens on and how many it reads now,
+// reads that failed (an unplugged adapter) and ports that came back (--reconnect). Written by
+// the live loop, read by the server.
 struct PortHealth {
+  std::atomic<uint32_t> ports{0};  // 0: a capture file, no port
+  std::atomic<uint32_t> open{0};
   std::atomic<uint64_t> read_errors{0};
   std::atomic<uint64_t> reconnects{0};
 };
 
-// The exposition (version 0.0.4) of the statistics, the problems and the ports' health.
-void append_metrics(fmt::memory_buffer& out, const BusStatistics& statistics,
-                    std::span<const Problem> problems, const PortHealth& ports);
+// The exposition (version 0.0.4) of modtap's version, the statistics, the problems and the
+// ports' health.
+void append_metrics(fmt::memory_buffer& out, std::string_view version,
+                    const BusStatistics& statistics, std::span<const Problem> problems,
+                    const PortHealth& ports);
 
 // The statistics and the problems' evidence (`health`), fed by the pipeline and read by the
 // server's thread, one at a time.

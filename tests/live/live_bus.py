@@ -19,6 +19,7 @@ import termios
 import threading
 import time
 import tty
+import urllib.error
 import urllib.request
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
@@ -343,6 +344,14 @@ def port_disappears():
           f"{'ok' if ok else 'FAILED'}")
 
 
+def scrape_metrics(address):
+    try:
+        with urllib.request.urlopen(f"http://{address}/metrics", timeout=5) as response:
+            return response.read().decode()
+    except OSError as e:
+        return str(e)
+
+
 def reconnects():
     """With --reconnect, an unplugged port is waited for and read again when it comes back.
     The port is a symbolic link, as udev's /dev/serial/by-id names are, moved to a new pty."""
@@ -365,17 +374,22 @@ def reconnects():
     time.sleep(0.2)
     os.close(first.master)  # unplugged
     time.sleep(0.5)
+    scrape_unplugged = scrape_metrics(metrics)
     second = Pty()  # plugged in again, under another pty that the link now names
     os.unlink(link)
     os.symlink(second.path, link)
     time.sleep(2.0)  # modtap retries once a second
     os.write(second.master, after)
     time.sleep(0.5)
+    scrape = scrape_metrics(metrics)
     try:
-        with urllib.request.urlopen(f"http://{metrics}/metrics", timeout=5) as response:
-            scrape = response.read().decode()
+        urllib.request.urlopen(urllib.request.Request(f"http://{metrics}/metrics", data=b"x"),
+                               timeout=5)
+        post = "answered"
+    except urllib.error.HTTPError as e:
+        post = e.code
     except OSError as e:
-        scrape = str(e)
+        post = str(e)
     modtap.send_signal(signal.SIGTERM)
     out, err = modtap.communicate(timeout=10)
     frames = [json.loads(line)["raw"] for line in out.splitlines() if '"type":"frame"' in line]
@@ -384,6 +398,11 @@ def reconnects():
     ok &= check("reconnect metrics", "modtap_port_read_errors_total 1\n" in scrape and
                 "modtap_port_reconnects_total 1\n" in scrape,
                 [line for line in scrape.splitlines() if line.startswith("modtap_port")])
+    ok &= check("ports open", "modtap_ports_open 0\n" in scrape_unplugged and
+                "modtap_ports_open 1\n" in scrape,
+                [line for line in scrape_unplugged.splitlines() if "ports_open" in line])
+    ok &= check("build info", 'modtap_build_info{version="' in scrape, "no modtap_build_info")
+    ok &= check("POST", post == 405, f"a POST: {post}")
     for fd in (first.slave, second.master, second.slave):
         try:
             os.close(fd)

@@ -158,8 +158,12 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
   options.reconnect = o.reconnect;
   options.announce = o.announce;
   output::PortHealth& port_health = session.port_health();
+  port_health.ports = static_cast<uint32_t>(ports.size());
+  port_health.open = static_cast<uint32_t>(ports.size());
   options.on_port_event = [&port_health](live::PortEvent event) {
-    ++(event == live::PortEvent::read_failed ? port_health.read_errors : port_health.reconnects);
+    const bool failed = event == live::PortEvent::read_failed;
+    ++(failed ? port_health.read_errors : port_health.reconnects);
+    failed ? --port_health.open : ++port_health.open;
   };
   if (session.publishes()) options.on_wake = [&](int64_t now_ns) { session.tick(now_ns); };
   // A status line on the terminal, unless frame lines are printed on that same terminal.

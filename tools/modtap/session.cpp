@@ -66,8 +66,10 @@ std::unique_ptr<output::MetricsServer> serve_metrics(const RunOptions& o, Pipeli
   output::SharedStatistics& shared = *pipeline.shared_statistics();
   return std::make_unique<output::MetricsServer>(o.metrics_address, [&shared, &pipeline, &ports] {
     fmt::memory_buffer text;
-    shared.read(
-        [&] { output::append_metrics(text, *pipeline.statistics(), pipeline.problems(), ports); });
+    shared.read([&] {
+      output::append_metrics(text, MODTAP_VERSION, *pipeline.statistics(), pipeline.problems(),
+                             ports);
+    });
     return fmt::to_string(text);
   });
 }
