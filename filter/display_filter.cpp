@@ -4,6 +4,9 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <memory>
+#include <optional>
+#include <regex>
 
 #include <string_view>
 #include <utility>
@@ -24,7 +27,7 @@ namespace modtap {
 FilterError::FilterError(size_t column, const std::string& message)
     : std::runtime_error(fmt::format("column {}: {}", column, message)), column_(column) {}
 
-enum class Op : uint8_t { eq, ne, lt, le, gt, ge };
+enum class Op : uint8_t { eq, ne, lt, le, gt, ge, contains, matches, in };
 enum class NameKind : uint8_t { field, finding, register_attribute, register_named };
 enum class RegisterAttribute : uint8_t { name, addr, value, raw, unit, text };
 
@@ -39,15 +42,18 @@ struct Name {
 struct Literal {
   bool is_number = false;
   double number = 0;
-  std::string text;
+  std::string text{};
+  std::optional<double> upto{};  // a range in a set, number..upto
 };
 
 struct FilterNode {
   enum class Kind : uint8_t { any_of, all_of, negation, presence, comparison } kind;
   size_t left = 0, right = 0;
-  Name name;
+  Name name{};
   Op op = Op::eq;
-  Literal literal;
+  Literal literal{};
+  std::vector<Literal> set{};                   // `in {...}`
+  std::shared_ptr<const std::regex> pattern{};  // `matches`
 };
 
 namespace {
@@ -77,6 +83,10 @@ bool equal_ignoring_case(std::string_view a, std::string_view b) {
 template <typename T>
 bool ordered(Op op, const T& a, const T& b) {
   switch (op) {
+    case Op::contains:
+    case Op::matches:
+    case Op::in:
+      return false;
     case Op::eq:
       return a == b;
     case Op::ne:
@@ -93,18 +103,57 @@ bool ordered(Op op, const T& a, const T& b) {
   return false;
 }
 
+bool contains_ignoring_case(std::string_view text, std::string_view part) {
+  return std::search(text.begin(), text.end(), part.begin(), part.end(), [](char x, char y) {
+           return std::tolower(static_cast<unsigned char>(x)) ==
+                  std::tolower(static_cast<unsigned char>(y));
+         }) != text.end();
+}
+
 // `==` for one value; `!=` is handled as the negation of `==` over all values.
 bool compare(const Value& v, Op op, const Literal& literal) {
+  if (literal.upto) return v.has_number && v.number >= literal.number && v.number <= *literal.upto;
   if (literal.is_number) return v.has_number && ordered(op, v.number, literal.number);
   if (!v.has_text) return false;
   if (op == Op::eq) return equal_ignoring_case(v.text, literal.text);
   return ordered(op, v.text, std::string_view(literal.text));
 }
 
+bool compare(const Value& v, const FilterNode& node) {
+  switch (node.op) {
+    case Op::contains:
+      return v.has_text && contains_ignoring_case(v.text, node.literal.text);
+    case Op::matches:
+      return v.has_text && std::regex_search(v.text.begin(), v.text.end(), *node.pattern);
+    case Op::in:
+      return std::any_of(node.set.begin(), node.set.end(),
+                         [&](const Literal& member) { return compare(v, Op::eq, member); });
+    case Op::ne:
+      return compare(v, Op::eq, node.literal);
+    default:
+      return compare(v, node.op, node.literal);
+  }
+}
+
 // ---- Parsing ----------------------------------------------------------------------------
 
 struct Token {
-  enum class Kind : uint8_t { name, number, string, op, open, close, both, either, negate, end };
+  enum class Kind : uint8_t {
+    name,
+    number,
+    string,
+    op,
+    open,
+    close,
+    open_set,
+    close_set,
+    comma,
+    range,
+    both,
+    either,
+    negate,
+    end
+  };
   Kind kind = Kind::end;
   size_t column = 0;  // from 1
   std::string text;
@@ -151,6 +200,11 @@ class Lexer {
     if (c == '!') return symbol(Token::Kind::negate, 1);
     if (c == '(') return symbol(Token::Kind::open, 1);
     if (c == ')') return symbol(Token::Kind::close, 1);
+    if (c == '{') return symbol(Token::Kind::open_set, 1);
+    if (c == '}') return symbol(Token::Kind::close_set, 1);
+    if (c == ',') return symbol(Token::Kind::comma, 1);
+    if (two("..")) return symbol(Token::Kind::range, 2);
+    if (c == '~') return op(Op::matches, 1);
     if (c == '"') return string(t);
     if (std::isdigit(static_cast<unsigned char>(c)) || c == '-' || c == '.') return numeric(t);
     if (is_name_start(c)) return word(t);
@@ -175,7 +229,8 @@ class Lexer {
     const size_t start = at_;
     if (text_[at_] == '-') ++at_;
     while (at_ < text_.size() &&
-           (std::isalnum(static_cast<unsigned char>(text_[at_])) || text_[at_] == '.'))
+           (std::isalnum(static_cast<unsigned char>(text_[at_])) ||
+            (text_[at_] == '.' && text_.substr(at_, 2) != "..")))  // 1..10 is a range
       ++at_;
     const std::string_view word = text_.substr(start, at_ - start);
     t.kind = Token::Kind::number;
@@ -194,9 +249,15 @@ class Lexer {
     const size_t start = at_;
     while (at_ < text_.size() && is_name_char(text_[at_])) ++at_;
     t.text = std::string(text_.substr(start, at_ - start));
-    static constexpr std::pair<const char*, Op> word_ops[] = {{"eq", Op::eq}, {"ne", Op::ne},
-                                                              {"lt", Op::lt}, {"le", Op::le},
-                                                              {"gt", Op::gt}, {"ge", Op::ge}};
+    static constexpr std::pair<const char*, Op> word_ops[] = {{"eq", Op::eq},
+                                                              {"ne", Op::ne},
+                                                              {"lt", Op::lt},
+                                                              {"le", Op::le},
+                                                              {"gt", Op::gt},
+                                                              {"ge", Op::ge},
+                                                              {"contains", Op::contains},
+                                                              {"matches", Op::matches},
+                                                              {"in", Op::in}};
     for (const auto& [name, op] : word_ops)
       if (t.text == name) {
         t.kind = Token::Kind::op;
@@ -327,7 +388,7 @@ class Parser {
     size_t left = both();
     while (token_.kind == Token::Kind::either) {
       advance();
-      left = add({FilterNode::Kind::any_of, left, both(), {}, Op::eq, {}});
+      left = add({.kind = FilterNode::Kind::any_of, .left = left, .right = both()});
     }
     return left;
   }
@@ -336,7 +397,7 @@ class Parser {
     size_t left = unary();
     while (token_.kind == Token::Kind::both) {
       advance();
-      left = add({FilterNode::Kind::all_of, left, unary(), {}, Op::eq, {}});
+      left = add({.kind = FilterNode::Kind::all_of, .left = left, .right = unary()});
     }
     return left;
   }
@@ -354,7 +415,7 @@ class Parser {
   size_t unary_inner() {
     if (token_.kind == Token::Kind::negate) {
       advance();
-      return add({FilterNode::Kind::negation, unary(), 0, {}, Op::eq, {}});
+      return add({.kind = FilterNode::Kind::negation, .left = unary()});
     }
     if (token_.kind == Token::Kind::open) {
       const size_t column = token_.column;
@@ -374,17 +435,85 @@ class Parser {
                         token_.kind == Token::Kind::end
                             ? std::string("a name is missing at the end")
                             : fmt::format("expected a name, not \"{}\"", token_.text));
-    FilterNode node{FilterNode::Kind::presence, 0, 0, resolve(token_), Op::eq, {}};
+    FilterNode node{.kind = FilterNode::Kind::presence, .name = resolve(token_)};
     advance();
     if (token_.kind != Token::Kind::op) return add(std::move(node));
     node.kind = FilterNode::Kind::comparison;
     node.op = token_.op;
     const Token op = token_;
     advance();
-    node.literal = literal(op);
-    check_fixed_value(node.name, node.literal);
+    switch (node.op) {
+      case Op::in:
+        node.set = set(op, node.name);
+        break;
+      case Op::contains:
+        node.literal = {.text = written_bytes(text_of(literal(op)))};
+        break;
+      case Op::matches:
+        node.pattern = pattern(text_of(literal(op)));
+        break;
+      default:
+        node.literal = literal(op);
+        check_fixed_value(node.name, node.literal);
+    }
     advance();
     return add(std::move(node));
+  }
+
+  // `in {3 5 7}`, `in {1..10, 20}`: each member a value or a range; the closing brace current.
+  std::vector<Literal> set(const Token& op, const Name& name) {
+    if (token_.kind != Token::Kind::open_set)
+      throw FilterError(token_.column, "expected '{' after in");
+    std::vector<Literal> members;
+    advance();
+    while (token_.kind != Token::Kind::close_set) {
+      if (token_.kind == Token::Kind::comma) {
+        advance();
+        continue;
+      }
+      if (token_.kind == Token::Kind::end)
+        throw FilterError(token_.column, "the set has no closing '}'");
+      Literal member = literal(op);
+      advance();
+      if (token_.kind == Token::Kind::range) {
+        advance();
+        const Literal last = literal(op);
+        if (!member.is_number || !last.is_number)
+          throw FilterError(token_.column, "a range in a set is of numbers: 1..10");
+        member.upto = last.number;
+        advance();
+      } else {
+        check_fixed_value(name, member);
+      }
+      members.push_back(std::move(member));
+    }
+    if (members.empty()) throw FilterError(token_.column, "the set is empty");
+    return members;
+  }
+
+  // What `contains` and `matches` look for: text, whatever the literal looked like (01 is hex).
+  std::string text_of(const Literal& literal) const {
+    return literal.is_number ? token_.text : literal.text;
+  }
+
+  // Bytes print as hex pairs without separators: "01:03" and "01 03" look for "0103".
+  static std::string written_bytes(std::string text) {
+    const bool bytes =
+        text.size() > 2 && std::all_of(text.begin(), text.end(), [](char c) {
+          return std::isxdigit(static_cast<unsigned char>(c)) || c == ':' || c == ' ' || c == '-';
+        });
+    if (bytes) std::erase_if(text, [](char c) { return c == ':' || c == ' ' || c == '-'; });
+    return text;
+  }
+
+  // Case does not matter, as in Wireshark's `matches`.
+  std::shared_ptr<const std::regex> pattern(const std::string& text) const {
+    try {
+      return std::make_shared<const std::regex>(
+          text, std::regex::ECMAScript | std::regex::icase | std::regex::optimize);
+    } catch (const std::regex_error& e) {
+      throw FilterError(token_.column, fmt::format("\"{}\" is no regular expression", text));
+    }
   }
 
   // A field of a fixed set of values compares with one of them, or with what the text output
@@ -406,13 +535,13 @@ class Parser {
   Literal literal(const Token& op) {
     switch (token_.kind) {
       case Token::Kind::number:
-        return {true, token_.number, {}};
+        return {.is_number = true, .number = token_.number};
       case Token::Kind::string:
-        return {false, 0, token_.text};
+        return {.text = token_.text};
       case Token::Kind::name:  // a bare word: role == request; or a manual's hex, FFFFH
         if (auto hex = parse_written_number(token_.text))
-          return {true, static_cast<double>(*hex), {}};
-        return {false, 0, token_.text};
+          return {.is_number = true, .number = static_cast<double>(*hex)};
+        return {.text = token_.text};
       default:
         throw FilterError(token_.column, fmt::format("expected a value after {}", op.text));
     }
@@ -661,9 +790,8 @@ bool evaluate(const std::vector<FilterNode>& nodes, size_t at, const Record& rec
     case FilterNode::Kind::presence:
       return record.any(node.name, scratch, [](const Value&) { return true; });
     case FilterNode::Kind::comparison: {
-      const Op op = node.op == Op::ne ? Op::eq : node.op;
-      const bool any = record.any(node.name, scratch,
-                                  [&](const Value& v) { return compare(v, op, node.literal); });
+      const bool any =
+          record.any(node.name, scratch, [&](const Value& v) { return compare(v, node); });
       return node.op == Op::ne ? !any : any;
     }
   }

@@ -107,6 +107,30 @@ TEST(DisplayFilter, GroupsAsWrittenAndBindsAndBeforeOr) {
   EXPECT_TRUE(matches("not not slave == 1"));
 }
 
+// Wireshark's own operators: a part of a text or of the bytes, a set of values and ranges, a
+// regular expression; case does not matter, as in Wireshark.
+TEST(DisplayFilter, ContainsInAndMatchesAsWiresharkHasThem) {
+  EXPECT_TRUE(matches("function contains \"holding\""));
+  EXPECT_FALSE(matches("function contains \"coils\""));
+  EXPECT_TRUE(matches("raw contains \"17:70\""));  // the bytes, however they are written
+  EXPECT_TRUE(matches("raw contains \"02 17 70\""));
+  EXPECT_TRUE(matches("raw contains 0103"));
+  EXPECT_FALSE(matches("raw contains \"70:17\""));
+  EXPECT_TRUE(matches("slave in {3 1 5}"));
+  EXPECT_TRUE(matches("fc in {1..4, 16}"));
+  EXPECT_FALSE(matches("fc in {5..16}"));
+  EXPECT_TRUE(matches("role in {rsp}"));  // as the text prints it
+  EXPECT_TRUE(matches("function matches \"^READ .* registers$\""));
+  EXPECT_TRUE(matches("function ~ \"holding\""));
+  EXPECT_FALSE(matches("function matches \"^write\""));
+  EXPECT_TRUE(matches("!(slave in {2 3})"));
+  EXPECT_EQ(refusal("slave in {}"), "column 11: the set is empty");
+  EXPECT_EQ(refusal("slave in {1"), "column 12: the set has no closing '}'");
+  EXPECT_EQ(refusal("slave in 1"), "column 10: expected '{' after in");
+  EXPECT_EQ(refusal("function matches \"(\""), "column 18: \"(\" is no regular expression");
+  EXPECT_NE(refusal("role in {req, foo}").find("not \"foo\""), std::string::npos);
+}
+
 TEST(DisplayFilter, NoiseAndTimeOutsHaveTheirOwnFields) {
   const uint8_t junk[] = {0xFF};
   Noise noise;
