@@ -52,13 +52,15 @@ void AsciiFramer::push(const Chunk& chunk) {
 }
 
 void AsciiFramer::flush(int64_t now_ns) {
-  if (in_frame_ && options_.clock != ClockQuality::none &&
-      now_ns - pending_end_ns_ >= options_.char_timeout_ns)
+  if (options_.clock == ClockQuality::none) return;
+  if (in_frame_ && now_ns - pending_end_ns_ >= options_.char_timeout_ns)
     emit_pending(NoiseReason::truncated);
+  if (!held_.raw.empty() && now_ns - held_.end_ns >= options_.char_timeout_ns) release_held();
 }
 
 void AsciiFramer::finish() {
   if (!pending_.empty()) emit_pending(in_frame_ ? NoiseReason::truncated : NoiseReason::junk);
+  release_held();
 }
 
 void AsciiFramer::on_byte(uint8_t byte, int64_t end_ns, bool starts_read) {
@@ -123,11 +125,14 @@ void AsciiFramer::emit_frame() {
   frame.fit.request = options_.role != ChannelRole::slave && fits(Role::request, frame.adu);
   frame.fit.response =
       options_.role != ChannelRole::master && !broadcast && fits(Role::response, frame.adu);
+  release_held();
   sink_.on_frame(frame);
   pending_.clear();
 }
 
 void AsciiFramer::emit_noise(NoiseReason reason) {
+  if (reason == NoiseReason::junk || reason == NoiseReason::truncated) return hold_noise(reason);
+  release_held();
   Noise noise;
   noise.channel = channel_;
   noise.mode = Mode::ascii;
@@ -139,6 +144,41 @@ void AsciiFramer::emit_noise(NoiseReason reason) {
   noise.reason = reason;
   sink_.on_noise(noise);
   pending_.clear();
+}
+
+// Joins the pending piece to the held run, unless a silence parts them (the inter-character
+// time-out) or the run would outgrow a frame; the run is junk unless all of it is truncated.
+void AsciiFramer::hold_noise(NoiseReason reason) {
+  const bool silence = options_.clock != ClockQuality::none &&
+                       pending_start_ns_ - held_.end_ns >= options_.char_timeout_ns;
+  if (!held_.raw.empty() && (silence || held_.raw.size() + pending_.size() > max_frame_chars))
+    release_held();
+  if (held_.raw.empty()) {
+    held_.offset = pending_offset_;
+    held_.t_ns = pending_start_ns_;
+    held_.untimed_start = pending_untimed_start_;
+    held_.reason = reason;
+  } else if (reason != held_.reason) {
+    held_.reason = NoiseReason::junk;
+  }
+  held_.raw.insert(held_.raw.end(), pending_.begin(), pending_.end());
+  held_.end_ns = pending_end_ns_;
+  pending_.clear();
+}
+
+void AsciiFramer::release_held() {
+  if (held_.raw.empty()) return;
+  Noise noise;
+  noise.channel = channel_;
+  noise.mode = Mode::ascii;
+  noise.offset = held_.offset;
+  noise.raw = held_.raw;
+  noise.t_ns = held_.t_ns;
+  noise.end_ns = held_.end_ns;
+  noise.untimed_start = held_.untimed_start;
+  noise.reason = held_.reason;
+  sink_.on_noise(noise);
+  held_.raw.clear();
 }
 
 void AsciiFramer::reset(uint64_t offset, int64_t start_ns, bool starts_read) {

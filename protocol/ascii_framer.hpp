@@ -27,8 +27,11 @@ class AsciiFramer {
   void finish();
 
   int64_t last_byte_ns() const { return last_end_ns_; }
-  // When the record being built began (INT64_MAX if none).
-  int64_t held_since_ns() const { return pending_.empty() ? INT64_MAX : pending_start_ns_; }
+  // When the oldest record not yet handed on began (INT64_MAX if none).
+  int64_t held_since_ns() const {
+    if (!held_.raw.empty()) return held_.t_ns;
+    return pending_.empty() ? INT64_MAX : pending_start_ns_;
+  }
 
   // ':' + 2 * 255 hex characters + CR LF (Modbus over Serial Line 2.5.2.1: 513 characters).
   static constexpr size_t max_frame_chars = 513;
@@ -38,6 +41,8 @@ class AsciiFramer {
   void emit_pending(NoiseReason reason);
   void emit_frame();
   void emit_noise(NoiseReason reason);
+  void hold_noise(NoiseReason reason);
+  void release_held();
   void reset(uint64_t offset, int64_t start_ns, bool starts_read);
 
   uint16_t channel_;
@@ -54,6 +59,15 @@ class AsciiFramer {
   uint64_t pending_start_read_ = 0;     // Frame::start_read
   uint64_t reads_ = 0;                  // chunks pushed, those that continue a read aside
   int64_t pending_end_ns_ = 0;
+  // Junk and frames that never ended, held so that the next such piece joins them: a run of
+  // stray ':' (each the start of a frame) is one record, as a run of junk is in RTU.
+  struct HeldNoise {
+    std::vector<uint8_t> raw;
+    uint64_t offset = 0;
+    int64_t t_ns = 0, end_ns = 0;
+    bool untimed_start = false;
+    NoiseReason reason = NoiseReason::junk;
+  } held_;
   uint64_t offset_ = 0;  // stream offset of the next byte
   int64_t last_end_ns_ = 0;
 };

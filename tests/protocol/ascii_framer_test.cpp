@@ -25,6 +25,26 @@ TEST(AsciiFramer, FramesColonToCrLfAndChecksTheLrc) {
   EXPECT_EQ(frames[0].raw, bytes(":010300000001FB\r\n"));
 }
 
+// Each stray ':' starts a frame that never ends; a run of them, or of junk, is one record, as
+// a run of junk is in RTU, up to a frame's 513 characters: 20 MB of ':' is not 20 million.
+TEST(AsciiFramer, RunsOfNoiseAreOneRecordUpToAFramesLength) {
+  const std::string good = ":010300000001FB\r\n";
+  const auto out = analyze_untimed(bytes(std::string(2000, ':') + good + "junk:01" + good), {},
+                                   ModeChoice::ascii);
+  const auto noise = out.noise();
+  ASSERT_EQ(noise.size(), 5u);
+  size_t colons = 0;
+  for (size_t i = 0; i < 4; ++i) {
+    EXPECT_LE(noise[i].raw.size(), AsciiFramer::max_frame_chars);
+    EXPECT_EQ(noise[i].reason, NoiseReason::truncated);
+    colons += noise[i].raw.size();
+  }
+  EXPECT_EQ(colons, 2000u);
+  EXPECT_EQ(noise[4].raw, bytes("junk:01"));  // junk, then a frame's start: junk
+  EXPECT_EQ(noise[4].reason, NoiseReason::junk);
+  EXPECT_EQ(out.frames().size(), 2u);
+}
+
 TEST(AsciiFramer, FramesReservedAddressesAsRtuDoes) {
   // N3 allows stations up to 254; 248-255 are reserved by Modbus but still frames.
   const auto out =
