@@ -1,6 +1,9 @@
 #include "output/csv_sink.hpp"
 
+#include <ctime>
 #include <stdexcept>
+
+#include <fmt/chrono.h>
 
 #include "output/render.hpp"
 
@@ -40,7 +43,7 @@ std::vector<FollowedRegister> parse_follow(const std::string& list, RegisterBase
 CsvSink::CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat time_format,
                  RegisterBase base, const RecordClock* clock)
     : out_(out), follow_(std::move(follow)), time_format_(time_format), base_(base), clock_(clock) {
-  out_.print("t,slave,address,name,value,unit,raw\n");
+  out_.print("t,slave,address,name,value,unit,raw,text\n");
 }
 
 bool follows(const std::vector<FollowedRegister>& follow, const RegisterValue& reg) {
@@ -52,11 +55,20 @@ bool follows(const std::vector<FollowedRegister>& follow, const RegisterValue& r
   return false;
 }
 
-// Seconds since the capture's first record (the text's time column), or with -t a or ad since
-// the Unix epoch: numbers a spreadsheet or a plotting tool takes as they are.
+// Seconds since the capture's first record (the text's time column), with -t a since the Unix
+// epoch: numbers a spreadsheet or a plotting tool takes as they are; with -t ad the local date
+// and time, as the text prints them, which spreadsheets read as a date.
 void CsvSink::time(int64_t t_ns) {
-  if (time_format_ == TimeFormat::absolute || time_format_ == TimeFormat::absolute_date) {
+  if (time_format_ == TimeFormat::absolute) {
     out_.print(FMT_COMPILE("{}"), Fixed{t_ns, 9, 6});
+    return;
+  }
+  if (time_format_ == TimeFormat::absolute_date) {
+    const auto [second, micros] = seconds_and_micros(t_ns);
+    std::tm local{};
+    const auto when = static_cast<std::time_t>(second);
+    localtime_r(&when, &local);
+    out_.print("{:%Y-%m-%d %H:%M:%S}.{:06}", local, micros);
     return;
   }
   const RecordClock& clock = clock_.get();
@@ -78,7 +90,9 @@ void CsvSink::on_frame(const Frame& frame) {
     append_number(buf, reg.value, reg.decimals);
     buf.push_back(',');
     append_field(buf, reg.unit);
-    out_.print(FMT_COMPILE(",{}\n"), reg.raw);
+    out_.print(FMT_COMPILE(",{},"), reg.raw);
+    append_field(buf, reg.text);  // an enumeration's or a bit field's meaning
+    buf.push_back('\n');
   }
   out_.end_record();
 }

@@ -108,8 +108,7 @@ void TextSink::seconds_column(int64_t ns) {
 
 // The date and time are formatted once a second; the microseconds per record.
 void TextSink::absolute_time(int64_t t_ns) {
-  const int64_t us = t_ns >= 0 ? (t_ns + 500) / 1000 : -((-t_ns + 500) / 1000);
-  const int64_t second = us >= 0 ? us / 1'000'000 : (us + 1) / 1'000'000 - 1;
+  const auto [second, micros] = seconds_and_micros(t_ns);
   if (second != shown_second_) {
     shown_second_ = second;
     shown_.clear();
@@ -122,8 +121,7 @@ void TextSink::absolute_time(int64_t t_ns) {
       fmt::format_to(fmt::appender(shown_), "{:%H:%M:%S}", local);
     }
   }
-  out_.print(FMT_COMPILE(" {}.{:06}"), std::string_view(shown_.data(), shown_.size()),
-             us - second * 1'000'000);
+  out_.print(FMT_COMPILE(" {}.{:06}"), std::string_view(shown_.data(), shown_.size()), micros);
 }
 
 void TextSink::channel_column(uint16_t channel) {

@@ -392,6 +392,21 @@ TEST(Cli, CountStopsAfterNRecordsNoiseIncluded) {
 
 // --follow: the values of chosen registers over time, by name or address, as the device's
 // answers to reads and writes give them: a row a good response.
+// A status register's meaning beside its number; -t ad, the date and time its name promises.
+TEST(Cli, CsvGivesAnEnumerationsTextAndTheDateWithTad) {
+  const std::string drives = std::string("-r ") + MODTAP_SAMPLES +
+                             "/drives-manual-examples.log --model 1=nta5000 --model 2=n3";
+  const Outcome status = run(drives + " --follow 2520H");
+  ASSERT_EQ(status.status, 0);
+  ASSERT_GE(status.lines.size(), 2u);
+  EXPECT_THAT(status.lines[1], ::testing::EndsWith(",status,7,,7,\"Run, Reverse, Ready\""))
+      << status.lines[1];
+  const Outcome dated = run(drives + " --follow 2502H -t ad");
+  ASSERT_GE(dated.lines.size(), 2u);
+  EXPECT_THAT(dated.lines[1], ::testing::MatchesRegex("2026-11-2[12] [0-9:]{8}\\.061176,1,.*"))
+      << dated.lines[1];
+}
+
 TEST(Cli, FollowWritesRegisterValuesOverTimeAsCsv) {
   const std::string drives = std::string("-r ") + MODTAP_SAMPLES +
                              "/drives-manual-examples.log --model 1=nta5000 --model 2=n3";
@@ -399,14 +414,15 @@ TEST(Cli, FollowWritesRegisterValuesOverTimeAsCsv) {
   ASSERT_EQ(r.status, 0);
   // t counts from the capture's first record, as the text's time column: the first row is an
   // answer, 61 ms after the request that opens the capture.
-  EXPECT_EQ(r.lines, (std::vector<std::string>{"t,slave,address,name,value,unit,raw",
-                                               "0.061176,1,2502H,frequency_command,60.00,Hz,6000",
-                                               "0.117207,1,2502H,frequency_command,60.00,Hz,6000",
-                                               "0.170373,1,2524H,output_frequency,60.00,Hz,6000"}));
+  EXPECT_EQ(r.lines,
+            (std::vector<std::string>{"t,slave,address,name,value,unit,raw,text",
+                                      "0.061176,1,2502H,frequency_command,60.00,Hz,6000,",
+                                      "0.117207,1,2502H,frequency_command,60.00,Hz,6000,",
+                                      "0.170373,1,2524H,output_frequency,60.00,Hz,6000,"}));
   // A filter picks rows; it does not move them in time.
   EXPECT_EQ(run(drives + " --follow output_frequency -Y 'fc == 3'").lines,
-            (std::vector<std::string>{"t,slave,address,name,value,unit,raw",
-                                      "0.170373,1,2524H,output_frequency,60.00,Hz,6000"}));
+            (std::vector<std::string>{"t,slave,address,name,value,unit,raw,text",
+                                      "0.170373,1,2524H,output_frequency,60.00,Hz,6000,"}));
   const Outcome all = run(drives + " -T csv");
   EXPECT_GT(all.lines.size(), r.lines.size());
   EXPECT_EQ(run(drives + " --follow ,x").lines,
@@ -428,7 +444,7 @@ TEST(Cli, FollowRefusesUnknownNamesAndSaysWhatNoFrameTouched) {
   const Outcome any_model = run(log + " --follow frequency_setting");  // GD20's, slave 3 says
   EXPECT_EQ(any_model.status, 0);
   EXPECT_EQ(any_model.lines.size(), 2u);
-  EXPECT_THAT(any_model.lines[1], ::testing::EndsWith(",3,2001H,frequency_setting,50.00,Hz,5000"));
+  EXPECT_THAT(any_model.lines[1], ::testing::EndsWith(",3,2001H,frequency_setting,50.00,Hz,5000,"));
   const Outcome unseen = run(log + " --model 1=nta5000 --follow output_frequency,2200H,P00.04");
   EXPECT_EQ(unseen.status, 0);
   ASSERT_GE(unseen.lines.size(), 2u);
@@ -457,7 +473,7 @@ TEST(Cli, RegisterBaseNumbersRegistersAsThePlcManualDoes) {
     })) << base;
     const Outcome csv = run(drives + " --register-base " + base + " --follow " + written);
     ASSERT_EQ(csv.lines.size(), 2u) << base;
-    EXPECT_EQ(csv.lines[1], "0.061176,1," + written + ",frequency_command,60.00,Hz,6000");
+    EXPECT_EQ(csv.lines[1], "0.061176,1," + written + ",frequency_command,60.00,Hz,6000,");
   }
   EXPECT_NE(run(drives + " --register-base 4xxxx -T json").lines[2].find("\"address\":9474"),
             std::string::npos);
