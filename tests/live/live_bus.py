@@ -395,6 +395,8 @@ def reconnects():
     frames = [json.loads(line)["raw"] for line in out.splitlines() if '"type":"frame"' in line]
     ok = check("reconnect", frames == [before.hex(), after.hex()], f"frames {frames}; {err!r}")
     ok &= check("reconnect", "is back" in err and modtap.returncode == 0, f"{modtap.returncode}: {err!r}")
+    ok &= check("reconnect", "waiting for the port to come back" in err, err)
+    ok &= check("start-up line", f"listening on {link} at 19200 8E1, mode auto" in err, err)
     ok &= check("reconnect metrics", "modtap_port_read_errors_total 1\n" in scrape and
                 "modtap_port_reconnects_total 1\n" in scrape,
                 [line for line in scrape.splitlines() if line.startswith("modtap_port")])

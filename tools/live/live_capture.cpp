@@ -157,7 +157,9 @@ int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options, Rec
     ports.push_back(std::make_unique<SerialPort>(spec.path, options.analyzer.format));
     channels.push_back({spec.name, spec.role});
     if (options.announce)
-      fmt::print(stderr, "modtap: listening on {} ({})\n", spec.path, ports.back()->clock_note());
+      fmt::print(stderr, "modtap: listening on {} at {}, mode {} ({})\n", spec.path,
+                 describe(options.analyzer.format), to_string(options.analyzer.mode),
+                 ports.back()->clock_note());
   }
   AnalyzerOptions analyzer_options = options.analyzer;
   analyzer_options.clock = ClockQuality::per_chunk;
@@ -193,6 +195,7 @@ int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options, Rec
         status = 1;
         break;
       }
+      fmt::print(stderr, "modtap: waiting for the port to come back (--reconnect)\n");
       for (size_t i = 0; i < ports.size() && !stop; ++i) {
         while (!stop) {
           try {
