@@ -281,10 +281,12 @@ PcapngFiles::PcapngFiles(const std::string& path, const captures::RingLimits& li
 
 void PcapngFiles::on_frame(const Frame& frame) {
   sink_at(frame.t_ns).on_frame(frame);
+  ++packets_;
 }
 
 void PcapngFiles::on_noise(const Noise& noise) {
   sink_at(noise.t_ns).on_noise(noise);
+  packets_ += options_.link != PcapngLink::bare;  // frames only, bare
 }
 
 void PcapngFiles::on_timeout(const Timeout& timeout) {

@@ -76,6 +76,7 @@ class PcapngFiles final : public RecordSink {
 
   uint64_t bytes_written() const;  // by all its files together
   uint64_t files_begun() const { return ring_.files_begun(); }
+  uint64_t packets() const { return packets_; }  // records written, one packet each
   // Completes the last file (or the one file of a run that saw no record), reporting failures.
   void close();
 
@@ -87,6 +88,7 @@ class PcapngFiles final : public RecordSink {
   const std::vector<ChannelInfo>& channels_;
   PcapngOptions options_;
   uint64_t closed_bytes_ = 0;  // what the files before the current one hold
+  uint64_t packets_ = 0;
   std::unique_ptr<captures::PcapngWriter> writer_;
   std::unique_ptr<PcapngSink> sink_;
 };

@@ -223,12 +223,14 @@ TEST(Cli, StatsFileIsJsonBesideTheTextOutput) {
 // dumpcap's autostop: after so many frames, so much capture time, or a -w file so large; the
 // first condition reached wins. Conditions that are none are refused before any work.
 TEST(Cli, AutostopEndsTheRunAtTheFirstConditionReached) {
-  EXPECT_EQ(run(brainchild + " -a frames:5 -T json").lines.size(), 5u);
+  // The records, then which condition stopped the run.
+  EXPECT_EQ(run(brainchild + " -a frames:5 -T json").lines.size(), 5u + 1);
   EXPECT_EQ(run(brainchild + " -a frames:5 -c 3 -T json").lines.size(), 3u);
   // The capture spans 262 ms; its first 100 ms hold 14 frames.
   const Outcome early = run(brainchild + " -a duration:0.1 -T json");
   ASSERT_EQ(early.status, 0);
-  EXPECT_EQ(early.lines.size(), 14u);
+  EXPECT_EQ(early.lines.size(), 14u + 1);
+  EXPECT_EQ(early.lines.back(), "modtap: stopped at -a duration:0.1");
   const auto pcapng = (std::filesystem::temp_directory_path() / "modtap-autostop.pcapng").string();
   std::filesystem::remove(pcapng);
   ASSERT_EQ(run(brainchild + " -a filesize:1 -a duration:10 -w " + pcapng).status, 0);
@@ -392,6 +394,21 @@ TEST(Cli, CountStopsAfterNRecordsNoiseIncluded) {
 
 // --follow: the values of chosen registers over time, by name or address, as the device's
 // answers to reads and writes give them: a row a good response.
+// A run to a file says what it wrote, and a run -a stopped says which condition did.
+TEST(Cli, WriteAndAutostopSayWhatTheyDid) {
+  const std::string drives = std::string("-r ") + MODTAP_SAMPLES + "/drives-manual-examples.log";
+  const auto file = (std::filesystem::temp_directory_path() / "modtap-said.pcapng").string();
+  const Outcome all = run(drives + " -w " + file);
+  ASSERT_EQ(all.status, 0);
+  EXPECT_THAT(all.lines, ::testing::Contains(::testing::MatchesRegex(
+                             "modtap: wrote 29 packets \\([0-9]+ bytes\\) to " + file)));
+  const Outcome stopped = run(drives + " -q -a frames:3");
+  EXPECT_EQ(stopped.lines, std::vector<std::string>{"modtap: stopped at -a frames:3"});
+  const Outcome by_size = run(drives + " -w " + file + " -a filesize:2");
+  EXPECT_THAT(by_size.lines, ::testing::Contains("modtap: stopped at -a filesize:2"));
+  EXPECT_THAT(run(drives + " -q -c 3 -a frames:5").lines, ::testing::IsEmpty());
+}
+
 // A status register's meaning beside its number; -t ad, the date and time its name promises.
 TEST(Cli, CsvGivesAnEnumerationsTextAndTheDateWithTad) {
   const std::string drives = std::string("-r ") + MODTAP_SAMPLES +
@@ -847,10 +864,14 @@ TEST(Cli, ItsOwnPcapngReadsBackToTheSameRecordsOnBothChannels) {
   for (const char* link : {"user", "exported-pdu"}) {
     const auto path =
         std::filesystem::temp_directory_path() / (std::string("modtap-rt-") + link + ".pcapng");
-    const Outcome first = run(brainchild + " -T json --link " + link + " -w " + path.string());
+    Outcome first = run(brainchild + " -T json --link " + link + " -w " + path.string());
     const Outcome again = run("-r " + path.string() + " --baud 19200 --parity even -T json");
     ASSERT_EQ(first.status, 0);
     ASSERT_EQ(again.status, 0) << link;
+    ASSERT_EQ(first.lines.back(), "modtap: wrote 30 packets (" +
+                                      std::to_string(std::filesystem::file_size(path)) +
+                                      " bytes) to " + path.string());
+    first.lines.pop_back();
     EXPECT_EQ(again.lines, first.lines) << link;
     EXPECT_NE(again.lines[1].find("\"channel\":\"rx:0\""), std::string::npos) << again.lines[1];
   }

@@ -48,6 +48,15 @@ Autostop parse_autostop(const std::vector<std::string>& conditions) {
   return stop;
 }
 
+std::optional<std::string> autostop_met(const Autostop& stop, int64_t elapsed_ns,
+                                        uint64_t written_bytes) {
+  if (stop.duration_ns && elapsed_ns >= *stop.duration_ns)
+    return fmt::format("duration:{:g}", static_cast<double>(*stop.duration_ns) / 1e9);
+  if (stop.filesize_bytes && written_bytes >= *stop.filesize_bytes)
+    return fmt::format("filesize:{}", *stop.filesize_bytes / 1000);
+  return std::nullopt;
+}
+
 captures::RingLimits parse_ring_buffer(const std::vector<std::string>& conditions) {
   captures::RingLimits ring;
   for (const auto& text : conditions) {

@@ -21,6 +21,11 @@ struct Autostop {
 // "duration:S", "filesize:KB", "frames:N"; throws std::invalid_argument naming the condition.
 Autostop parse_autostop(const std::vector<std::string>& conditions);
 
+// The -a condition a run has met ("duration:60", "filesize:100"), after `elapsed_ns` with
+// `written_bytes` in its -w files; none yet.
+std::optional<std::string> autostop_met(const Autostop& stop, int64_t elapsed_ns,
+                                        uint64_t written_bytes);
+
 // "duration:S", "filesize:KB", "files:N"; throws std::invalid_argument naming the condition,
 // or when files is given without a condition that turns a file.
 captures::RingLimits parse_ring_buffer(const std::vector<std::string>& conditions);

@@ -132,6 +132,8 @@ class Pipeline {
   output::MqttPublisher& publish(output::MessageBroker& broker, output::MqttOptions options);
   // How much the -w files hold so far (0 without -w).
   uint64_t pcapng_bytes() const { return pcapng_ ? pcapng_->bytes_written() : 0; }
+  uint64_t pcapng_packets() const { return pcapng_ ? pcapng_->packets() : 0; }
+  uint64_t pcapng_files() const { return pcapng_ ? pcapng_->files_begun() : 0; }
   const BusStatistics* statistics() const { return statistics_.get(); }
   // The problems the statistics and the evidence beside them show (none without statistics).
   // With --metrics, call it under shared_statistics()'s lock.

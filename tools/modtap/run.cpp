@@ -61,6 +61,14 @@ void hint_settings(const SerialFormat& format, const LineHealth& health, const C
                100 * health.good_share(), health.bytes, describe(format));
 }
 
+// -a frames:N, where the run's record limit (the smaller of it and -c) was it and was reached.
+std::optional<std::string> frames_met(const RunOptions& o, const Autostop& stop,
+                                      const Session& session) {
+  if (!stop.frames || o.max_records != *stop.frames || !session.limit_reached())
+    return std::nullopt;
+  return fmt::format("frames:{}", *stop.frames);
+}
+
 }  // namespace
 
 int read_capture(const RunOptions& o, const Autostop& autostop, const captures::RingLimits& ring) {
@@ -93,13 +101,14 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   // A capture that breaks off (a truncated file) still gives everything read before the
   // break, in every output, and then the error.
   std::optional<captures::CaptureError> broken;
+  std::optional<std::string> stopped_by;  // the -a condition met
   auto progress = progress_bar(o, *source, piped);
   try {
     std::optional<int64_t> first_ns;
     while (!session.limit_reached() && source->next(chunk)) {
       if (!first_ns) first_ns = chunk.t_ns;
-      if (autostop.duration_ns && chunk.t_ns - *first_ns >= *autostop.duration_ns) break;
-      if (autostop.filesize_bytes && session.pcapng_bytes() >= *autostop.filesize_bytes) break;
+      stopped_by = autostop_met(autostop, chunk.t_ns - *first_ns, session.pcapng_bytes());
+      if (stopped_by) break;
       if (progress) progress->update(*source->file_position());
       if (source->clock() == ClockQuality::per_chunk) pace.add(chunk);
       if (session.keeps_raw()) session.keep_raw(chunk, bus.between_frames());
@@ -110,7 +119,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   }
   progress.reset();  // wiped before anything else reaches the terminal
   bus.finish();
-  session.finish(!broken);
+  session.finish(!broken, frames_met(o, autostop, session).value_or(stopped_by.value_or("")));
   if (bus.clock_steps_back())
     fmt::print(stderr,
                "modtap: warning: {}: the time stamps go backwards {}; latencies across "
@@ -146,9 +155,10 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
       {channels, options.analyzer.format, ClockQuality::per_chunk, ports.front().path, true},
       live::request_stop);
   const int64_t started_ns = live::wall_clock_ns();
+  std::optional<std::string> stopped_by;  // the -a condition met
   options.done = [&](int64_t now_ns) {
-    return (autostop.duration_ns && now_ns - started_ns >= *autostop.duration_ns) ||
-           (autostop.filesize_bytes && session.pcapng_bytes() >= *autostop.filesize_bytes);
+    stopped_by = autostop_met(autostop, now_ns - started_ns, session.pcapng_bytes());
+    return stopped_by.has_value();
   };
   options.analyzer.slave_timeout_ns = session.model_timeouts();
   if (session.keeps_raw())
@@ -170,7 +180,7 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
   options.status_line = o.announce && terminal_free_for_status(o);
   const int status = live::run_live(ports, options, session.records(), stop);
   // Ctrl-C, -c and -a end a live run whole; a port gone (status 1) breaks it off.
-  session.finish(status == 0);
+  session.finish(status == 0, frames_met(o, autostop, session).value_or(stopped_by.value_or("")));
   return status;
 }
 

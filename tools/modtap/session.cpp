@@ -47,6 +47,16 @@ void summarise(const RunOptions& o, output::Output& out, const Pipeline& pipelin
   }
 }
 
+// What -w wrote, as dumpcap says it: a run to a file otherwise ends in silence.
+void say_written(const RunOptions& o, const Pipeline& pipeline) {
+  if (o.write_file.empty() || o.write_file == "-") return;
+  const uint64_t files = pipeline.pcapng_files();
+  fmt::print(stderr, "modtap: wrote {} ({} bytes) to {}{}\n",
+             output::counted(pipeline.pcapng_packets(), "packet", "packets"),
+             pipeline.pcapng_bytes(), o.write_file,
+             files > 1 ? fmt::format(", in {} files", files) : "");
+}
+
 // --follow items no frame carried: a mistyped address, or a register the master never touched.
 void say_unseen(const Pipeline& pipeline) {
   for (const std::string& item : pipeline.unseen_follow())
@@ -147,7 +157,7 @@ void Session::tick(int64_t now_ns) {
   if (mqtt_) mqtt_->tick(now_ns);
 }
 
-void Session::finish(bool complete) {
+void Session::finish(bool complete, const std::string& stopped_by) {
   metrics_.reset();
   if (mqtt_) mqtt_->finish();
   summarise(o_, out_, pipeline_, complete);
@@ -155,6 +165,9 @@ void Session::finish(bool complete) {
   say_unseen(pipeline_);
   pipeline_.close();
   if (raw_) raw_->close();
+  if (!o_.announce) return;  // Wireshark reads standard error as errors
+  if (!stopped_by.empty()) fmt::print(stderr, "modtap: stopped at -a {}\n", stopped_by);
+  say_written(o_, pipeline_);
 }
 
 }  // namespace modtap::tools

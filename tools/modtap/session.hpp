@@ -55,8 +55,9 @@ class Session {
   bool publishes() const { return mqtt_ != nullptr; }
   void tick(int64_t now_ns);
 
-  // The end of the run; `complete` false when the input broke off.
-  void finish(bool complete);
+  // The end of the run; `complete` false when the input broke off; `stopped_by` the -a
+  // condition met, if one was.
+  void finish(bool complete, const std::string& stopped_by = {});
 
  private:
   const RunOptions& o_;
