@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <ctime>
+#include <utility>
 
 #include <fmt/chrono.h>
 #include <fmt/format.h>
@@ -41,6 +42,8 @@ void BusStatistics::count_finding(size_t slot, uint64_t index) {
 }
 
 void BusStatistics::on_frame(const Frame& frame) {
+  if (std::exchange(data_bits_from_mode_, false))
+    format_ = format_.with_data_bits_of(frame.mode == Mode::ascii);
   ++frames;
   frame_bytes += frame.raw.size();
   see_time(frame.t_ns, frame.end_ns);

@@ -74,7 +74,10 @@ struct FindingCount {
 
 class BusStatistics final : public RecordSink {
  public:
-  BusStatistics(SerialFormat format, ClockQuality clock) : format_(format), clock_(clock) {}
+  // `data_bits_from_mode`: nobody gave the line's data bits, so the first frame's mode says
+  // them (ASCII 7, RTU 8), for the bus load and for what the statistics say of the line.
+  BusStatistics(SerialFormat format, ClockQuality clock, bool data_bits_from_mode = false)
+      : format_(format), clock_(clock), data_bits_from_mode_(data_bits_from_mode) {}
 
   void on_frame(const Frame& frame) override;
   void on_noise(const Noise& noise) override;
@@ -133,6 +136,7 @@ class BusStatistics final : public RecordSink {
 
   SerialFormat format_;
   ClockQuality clock_;
+  bool data_bits_from_mode_;
   std::map<uint8_t, std::unique_ptr<SlaveStatistics>> addresses_;
   std::array<std::optional<int64_t>, 256> last_request_ns_{};
 };

@@ -24,6 +24,13 @@ struct SerialFormat {
   constexpr uint32_t bits_per_char() const {
     return 1u + data_bits + (parity == Parity::none ? 0u : 1u) + stop_bits;
   }
+  // Modbus over Serial Line 2.5: RTU's characters have 8 data bits, ASCII's 7. For a line
+  // whose data bits nobody gave, the mode's.
+  constexpr SerialFormat with_data_bits_of(bool ascii) const {
+    SerialFormat f = *this;
+    f.data_bits = ascii ? 7 : 8;
+    return f;
+  }
   constexpr int64_t char_time_ns() const {
     return static_cast<int64_t>(bits_per_char()) * 1'000'000'000 / baud;
   }

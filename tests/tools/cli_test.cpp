@@ -311,8 +311,8 @@ TEST(Cli, OptionErrorsSpeakAsModtapAndExitTwo) {
   const Outcome help = run("--help");
   EXPECT_EQ(help.status, 0);
   const std::string text = fmt::format("{}", fmt::join(help.lines, "\n"));
-  for (const char* shown :
-       {"(default 19200)", "even (default)", "Stop bits (default 1)", "Data bits (default 8)"})
+  for (const char* shown : {"(default 19200)", "even (default)", "Stop bits (default 1)",
+                            "Data bits (default 8 for RTU, 7 for ASCII)"})
     EXPECT_THAT(text, ::testing::HasSubstr(shown));
 }
 
@@ -407,6 +407,20 @@ TEST(Cli, WriteAndAutostopSayWhatTheyDid) {
   const Outcome by_size = run(drives + " -w " + file + " -a filesize:2");
   EXPECT_THAT(by_size.lines, ::testing::Contains("modtap: stopped at -a filesize:2"));
   EXPECT_THAT(run(drives + " -q -c 3 -a frames:5").lines, ::testing::IsEmpty());
+}
+
+// Modbus ASCII's characters have 7 data bits: the line's settings and its load say so, unless
+// --data-bits says otherwise.
+TEST(Cli, AsciiIsSevenDataBitsUnlessTold) {
+  const auto capture = (std::filesystem::temp_directory_path() / "modtap-ascii-7e1.log").string();
+  std::ofstream(capture) << "2026-11-22 09:00:00.008500:\n3A 30 31 30 33 30 30 30 30 30 30 30 31 "
+                            "46 42 0D 0A\n";
+  for (const std::string mode : {"", " --mode ascii"})
+    EXPECT_THAT(run("-r " + capture + mode + " -T stats").lines,
+                ::testing::Contains(::testing::HasSubstr("19200 7E1")))
+        << mode;
+  EXPECT_THAT(run("-r " + capture + " --data-bits 8 -T stats").lines,
+              ::testing::Contains(::testing::HasSubstr("19200 8E1")));
 }
 
 // A status register's meaning beside its number; -t ad, the date and time its name promises.

@@ -85,8 +85,11 @@ output::TimeFormat time_format_for(const RunOptions& o, ClockQuality clock) {
 }
 
 SerialFormat serial_format(const RunOptions& o) {
-  return {o.baud.value_or(19200), static_cast<uint8_t>(o.data_bits),
-          o.parity.value_or(Parity::even), static_cast<uint8_t>(o.stop_bits)};
+  SerialFormat format{o.baud.value_or(19200), 8, o.parity.value_or(Parity::even),
+                      static_cast<uint8_t>(o.stop_bits)};
+  if (!o.data_bits) return format.with_data_bits_of(o.mode == ModeChoice::ascii);
+  format.data_bits = static_cast<uint8_t>(*o.data_bits);
+  return format;
 }
 
 namespace {
@@ -126,7 +129,8 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
   fan_out_.add(*terminal_);
   const Needs needs = needs_of(o);
   if (needs.statistics) {
-    statistics_ = std::make_unique<BusStatistics>(format, clock);
+    statistics_ = std::make_unique<BusStatistics>(format, clock,
+                                                  !o.data_bits && o.mode == ModeChoice::automatic);
     evidence_ = std::make_unique<ProblemEvidence>();
     problem_options_.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
     if (!o.report_file.empty()) {  // the report shows the lines of the records problems cite

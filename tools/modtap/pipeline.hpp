@@ -53,7 +53,7 @@ struct RunOptions {
   std::optional<uint32_t> baud = 19200;         // none: --baud auto
   std::optional<Parity> parity = Parity::even;  // none: --parity auto
   unsigned stop_bits = 1;
-  unsigned data_bits = 8;
+  std::optional<unsigned> data_bits;  // none: the mode's (RTU 8, ASCII 7)
   double timeout_s = 1.0;
   bool timeout_given = false;  // --timeout wins over the models' own time-outs
   double ascii_timeout_s = 1.0;

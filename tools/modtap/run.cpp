@@ -198,7 +198,7 @@ void add_line_options(CLI::App& app, RunOptions& o) {
   add_enum_or_auto_option(app, "--parity", o.parity, "Parity: none, even (default), odd, or auto");
   app.add_option("--stop-bits", o.stop_bits, "Stop bits (default 1)")
       ->check(CLI::IsMember({1u, 2u}));
-  app.add_option("--data-bits", o.data_bits, "Data bits (default 8)")
+  app.add_option("--data-bits", o.data_bits, "Data bits (default 8 for RTU, 7 for ASCII)")
       ->check(CLI::IsMember({7u, 8u}));
   app.add_option("--model", o.models,
                  "Device model for the bus (MODEL) or one slave (SLAVE=MODEL); repeatable");
