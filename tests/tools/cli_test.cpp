@@ -589,6 +589,26 @@ TEST(Cli, AWrongBaudGivesNoiseAndAHintNotACrash) {
       << r.lines.back();
 }
 
+// A hint names the setting the evidence points at: the mode where the other one reads the
+// capture, and no baud where the capture has no timing to tell bauds apart.
+TEST(Cli, AHintNamesTheSettingTheEvidencePointsAt) {
+  const std::string drives = std::string("-r ") + MODTAP_SAMPLES + "/drives-manual-examples.log";
+  const Outcome ascii = run(drives + " --mode ascii -q");
+  ASSERT_EQ(ascii.status, 0);
+  EXPECT_THAT(ascii.lines,
+              ::testing::Contains("modtap: hint: the traffic reads as Modbus RTU: try --mode rtu "
+                                  "(or auto)"));
+  std::vector<std::vector<uint8_t>> junk;
+  for (int i = 0; i < 40; ++i) junk.push_back({0x41, 0x42, static_cast<uint8_t>(i), 0x43});
+  const std::string untimed = raw_capture("modtap-untimed-junk.raw", junk);
+  const Outcome any_baud = run("-r " + untimed + " --format raw --mode rtu --baud auto -q");
+  EXPECT_THAT(any_baud.lines,
+              ::testing::Contains(::testing::HasSubstr("without timing no baud or parity reads "
+                                                       "them otherwise")));
+  EXPECT_THAT(any_baud.lines,
+              ::testing::Not(::testing::Contains(::testing::HasSubstr("try --baud auto"))));
+}
+
 TEST(Cli, BaudAutoFindsTheLinesSettingsAndShowsItsEvidence) {
   const Outcome r = run(brainchild_lines + " --baud auto --parity auto -T stats");
   ASSERT_EQ(r.status, 0);

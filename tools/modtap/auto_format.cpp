@@ -30,6 +30,17 @@ void report(const std::vector<FormatTrial>& trials, const FormatTrial& best) {
 
 }  // namespace
 
+std::optional<ModeChoice> better_mode(const std::string& path, captures::OpenOptions open,
+                                      AnalyzerOptions analyzer) {
+  if (analyzer.mode == ModeChoice::automatic) return std::nullopt;
+  const SerialFormat told = open.serial;
+  if (trial(path, open, analyzer, told).convincing()) return std::nullopt;
+  const bool ascii = analyzer.mode == ModeChoice::rtu;  // the other one
+  analyzer.mode = ascii ? ModeChoice::ascii : ModeChoice::rtu;
+  if (!trial(path, open, analyzer, told.with_data_bits_of(ascii)).convincing()) return std::nullopt;
+  return analyzer.mode;
+}
+
 SerialFormat choose_file_format(const std::string& path, captures::OpenOptions open,
                                 AnalyzerOptions analyzer, std::optional<uint32_t> baud,
                                 std::optional<Parity> parity) {

@@ -16,4 +16,9 @@ SerialFormat choose_file_format(const std::string& path, captures::OpenOptions o
                                 AnalyzerOptions analyzer, std::optional<uint32_t> baud,
                                 std::optional<Parity> parity);
 
+// The other transmission mode than the one `analyzer` was told, where the capture's start reads
+// convincingly under it and did not under the one told: the setting a hint should name.
+std::optional<ModeChoice> better_mode(const std::string& path, captures::OpenOptions open,
+                                      AnalyzerOptions analyzer);
+
 }  // namespace modtap::tools

@@ -36,9 +36,18 @@ std::unique_ptr<ProgressBar> progress_bar(const RunOptions& o, const captures::C
   return std::make_unique<ProgressBar>(stderr, size);
 }
 
-// After a run whose traffic made little sense, or came faster than the baud allows, say so.
+// What a hint after the run knows besides the traffic: the setting the evidence points at.
+struct HintContext {
+  bool logic_analyzer = false;
+  bool untimed = false;                   // a capture without timing: no baud reads differently
+  std::optional<ModeChoice> better_mode;  // the other mode reads the capture where this did not
+};
+
+// After a run whose traffic made little sense, or came faster than the baud allows, say so,
+// naming the setting the evidence points at.
 void hint_settings(const SerialFormat& format, const LineHealth& health, const ChunkPace& pace,
-                   bool logic_analyzer) {
+                   const HintContext& context) {
+  const bool logic_analyzer = context.logic_analyzer;
   // A logic-analyzer capture that reads as nothing is usually a line inverted (RS-232 levels)
   // or probes swapped, which no baud rate mends.
   if (logic_analyzer && health.looks_wrong() && health.good_frames == 0) {
@@ -47,6 +56,19 @@ void hint_settings(const SerialFormat& format, const LineHealth& health, const C
                "--sigrok-invert), are the channels right (--sigrok-channels tx=NAME,rx=NAME), "
                "or are {} not the line's settings (try --baud auto)?\n",
                describe(format));
+    return;
+  }
+  if (context.better_mode) {
+    fmt::print(stderr, "modtap: hint: the traffic reads as Modbus {}: try --mode {} (or auto)\n",
+               *context.better_mode == ModeChoice::ascii ? "ASCII" : "RTU",
+               to_string(*context.better_mode));
+    return;
+  }
+  if (context.untimed && health.looks_wrong()) {
+    fmt::print(stderr,
+               "modtap: hint: only {:.0f}% of {} bytes formed frames with a good check; without "
+               "timing no baud or parity reads them otherwise: they may be no Modbus, or cut\n",
+               100 * health.good_share(), health.bytes);
     return;
   }
   if (pace.too_fast())
@@ -130,7 +152,11 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   const captures::Format format = open.format != captures::Format::automatic ? open.format
                                   : piped                                    ? captures::Format::raw
                                           : captures::detect_format(o.read_file);
-  hint_settings(open.serial, health, pace, format == captures::Format::sigrok);
+  HintContext context{format == captures::Format::sigrok, source->clock() == ClockQuality::none,
+                      std::nullopt};
+  if (health.looks_wrong() && !piped && !context.logic_analyzer)
+    context.better_mode = better_mode(o.read_file, open, analyzer_options(o, source->clock()));
+  hint_settings(open.serial, health, pace, context);
   return 0;
 }
 
