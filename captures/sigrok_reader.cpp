@@ -93,6 +93,10 @@ std::vector<SigrokLine> parse_sigrok_channels(const std::string& spec) {
   return lines;
 }
 
+std::vector<std::string> sigrok_channel_names(const std::string& path, const std::string& program) {
+  return parse_sigrok_show(run_to_string({program, "-i", path, "--show"}, path), path).channels;
+}
+
 SigrokReader::SigrokReader(const std::string& path, const SigrokOptions& options)
     : path_(path), options_(options) {
   const SigrokShape shape =

@@ -31,6 +31,9 @@ struct SigrokShape {
   std::vector<std::string> channels;
 };
 SigrokShape parse_sigrok_show(const std::string& text, const std::string& path);
+// The logic channels of a capture, by name, as `sigrok-cli --show` lists them.
+std::vector<std::string> sigrok_channel_names(const std::string& path,
+                                              const std::string& program = "sigrok-cli");
 
 // One line of the UART decoder's output: where the data bits start, and the byte.
 struct SigrokByte {

@@ -609,6 +609,18 @@ TEST(Cli, AHintNamesTheSettingTheEvidencePointsAt) {
               ::testing::Not(::testing::Contains(::testing::HasSubstr("try --baud auto"))));
 }
 
+// A logic-analyzer capture read on its first channel, where nothing is: the hint lists the
+// capture's channels rather than leaving a silent success.
+TEST(Cli, NothingOnTheDefaultSigrokChannelListsTheChannels) {
+  const Outcome r =
+      run(std::string("-r ") + MODTAP_SAMPLES + "/flowmeter_target_15liter_per_min.sr");
+  ASSERT_EQ(r.status, 0);
+  EXPECT_EQ(r.lines, std::vector<std::string>{
+                         "modtap: hint: nothing was decoded on channel 0, the capture's first; it "
+                         "has 0, 1, RXTX, 3, 4, 5, 6, 7: name the lines with --sigrok-channels "
+                         "tx=NAME,rx=NAME or bus=NAME"});
+}
+
 TEST(Cli, BaudAutoFindsTheLinesSettingsAndShowsItsEvidence) {
   const Outcome r = run(brainchild_lines + " --baud auto --parity auto -T stats");
   ASSERT_EQ(r.status, 0);

@@ -6,9 +6,11 @@
 #include <filesystem>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "captures/open_capture.hpp"
 #include "captures/piped_input.hpp"
+#include "captures/sigrok_reader.hpp"
 #include "protocol/format_probe.hpp"
 #include "tools/live/live_capture.hpp"
 #include "tools/modtap/auto_format.hpp"
@@ -39,8 +41,9 @@ std::unique_ptr<ProgressBar> progress_bar(const RunOptions& o, const captures::C
 // What a hint after the run knows besides the traffic: the setting the evidence points at.
 struct HintContext {
   bool logic_analyzer = false;
-  bool untimed = false;                   // a capture without timing: no baud reads differently
-  std::optional<ModeChoice> better_mode;  // the other mode reads the capture where this did not
+  std::vector<std::string> unnamed_lines;  // a logic-analyzer capture read on its first channel
+  bool untimed = false;                    // a capture without timing: no baud reads differently
+  std::optional<ModeChoice> better_mode;   // the other mode reads the capture where this did not
 };
 
 // After a run whose traffic made little sense, or came faster than the baud allows, say so,
@@ -48,6 +51,14 @@ struct HintContext {
 void hint_settings(const SerialFormat& format, const LineHealth& health, const ChunkPace& pace,
                    const HintContext& context) {
   const bool logic_analyzer = context.logic_analyzer;
+  // Nothing at all came of the first channel, read since no line was named: name them.
+  if (logic_analyzer && health.bytes == 0 && !context.unnamed_lines.empty()) {
+    fmt::print(stderr,
+               "modtap: hint: nothing was decoded on channel {}, the capture's first; it has {}: "
+               "name the lines with --sigrok-channels tx=NAME,rx=NAME or bus=NAME\n",
+               context.unnamed_lines.front(), fmt::join(context.unnamed_lines, ", "));
+    return;
+  }
   // A logic-analyzer capture that reads as nothing is usually a line inverted (RS-232 levels)
   // or probes swapped, which no baud rate mends.
   if (logic_analyzer && health.looks_wrong() && health.good_frames == 0) {
@@ -152,8 +163,10 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   const captures::Format format = open.format != captures::Format::automatic ? open.format
                                   : piped                                    ? captures::Format::raw
                                           : captures::detect_format(o.read_file);
-  HintContext context{format == captures::Format::sigrok, source->clock() == ClockQuality::none,
-                      std::nullopt};
+  HintContext context{
+      format == captures::Format::sigrok, {}, source->clock() == ClockQuality::none, std::nullopt};
+  if (context.logic_analyzer && o.sigrok_channels.empty())
+    context.unnamed_lines = captures::sigrok_channel_names(o.read_file);
   if (health.looks_wrong() && !piped && !context.logic_analyzer)
     context.better_mode = better_mode(o.read_file, open, analyzer_options(o, source->clock()));
   hint_settings(open.serial, health, pace, context);
