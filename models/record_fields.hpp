@@ -25,6 +25,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 
 #include "models/register_meaning.hpp"
@@ -71,16 +72,32 @@ inline FindingSlots findings_of(const Frame& frame) {
   return {frame.findings, frame.meaning};
 }
 
+// Where a frame or a noise record was: the fields both begin with.
+template <typename Record, typename Visitor>
+void walk_place(const Record& r, RecordType kind, Visitor& v) {
+  using enum FieldId;
+  v.choice(field<type>, kind);
+  v.number(field<index>, r.index);
+  v.time(field<t_ns>, r.t_ns);
+  v.time(field<end_ns>, r.end_ns);
+  v.channel(field<channel>, r.channel);
+  v.number(field<offset>, r.offset);
+  v.choice(field<mode>, r.mode);
+}
+
+// The request a frame answers or noise came after, where there is one.
+template <typename Visitor>
+void walk_request(const std::optional<uint64_t>& request, Visitor& v) {
+  if (request)
+    v.number(field<FieldId::request>, *request);
+  else
+    v.absent(field<FieldId::request>);
+}
+
 template <typename Visitor>
 void walk_fields(const Frame& frame, const DecodedPdu& pdu, Visitor& v) {
   using enum FieldId;
-  v.choice(field<type>, RecordType::frame);
-  v.number(field<index>, frame.index);
-  v.time(field<t_ns>, frame.t_ns);
-  v.time(field<end_ns>, frame.end_ns);
-  v.channel(field<channel>, frame.channel);
-  v.number(field<offset>, frame.offset);
-  v.choice(field<mode>, frame.mode);
+  walk_place(frame, RecordType::frame, v);
   v.choice(field<role>, frame.role);
   v.number(field<slave>, frame.slave());
   v.function_code(field<fc>, field<function>, frame.function());
@@ -99,10 +116,7 @@ void walk_fields(const Frame& frame, const DecodedPdu& pdu, Visitor& v) {
     v.number(field<exception>, frame.adu[2]);
   else
     v.absent(field<exception>);
-  if (frame.request)
-    v.number(field<request>, *frame.request);
-  else
-    v.absent(field<request>);
+  walk_request(frame.request, v);
   if (frame.latency_ns)
     v.micros(field<latency_us>, *frame.latency_ns);
   else
@@ -120,19 +134,10 @@ void walk_fields(const Frame& frame, const DecodedPdu& pdu, Visitor& v) {
 template <typename Visitor>
 void walk_fields(const Noise& noise, Visitor& v) {
   using enum FieldId;
-  v.choice(field<type>, RecordType::noise);
-  v.number(field<index>, noise.index);
-  v.time(field<t_ns>, noise.t_ns);
-  v.time(field<end_ns>, noise.end_ns);
-  v.channel(field<channel>, noise.channel);
-  v.number(field<offset>, noise.offset);
-  v.choice(field<mode>, noise.mode);
+  walk_place(noise, RecordType::noise, v);
   v.bytes(field<raw>, noise.raw);
   v.choice(field<reason>, noise.reason);
-  if (noise.request)
-    v.number(field<request>, *noise.request);
-  else
-    v.absent(field<request>);
+  walk_request(noise.request, v);
   v.boolean(field<damaged_answer>, noise.damaged_answer);
   v.findings(field<findings>, FindingSlots{noise.findings, nullptr});
 }
