@@ -348,8 +348,8 @@ std::string suggestion(std::string_view word) {
 class Parser {
  public:
   Parser(std::string_view text, const std::function<bool(std::string_view)>& is_register_name,
-         std::vector<FilterNode>& nodes)
-      : lexer_(text), is_register_name_(is_register_name), nodes_(nodes) {
+         RegisterBase base, std::vector<FilterNode>& nodes)
+      : lexer_(text), is_register_name_(is_register_name), base_(base), nodes_(nodes) {
     advance();
   }
 
@@ -453,11 +453,27 @@ class Parser {
         node.pattern = pattern(text_of(literal(op)));
         break;
       default:
-        node.literal = literal(op);
-        check_fixed_value(node.name, node.literal);
+        node.literal = value(op, node.name);
     }
     advance();
     return add(std::move(node));
+  }
+
+  // The literal compared with `name`: an address as text writes it, a fixed field's value.
+  Literal value(const Token& op, const Name& name) {
+    Literal given = literal(op);
+    check_fixed_value(name, given);
+    if (given.is_number && names_an_address(name))
+      if (const auto reg = parse_register_number(token_.text, base_))
+        given.number = reg->address;  // the table a 4xxxx number names is not checked
+    return given;
+  }
+
+  static bool names_an_address(const Name& name) {
+    if (name.kind == NameKind::register_attribute) return name.attribute == RegisterAttribute::addr;
+    return name.kind == NameKind::field &&
+           std::any_of(name.ids.begin(), name.ids.end(),
+                       [](FieldId id) { return field_info(id).type == FieldType::address; });
   }
 
   // `in {3 5 7}`, `in {1..10, 20}`: each member a value or a range; the closing brace current.
@@ -473,17 +489,15 @@ class Parser {
       }
       if (token_.kind == Token::Kind::end)
         throw FilterError(token_.column, "the set has no closing '}'");
-      Literal member = literal(op);
+      Literal member = value(op, name);
       advance();
       if (token_.kind == Token::Kind::range) {
         advance();
-        const Literal last = literal(op);
+        const Literal last = value(op, name);
         if (!member.is_number || !last.is_number)
           throw FilterError(token_.column, "a range in a set is of numbers: 1..10");
         member.upto = last.number;
         advance();
-      } else {
-        check_fixed_value(name, member);
       }
       members.push_back(std::move(member));
     }
@@ -586,6 +600,7 @@ class Parser {
 
   Lexer lexer_;
   const std::function<bool(std::string_view)>& is_register_name_;
+  RegisterBase base_;
   std::vector<FilterNode>& nodes_;
   std::vector<size_t> depth_;  // of each node's subtree
   size_t nesting_ = 0;
@@ -801,8 +816,9 @@ bool evaluate(const std::vector<FilterNode>& nodes, size_t at, const Record& rec
 }  // namespace
 
 DisplayFilter::DisplayFilter(std::string_view text,
-                             std::function<bool(std::string_view)> is_register_name) {
-  Parser(text, is_register_name, nodes_).parse();
+                             std::function<bool(std::string_view)> is_register_name,
+                             RegisterBase base) {
+  Parser(text, is_register_name, base, nodes_).parse();
 }
 DisplayFilter::~DisplayFilter() = default;
 DisplayFilter::DisplayFilter(DisplayFilter&&) noexcept = default;

@@ -21,6 +21,7 @@
 
 #include "protocol/pdu_fields.hpp"
 #include "protocol/record_sink.hpp"
+#include "protocol/register_numbering.hpp"
 
 namespace modtap {
 
@@ -38,9 +39,11 @@ struct FilterNode;
 
 class DisplayFilter {
  public:
-  // `is_register_name` says whether a loaded model names a register so (may be empty).
-  // Throws FilterError.
-  DisplayFilter(std::string_view text, std::function<bool(std::string_view)> is_register_name);
+  // `is_register_name` says whether a loaded model names a register so (may be empty). A
+  // decimal number compared with an address is read in `base`, as text prints addresses
+  // (--register-base: 1-based, or 4xxxx's 49475). Throws FilterError.
+  DisplayFilter(std::string_view text, std::function<bool(std::string_view)> is_register_name,
+                RegisterBase base = RegisterBase::hex);
   ~DisplayFilter();
   DisplayFilter(DisplayFilter&&) noexcept;
 

@@ -131,6 +131,23 @@ TEST(DisplayFilter, ContainsInAndMatchesAsWiresharkHasThem) {
   EXPECT_NE(refusal("role in {req, foo}").find("not \"foo\""), std::string::npos);
 }
 
+// An address is compared as text prints it under --register-base: 49508 is holding register
+// 2523H in the 4xxxx convention, 9508 in the 1-based one; hex is the wire's in any.
+TEST(DisplayFilter, AddressesReadAsTheRegisterBasePrintsThem) {
+  const Sample sample;
+  auto matches_in = [&](const std::string& text, RegisterBase base) {
+    return DisplayFilter(text, is_register, base).matches(sample.frame, sample.pdu);
+  };
+  EXPECT_TRUE(matches_in("address == 49508", RegisterBase::modicon));
+  EXPECT_TRUE(matches_in("address in {49500..49510}", RegisterBase::modicon));
+  EXPECT_TRUE(matches_in("register.addr == 49508", RegisterBase::modicon));
+  EXPECT_TRUE(matches_in("address == 9508", RegisterBase::one));
+  EXPECT_FALSE(matches_in("address == 9507", RegisterBase::one));
+  EXPECT_TRUE(matches_in("address == 2523H", RegisterBase::one));
+  EXPECT_TRUE(matches_in("address == 9507", RegisterBase::hex));
+  EXPECT_TRUE(matches_in("slave == 1", RegisterBase::one));  // only addresses move
+}
+
 TEST(DisplayFilter, NoiseAndTimeOutsHaveTheirOwnFields) {
   const uint8_t junk[] = {0xFF};
   Noise noise;

@@ -158,7 +158,7 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
     catalog_ = load_models(o);
     choice = catalog_.choose(o.models);
     if (!o.timeout_given) model_timeouts_ = modtap::model_timeouts(choice);
-    if (!o.display_filter.empty()) filter(o.display_filter, channels);
+    if (!o.display_filter.empty()) filter(o.display_filter, o.register_base, channels);
   }
   // Every record's time is kept before the filter picks some: the time column counts over the
   // whole capture, as without the filter.
@@ -240,12 +240,14 @@ std::vector<std::string> FollowWatch::unseen() const {
 }
 
 // -Y: every output (text, JSON, statistics, pcapng) sees only the records it matches.
-void Pipeline::filter(const std::string& text, const std::vector<ChannelInfo>& channels) {
+void Pipeline::filter(const std::string& text, RegisterBase base,
+                      const std::vector<ChannelInfo>& channels) {
   const auto models = catalog_.all();
-  DisplayFilter filter(text, [models](std::string_view name) {
+  const auto is_register_name = [models](std::string_view name) {
     return std::any_of(models.begin(), models.end(),
                        [&](const DeviceModel* m) { return names_register(*m, name); });
-  });
+  };
+  DisplayFilter filter(text, is_register_name, base);
   std::vector<std::string> names;
   for (const auto& channel : channels) names.push_back(channel.name);
   filter.set_channel_names(std::move(names));

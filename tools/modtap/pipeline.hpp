@@ -157,7 +157,7 @@ class Pipeline {
   RecordSink& after_diagnostics();
   RecordSink& before_filter();  // the clock stage in front of the filter, or the sinks
   RecordSink& watch_follow(const RunOptions& o, RecordSink& next);
-  void filter(const std::string& text, const std::vector<ChannelInfo>& channels);
+  void filter(const std::string& text, RegisterBase base, const std::vector<ChannelInfo>& channels);
   void write_pcapng(const RunOptions& o, const captures::RingLimits& ring,
                     const std::vector<ChannelInfo>& channels, ClockQuality clock);
 
