@@ -49,6 +49,7 @@ class Analyzer final : private FrameSink {
   // How often a chunk's time stamp was earlier than one before it (a capture whose clock
   // stepped back); latencies across such a step are not measured.
   uint64_t clock_steps_back() const { return clock_steps_back_; }
+  const Matcher& matcher() const { return matcher_; }
   // No byte pushed so far waits in a framer or in the mode's probe: what comes next begins
   // a new record, so a file of raw reads may turn here without cutting a frame in two.
   bool between_frames() const { return !probe_ && settled_ns(INT64_MAX) == INT64_MAX; }

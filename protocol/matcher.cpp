@@ -235,7 +235,7 @@ void Matcher::on_response(Frame& frame, Copy copy) {
   // the slave's turnaround for telling a retry from an echo.
   if (options_.timed && frame.t_ns >= pending_->end_ns && copy == Copy::none && frame.check_ok)
     learn_turnaround(pending_->slave, frame.t_ns - pending_->end_ns);
-  if (sees_turnaround(frame, pending_->end_ns, pending_->end_read)) {
+  if (count_turnaround(frame, pending_->end_ns, pending_->end_read)) {
     frame.latency_ns = frame.t_ns - pending_->end_ns;
     if (options_.exact_clock && *frame.latency_ns < options_.t35_ns)
       frame.findings |= finding_fast_turnaround;
@@ -251,7 +251,7 @@ void Matcher::answers_retry(Frame& frame, const AmbiguousEcho& echo) {
   frame.request = echo.index;
   frame.request_slave = echo.request->slave;
   frame.request_pdu = {echo.request->pdu.data(), echo.request->size};
-  if (sees_turnaround(frame, echo.end_ns, echo.end_read))
+  if (count_turnaround(frame, echo.end_ns, echo.end_read))
     frame.latency_ns = frame.t_ns - echo.end_ns;
 }
 
@@ -259,10 +259,13 @@ void Matcher::answers_retry(Frame& frame, const AmbiguousEcho& echo) {
 // back, or stamps reads later than the bytes ended, can put a response before its request's
 // end: that latency is not measured rather than negative. An answer that came in the read of
 // the request's last bytes has no time of its own (a sniffer's packet, a hex log's block).
-bool Matcher::sees_turnaround(const Frame& frame, int64_t request_end_ns,
-                              uint64_t request_end_read) const {
+bool Matcher::count_turnaround(const Frame& frame, int64_t request_end_ns,
+                               uint64_t request_end_read) {
   const bool one_read = frame.start_read != 0 && frame.start_read == request_end_read;
-  return options_.timed && frame.t_ns >= request_end_ns && !one_read;
+  if (!options_.timed || one_read) return false;
+  ++timed_answers_;
+  early_answers_ += frame.t_ns < request_end_ns;
+  return frame.t_ns >= request_end_ns;
 }
 
 void Matcher::advance(int64_t now_ns) {

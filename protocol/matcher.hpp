@@ -41,6 +41,10 @@ class Matcher {
   void finish(int64_t end_ns);
 
   const Expectation& expectation() const { return expectation_; }
+  // Answers in a read of their own, and those of them placed to begin before their request
+  // ended: at the line's real speed none does, so many say the line is faster than told.
+  uint64_t timed_answers() const { return timed_answers_; }
+  uint64_t early_answers() const { return early_answers_; }
 
  private:
   struct Pending {
@@ -93,7 +97,8 @@ class Matcher {
   static bool fits(const Frame& frame, const Pending& request);
   bool fits_pending(const Frame& frame) const { return fits(frame, *pending_); }
   bool long_after_answer_due(const Frame& frame) const;
-  bool sees_turnaround(const Frame& frame, int64_t request_end_ns, uint64_t request_end_read) const;
+  // Whether the clock saw the answer's turnaround; counts the answers timed, and the early ones.
+  bool count_turnaround(const Frame& frame, int64_t request_end_ns, uint64_t request_end_read);
   void on_request(Frame& frame);
   void on_response(Frame& frame, Copy copy);
   void garbled_answer(Frame& frame);
@@ -113,6 +118,7 @@ class Matcher {
   Pending* unanswered_ = nullptr;  // the request that last timed out, until another is sent
   std::optional<AmbiguousEcho> ambiguous_echo_;  // the last frame, where it was one
   Expectation expectation_;  // what pending_ means to a framer, kept in step with it
+  uint64_t timed_answers_ = 0, early_answers_ = 0;
   // The longest turnaround seen per slave, and on the bus, from pairs no retry could fake.
   std::array<int64_t, 256> turnaround_ns_{};
   int64_t bus_turnaround_ns_ = 0;

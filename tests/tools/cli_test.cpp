@@ -621,6 +621,27 @@ TEST(Cli, NothingOnTheDefaultSigrokChannelListsTheChannels) {
                          "tx=NAME,rx=NAME or bus=NAME"});
 }
 
+// Read at half its baud, a bus of quick answers places each answer's start before its request
+// ended: the clock says the line is faster than told.
+TEST(Cli, AnswersBeforeTheirQuestionsSayTheLineIsFaster) {
+  const auto path = (std::filesystem::temp_directory_path() / "modtap-quick-answers.pcap").string();
+  {
+    modtap::captures::PcapChunkWriter pcap(path, 147);
+    const std::vector<uint8_t> request{0x01, 0x03, 0x00, 0x00, 0x00, 0x01, 0x84, 0x0A};
+    const std::vector<uint8_t> answer{0x01, 0x03, 0x02, 0x00, 0x07, 0xF9, 0x86};
+    // 19200 baud: each answer 1 ms after its request, each packet stamped at its end.
+    for (int64_t k = 0; k < 12; ++k) {
+      pcap.write({0, 1'700'000'000'000'000'000 + k * 50'000'000, request});
+      pcap.write({0, 1'700'000'000'000'000'000 + k * 50'000'000 + 5'000'000, answer});
+    }
+  }
+  const std::string hint =
+      "modtap: hint: 12 of 12 answers would begin before their request ended at 9600 8E1; the "
+      "line is faster: try --baud auto";
+  EXPECT_THAT(run("-r " + path + " --baud 9600 -q").lines, ::testing::Contains(hint));
+  EXPECT_THAT(run("-r " + path + " -q").lines, ::testing::IsEmpty());
+}
+
 TEST(Cli, BaudAutoFindsTheLinesSettingsAndShowsItsEvidence) {
   const Outcome r = run(brainchild_lines + " --baud auto --parity auto -T stats");
   ASSERT_EQ(r.status, 0);

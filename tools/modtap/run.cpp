@@ -44,6 +44,7 @@ struct HintContext {
   std::vector<std::string> unnamed_lines;  // a logic-analyzer capture read on its first channel
   bool untimed = false;                    // a capture without timing: no baud reads differently
   std::optional<ModeChoice> better_mode;   // the other mode reads the capture where this did not
+  uint64_t timed_answers = 0, early_answers = 0;  // the matcher's: answers before their questions
 };
 
 // After a run whose traffic made little sense, or came faster than the baud allows, say so,
@@ -80,6 +81,13 @@ void hint_settings(const SerialFormat& format, const LineHealth& health, const C
                "modtap: hint: only {:.0f}% of {} bytes formed frames with a good check; without "
                "timing no baud or parity reads them otherwise: they may be no Modbus, or cut\n",
                100 * health.good_share(), health.bytes);
+    return;
+  }
+  if (context.timed_answers >= 10 && context.early_answers * 2 > context.timed_answers) {
+    fmt::print(stderr,
+               "modtap: hint: {} of {} answers would begin before their request ended at {}; "
+               "the line is faster: try --baud auto\n",
+               context.early_answers, context.timed_answers, describe(format));
     return;
   }
   if (pace.too_fast())
@@ -165,6 +173,8 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
                                           : captures::detect_format(o.read_file);
   HintContext context{
       format == captures::Format::sigrok, {}, source->clock() == ClockQuality::none, std::nullopt};
+  context.timed_answers = bus.matcher().timed_answers();
+  context.early_answers = bus.matcher().early_answers();
   if (context.logic_analyzer && o.sigrok_channels.empty())
     context.unnamed_lines = captures::sigrok_channel_names(o.read_file);
   if (health.looks_wrong() && !piped && !context.logic_analyzer)
