@@ -147,24 +147,28 @@ void append_text_scalar(fmt::memory_buffer& out, const Field& f, size_t max_item
 }  // namespace
 
 // A byte's two hex digits in one copy, from a table of all 256.
-constexpr auto hex_pairs = [] {
-  constexpr char digits[] = "0123456789abcdef";
+constexpr auto hex_pairs_in(const char (&digits)[17]) {
   std::array<char, 512> pairs{};
   for (int i = 0; i < 256; ++i) {
     pairs[2 * i] = digits[i >> 4];
     pairs[2 * i + 1] = digits[i & 15];
   }
   return pairs;
-}();
+}
+constexpr auto hex_pairs = hex_pairs_in("0123456789abcdef");
+constexpr auto upper_hex_pairs = hex_pairs_in("0123456789ABCDEF");
 
+// Spaced for people, in capitals as the manuals and the check column write bytes; packed for
+// JSON and filters, in small letters.
 void append_hex(fmt::memory_buffer& out, std::span<const uint8_t> bytes, bool spaced) {
   if (bytes.empty()) return;
   const size_t at = out.size();
   const size_t step = spaced ? 3 : 2;
+  const auto& pairs = spaced ? upper_hex_pairs : hex_pairs;
   out.resize(at + bytes.size() * step - (spaced ? 1 : 0));
   char* to = out.data() + at;
   for (size_t i = 0; i < bytes.size(); ++i, to += step) {
-    std::memcpy(to, &hex_pairs[2 * bytes[i]], 2);
+    std::memcpy(to, &pairs[2 * bytes[i]], 2);
     if (spaced && i + 1 < bytes.size()) to[2] = ' ';
   }
 }

@@ -259,7 +259,8 @@ void TextSink::on_noise(const Noise& noise) {
   out_.print(FMT_COMPILE("{:6}"), noise.index);
   time_column(noise.t_ns);
   channel_column(noise.channel);
-  out_.print(FMT_COMPILE(" noise {} bytes ({})"), noise.raw.size(), to_string(noise.reason));
+  out_.print(FMT_COMPILE(" noise {} ({})"), counted(noise.raw.size(), "byte", "bytes"),
+             to_string(noise.reason));
   if (noise.request) out_.print(FMT_COMPILE(" after request #{}"), *noise.request);
   if (noise.damaged_answer)
     out_.print(FMT_COMPILE(", slave {}'s answer garbled"), noise.request_slave);

@@ -92,7 +92,7 @@ TEST(Put, AppendsLabelsNumbersAndHexInPlace) {
             "x=42442" + std::string(600, ',') + "42442");
   const uint8_t bytes[] = {0x01, 0xab, 0x00};
   EXPECT_EQ(appended([&](auto& out) { append_hex(out, bytes, false); }), "x=01ab00");
-  EXPECT_EQ(appended([&](auto& out) { append_hex(out, bytes, true); }), "x=01 ab 00");
+  EXPECT_EQ(appended([&](auto& out) { append_hex(out, bytes, true); }), "x=01 AB 00");
   EXPECT_EQ(appended([](auto& out) { append_hex(out, {}, true); }), "x=");
 }
 

@@ -55,5 +55,34 @@ TEST(TextSink, PrintsTheTimeColumnFromTheNanoseconds) {
                                       "    3.000000", "   -3.002292"}));
 }
 
+// A noise line counts its bytes in the number they take, and shows them in capitals, as the
+// check column and the manuals write bytes.
+TEST(TextSink, NoiseSaysItsBytesAsPeopleWriteThem) {
+  FILE* stream = std::tmpfile();
+  {
+    captures::OutputFile file(stream, "test");
+    Output out(file);
+    const std::vector<ChannelInfo> channels{{"bus", ChannelRole::bus}};
+    TextSink sink(out, channels, TextOptions{});
+    static const uint8_t glitch[] = {0xFF}, junk[] = {0xAB, 0x0C};
+    Noise noise;
+    noise.raw = glitch;
+    noise.reason = NoiseReason::glitch;
+    sink.on_noise(noise);
+    noise.raw = junk;
+    noise.reason = NoiseReason::junk;
+    sink.on_noise(noise);
+    out.flush();
+  }
+  std::rewind(stream);
+  char line[512];
+  std::vector<std::string> lines;
+  while (std::fgets(line, sizeof line, stream)) lines.emplace_back(line);
+  std::fclose(stream);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_NE(lines[0].find("noise 1 byte (glitch): FF\n"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[1].find("noise 2 bytes (junk): AB 0C\n"), std::string::npos) << lines[1];
+}
+
 }  // namespace
 }  // namespace modtap::output
