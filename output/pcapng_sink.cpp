@@ -223,6 +223,7 @@ void PcapngSink::on_frame(const Frame& frame) {
       frame.channel < channels_.size() ? channels_[frame.channel].role : ChannelRole::bus;
   const captures::PacketDirection direction = direction_of(frame.role, channel_role);
   const uint32_t interface = interface_for(frame.channel);
+  ++packets_;
   if (options_.link == PcapngLink::bare) {
     writer_.write_packet(interface, frame.t_ns, frame.raw, direction, {});
     return;
@@ -246,6 +247,7 @@ void PcapngSink::on_frame(const Frame& frame) {
 
 void PcapngSink::on_noise(const Noise& noise) {
   if (options_.link == PcapngLink::bare) return;
+  ++packets_;
   const uint32_t interface = interface_for(noise.channel);
   std::span<const uint8_t> data = noise.raw;
   if (options_.link == PcapngLink::exported_pdu) data = exported_pdu("data", true, noise.raw);
@@ -281,12 +283,10 @@ PcapngFiles::PcapngFiles(const std::string& path, const captures::RingLimits& li
 
 void PcapngFiles::on_frame(const Frame& frame) {
   sink_at(frame.t_ns).on_frame(frame);
-  ++packets_;
 }
 
 void PcapngFiles::on_noise(const Noise& noise) {
   sink_at(noise.t_ns).on_noise(noise);
-  packets_ += options_.link != PcapngLink::bare;  // frames only, bare
 }
 
 void PcapngFiles::on_timeout(const Timeout& timeout) {
@@ -297,6 +297,10 @@ uint64_t PcapngFiles::bytes_written() const {
   return closed_bytes_ + (writer_ ? writer_->bytes_written() : 0);
 }
 
+uint64_t PcapngFiles::packets() const {
+  return closed_packets_ + (sink_ ? sink_->packets() : 0);
+}
+
 PcapngSink& PcapngFiles::sink_at(int64_t t_ns) {
   if (!writer_ || ring_.due(t_ns, writer_->bytes_written())) begin_file(ring_.begin(t_ns));
   return *sink_;
@@ -305,6 +309,7 @@ PcapngSink& PcapngFiles::sink_at(int64_t t_ns) {
 void PcapngFiles::begin_file(const std::string& path) {
   if (writer_) {
     sink_->finish();  // a request still waiting stays in its file, without its outcome
+    closed_packets_ += sink_->packets();
     sink_.reset();
     writer_->close();
     closed_bytes_ += writer_->bytes_written();

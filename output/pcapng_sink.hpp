@@ -47,6 +47,7 @@ class PcapngSink final : public RecordSink {
   void on_timeout(const Timeout& timeout) override;
   // Writes what is held (requests still waiting, and what came after them).
   void finish();
+  uint64_t packets() const { return packets_; }  // records written, one packet each
 
  private:
   uint32_t interface_for(uint16_t channel);
@@ -59,6 +60,7 @@ class PcapngSink final : public RecordSink {
   std::vector<int64_t> interface_of_channel_;  // -1 until its interface block is written
   std::vector<uint8_t> payload_;
   fmt::memory_buffer comment_;  // the packet's comment, its storage kept from frame to frame
+  uint64_t packets_ = 0;
 };
 
 // -w: the pcapng file, or with -b a ring of them. Each file is whole (its own section and
@@ -76,7 +78,7 @@ class PcapngFiles final : public RecordSink {
 
   uint64_t bytes_written() const;  // by all its files together
   uint64_t files_begun() const { return ring_.files_begun(); }
-  uint64_t packets() const { return packets_; }  // records written, one packet each
+  uint64_t packets() const;  // records written, one packet each, by all its files
   // Completes the last file (or the one file of a run that saw no record), reporting failures.
   void close();
 
@@ -88,7 +90,7 @@ class PcapngFiles final : public RecordSink {
   const std::vector<ChannelInfo>& channels_;
   PcapngOptions options_;
   uint64_t closed_bytes_ = 0;  // what the files before the current one hold
-  uint64_t packets_ = 0;
+  uint64_t closed_packets_ = 0;
   std::unique_ptr<captures::PcapngWriter> writer_;
   std::unique_ptr<PcapngSink> sink_;
 };

@@ -175,7 +175,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
       format == captures::Format::sigrok, {}, source->clock() == ClockQuality::none, std::nullopt};
   context.timed_answers = bus.matcher().timed_answers();
   context.early_answers = bus.matcher().early_answers();
-  if (context.logic_analyzer && o.sigrok_channels.empty())
+  if (context.logic_analyzer && o.sigrok_channels.empty() && health.bytes == 0)
     context.unnamed_lines = captures::sigrok_channel_names(o.read_file);
   if (health.looks_wrong() && !piped && !context.logic_analyzer)
     context.better_mode = better_mode(o.read_file, open, analyzer_options(o, source->clock()));
