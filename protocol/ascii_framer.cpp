@@ -133,22 +133,8 @@ void AsciiFramer::emit_frame() {
 void AsciiFramer::emit_noise(NoiseReason reason) {
   if (reason == NoiseReason::junk || reason == NoiseReason::truncated) return hold_noise(reason);
   release_held();
-  hand_on({pending_, pending_offset_, pending_start_ns_, pending_end_ns_, pending_untimed_start_,
-           reason});
-  pending_.clear();
-}
-
-void AsciiFramer::hand_on(const HeldNoise& piece) {
-  Noise noise;
-  noise.channel = channel_;
-  noise.mode = Mode::ascii;
-  noise.offset = piece.offset;
-  noise.raw = piece.raw;
-  noise.t_ns = piece.t_ns;
-  noise.end_ns = piece.end_ns;
-  noise.untimed_start = piece.untimed_start;
-  noise.reason = piece.reason;
-  sink_.on_noise(noise);
+  hold_noise(reason);  // alone, through the held record's kept room
+  release_held();
 }
 
 // Joins the pending piece to the held run, unless a silence parts them (the inter-character
@@ -173,7 +159,16 @@ void AsciiFramer::hold_noise(NoiseReason reason) {
 
 void AsciiFramer::release_held() {
   if (held_.raw.empty()) return;
-  hand_on(held_);
+  Noise noise;
+  noise.channel = channel_;
+  noise.mode = Mode::ascii;
+  noise.offset = held_.offset;
+  noise.raw = held_.raw;
+  noise.t_ns = held_.t_ns;
+  noise.end_ns = held_.end_ns;
+  noise.untimed_start = held_.untimed_start;
+  noise.reason = held_.reason;
+  sink_.on_noise(noise);
   held_.raw.clear();
 }
 

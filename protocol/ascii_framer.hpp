@@ -43,8 +43,6 @@ class AsciiFramer {
   void emit_noise(NoiseReason reason);
   void hold_noise(NoiseReason reason);
   void release_held();
-  struct HeldNoise;
-  void hand_on(const HeldNoise& piece);
   void reset(uint64_t offset, int64_t start_ns, bool starts_read);
 
   uint16_t channel_;
