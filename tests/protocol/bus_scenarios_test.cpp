@@ -364,6 +364,16 @@ BusOptions faulty_senders(uint64_t seed) {
   return o;
 }
 
+// FC15 Write File Record answers as long as their requests (up to 250 bytes), at 115200 baud:
+// through a 16 ms adapter an echo spans reads, and its duration is as long as a turnaround.
+BusOptions long_echoes(uint64_t seed) {
+  BusOptions o = real_masters(seed);
+  o.transactions = 1000;
+  o.format = {115200, 8, Parity::none, 1};
+  o.long_file_records = true;
+  return o;
+}
+
 constexpr busgen::ClockError usb_jitter{8'000'000, 1};
 constexpr busgen::ClockError coarse_timer{0, 10'000'000};
 constexpr busgen::ClockError sample_clock{0, 2'000};  // a logic analyzer at 500 kHz
@@ -389,7 +399,10 @@ INSTANTIATE_TEST_SUITE_P(
         Scenario{"glitches_per_byte", Delivery::per_byte, glitch_every_turnaround(27)},
         Scenario{"glitches_bursts", Delivery::bursts, glitch_every_turnaround(28)},
         Scenario{"glitches_per_frame", Delivery::per_frame, glitch_every_turnaround(29)},
-        Scenario{"glitches_untimed", Delivery::untimed, glitch_every_turnaround(30)}),
+        Scenario{"glitches_untimed", Delivery::untimed, glitch_every_turnaround(30)},
+        Scenario{"long_echoes_bursts", Delivery::bursts, long_echoes(35)},
+        Scenario{"long_echoes_per_frame", Delivery::per_frame, long_echoes(36), 0, Via::direct,
+                 usb_jitter}),
     [](const auto& info) { return std::string(info.param.name); });
 
 // The seeds to run: MODTAP_SEEDS=FIRST-LAST (a sweep of fresh seeds by hand, to find what no

@@ -584,9 +584,11 @@ class Simulator {
       }
       case 0x15: {
         const unsigned subs = pick(1, 3);
+        // 245 bytes of data at most (Modbus Application Protocol 6.15): 7 of header a record.
+        const unsigned longest = o_.long_file_records ? (245 / subs - 7) / 2 : 5;
         Bytes data;
         for (unsigned i = 0; i < subs; ++i) {
-          const unsigned length = pick(1, 5);
+          const unsigned length = pick(1, longest);
           data.push_back(6);
           u16(data, pick(1, 10));
           u16(data, pick(0, 9999));

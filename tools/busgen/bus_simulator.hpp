@@ -63,6 +63,9 @@ struct BusOptions {
   double noise_rate = 0.0;             // a burst of junk between transactions
   double truncation_rate = 0.0;        // the master's request breaks off, then is sent again
   double unknown_function_rate = 0.0;  // a vendor function code the length rules do not know
+  // FC15 Write File Record with records up to the standard's 245 bytes of request data (a
+  // drive's parameter download), not a few registers: echoes as long as their requests.
+  bool long_file_records = false;
   // What real masters and buses do beyond the clean picture:
   double out_of_spec_rate = 0.0;  // a request over the standard's limits, answered by exception 03
   double retry_rate = 0.0;        // an unanswered request is sent again after the master's time-out
