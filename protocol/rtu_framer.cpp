@@ -377,7 +377,9 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
           return {Match::Kind::found, n, fit, doubt};
         }
       }
-      if (search <= 0 || p[0] > max_unicast_slave) return {};
+      // No station answers to 255 on a serial line (N3 counts to 254), and 0xFF is what a
+      // driver turning on puts on it: a frame of no fixed length from there is a glitch's.
+      if (search <= 0 || p[0] == 0xFF) return {};
       return search_end(at, std::max<size_t>(body.bytes + crc_size, min_adu), fit, final, search);
     }
   }
@@ -414,7 +416,8 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       // Whether it swallows a frame is the costly question: asked only where it decides.
       const bool confirmed = confirmed_end(at, at + n, final, search - 1, allow_glitch);
       const bool at_end = at + n == end_;
-      const bool may_stand_alone = !unconfirmed && p[1] == 0x08;
+      // A reserved address is as often a turnaround's 0xFF: its frame needs confirming.
+      const bool may_stand_alone = !unconfirmed && p[1] == 0x08 && p[0] <= max_unicast_slave;
       if (!confirmed && !at_end && !may_stand_alone) continue;
       if (swallows_known_frame(at, at + n)) continue;
       // Confirmed only by taking the next 0x00 for a glitch, where one byte more holds too; or

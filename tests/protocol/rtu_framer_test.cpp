@@ -442,6 +442,28 @@ TEST_F(GapCollector, APauseAfterAGoodCrcEndsAFrameOfNoFixedLength) {
   EXPECT_EQ(stream[2].raw, read_request);
 }
 
+// N3 answers to stations up to 254 (reserved by the standard), and its loop test is FC08
+// Return Query Data, which has no fixed length. A query and its echo read in one chunk are two
+// frames, paired, found by the CRC search as for any station; only 0xFF, a glitch's byte,
+// starts no frame of no fixed length.
+TEST_F(GapCollector, ALoopTestToAReservedStationAndItsEchoInOneReadAreTwoFrames) {
+  for (uint8_t station = 248; station <= 254; ++station) {
+    const auto query = with_crc({station, 0x08, 0x00, 0x00, 0x12, 0x34});
+    auto query_and_echo = query;
+    query_and_echo.insert(query_and_echo.end(), query.begin(), query.end());
+    const auto out =
+        run({{0, query_and_echo}, {20'000'000, read_request}}, ClockQuality::per_chunk);
+    const auto frames = out.frames();
+    ASSERT_EQ(frames.size(), 3u) << "station " << int{station};
+    EXPECT_EQ(frames[0].raw, query);
+    EXPECT_EQ(frames[0].role, Role::request);
+    EXPECT_EQ(frames[1].raw, query);
+    EXPECT_EQ(frames[1].role, Role::response);
+    EXPECT_EQ(frames[1].request, frames[0].index);
+    EXPECT_TRUE(frames[0].check_ok && frames[1].check_ok);
+  }
+}
+
 // Noise while a request waits is marked with that request; a glitch, or noise once the request
 // was answered, is not.
 TEST_F(GapCollector, NoiseWhereAnAnswerWasAwaitedIsGarbageAfterTheRequest) {
