@@ -173,6 +173,27 @@ void append_hex(fmt::memory_buffer& out, std::span<const uint8_t> bytes, bool sp
   }
 }
 
+namespace {
+
+// The length of the well-formed UTF-8 sequence at the start of `text` (RFC 3629: no overlong
+// form, no surrogate, nothing past U+10FFFF), or 0.
+size_t utf8_sequence(std::string_view text) {
+  const auto byte = [&](size_t i) { return static_cast<unsigned char>(text[i]); };
+  const unsigned char lead = byte(0);
+  const size_t size = lead >= 0xF0 ? 4 : lead >= 0xE0 ? 3 : lead >= 0xC2 ? 2 : 0;
+  if (size == 0 || lead > 0xF4 || text.size() < size) return 0;
+  // The second byte's range rules out overlong forms, surrogates and code points too large.
+  const unsigned char second = byte(1);
+  const unsigned char low = lead == 0xE0 ? 0xA0 : lead == 0xF0 ? 0x90 : 0x80;
+  const unsigned char high = lead == 0xED ? 0x9F : lead == 0xF4 ? 0x8F : 0xBF;
+  if (second < low || second > high) return 0;
+  for (size_t i = 2; i < size; ++i)
+    if ((byte(i) & 0xC0) != 0x80) return 0;
+  return size;
+}
+
+}  // namespace
+
 void append_json_string(fmt::memory_buffer& out, std::string_view text) {
   out.push_back('"');
   const bool plain = std::all_of(text.begin(), text.end(), [](unsigned char c) {
@@ -183,12 +204,16 @@ void append_json_string(fmt::memory_buffer& out, std::string_view text) {
     out.push_back('"');
     return;
   }
-  for (unsigned char c : text) {
+  for (size_t i = 0; i < text.size(); ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
     if (c == '"' || c == '\\') {
       out.push_back('\\');
       out.push_back(static_cast<char>(c));
+    } else if (const size_t n = c >= 0x80 ? utf8_sequence(text.substr(i)) : 0; n > 0) {
+      put(out, text.substr(i, n));  // a model's text (Chinese), or a device's UTF-8 string
+      i += n - 1;
     } else if (c < 0x20 || c >= 0x7F) {
-      // Device strings are bytes, not UTF-8: escape anything outside printable ASCII.
+      // A device string's bytes that are no UTF-8 read as Latin-1, each its own code point.
       fmt::format_to(fmt::appender(out), "\\u{:04x}", c);
     } else {
       out.push_back(static_cast<char>(c));

@@ -96,14 +96,28 @@ TEST(Put, AppendsLabelsNumbersAndHexInPlace) {
   EXPECT_EQ(appended([](auto& out) { append_hex(out, {}, true); }), "x=");
 }
 
-// Device strings are bytes: anything outside printable ASCII is escaped, quotes and
-// backslashes too; a plain string is copied whole.
+// Control bytes are escaped, quotes and backslashes too; a plain string is copied whole.
 TEST(JsonString, EscapesWhatJsonAndTerminalsNeed) {
   EXPECT_EQ(appended([](auto& out) { append_json_string(out, "Hz"); }), "x=\"Hz\"");
   EXPECT_EQ(appended([](auto& out) { append_json_string(out, ""); }), "x=\"\"");
   EXPECT_EQ(appended([](auto& out) { append_json_string(out, "a\"b\\c"); }), "x=\"a\\\"b\\\\c\"");
   EXPECT_EQ(appended([](auto& out) { append_json_string(out, std::string_view("\x01\xff", 2)); }),
             "x=\"\\u0001\\u00ff\"");
+}
+
+// JSON is UTF-8: a model's Chinese text stays itself. Bytes that are no well-formed UTF-8 (a
+// lone lead byte, an overlong form, a surrogate) read as Latin-1, each its own code point.
+TEST(JsonString, PassesUtf8AndEscapesBytesThatAreNone) {
+  EXPECT_EQ(appended([](auto& out) { append_json_string(out, "机能代码错误 (51H)"); }),
+            "x=\"机能代码错误 (51H)\"");
+  EXPECT_EQ(appended([](auto& out) { append_json_string(out, "\xe6\x9c"); }),
+            "x=\"\\u00e6\\u009c\"");
+  EXPECT_EQ(appended([](auto& out) { append_json_string(out, "\xc0\xaf"); }),
+            "x=\"\\u00c0\\u00af\"");
+  EXPECT_EQ(appended([](auto& out) { append_json_string(out, "\xed\xa0\x80"); }),
+            "x=\"\\u00ed\\u00a0\\u0080\"");
+  EXPECT_EQ(appended([](auto& out) { append_json_string(out, "\xf0\x9f\x94\x8c!"); }),
+            "x=\"\xf0\x9f\x94\x8c!\"");
 }
 
 }  // namespace
