@@ -474,7 +474,9 @@ class Diagnosis {
                      events.first);
     p.evidence = {{"function", fc},    {"address", start},         {"quantity", quantity},
                   {"exception", code}, {"answered", events.count}, {"requests", requests}};
-    const std::string_view name = exception_name(code);
+    // The model's meaning of the code, where it gives one, is its name and says why.
+    const std::string_view meaning = slave.model ? exception_meaning(*slave.model, code) : "";
+    const std::string_view name = meaning.empty() ? exception_name(code) : meaning;
     std::vector<std::string> what;
     if (const std::string reg = register_name(slave, fc, start); !reg.empty()) what.push_back(reg);
     if (quantity > 1) what.push_back(fmt::format("{} registers", quantity));
@@ -483,7 +485,10 @@ class Diagnosis {
                          who(address, slave), events.count == requests ? "every" : "nearly every",
                          verb(fc), start, detail, code, name.empty() ? "" : " (", name,
                          name.empty() ? "" : ")", events.count, requests);
-    p.advice = fmt::format("{}; {}", exception_advice(code), problem_info(p.kind).advice);
+    const std::string_view why =
+        meaning.empty() ? exception_advice(code)
+                        : "the device gives its own reason (above): its manual says what to change";
+    p.advice = fmt::format("{}; {}", why, problem_info(p.kind).advice);
   }
 
   static std::string_view verb(uint8_t fc) {

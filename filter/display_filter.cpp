@@ -840,7 +840,7 @@ FilterStage::FilterStage(DisplayFilter filter, RecordSink& next)
     : filter_(std::move(filter)), next_(next) {}
 
 void FilterStage::on_frame(const Frame& frame) {
-  decode_pdu(frame.role, frame.pdu(), frame.request_pdu, decoded_);
+  decode_frame(frame, decoded_);
   if (!filter_.matches(frame, decoded_)) return;
   Frame decoded = frame;
   decoded.decoded = &decoded_;

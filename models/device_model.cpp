@@ -68,4 +68,9 @@ bool names_register(const DeviceModel& model, std::string_view name) {
          number.size() - point - 1 == 2 && digits(number.substr(point + 1));
 }
 
+std::string_view exception_meaning(const DeviceModel& model, uint8_t code) {
+  const auto it = model.exceptions.find(code);
+  return it == model.exceptions.end() ? std::string_view{} : std::string_view{it->second};
+}
+
 }  // namespace modtap

@@ -125,4 +125,8 @@ inline bool maps_no_register(const DeviceModel& model) {
 // Whether the model calls a register so: a listed one, or a parameter its group rule names.
 bool names_register(const DeviceModel& model, std::string_view name);
 
+// The model's meaning of an exception code (GD20's 04H: "Operation failed ..."), empty where the
+// model gives the code none and the standard's name stands.
+std::string_view exception_meaning(const DeviceModel& model, uint8_t code);
+
 }  // namespace modtap

@@ -72,6 +72,28 @@ inline FindingSlots findings_of(const Frame& frame) {
   return {frame.findings, frame.meaning};
 }
 
+// An exception code's name as every output gives it: the device model's meaning where the model
+// gives the code one (GD20's 04H is "Operation failed", not "Server Device Failure"), else the
+// standard's; empty for a code neither names.
+inline std::string_view exception_name_of(const Frame& frame) {
+  if (!frame.is_exception()) return {};
+  const uint8_t code = frame.adu[2];
+  if (frame.meaning && frame.meaning->model)
+    if (const auto meaning = exception_meaning(*frame.meaning->model, code); !meaning.empty())
+      return meaning;
+  return exception_name(code);
+}
+
+// A frame's fields as every output shows them: its PDU decoded, the exception named as above.
+void decode_frame(const Frame& frame, DecodedPdu& out);
+
+// A frame's fields: as a stage before decoded them (the filter), or decoded into `kept`.
+inline const DecodedPdu& fields_of(const Frame& frame, DecodedPdu& kept) {
+  if (frame.decoded) return *frame.decoded;
+  decode_frame(frame, kept);
+  return kept;
+}
+
 // Where a frame or a noise record was: the fields both begin with.
 template <typename Record, typename Visitor>
 void walk_place(const Record& r, RecordType kind, Visitor& v) {

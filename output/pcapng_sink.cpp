@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "captures/pcapng_format.hpp"
+#include "models/record_fields.hpp"
 #include "models/register_meaning.hpp"
 #include "protocol/buffer_put.hpp"
 
@@ -133,7 +134,7 @@ void append_frame_comment(fmt::memory_buffer& out, const Frame& f) {
   if (f.is_exception()) {
     put(out, " exception=");
     put_uint(out, f.adu[2]);
-    if (const auto name = exception_name(f.adu[2]); !name.empty()) {
+    if (const auto name = exception_name_of(f); !name.empty()) {
       put(out, " exception_name=\"");
       put(out, name);
       out.push_back('"');

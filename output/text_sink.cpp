@@ -5,6 +5,7 @@
 
 #include <fmt/chrono.h>
 
+#include "models/record_fields.hpp"
 #include "models/register_meaning.hpp"
 #include "output/render.hpp"
 #include "protocol/pdu_fields.hpp"
@@ -139,13 +140,14 @@ void TextSink::on_frame(const Frame& frame) {
   put(buf, spaced_function_label(frame.function()));
   const DecodedPdu& pdu = fields_of(frame, decoded_);
   const AddressNumbering numbering = numbering_of(frame);
-  // Where the model gives exceptions the vendor's meanings, the standard's name would mislead
-  // (GD20's 04H is "Operation failed", not "Server Device Failure"): the model's text stands.
-  const bool vendor_exceptions = frame.meaning && frame.meaning->model->vendor_exceptions;
+  // Where the model gives the exception code its own meaning, the model's note after the fields
+  // says it in full: the line does not say it twice.
+  const bool noted_exception = frame.is_exception() && frame.meaning &&
+                               !exception_meaning(*frame.meaning->model, frame.adu[2]).empty();
   for (size_t at = 0; at < pdu.fields.size();) {
     const Field& f = pdu.fields[at];
     const bool shown = f.type() != FieldType::list && f.id != FieldId::byte_count &&
-                       !(vendor_exceptions && f.id == FieldId::exception_name);
+                       !(noted_exception && f.id == FieldId::exception_name);
     if (!shown) {
       at = pdu.next(at);
       continue;

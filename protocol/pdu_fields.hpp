@@ -97,11 +97,4 @@ void decode_pdu(Role role, std::span<const uint8_t> pdu, std::span<const uint8_t
 DecodedPdu decode_pdu(Role role, std::span<const uint8_t> pdu,
                       std::span<const uint8_t> request_pdu);
 
-// A frame's fields: as a stage before decoded them (the filter), or decoded into `kept`.
-inline const DecodedPdu& fields_of(const Frame& frame, DecodedPdu& kept) {
-  if (frame.decoded) return *frame.decoded;
-  decode_pdu(frame.role, frame.pdu(), frame.request_pdu, kept);
-  return kept;
-}
-
 }  // namespace modtap

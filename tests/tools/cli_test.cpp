@@ -2,6 +2,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,7 @@
 #include "captures/pcap_chunk_writer.hpp"
 #include "protocol/checksum.hpp"
 #include "tools/busgen/bus_simulator.hpp"
+#include "tools/modtap/model_catalog.hpp"
 
 namespace {
 
@@ -1045,3 +1047,55 @@ TEST(Cli, RefusesOutputsThatWouldOverwriteTheInputOrEachOther) {
 }
 
 }  // namespace
+
+namespace {
+
+std::string file_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+bool holds(const std::vector<std::string>& lines, const std::string& text) {
+  return std::any_of(lines.begin(), lines.end(),
+                     [&](const std::string& line) { return line.find(text) != std::string::npos; });
+}
+
+}  // namespace
+
+// Where a model gives an exception code its own meaning (GD20's 04H: "Operation failed", not
+// "Server Device Failure"), that meaning is the code's name in every output: -V, JSON, the
+// pcapng comment the Wireshark plugin shows, and the problem the statistics and the report
+// give. Every code of every model's table, each answering a read the master repeats.
+TEST(Cli, AModelsMeaningOfAnExceptionCodeIsItsNameInEveryOutput) {
+  modtap::tools::ModelCatalog catalog;
+  catalog.load_builtin();
+  for (const modtap::DeviceModel* model : catalog.all()) {
+    if (model->exceptions.empty()) continue;
+    std::vector<std::vector<uint8_t>> bodies;
+    for (const auto& [code, meaning] : model->exceptions)
+      for (int i = 0; i < 5; ++i) {
+        bodies.push_back({1, 0x03, 0x00, code, 0x00, 0x01});
+        bodies.push_back({1, 0x83, code});
+      }
+    const std::string capture = raw_capture("modtap-exceptions-" + model->name + ".raw", bodies);
+    const std::string pcapng = capture + ".pcapng";
+    const std::string with_model = "-r " + capture + " --model " + model->name;
+    const Outcome json = run(with_model + " -T json");
+    const Outcome verbose = run(with_model + " -V");
+    const std::string stats_path = capture + ".json";
+    ASSERT_EQ(run(with_model + " -q -w " + pcapng + " --stats " + stats_path).status, 0);
+    const std::string comments = file_text(pcapng);
+    const std::string stats = file_text(stats_path);
+    for (const auto& [code, meaning] : model->exceptions) {
+      SCOPED_TRACE(model->name + " exception " + std::to_string(code));
+      EXPECT_TRUE(holds(json.lines, "\"exception_code\":" + std::to_string(code) +
+                                        ",\"exception_name\":\"" + meaning + "\""));
+      EXPECT_TRUE(holds(verbose.lines, "exception_name: \"" + meaning + "\""));
+      EXPECT_NE(comments.find("exception_name=\"" + meaning + "\""), std::string::npos);
+      EXPECT_NE(stats.find(fmt::format("with exception {:02X}H ({})", code, meaning)),
+                std::string::npos);
+    }
+  }
+}
