@@ -8,21 +8,25 @@
 namespace modtap {
 namespace {
 
+// Whether the group rule numbers a parameter at `address`, in an open group or a closed one.
+bool numbers_parameter(const ParameterGroups& groups, uint16_t address) {
+  const unsigned group = address >> 8;
+  const unsigned index = address & 0xFF;
+  if (groups.closed.count(group)) return true;
+  if (groups.counts.empty()) return group <= groups.max_group && index <= groups.max_index;
+  const auto it = groups.counts.find(group);
+  return it != groups.counts.end() && index < it->second;
+}
+
 // GGnnH: the group and the index are the two bytes of the address. The parameter is made in
 // `made` itself: a lookup per word a frame carries, where a copy of the definition cost more
 // than finding it.
 void make_group_parameter(const ParameterGroups& groups, uint16_t address, bool& closed,
                           std::optional<RegisterDef>& made) {
+  if (!numbers_parameter(groups, address)) return;
   const unsigned group = address >> 8;
   const unsigned index = address & 0xFF;
-  if (groups.closed.count(group)) {
-    closed = true;
-  } else if (groups.counts.empty()) {
-    if (group > groups.max_group || index > groups.max_index) return;
-  } else {
-    const auto it = groups.counts.find(group);
-    if (it == groups.counts.end() || index >= it->second) return;
-  }
+  closed = groups.closed.count(group) != 0;
   RegisterDef& def = made.emplace();
   def.address = address;
   def.table = groups.table;
@@ -39,8 +43,12 @@ void make_group_parameter(const ParameterGroups& groups, uint16_t address, bool&
 RegisterLookup find_register(const DeviceModel& model, Table table, uint16_t address) {
   RegisterLookup found;
   if (maps_no_register(model)) return found;
+  // The alias reaches parameters only (GD20 7.4.3: "P00.07 ... 8007H"): 2000H's control word
+  // with the high bit set is no register at all.
   if (model.alias && (address & model.alias->flag) && table == Table::holding) {
-    found = find_register(model, table, static_cast<uint16_t>(address & ~model.alias->flag));
+    const auto parameter = static_cast<uint16_t>(address & ~model.alias->flag);
+    if (!model.groups || !numbers_parameter(*model.groups, parameter)) return found;
+    found = find_register(model, table, parameter);
     if (found.def()) found.via_alias = true;
     return found;
   }

@@ -90,10 +90,17 @@ uint32_t combine(const RegisterDef& def, uint16_t first, uint16_t second) {
 
 void check_value(const RegisterDef& def, const RegisterValue& v, RuleFindings* found) {
   if (!found) return;
-  if ((def.min && v.value < *def.min) || (def.max && v.value > *def.max)) {
+  // The range as the manual gives it: both ends, or the one it gives (3001H's maximum is a
+  // parameter, P00.03).
+  const bool below = def.min && v.value < *def.min;
+  const bool above = def.max && v.value > *def.max;
+  if ((below || above) && def.min && def.max)
     found->add(RuleKind::out_of_range, v.address, "{} = {:.{}f} is outside {:g}..{:g}", v.name,
-               v.value, v.decimals, def.min.value_or(-INFINITY), def.max.value_or(INFINITY));
-  }
+               v.value, v.decimals, *def.min, *def.max);
+  else if (below || above)
+    found->add(RuleKind::out_of_range, v.address, "{} = {:.{}f} is {} its {} {:g}", v.name, v.value,
+               v.decimals, below ? "below" : "above", below ? "minimum" : "maximum",
+               below ? *def.min : *def.max);
   if (def.values && !def.values->count(enum_key(def, v.raw)))
     found->add(RuleKind::not_in_enum, v.address, "{} = {} is not one of its named values", v.name,
                v.raw);

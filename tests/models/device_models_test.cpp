@@ -312,6 +312,19 @@ TEST_F(Models, ReadsOfWriteOnlyRegistersAndAliasesAreFound) {
   EXPECT_EQ(alias_write.registers[0].label, "RAM only, not stored in EEPROM");
 }
 
+// GD20 7.4.1: "Changing the high bit of the function code form 0 to 1 ... P00.07 ... set the
+// address to 8007H": the alias is of parameters (PGG.nn) only. The control word 2000H, the
+// identifying code 2103H and the running frequency 3000H with the high bit set are no
+// registers of the drive.
+TEST_F(Models, Gd20RamAliasReachesParametersOnly) {
+  for (const char* write : {"01 06 A0 00 00 01", "01 06 A1 03 00 01", "01 06 B0 00 00 01"}) {
+    const Meaning meaning = request("gd20", rtu(write));
+    EXPECT_THAT(kinds(meaning), ElementsAre(RuleKind::unmapped_register)) << write;
+    for (const RegisterValue& v : meaning.registers) EXPECT_EQ(v.name, "") << write;
+  }
+  EXPECT_EQ(request("gd20", rtu("01 06 8A 01 00 05")).registers[0].name, "P10.01 (RAM)");
+}
+
 TEST_F(Models, MoreWordsThanTheModelAllowsAreFoundPerMode) {
   EXPECT_THAT(request("nta5000", rtu("01 03 03 00 00 25")).findings, IsEmpty());  // 37
   EXPECT_THAT(kinds(request("nta5000", rtu("01 03 03 00 00 26"))),
@@ -460,6 +473,24 @@ TEST_F(Models, ValuesOutsideRangeOrEnumAreFound) {
   const Meaning negative = request("gd20", rtu("01 06 20 04 F4 48"));  // -300.0 %, signed
   EXPECT_DOUBLE_EQ(negative.registers[0].value, -300.0);
   EXPECT_THAT(negative.findings, IsEmpty());
+}
+
+// GD20 300AH, Input IO: "000~1FF". A range the manual gives is said with both its ends; one
+// whose other end is a parameter (3001H, "0.00Hz~P00.03") with the end it has.
+TEST_F(Models, ARangeIsSaidAsTheManualGivesIt) {
+  const Meaning input_io = response("gd20", rtu("01 03 30 0A 00 01"), rtu("01 03 02 02 00"));
+  ASSERT_THAT(kinds(input_io), ElementsAre(RuleKind::out_of_range));
+  EXPECT_EQ(input_io.findings[0].text, "input_io_1 = 512 is outside 0..511");
+  EXPECT_THAT(kinds(request("gd20", rtu("01 06 20 0B 00 10"))),  // 200BH: 0x00~0x0F
+              ElementsAre(RuleKind::out_of_range));
+  const DeviceModel one_ended = parse_model(
+      "model: one-ended\n"
+      "registers:\n"
+      "  - {address: 0x3001, name: setting_frequency, type: s16, scale: 0.01, min: 0}\n",
+      "one-ended.yaml");
+  const Meaning below = interpret(one_ended, frame(rtu("01 06 30 01 FF 9C"), Role::request));
+  ASSERT_THAT(kinds(below), ElementsAre(RuleKind::out_of_range));
+  EXPECT_EQ(below.findings[0].text, "setting_frequency = -1.00 is below its minimum 0");
 }
 
 TEST_F(Models, FactoryGroupIsClosed) {
