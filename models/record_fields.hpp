@@ -125,11 +125,13 @@ void walk_fields(const Frame& frame, const DecodedPdu& pdu, Visitor& v) {
   v.function_code(field<fc>, field<function>, frame.function());
   v.bytes(field<raw>, frame.raw);
   v.choice(field<check>, frame.check_ok ? CheckResult::ok : CheckResult::bad);
-  v.number(field<check_value>, frame.wire_check());
-  if (frame.damage == Damage::cut)
-    v.absent(field<expected_check>);  // the frame ended before its check
-  else
+  if (frame.damage == Damage::cut) {  // the frame ended before its check
+    v.absent(field<check_value>);
+    v.absent(field<expected_check>);
+  } else {
+    v.number(field<check_value>, frame.wire_check());
     v.number(field<expected_check>, frame.expected_check);
+  }
   if (frame.damage != Damage::none)
     v.choice(field<damage>, frame.damage);
   else

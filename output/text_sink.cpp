@@ -209,13 +209,17 @@ void TextSink::tree(const Frame& frame, const DecodedPdu& pdu, AddressNumbering 
   }
   if (pdu.truncated) out_.print(FMT_COMPILE("    [PDU shorter than its fields]\n"));
   out_.print(FMT_COMPILE("    {}: "), frame.mode == Mode::rtu ? "CRC" : "LRC");
-  append_check(buf, frame.wire_check(), frame.mode);
-  out_.print(FMT_COMPILE(" ({})"), frame.check_ok ? "ok" : "bad");
-  if (!frame.check_ok) {
-    out_.print(FMT_COMPILE(", "));
-    append_bad_check(buf, frame);
+  if (frame.damage == Damage::cut) {
+    out_.print(FMT_COMPILE("none, the frame was cut before it\n"));
+  } else {
+    append_check(buf, frame.wire_check(), frame.mode);
+    out_.print(FMT_COMPILE(" ({})"), frame.check_ok ? "ok" : "bad");
+    if (!frame.check_ok) {
+      out_.print(FMT_COMPILE(", "));
+      append_bad_check(buf, frame);
+    }
+    out_.print(FMT_COMPILE("\n"));
   }
-  out_.print(FMT_COMPILE("\n"));
   if (frame.request) out_.print(FMT_COMPILE("    Request in frame: {}\n"), *frame.request);
   if (frame.latency_ns)
     out_.print(FMT_COMPILE("    Latency: {} ms\n"), Fixed{*frame.latency_ns, 6, 3});

@@ -33,6 +33,14 @@ bool fits(Role role, std::span<const uint8_t> adu) {
   return body.kind == BodyLength::Kind::variable && body.bytes <= body_bytes;
 }
 
+// Whether the bytes end before their LRC could: as long as their structure or shorter, as N3's
+// manual prints an exception ":028352" CR LF. Their last byte is data, not a check.
+bool ends_before_check(Role role, std::span<const uint8_t> adu) {
+  const BodyLength body = body_length(role, adu);
+  return body.kind == BodyLength::Kind::need_more ||
+         (body.kind == BodyLength::Kind::known && adu.size() <= body.bytes);
+}
+
 }  // namespace
 
 AsciiFramer::AsciiFramer(uint16_t channel, const AsciiFramerOptions& options, FrameSink& sink)
@@ -117,14 +125,20 @@ void AsciiFramer::emit_frame() {
   frame.end_read = reads_;
   frame.expected_check = lrc(frame.adu.first(decoded_.size() - 1));
   frame.check_ok = frame.expected_check == decoded_.back();
+  const bool broadcast = decoded_[0] == 0;
+  const bool may_request = options_.role != ChannelRole::slave && !(decoded_[1] & 0x80);
+  const bool may_respond = options_.role != ChannelRole::master && !broadcast;
   if (!frame.check_ok) {
     frame.findings |= finding_bad_check;
-    frame.damage = Damage::corrupted;  // ':' and CR LF say where it ends
+    // ':' and CR LF say where it ends; its structure says whether an LRC fits before that.
+    const bool cut = (may_request || may_respond) &&
+                     (!may_request || ends_before_check(Role::request, frame.adu)) &&
+                     (!may_respond || ends_before_check(Role::response, frame.adu));
+    frame.damage = cut ? Damage::cut : Damage::corrupted;
+    if (cut) frame.expected_check = 0;
   }
-  const bool broadcast = decoded_[0] == 0;
-  frame.fit.request = options_.role != ChannelRole::slave && fits(Role::request, frame.adu);
-  frame.fit.response =
-      options_.role != ChannelRole::master && !broadcast && fits(Role::response, frame.adu);
+  frame.fit.request = may_request && fits(Role::request, frame.adu);
+  frame.fit.response = may_respond && fits(Role::response, frame.adu);
   release_held();
   sink_.on_frame(frame);
   pending_.clear();

@@ -119,10 +119,11 @@ struct Frame {
   uint8_t function() const { return adu.size() < 2 ? 0 : adu[1]; }
   bool is_exception() const { return adu.size() >= 3 && (function() & 0x80) != 0; }
   size_t check_size() const { return mode == Mode::rtu ? 2 : 1; }
-  // The PDU: function code and data, without slave address and check.
+  // The PDU: function code and data, without slave address and check. A cut frame has no
+  // check: all its bytes after the address are PDU.
   std::span<const uint8_t> pdu() const {
-    return adu.size() < 1 + check_size() ? adu.subspan(0, 0)
-                                         : adu.subspan(1, adu.size() - 1 - check_size());
+    const size_t check = damage == Damage::cut ? 0 : check_size();
+    return adu.size() < 1 + check ? adu.subspan(0, 0) : adu.subspan(1, adu.size() - 1 - check);
   }
   uint16_t wire_check() const;
 };

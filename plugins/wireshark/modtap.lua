@@ -156,6 +156,7 @@ local function adu_of(tvb, v)
   if v.mode == "ascii" or (not v.mode and tvb:len() > 0 and tvb(0, 1):uint() == 0x3A) then
     local adu = ascii_adu(tvb)
     if not adu then return nil end
+    if v.damage == "cut" then return adu, true end  -- ended before its LRC
     return adu:subset(0, adu:len() - 1), true
   end
   if v.damage == "cut" then  -- no check at its end: what there is names slave and function
@@ -243,7 +244,7 @@ function modtap.dissector(tvb, pinfo, tree)
     local n = adu:len()
     local item = subtree:add(tvb(), "Modbus ASCII")
     if n > 2 then item:add(fields.data, adu:tvb("Modbus ASCII, decoded")(2, n - 2)) end
-    item:add(fields.lrc, tonumber(tvb:raw():sub(-4, -3), 16))
+    if v.damage ~= "cut" then item:add(fields.lrc, tonumber(tvb:raw():sub(-4, -3), 16)) end
   end
   local slave, fc, name, exception = add_identity(subtree, adu, v)
   if v.damage ~= "cut" then  -- half a PDU would only read as malformed

@@ -71,7 +71,7 @@ TEST(RecordFields, AFrameHasEveryRecordFieldOnceInJsonsOrder) {
   EXPECT_TRUE(walked.walked_pdu);
 }
 
-// A frame cut before its check has none to expect; its damage and exception are there.
+// A frame cut before its check has none, nor one to expect; its damage and exception are there.
 TEST(RecordFields, WhatARecordLacksIsAbsentNotZero) {
   Frame frame = response_frame();
   const std::vector<uint8_t> cut_exception{0x11, 0x83, 0x02};
@@ -83,7 +83,7 @@ TEST(RecordFields, WhatARecordLacksIsAbsentNotZero) {
   Recorder walked;
   walk_fields(frame, DecodedPdu{}, walked);
   EXPECT_EQ(walked.absent_names,
-            (std::vector<std::string>{"expected_check", "request", "latency_us"}));
+            (std::vector<std::string>{"check_value", "expected_check", "request", "latency_us"}));
 }
 
 // Findings are kept in two places, the frame's bits and the model's rules: the walk gives one

@@ -871,7 +871,28 @@ TEST(Cli, AResponseCutShortSaysSoInsteadOfAnExpectedCheck) {
   const Outcome r = run("-r " + log + " -V");
   ASSERT_EQ(r.status, 0);
   EXPECT_THAT(r.lines, ::testing::Contains(::testing::HasSubstr("crc BAD (cut)  req #1")));
-  EXPECT_THAT(r.lines, ::testing::Contains("    CRC: 01 00 (bad), cut"));
+  // Its last bytes are what it held, not a CRC: the value that came is read.
+  EXPECT_THAT(r.lines, ::testing::Contains("    CRC: none, the frame was cut before it"));
+  EXPECT_THAT(r.lines, ::testing::Contains("    values: [1]"));
+}
+
+// N3's manual prints its ASCII exception answer without an LRC (002, the FC03 fault example:
+// ":028352" CR LF). Too short for its LRC, it is a cut frame, and every output gives its
+// exception code as the 52H that came.
+TEST(Cli, AnAsciiFrameEndingBeforeItsLrcIsCutWithTheCodeItHolds) {
+  const auto path = std::filesystem::temp_directory_path() / "modtap-n3-ascii-error.raw";
+  std::ofstream(path, std::ios::binary) << ":020301200001D9\r\n:028352\r\n";
+  const std::string args = "-r " + path.string() + " --mode ascii --model n3";
+  const Outcome text = run(args + " -V");
+  EXPECT_THAT(text.lines, ::testing::Contains(
+                              ::testing::HasSubstr("exception_code=52H  lrc BAD (cut)  req #1")));
+  EXPECT_THAT(text.lines, ::testing::Contains("    exception_code: 52H"));
+  EXPECT_THAT(text.lines, ::testing::Contains("    LRC: none, the frame was cut before it"));
+  const Outcome json = run(args + " -T json");
+  ASSERT_EQ(json.lines.size(), 2u);
+  EXPECT_THAT(json.lines[1], ::testing::HasSubstr("\"check_value\":null,\"expected_check\":null,"
+                                                  "\"damage\":\"cut\",\"exception\":82,"));
+  EXPECT_THAT(json.lines[1], ::testing::HasSubstr("\"exception_code\":82"));
 }
 
 TEST(Cli, AnN3SlaveTimesOutAfterItsManualsTimeUnlessTimeoutSaysOtherwise) {
