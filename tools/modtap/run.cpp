@@ -210,10 +210,13 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
     return stopped_by.has_value();
   };
   options.analyzer.slave_timeout_ns = session.model_timeouts();
-  if (session.keeps_raw())
-    options.on_read = [&](const Chunk& chunk, bool between_frames) {
-      session.keep_raw(chunk, between_frames);
-    };
+  // What the traffic says of the settings, for a hint when the run ends, as a file's run gives.
+  LineHealth health(&session.records());
+  ChunkPace pace(options.analyzer.format);
+  options.on_read = [&](const Chunk& chunk, bool between_frames) {
+    pace.add(chunk);
+    if (session.keeps_raw()) session.keep_raw(chunk, between_frames);
+  };
   options.reconnect = o.reconnect;
   options.announce = o.announce;
   output::PortHealth& port_health = session.port_health();
@@ -227,9 +230,10 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
   if (session.publishes()) options.on_wake = [&](int64_t now_ns) { session.tick(now_ns); };
   // A status line on the terminal, unless frame lines are printed on that same terminal.
   options.status_line = o.announce && terminal_free_for_status(o);
-  const int status = live::run_live(ports, options, session.records(), stop);
+  const int status = live::run_live(ports, options, health, stop);
   // Ctrl-C, -c and -a end a live run whole; a port gone (status 1) breaks it off.
   session.finish(status == 0, frames_met(o, autostop, session).value_or(stopped_by.value_or("")));
+  hint_settings(options.analyzer.format, health, pace, HintContext{});
   return status;
 }
 
