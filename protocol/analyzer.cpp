@@ -126,7 +126,8 @@ Analyzer::Channel& Analyzer::channel(uint16_t id) {
 void Analyzer::start_framer(uint16_t id, Mode mode) {
   Channel& c = channels_[id];
   if (mode == Mode::rtu) {
-    RtuFramerOptions o{options_.format, options_.clock, c.info.role, options_.chunk_jitter_ns};
+    RtuFramerOptions o{options_.format, options_.clock, c.info.role, options_.chunk_jitter_ns,
+                       options_.framing_observer};
     c.framer = std::make_unique<RtuFramer>(id, o, static_cast<FrameSink&>(*this));
   } else {
     AsciiFramerOptions o{options_.format, options_.clock, c.info.role,

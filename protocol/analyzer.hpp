@@ -11,6 +11,7 @@
 
 #include "protocol/ascii_framer.hpp"
 #include "protocol/frame_sink.hpp"
+#include "protocol/framing_evidence.hpp"
 #include "protocol/matcher.hpp"
 #include "protocol/record_sink.hpp"
 #include "protocol/records.hpp"
@@ -33,6 +34,8 @@ struct AnalyzerOptions {
   std::map<uint8_t, int64_t> slave_timeout_ns;  // slaves whose model sets their own time-out
   int64_t ascii_char_timeout_ns = 1'000'000'000;
   int64_t chunk_jitter_ns = default_read_jitter_ns;
+  // Told the readings the RTU framer weighs at each start (--explain); not the mode trials'.
+  FramingObserver* framing_observer = nullptr;
 };
 
 class Analyzer final : private FrameSink {

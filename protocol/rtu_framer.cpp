@@ -97,6 +97,7 @@ void RtuFramer::resolve(bool final) {
 }
 
 RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const {
+  if (options_.observer && search == max_search) options_.observer->on_start(channel_, at);
   const uint64_t avail = end_ - at;
   const uint8_t* p = at_ptr(at);
   if (avail < 2) return need_more();
@@ -121,7 +122,11 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const 
     const Role other = role == Role::request ? Role::response : Role::request;
     const bool other_allowed = other == Role::request ? may_request : may_respond;
     if (m.kind == Match::Kind::found) {
-      switch (judge_found(at, role, m.length, other_allowed ? &other : nullptr, final, search)) {
+      Evidence why = Evidence::length_and_crc;
+      const Verdict verdict =
+          judge_found({at, role, m.length, other_allowed ? &other : nullptr, final, search}, why);
+      if (search == max_search) observe(at, role, m.length, outcome_of(verdict), why);
+      switch (verdict) {
         case Verdict::refuse:
           return {};
         case Verdict::wait:
@@ -135,6 +140,11 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const 
       if (other_allowed && fits_role(other, at, m.length)) m.fit = {true, true};
       return m;
     }
+    if (search == max_search)
+      observe(
+          at, role, 0,
+          m.kind == Match::Kind::need_more ? ReadingOutcome::waiting : ReadingOutcome::no_frame,
+          m.kind == Match::Kind::need_more ? Evidence::more_bytes_needed : Evidence::no_good_end);
     if (m.kind == Match::Kind::need_more) {
       // The likelier reading is still open: wait for it rather than take the other one early,
       // unless a silence with a good frame after it says it never completes (a master's retry
@@ -147,124 +157,197 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const 
   return waiting ? need_more() : Match{};
 }
 
-// What the bus says against a reading of [at, at + length) whose length rules and CRC agree.
-// `other` is the other role, where it is allowed.
-RtuFramer::Verdict RtuFramer::judge_found(uint64_t at, Role role, uint16_t length,
-                                          const Role* other, bool final, int search) const {
-  const uint8_t* p = at_ptr(at);
-  const uint64_t gap = first_gap_after(at);
-  if (gap < at + length) {
-    // A frame ends before the silence, and what came after it kept the CRC good (a trailing
-    // 0x00 keeps a zero residue zero: a retry of FC07, four bytes, and the 0x00 of a broadcast
-    // after the silence read as its five-byte answer): the other reading, if any, is the frame,
-    // whatever comes after the silence.
-    if (gap - at >= min_adu && crc_ok(p, gap - at)) return Verdict::other_reading;
-    // A silence inside a frame, with a good frame starting right after it, means this was a
-    // frame that broke off, whatever its CRC says.
-    const Match after_gap = match_at(gap, final, 0);
-    if (after_gap.kind == Match::Kind::found) return Verdict::refuse;
-    if (after_gap.kind == Match::Kind::need_more && !final) return Verdict::wait;
-  }
-  // The first bytes after the request (a glitch aside), beginning as the awaited answer with
-  // every byte its request predicts in place (a read's byte count), read as a request the
-  // standard does not allow, too soon for the master's next one: a talked-over answer whose
-  // junk passed a CRC by chance (`55 01 04 69 ff c9 69 16`, a read of 0xFFC9 coils, where 4
-  // bytes of coils were due). The answer, damaged, is the reading. So is a 0xFF glitch with the
-  // awaited answer's slave and function code after it: `ff 03 0c 15 de 10 1a ec` passed a CRC
-  // as a read for slave 255, where slave 3's answer to FC0C began after its driver's 0xFF. (A
-  // request the standard allows may be the master's, after a time-out shorter than the
-  // threshold: a write of the same block with new values begins as its echo would.)
-  if (role == Role::request && other && first_after_request(at) && too_soon_for_retry(at) &&
-      !copies_request(at, length)) {
-    const bool junk_as_request =
-        begins_as_awaited(at) &&
-        request_spec_findings({p + 1, static_cast<size_t>(length - 1 - crc_size)}) != 0;
-    const bool glitch_then_awaited =
-        p[0] == 0xFF && awaited_length(at + 1, end_ - at - 1).has_value();
-    if (junk_as_request || glitch_then_awaited) return Verdict::refuse;
-  }
-  // A request inside the span the awaited answer's structure claims is a collision's junk
-  // that passed a CRC unless its own answer follows it (after a cut answer, the master's next
-  // request and its answer): a FC0C poll of slave 113, then junk, inside a talked-over answer
-  // of 51 bytes (seed 896); a FC06 write of slave 3 from the last bytes of a talked-over FC14
-  // answer on, then another slave's request (1008); a read of 10,773 inputs of slave 131 from
-  // the second byte of a cut exception `ae 83 02` on (946). A silence after it may be its slave's;
-  // with no clock, where the master's time-out after a silent slave cannot show, no rule.
-  if (role == Role::request && p[0] != 0 && options_.clock != ClockQuality::none && at > head_ &&
-      at < awaited_end(head_)) {
-    const auto answered = answer_follows(at, at + length, final);
-    if (!answered) return Verdict::wait;
-    if (!*answered) return Verdict::refuse;
-  }
-  // A copy of the pending request with a glitch after it reads as a response of one more
-  // byte (FC07: a status equal to the request's CRC low byte); on a bus of glitches, the copy
-  // is the likelier (a master's retry), unless it came too soon for a retry. (Any other frame
-  // whose CRC ends in 0x00 holds a frame one byte shorter too: that is no reason to cut it.)
-  if (other && *other == Role::request && zero_glitches_common() && p[length - 1] == 0x00 &&
-      may_be_glitch(at + length - 1) && copies_request(at, length - 1) && !too_soon_for_retry(at))
-    return Verdict::other_reading;
-  // The pending request again (a retry) whose CRC ends in 0x00 holds a response one byte
-  // shorter, which its request would not have asked for: the copy is the reading, once its
-  // last byte is there to say so.
-  if (other && *other == Role::request && starts_request_copy(at, length)) {
-    if (at + length == end_) {
-      if (!final) return Verdict::wait;
-    } else if (copies_request(at, length + 1) && !too_soon_for_retry(at)) {
-      return Verdict::other_reading;
-    }
-  }
-  // A copy of the pending request too soon for a retry, where the awaited answer is longer, is
-  // that answer damaged. FC07's answer whose status equals the request's CRC low byte is the
-  // request and a 0x00, so right where the answer begins, if the answer may begin so, the copy
-  // is that answer cut or talked over (a quick retry of a read of 2 registers at 0400H also
-  // begins as its answer would, but that answer's data would all have to repeat the request).
-  // Further on, after a damaged answer, a master may repeat its request as soon: there only
-  // bytes no frame explains after the copy make it the answer, unless they begin as the
-  // answer to it would (a FC07 poll `c7 07 12 42` again after a talked-over answer, then its
-  // own answer talked over, `c7 07 31 c1 cd`; seed 1021).
-  if (other && *other == Role::response && copies_request(at, length) && too_soon_for_retry(at)) {
-    const uint64_t end = at + length;
-    const auto awaited = awaited_length(at, end_ - at);
-    if (awaited && *awaited > length) {
-      if (first_after_request(at) && answer_may_copy_request(at, length, *awaited))
-        return Verdict::refuse;
-      if (end == end_ && !final) return Verdict::wait;  // what follows tells
-      if (end < end_ && !gap_at(end)) {
-        const Match next = match_at(end, final, 0);
-        if (next.kind == Match::Kind::need_more && !final) return Verdict::wait;
-        if (next.kind == Match::Kind::none && !glitch_then_frame(end, final, 0) &&
-            !starts_awaited(end, end_ - end))
-          return Verdict::refuse;
-      }
-    }
-  }
-  // The awaited response cut one byte short, whose missing CRC byte the next request's slave
-  // address repeats, reads whole and good; the request, one byte short, then reads as junk.
-  // The bytes after it tell. Only on a bus channel (on a split tap the request is on the
-  // other), and only for a reading that may search on (search 0: nested in another reading's
-  // judgement, or a CRC search at its depth), so that it never nests.
-  if (role == Role::response && options_.role == ChannelRole::bus && search > 0 &&
-      expected_.pending && expected_.slave == p[0] && expected_.function == (p[1] & 0x7F)) {
-    const auto cut = cut_before_frame(at, length, final);
-    if (!cut) return Verdict::wait;
-    if (*cut) return Verdict::refuse;
-  }
-  // A reserved address is as often a turnaround's 0xFF, and an answer nobody awaits (another
-  // slave's or function's while a request waits) a collision's junk that passed a CRC: such a
-  // frame never swallows one whose length rules and CRC agree (a glitch, a response and the
-  // next glitch can read as one; a talked-over exception's tail read as a 245-byte answer of a
-  // slave nobody asked, across the next request and its answer).
-  const bool unawaited = role == Role::response && expected_.pending &&
-                         (expected_.slave != p[0] || expected_.function != (p[1] & 0x7F));
-  if ((p[0] > max_unicast_slave || unawaited) && swallows_known_frame(at, at + length))
-    return Verdict::refuse;
-  // Nor does any frame whose CRC holds by chance across a whole exchange: junk after it, and
-  // inside it a request with its own answer's first bytes after it. A cut FC0C answer
-  // `a5 0c 08 fb e1 58`, a glitch, the next request `10 0b 4d b7`, a glitch and its answer's
-  // slave address passed a CRC as the 13 bytes the answer claimed (seed 1073); a FC0F request
-  // of 255 bytes from inside a talked-over answer on, across the two exchanges after it (1020).
-  if (search > 0 && swallows_exchange(at, at + length, final)) return Verdict::refuse;
+ReadingOutcome RtuFramer::outcome_of(Verdict verdict) {
+  static constexpr ReadingOutcome outcomes[] = {ReadingOutcome::kept, ReadingOutcome::refused,
+                                                ReadingOutcome::waiting,
+                                                ReadingOutcome::other_reading};
+  return outcomes[static_cast<size_t>(verdict)];
+}
+
+void RtuFramer::observe(uint64_t at, Role role, uint16_t length, ReadingOutcome outcome,
+                        Evidence why) const {
+  if (options_.observer) options_.observer->on_reading({channel_, at, role, length, outcome, why});
+}
+
+// What the bus says against a reading of [at, at + length) whose length rules and CRC agree:
+// the first row of this table that has something to say decides, and names its evidence.
+RtuFramer::Verdict RtuFramer::judge_found(const Reading& r, Evidence& why) const {
+  return first_verdict<
+      Row{Evidence::good_frame_before_silence, &RtuFramer::good_frame_before_silence},
+      Row{Evidence::broke_off_at_silence, &RtuFramer::broke_off_at_silence},
+      Row{Evidence::answer_read_as_request, &RtuFramer::answer_read_as_request},
+      Row{Evidence::request_inside_awaited_answer, &RtuFramer::request_inside_awaited_answer},
+      Row{Evidence::retry_and_glitch, &RtuFramer::retry_and_glitch},
+      Row{Evidence::retry_ending_in_zero, &RtuFramer::retry_ending_in_zero},
+      Row{Evidence::answer_copying_request, &RtuFramer::answer_copying_request},
+      Row{Evidence::answer_cut_before_request, &RtuFramer::answer_cut_before_request},
+      Row{Evidence::swallows_known_frame, &RtuFramer::swallows_known_frame_reading},
+      Row{Evidence::swallows_exchange, &RtuFramer::swallows_exchange_reading}>(r, why);
+}
+
+// The rows in order, unrolled at compile time: judging runs once a frame.
+template <RtuFramer::Row... rows>
+RtuFramer::Verdict RtuFramer::first_verdict(const Reading& r, Evidence& why) const {
+  std::optional<Verdict> verdict;
+  const bool decided =
+      ((verdict = (this->*rows.judge)(r), verdict && (why = rows.evidence, true)) || ...);
+  if (decided) return *verdict;
+  why = Evidence::length_and_crc;
   return Verdict::keep;
+}
+
+// A frame ends before a silence inside the reading, and what came after it kept the CRC good
+// (a trailing 0x00 keeps a zero residue zero: a retry of FC07, four bytes, and the 0x00 of a
+// broadcast after the silence read as its five-byte answer): the other reading, if any, is the
+// frame, whatever comes after the silence.
+std::optional<RtuFramer::Verdict> RtuFramer::good_frame_before_silence(const Reading& r) const {
+  const uint64_t gap = first_gap_after(r.at);
+  if (gap < r.at + r.length && gap - r.at >= min_adu && crc_ok(at_ptr(r.at), gap - r.at))
+    return Verdict::other_reading;
+  return std::nullopt;
+}
+
+// A silence inside a frame, with a good frame starting right after it, means this was a frame
+// that broke off, whatever its CRC says.
+std::optional<RtuFramer::Verdict> RtuFramer::broke_off_at_silence(const Reading& r) const {
+  const uint64_t gap = first_gap_after(r.at);
+  if (gap >= r.at + r.length) return std::nullopt;
+  const Match after_gap = match_at(gap, r.final, 0);
+  if (after_gap.kind == Match::Kind::found) return Verdict::refuse;
+  if (after_gap.kind == Match::Kind::need_more && !r.final) return Verdict::wait;
+  return std::nullopt;
+}
+
+// The first bytes after the request (a glitch aside), beginning as the awaited answer with
+// every byte its request predicts in place (a read's byte count), read as a request the
+// standard does not allow, too soon for the master's next one: a talked-over answer whose junk
+// passed a CRC by chance (`55 01 04 69 ff c9 69 16`, a read of 0xFFC9 coils, where 4 bytes of
+// coils were due). The answer, damaged, is the reading. So is a 0xFF glitch with the awaited
+// answer's slave and function code after it: `ff 03 0c 15 de 10 1a ec` passed a CRC as a read
+// for slave 255, where slave 3's answer to FC0C began after its driver's 0xFF. (A request the
+// standard allows may be the master's, after a time-out shorter than the threshold: a write of
+// the same block with new values begins as its echo would.)
+std::optional<RtuFramer::Verdict> RtuFramer::answer_read_as_request(const Reading& r) const {
+  if (r.role != Role::request || !r.other || !first_after_request(r.at) ||
+      !too_soon_for_retry(r.at) || copies_request(r.at, r.length))
+    return std::nullopt;
+  const uint8_t* p = at_ptr(r.at);
+  const bool junk_as_request =
+      begins_as_awaited(r.at) &&
+      request_spec_findings({p + 1, static_cast<size_t>(r.length - 1 - crc_size)}) != 0;
+  const bool glitch_then_awaited =
+      p[0] == 0xFF && awaited_length(r.at + 1, end_ - r.at - 1).has_value();
+  if (junk_as_request || glitch_then_awaited) return Verdict::refuse;
+  return std::nullopt;
+}
+
+// A request inside the span the awaited answer's structure claims is a collision's junk that
+// passed a CRC unless its own answer follows it (after a cut answer, the master's next request
+// and its answer): a FC0C poll of slave 113, then junk, inside a talked-over answer of 51 bytes
+// (seed 896); a FC06 write of slave 3 from the last bytes of a talked-over FC14 answer on, then
+// another slave's request (1008); a read of 10,773 inputs of slave 131 from the second byte of
+// a cut exception `ae 83 02` on (946). A silence after it may be its slave's; with no clock,
+// where the master's time-out after a silent slave cannot show, no rule.
+std::optional<RtuFramer::Verdict> RtuFramer::request_inside_awaited_answer(const Reading& r) const {
+  if (r.role != Role::request || *at_ptr(r.at) == 0 || options_.clock == ClockQuality::none ||
+      r.at <= head_ || r.at >= awaited_end(head_))
+    return std::nullopt;
+  const auto answered = answer_follows(r.at, r.at + r.length, r.final);
+  if (!answered) return Verdict::wait;
+  if (!*answered) return Verdict::refuse;
+  return std::nullopt;
+}
+
+// A copy of the pending request with a glitch after it reads as a response of one more byte
+// (FC07: a status equal to the request's CRC low byte); on a bus of glitches, the copy is the
+// likelier (a master's retry), unless it came too soon for a retry. (Any other frame whose CRC
+// ends in 0x00 holds a frame one byte shorter too: that is no reason to cut it.)
+std::optional<RtuFramer::Verdict> RtuFramer::retry_and_glitch(const Reading& r) const {
+  if (r.other && *r.other == Role::request && zero_glitches_common() &&
+      at_ptr(r.at)[r.length - 1] == 0x00 && may_be_glitch(r.at + r.length - 1) &&
+      copies_request(r.at, r.length - 1) && !too_soon_for_retry(r.at))
+    return Verdict::other_reading;
+  return std::nullopt;
+}
+
+// The pending request again (a retry) whose CRC ends in 0x00 holds a response one byte shorter,
+// which its request would not have asked for: the copy is the reading, once its last byte is
+// there to say so.
+std::optional<RtuFramer::Verdict> RtuFramer::retry_ending_in_zero(const Reading& r) const {
+  if (!r.other || *r.other != Role::request || !starts_request_copy(r.at, r.length))
+    return std::nullopt;
+  if (r.at + r.length == end_) return r.final ? std::nullopt : std::optional(Verdict::wait);
+  if (copies_request(r.at, r.length + 1) && !too_soon_for_retry(r.at))
+    return Verdict::other_reading;
+  return std::nullopt;
+}
+
+// A copy of the pending request too soon for a retry, where the awaited answer is longer, is
+// that answer damaged. FC07's answer whose status equals the request's CRC low byte is the
+// request and a 0x00, so right where the answer begins, if the answer may begin so, the copy is
+// that answer cut or talked over (a quick retry of a read of 2 registers at 0400H also begins
+// as its answer would, but that answer's data would all have to repeat the request). Further
+// on, after a damaged answer, a master may repeat its request as soon: there only bytes no
+// frame explains after the copy make it the answer, unless they begin as the answer to it
+// would (a FC07 poll `c7 07 12 42` again after a talked-over answer, then its own answer
+// talked over, `c7 07 31 c1 cd`; seed 1021).
+std::optional<RtuFramer::Verdict> RtuFramer::answer_copying_request(const Reading& r) const {
+  if (!r.other || *r.other != Role::response || !copies_request(r.at, r.length) ||
+      !too_soon_for_retry(r.at))
+    return std::nullopt;
+  const uint64_t end = r.at + r.length;
+  const auto awaited = awaited_length(r.at, end_ - r.at);
+  if (!awaited || *awaited <= r.length) return std::nullopt;
+  if (first_after_request(r.at) && answer_may_copy_request(r.at, r.length, *awaited))
+    return Verdict::refuse;
+  if (end == end_) return r.final ? std::nullopt : std::optional(Verdict::wait);  // what follows
+  if (gap_at(end)) return std::nullopt;
+  const Match next = match_at(end, r.final, 0);
+  if (next.kind == Match::Kind::need_more && !r.final) return Verdict::wait;
+  if (next.kind == Match::Kind::none && !glitch_then_frame(end, r.final, 0) &&
+      !starts_awaited(end, end_ - end))
+    return Verdict::refuse;
+  return std::nullopt;
+}
+
+// The awaited response cut one byte short, whose missing CRC byte the next request's slave
+// address repeats, reads whole and good; the request, one byte short, then reads as junk. The
+// bytes after it tell. Only on a bus channel (on a split tap the request is on the other), and
+// only for a reading that may search on (search 0: nested in another reading's judgement, or a
+// CRC search at its depth), so that it never nests.
+std::optional<RtuFramer::Verdict> RtuFramer::answer_cut_before_request(const Reading& r) const {
+  const uint8_t* p = at_ptr(r.at);
+  if (r.role != Role::response || options_.role != ChannelRole::bus || r.search <= 0 ||
+      !expected_.pending || expected_.slave != p[0] || expected_.function != (p[1] & 0x7F))
+    return std::nullopt;
+  const auto cut = cut_before_frame(r.at, r.length, r.final);
+  if (!cut) return Verdict::wait;
+  if (*cut) return Verdict::refuse;
+  return std::nullopt;
+}
+
+// A reserved address is as often a turnaround's 0xFF, and an answer nobody awaits (another
+// slave's or function's while a request waits) a collision's junk that passed a CRC: such a
+// frame never swallows one whose length rules and CRC agree (a glitch, a response and the next
+// glitch can read as one; a talked-over exception's tail read as a 245-byte answer of a slave
+// nobody asked, across the next request and its answer).
+std::optional<RtuFramer::Verdict> RtuFramer::swallows_known_frame_reading(const Reading& r) const {
+  const uint8_t* p = at_ptr(r.at);
+  const bool unawaited = r.role == Role::response && expected_.pending &&
+                         (expected_.slave != p[0] || expected_.function != (p[1] & 0x7F));
+  if ((p[0] > max_unicast_slave || unawaited) && swallows_known_frame(r.at, r.at + r.length))
+    return Verdict::refuse;
+  return std::nullopt;
+}
+
+// Nor does any frame whose CRC holds by chance across a whole exchange: junk after it, and
+// inside it a request with its own answer's first bytes after it. A cut FC0C answer
+// `a5 0c 08 fb e1 58`, a glitch, the next request `10 0b 4d b7`, a glitch and its answer's
+// slave address passed a CRC as the 13 bytes the answer claimed (seed 1073); a FC0F request of
+// 255 bytes from inside a talked-over answer on, across the two exchanges after it (1020).
+std::optional<RtuFramer::Verdict> RtuFramer::swallows_exchange_reading(const Reading& r) const {
+  if (r.search > 0 && swallows_exchange(r.at, r.at + r.length, r.final)) return Verdict::refuse;
+  return std::nullopt;
 }
 
 // Whether what follows the request [at, end), after a glitch if one comes, may be its answer:

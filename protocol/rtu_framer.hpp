@@ -14,6 +14,7 @@
 #include "protocol/checksum.hpp"
 #include "protocol/flat_queue.hpp"
 #include "protocol/frame_sink.hpp"
+#include "protocol/framing_evidence.hpp"
 #include "protocol/function_codes.hpp"
 #include "protocol/records.hpp"
 #include "protocol/serial_format.hpp"
@@ -27,6 +28,7 @@ struct RtuFramerOptions {
   // With per-chunk clocks a USB adapter holds bytes back (FTDI: 16 ms latency timer), so a
   // gap is only evidence when it is longer than t3.5 plus this.
   int64_t chunk_jitter_ns = default_read_jitter_ns;
+  FramingObserver* observer = nullptr;  // told the readings weighed at each start (--explain)
 };
 
 class RtuFramer {
@@ -73,8 +75,36 @@ class RtuFramer {
   // `search` is how many variable-length frames in a row may be found by CRC search.
   Match match_at(uint64_t at, bool final, int search) const;
   enum class Verdict : uint8_t { keep, refuse, wait, other_reading };
-  Verdict judge_found(uint64_t at, Role role, uint16_t length, const Role* other, bool final,
-                      int search) const;
+  // A reading of [at, at + length) as `role` whose length rules and CRC agree; `other` is the
+  // other role, where it is allowed.
+  struct Reading {
+    uint64_t at;
+    Role role;
+    uint16_t length;
+    const Role* other;
+    bool final;
+    int search;
+  };
+  Verdict judge_found(const Reading& reading, Evidence& why) const;
+  struct Row {  // a row of judge_found's table: its evidence, and what it says of a reading
+    Evidence evidence;
+    std::optional<Verdict> (RtuFramer::*judge)(const Reading&) const;
+  };
+  template <Row... rows>
+  Verdict first_verdict(const Reading& reading, Evidence& why) const;
+  // The rows of judge_found's table: a verdict where the evidence has one to give.
+  std::optional<Verdict> good_frame_before_silence(const Reading& r) const;
+  std::optional<Verdict> broke_off_at_silence(const Reading& r) const;
+  std::optional<Verdict> answer_read_as_request(const Reading& r) const;
+  std::optional<Verdict> request_inside_awaited_answer(const Reading& r) const;
+  std::optional<Verdict> retry_and_glitch(const Reading& r) const;
+  std::optional<Verdict> retry_ending_in_zero(const Reading& r) const;
+  std::optional<Verdict> answer_copying_request(const Reading& r) const;
+  std::optional<Verdict> answer_cut_before_request(const Reading& r) const;
+  std::optional<Verdict> swallows_known_frame_reading(const Reading& r) const;
+  std::optional<Verdict> swallows_exchange_reading(const Reading& r) const;
+  static ReadingOutcome outcome_of(Verdict verdict);
+  void observe(uint64_t at, Role role, uint16_t length, ReadingOutcome outcome, Evidence why) const;
   std::optional<bool> cut_before_frame(uint64_t at, uint16_t length, bool final) const;
   bool read_starts_inside(uint64_t at) const;
   bool begins_as_awaited(uint64_t at) const;
