@@ -1120,3 +1120,25 @@ TEST(Cli, AModelsMeaningOfAnExceptionCodeIsItsNameInEveryOutput) {
     }
   }
 }
+
+// --explain answers "why did modtap cut here?". A master's retry of FC07 (`01 07 41 E2`), a
+// silence, then a broadcast: the retry and the broadcast's 0x00 pass a CRC as the five-byte
+// answer the bus waits for, but a silence lies inside that reading and the four bytes before it
+// hold their own CRC, so the reading gives way and the request is kept.
+TEST(Cli, ExplainNamesTheReadingsWeighedAndTheEvidenceThatDecided) {
+  const std::string log =
+      hexlog("modtap-explain.log", {"00.000000", "01 07 41 E2", "00.300000", "01 07 41 E2",
+                                    "00.400000", "00 06 00 10 00 05 49 DD"});
+  const Outcome r = run("-r " + log + " --explain 2");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_EQ(r.lines.size(), 4u) << ::testing::PrintToString(r.lines);
+  EXPECT_THAT(r.lines[0], ::testing::MatchesRegex(" +2 +0\\.300000 req slave 1 .*"));
+  EXPECT_THAT(r.lines[1], ::testing::HasSubstr("at byte 4 of"));
+  EXPECT_THAT(r.lines[2], ::testing::StartsWith("    response, 5 bytes: gave way to the other "
+                                                "reading (good-frame-before-silence: "));
+  EXPECT_THAT(r.lines[3], ::testing::StartsWith("    request, 4 bytes: kept (length-and-crc: "));
+  const Outcome missing = run("-r " + log + " --explain 9");
+  EXPECT_NE(missing.status, 0);
+  EXPECT_THAT(missing.lines, ::testing::Contains(
+                                 ::testing::HasSubstr("--explain 9: " + log + " has no record 9")));
+}

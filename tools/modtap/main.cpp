@@ -202,6 +202,10 @@ void add_output_options(CLI::App& app, RunOptions& o, Command& command) {
   command.dlt = app.add_option("--dlt", o.dlt, "DLT_USER link type for --link user or bare")
                     ->check(CLI::Range(147, 162));
   app.add_flag("-V,--verbose", o.verbose, "Print each frame's field tree");
+  app.add_option("--explain", o.explain,
+                 "Print record INDEX and why the RTU framer cut there: each reading it weighed "
+                 "at the record's first byte and the evidence that decided (with -r)")
+      ->check(tools::positive("needs a record's index, from 1"));
   tools::add_enum_option(app, "-t", o.time_format,
                          "Text time column: r (since the capture's first record), a (local time "
                          "of day), ad (local date and time), d (since the record before, shown "
@@ -281,6 +285,8 @@ std::optional<std::string> refuse(const RunOptions& o, const Autostop& autostop,
                                   const captures::RingLimits& ring) {
   if (autostop.filesize_bytes && o.write_file.empty())
     return "-a filesize stops on the size of the -w file: give -w";
+  if (o.explain && (o.read_file.empty() || o.output != OutputKind::text))
+    return "--explain prints one record of a capture read with -r, as text";
   if (auto refusal = refuse_ring(o, ring)) return refusal;
   if (auto refusal = refuse_outputs(o)) return refusal;
   return refuse_follow(o);

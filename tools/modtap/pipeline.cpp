@@ -20,6 +20,10 @@ std::unique_ptr<RecordSink> make_sink(const RunOptions& o, output::Output& out,
     return std::make_unique<output::CsvSink>(out,
                                              output::parse_follow_or_all(o.follow, o.register_base),
                                              time_format, o.register_base, clock_before_filter);
+  if (o.explain)
+    return std::make_unique<output::ExplainSink>(
+        out, channels, output::TextOptions{o.verbose, time_format, o.register_base, nullptr},
+        *o.explain);
   if (o.output == OutputKind::text)
     return std::make_unique<output::TextSink>(
         out, channels,
@@ -126,6 +130,7 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
                    const std::vector<ChannelInfo>& channels, const SerialFormat& format,
                    ClockQuality clock)
     : terminal_(make_sink(o, out, channels, clock_, clock)) {
+  if (o.explain) explain_ = static_cast<output::ExplainSink*>(terminal_.get());
   fan_out_.add(*terminal_);
   const Needs needs = needs_of(o);
   if (needs.statistics) {

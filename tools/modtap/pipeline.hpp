@@ -21,6 +21,7 @@
 #include "models/model_interpreter.hpp"
 #include "output/cited_records.hpp"
 #include "output/csv_sink.hpp"
+#include "output/explain_sink.hpp"
 #include "output/metrics.hpp"
 #include "output/mqtt_publisher.hpp"
 #include "output/output.hpp"
@@ -50,7 +51,8 @@ struct RunOptions {
   ModeChoice mode = ModeChoice::automatic;
   OutputKind output = OutputKind::text;
   bool verbose = false;
-  std::optional<uint32_t> baud = 19200;         // none: --baud auto
+  std::optional<uint64_t> explain;       // --explain INDEX: that record, and why it was cut there
+  std::optional<uint32_t> baud = 19200;  // none: --baud auto
   std::optional<Parity> parity = Parity::even;  // none: --parity auto
   unsigned stop_bits = 1;
   std::optional<unsigned> data_bits;  // none: the mode's (RTU 8, ASCII 7)
@@ -133,6 +135,8 @@ class Pipeline {
   // How much the -w files hold so far (0 without -w).
   uint64_t pcapng_bytes() const { return pcapng_ ? pcapng_->bytes_written() : 0; }
   uint64_t pcapng_packets() const { return pcapng_ ? pcapng_->packets() : 0; }
+  // --explain: the sink that prints the record, told the framer's readings.
+  output::ExplainSink* explain() const { return explain_; }
   uint64_t pcapng_files() const { return pcapng_ ? pcapng_->files_begun() : 0; }
   const BusStatistics* statistics() const { return statistics_.get(); }
   // The problems the statistics and the evidence beside them show (none without statistics).
@@ -164,6 +168,7 @@ class Pipeline {
   RecordClock clock_;  // of every record, before the filter: the text's time column
   FanOut fan_out_;
   std::unique_ptr<RecordSink> terminal_;
+  output::ExplainSink* explain_ = nullptr;  // terminal_, with --explain
   std::unique_ptr<BusStatistics> statistics_;
   std::unique_ptr<ProblemEvidence> evidence_;
   std::unique_ptr<output::CitedRecords> cited_;  // in front of the evidence, with --report

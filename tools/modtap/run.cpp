@@ -136,6 +136,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   AnalyzerOptions options = analyzer_options(o, source->clock());
   options.format = open.serial;
   options.slave_timeout_ns = session.model_timeouts();
+  options.framing_observer = session.explain();
   Analyzer bus(options, source->channels(), health);
   ChunkPace pace(open.serial);
   Chunk chunk;
@@ -167,6 +168,9 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
                "those steps are not measured\n",
                o.read_file, output::counted(bus.clock_steps_back(), "time", "times"));
   if (broken) throw *broken;
+  if (session.explain() && !session.explain()->found())
+    throw std::runtime_error(
+        fmt::format("--explain {}: {} has no record {}", *o.explain, o.read_file, *o.explain));
   // A pipe is not read again: it holds no logic-analyzer capture anyway.
   const captures::Format format = open.format != captures::Format::automatic ? open.format
                                   : piped                                    ? captures::Format::raw

@@ -1,0 +1,44 @@
+// --explain INDEX: one record as the text output prints it, then why the RTU framer cut there:
+// each reading it weighed at the record's first byte (request, response), what became of it and
+// the row of the evidence table that decided (protocol/framing_evidence.hpp).
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <vector>
+
+#include "output/output.hpp"
+#include "output/text_sink.hpp"
+#include "protocol/framing_evidence.hpp"
+#include "protocol/record_sink.hpp"
+
+namespace modtap::output {
+
+class ExplainSink final : public RecordSink, public FramingObserver {
+ public:
+  ExplainSink(Output& out, const std::vector<ChannelInfo>& channels, TextOptions options,
+              uint64_t index);
+
+  void on_start(uint16_t channel, uint64_t offset) override;
+  void on_reading(const FramingStep& step) override;
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override;
+  void on_timeout(const Timeout& timeout) override;
+  // Whether the record was in the capture: said at the end, so that a wrong index is no
+  // silent empty output.
+  bool found() const { return found_; }
+
+ private:
+  void explain(uint16_t channel, uint64_t offset, Mode mode);
+
+  Output& out_;
+  const std::vector<ChannelInfo>& channels_;
+  RecordClock clock_;
+  TextSink text_;
+  uint64_t index_;
+  bool found_ = false;
+  // The readings weighed at the latest starts; a record is emitted right after its own.
+  std::deque<FramingStep> steps_;
+};
+
+}  // namespace modtap::output
