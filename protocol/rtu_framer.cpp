@@ -97,35 +97,21 @@ void RtuFramer::resolve(bool final) {
 }
 
 RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const {
-  if (options_.observer && search == max_search) options_.observer->on_start(channel_, at);
-  const uint64_t avail = end_ - at;
-  const uint8_t* p = at_ptr(at);
-  if (avail < 2) return need_more();
-  const uint8_t fc = p[1];
-  if (!plausible_start(p[0], fc)) return {};
-
-  const bool broadcast = p[0] == 0;
-  const bool may_request =
-      options_.role != ChannelRole::slave && !(fc & 0x80) && (!broadcast || may_broadcast(fc));
-  const bool may_respond = options_.role != ChannelRole::master && !broadcast;
-  const Expectation& expected = expected_;
-  const bool response_first =
-      expected.pending && expected.slave == p[0] && expected.function == (fc & 0x7F);
-
-  Role order[2] = {Role::request, Role::response};
-  if (response_first) std::swap(order[0], order[1]);
+  const bool observed = search == max_search;  // a decision at a start, not one nested in it
+  if (options_.observer && observed) options_.observer->on_start(channel_, at);
+  if (end_ - at < 2) return need_more();
+  const Readings readings = readings_at(at);
   bool waiting = false;
-  for (Role role : order) {
-    if ((role == Role::request && !may_request) || (role == Role::response && !may_respond))
-      continue;
+  for (size_t i = 0; i < readings.count; ++i) {
+    const Role role = readings.order[i];
     Match m = match_role(role, at, final, search);
     const Role other = role == Role::request ? Role::response : Role::request;
-    const bool other_allowed = other == Role::request ? may_request : may_respond;
+    const bool other_allowed = readings.allows(other);
     if (m.kind == Match::Kind::found) {
       Evidence why = Evidence::length_and_crc;
       const Verdict verdict =
           judge_found({at, role, m.length, other_allowed ? &other : nullptr, final, search}, why);
-      if (search == max_search) observe(at, role, m.length, outcome_of(verdict), why);
+      if (observed) observe(at, role, m.length, outcome_of(verdict), why);
       switch (verdict) {
         case Verdict::refuse:
           return {};
@@ -140,21 +126,37 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const 
       if (other_allowed && fits_role(other, at, m.length)) m.fit = {true, true};
       return m;
     }
-    if (search == max_search)
-      observe(
-          at, role, 0,
-          m.kind == Match::Kind::need_more ? ReadingOutcome::waiting : ReadingOutcome::no_frame,
-          m.kind == Match::Kind::need_more ? Evidence::more_bytes_needed : Evidence::no_good_end);
-    if (m.kind == Match::Kind::need_more) {
-      // The likelier reading is still open: wait for it rather than take the other one early,
-      // unless a silence with a good frame after it says it never completes (a master's retry
-      // read as the response its slave did not send).
-      if (blocked_by_gap(at, final)) continue;
-      if (!final) return m;
-      waiting = true;
-    }
+    const bool open = m.kind == Match::Kind::need_more;
+    if (observed)
+      observe(at, role, 0, open ? ReadingOutcome::waiting : ReadingOutcome::no_frame,
+              open ? Evidence::more_bytes_needed : Evidence::no_good_end);
+    // The likelier reading is still open: wait for it rather than take the other one early,
+    // unless a silence with a good frame after it says it never completes (a master's retry
+    // read as the response its slave did not send).
+    if (!open || blocked_by_gap(at, final)) continue;
+    if (!final) return m;
+    waiting = true;
   }
   return waiting ? need_more() : Match{};
+}
+
+// The roles the bytes at `at` may be read in, the likelier first: the response where the bus
+// waits for an answer of this slave and function. None where no frame can start.
+RtuFramer::Readings RtuFramer::readings_at(uint64_t at) const {
+  const uint8_t* p = at_ptr(at);
+  const uint8_t fc = p[1];
+  Readings readings;
+  if (!plausible_start(p[0], fc)) return readings;
+  const bool broadcast = p[0] == 0;
+  readings.request =
+      options_.role != ChannelRole::slave && !(fc & 0x80) && (!broadcast || may_broadcast(fc));
+  readings.response = options_.role != ChannelRole::master && !broadcast;
+  const bool response_first =
+      expected_.pending && expected_.slave == p[0] && expected_.function == (fc & 0x7F);
+  for (const Role role : response_first ? std::array{Role::response, Role::request}
+                                        : std::array{Role::request, Role::response})
+    if (readings.allows(role)) readings.order[readings.count++] = role;
+  return readings;
 }
 
 ReadingOutcome RtuFramer::outcome_of(Verdict verdict) {
@@ -899,31 +901,8 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
     emit_piece(begin, begin + 1);
     return emit_piece(begin + 1, end, findings);
   }
+  if (split_trailing_glitch(begin, end, findings, glitch_after)) return;
   const auto length = awaited_length(begin, size);
-  // A damaged response ending in 0x00 or 0xFF (2 in 256) right before the next frame, or one
-  // cut short with that frame's glitch after it: on a bus where glitches come with more than
-  // 1 in 128 frames, the glitch, unless the request says whether the byte is the response's
-  // (then a silence after it does not matter). Cut short, its length may be told only without
-  // the glitch (FC08 "68 08 00" and a 0x00 read as Return Query Data).
-  // Among a capture's first frames, before the bus has shown whether it has glitches, the byte
-  // is left to the frame unless the request rules it out, marked: both readings stand (a cut
-  // answer and the next request's glitch among the first frames; seeds 731, 981, 1233, 1390).
-  const uint8_t last = p[size - 1];
-  const bool cut_short =
-      (length && size <= *length) || (!length && awaited_length(begin, size - 1));
-  const bool glitchy_bus = glitches_ * 128 > good_frames_;
-  const bool bus_unknown = glitches_ == 0 && good_frames_ < 128;
-  if (cut_short && size > 3 && is_glitch_byte(last) && !glitch_after &&
-      (glitchy_bus || bus_unknown) && end < end_ && may_be_glitch(end - 1)) {
-    const std::optional<bool> told = awaited_byte(begin, size - 1);
-    // The clock has not ruled a glitch out, nor has a silence after the byte said it ended a
-    // frame: unless the request rules the byte out, both readings pass every check, so say so.
-    if (told != false && !gap_at(end)) findings |= finding_ambiguous_end;
-    if (told ? !*told : glitchy_bus && !gap_at(end)) {
-      emit_piece(begin, end - 1, findings, true);
-      return emit_piece(end - 1, end);
-    }
-  }
   if (length && *length != size) {
     if (size < *length) return emit_damaged(begin, end, Damage::cut, findings);
     emit_damaged(begin, begin + *length, Damage::collision, findings);
@@ -957,6 +936,35 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
   // Long runs of junk leave as several records so each stays printable and memory stays flat.
   for (uint64_t at = begin; at < end; at += max_rtu_adu)
     emit_noise(at, std::min<uint64_t>(end, at + max_rtu_adu), reason);
+}
+
+// A damaged response ending in 0x00 or 0xFF (2 in 256) right before the next frame, or one cut
+// short with that frame's glitch after it: on a bus where glitches come with more than 1 in 128
+// frames, the glitch, unless the request says whether the byte is the response's (then a
+// silence after it does not matter). Cut short, its length may be told only without the glitch
+// (FC08 "68 08 00" and a 0x00 read as Return Query Data). Among a capture's first frames,
+// before the bus has shown whether it has glitches, the byte is left to the frame unless the
+// request rules it out, marked: both readings stand (a cut answer and the next request's
+// glitch among the first frames; seeds 731, 981, 1233, 1390). Whether it emitted the piece so.
+bool RtuFramer::split_trailing_glitch(uint64_t begin, uint64_t end, uint32_t& findings,
+                                      bool glitch_after) {
+  const uint64_t size = end - begin;
+  const auto length = awaited_length(begin, size);
+  const bool cut_short =
+      (length && size <= *length) || (!length && awaited_length(begin, size - 1));
+  const bool glitchy_bus = glitches_ * 128 > good_frames_;
+  const bool bus_unknown = glitches_ == 0 && good_frames_ < 128;
+  if (!cut_short || size <= 3 || !is_glitch_byte(*at_ptr(end - 1)) || glitch_after ||
+      !(glitchy_bus || bus_unknown) || end >= end_ || !may_be_glitch(end - 1))
+    return false;
+  const std::optional<bool> told = awaited_byte(begin, size - 1);
+  // The clock has not ruled a glitch out, nor has a silence after the byte said it ended a
+  // frame: unless the request rules the byte out, both readings pass every check, so say so.
+  if (told != false && !gap_at(end)) findings |= finding_ambiguous_end;
+  if (!(told ? !*told : glitchy_bus && !gap_at(end))) return false;
+  emit_piece(begin, end - 1, findings, true);
+  emit_piece(end - 1, end);
+  return true;
 }
 
 void RtuFramer::emit_noise(uint64_t begin, uint64_t end, NoiseReason reason) {

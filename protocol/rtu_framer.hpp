@@ -71,6 +71,14 @@ class RtuFramer {
     uint64_t read;        // its number (Frame::start_read)
   };
 
+  struct Readings {
+    bool request = false, response = false;
+    std::array<Role, 2> order{};
+    size_t count = 0;
+    bool allows(Role role) const { return role == Role::request ? request : response; }
+  };
+  Readings readings_at(uint64_t at) const;
+
   void resolve(bool final);
   // `search` is how many variable-length frames in a row may be found by CRC search.
   Match match_at(uint64_t at, bool final, int search) const;
@@ -147,6 +155,7 @@ class RtuFramer {
   // piece's own last byte is no glitch (one driver turning on puts one on the line).
   void emit_piece(uint64_t begin, uint64_t end, uint32_t findings = finding_none,
                   bool glitch_after = false);
+  bool split_trailing_glitch(uint64_t begin, uint64_t end, uint32_t& findings, bool glitch_after);
   std::optional<uint16_t> awaited_length(uint64_t begin, uint64_t size) const;
   std::optional<bool> awaited_byte(uint64_t begin, uint64_t pos) const;
   bool starts_awaited(uint64_t begin, uint64_t size) const;
