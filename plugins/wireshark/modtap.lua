@@ -121,7 +121,11 @@ local function add_verdicts(tree, v, pinfo)
   if v.role then tree:add(fields.role, v.role) end
   if v.check then
     local item = tree:add(fields.check, v.check)
-    if v.check == "bad" then item:add_proto_expert_info(bad_check, "Bad check, expected " .. (v.expected_check or "?")) end
+    if v.check == "bad" then
+      local why = v.damage == "cut" and "Bad check: the frame was cut before it"
+                  or "Bad check, expected " .. v.expected_check
+      item:add_proto_expert_info(bad_check, why)
+    end
   end
   if v.expected_check then tree:add(fields.expected_check, v.expected_check) end
   local request = v.request and frame_of_record[tonumber(v.request)]

@@ -23,7 +23,7 @@ FIELDS = ["frame.number", "modtap.role", "modtap.check", "modtap.request", "modt
           "modtap.fc", "modtap.function", "modtap.exception", "mbtcp.unit_id",
           "modbus.func_code", "modbus.exception_code", "modbus.request_frame",
           "modbus.regval_uint16", "modtap.model", "modtap.register.addr",
-          "modtap.register.name"]
+          "modtap.register.name", "_ws.expert.message"]
 failures = []
 
 
@@ -85,6 +85,11 @@ def compare(name, capture, extra):
                   f"{where}: registers {theirs[:4]} != {ours[:4]}")
         check(name, row["modtap.role"] == r["role"], f"{where}: role {row['modtap.role']} != {r['role']}")
         check(name, row["modtap.check"] == r["check"], f"{where}: check {row['modtap.check']} != {r['check']}")
+        if r["check"] == "bad":  # the check it should have had, or that it was cut before it
+            said = ("the frame was cut before it" if r.get("damage") == "cut"
+                    else f"expected 0x{r['expected_check']:0{4 if r['mode'] == 'rtu' else 2}x}")
+            check(name, f"Bad check{':' if r.get('damage') == 'cut' else ','} {said}"
+                  in row["_ws.expert.message"], f"{where}: expert info {row['_ws.expert.message']!r}")
         if r["request"] is not None:
             check(name, row["modtap.request"] == str(r["request"]), f"{where}: request")
         # Every frame: slave, function code and name as modtap's JSON has them.
@@ -186,6 +191,7 @@ scenarios = [
     ("frames", simulated("frames", ["-n", "3000", "--seed", "21"], "frames"), []),
     ("sniffer", simulated("sniffer", ["-n", "3000", "--seed", "22"], "sniffer"), []),
     ("bursts", simulated("bursts", ["-n", "3000", "--seed", "23"], "bursts"), []),
+    ("faults", simulated("faults", ["-n", "3000", "--seed", "26", "--faults"], "frames"), []),
     ("gd20", simulated("gd20", ["-n", "3000", "--seed", "24"], "frames"), ["--model", "gd20"]),
     ("ascii", simulated("ascii", ["-n", "1000", "--seed", "25", "--ascii"], "frames"),
      ["--mode", "ascii", "--data-bits", "7"]),
