@@ -20,4 +20,4 @@ def link_extcap(extcap):
 
 def preference_prefix(port):
     """The capture options' preference names for a port: extcap.modtap__dev_pts_3.baud."""
-    return "extcap.modtap_" + "".join(c if c.isalnum() else "_" for c in port)
+    return "extcap.modtap_" + "".join(c if c.isalnum() else "_" for c in port.lower())
