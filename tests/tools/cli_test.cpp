@@ -274,8 +274,16 @@ TEST(Cli, TsharkHabitsCountQuietTimeAndVersion) {
 
   const Outcome version = run("--version");
   EXPECT_EQ(version.status, 0);
-  ASSERT_EQ(version.lines.size(), 1u);
-  EXPECT_EQ(version.lines[0].rfind("modtap ", 0), 0u);
+  EXPECT_THAT(version.lines,
+              ::testing::ElementsAre(std::string("modtap ") + MODTAP_PROJECT_VERSION));
+}
+
+// One version, CMake's project(VERSION), wherever modtap says one: the extcap tells Wireshark
+// the same as modtap --version.
+TEST(Cli, TheExtcapSaysTheProjectsVersion) {
+  const Outcome extcap = run_shell(std::string(MODTAP_EXTCAP) + " --extcap-interfaces");
+  EXPECT_THAT(extcap.lines, ::testing::Contains(::testing::StartsWith(
+                                std::string("extcap {version=") + MODTAP_PROJECT_VERSION + "}")));
 }
 
 // -Y picks lines, it does not move them in time: each line shown reads as it does without the

@@ -44,7 +44,7 @@ std::vector<std::string> serial_ports() {
 }
 
 void print_interfaces() {
-  fmt::print("extcap {{version=0.1.0}}{{display=modtap serial Modbus}}\n");
+  fmt::print("extcap {{version={}}}{{display=modtap serial Modbus}}\n", MODTAP_VERSION);
   for (const auto& port : serial_ports())
     fmt::print("interface {{value={}{}}}{{display=Modbus serial (modtap): {}}}\n", prefix, port,
                port);
