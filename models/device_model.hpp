@@ -48,6 +48,7 @@ struct RegisterDef {
   std::shared_ptr<const EnumTable> values;  // named values, often shared between registers
   std::vector<BitField> bits;
   bool reserved = false;  // "do not write"
+  bool fault = false;     // the device's fault register: any value but 0 is a fault it reports
 };
 
 // Parameters numbered by rule: name PREFIX GG.nn at address GGnnH (GG and nn in hex).

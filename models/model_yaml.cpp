@@ -348,9 +348,10 @@ class ModelReader {
   }
 
   void read_register(const YamlNode& node) {
-    MapReader map(node, problems_,
-                  {"address", "to", "table", "name", "label", "type", "words", "order", "scale",
-                   "offset", "unit", "access", "min", "max", "enum", "values", "bits", "reserved"});
+    MapReader map(
+        node, problems_,
+        {"address", "to", "table", "name", "label", "type", "words", "order", "scale", "offset",
+         "unit", "access", "min", "max", "enum", "values", "bits", "reserved", "fault"});
     if (!node.is_map()) return;
     RegisterDef def;
     uint16_t last = 0;
@@ -387,6 +388,7 @@ class ModelReader {
     if (map["values"]) def.values = read_enum(map["values"], problems_);
     if (map["bits"]) read_bits(map["bits"], def);
     if (map["reserved"]) def.reserved = read_flag(map["reserved"]);
+    if (map["fault"]) def.fault = read_flag(map["fault"]);
     if (def.name.empty() && !def.reserved) problems_.add(node, "a register needs a name");
     if (def.type == ValueType::u32 || def.type == ValueType::s32 || def.type == ValueType::f32)
       def.words = 2;

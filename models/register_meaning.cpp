@@ -88,8 +88,14 @@ uint32_t combine(const RegisterDef& def, uint16_t first, uint16_t second) {
                                             : (uint32_t{second} << 16 | first);
 }
 
-void check_value(const RegisterDef& def, const RegisterValue& v, RuleFindings* found) {
+// `reported`: the device says the value (a read's answer), the master did not write it.
+void check_value(const RegisterDef& def, const RegisterValue& v, bool reported,
+                 RuleFindings* found) {
   if (!found) return;
+  if (def.fault && reported && v.raw != 0)
+    found->add(RuleKind::device_fault, v.address, "the device reports a fault: {} ({} = {})",
+               v.text.empty() ? std::string_view("not one the model names") : v.text, v.name,
+               v.raw);
   // The range as the manual gives it: both ends, or the one it gives (3001H's maximum is a
   // parameter, P00.03).
   const bool below = def.min && v.value < *def.min;
@@ -107,7 +113,8 @@ void check_value(const RegisterDef& def, const RegisterValue& v, RuleFindings* f
 }
 
 void decode_span(const DeviceModel& model, Table table, uint16_t start,
-                 std::span<const uint16_t> words, Meaning& meaning, RuleFindings* found) {
+                 std::span<const uint16_t> words, bool reported, Meaning& meaning,
+                 RuleFindings* found) {
   std::vector<RegisterValue>& out = meaning.registers;
   if (maps_no_register(model)) {  // every word unnamed: nothing to look up
     if (!meaning.lists_unnamed) return;
@@ -168,7 +175,7 @@ void decode_span(const DeviceModel& model, Table table, uint16_t start,
     } else if (!def->bits.empty()) {
       v.text = meaning.keep(bits_text(*def, v.raw));
     }
-    check_value(*def, v, found);
+    check_value(*def, v, reported, found);
     out.push_back(v);
   }
 }
@@ -326,7 +333,8 @@ void decode_values(const DeviceModel& model, const RegisterAccess& access, Meani
       return;
     case RegisterAccess::Data::words: {
       WordBuffer buffer;
-      decode_span(model, access.table, access.start, words_of(access.values, buffer), out, found);
+      decode_span(model, access.table, access.start, words_of(access.values, buffer), !access.write,
+                  out, found);
       return;
     }
     case RegisterAccess::Data::bits:
@@ -374,7 +382,7 @@ void interpret_response(const DeviceModel& model, const Frame& frame, Meaning& m
 
 void decode_registers(const DeviceModel& model, Table table, uint16_t start,
                       std::span<const uint16_t> words, Meaning& out) {
-  decode_span(model, table, start, words, out, nullptr);
+  decode_span(model, table, start, words, false, out, nullptr);
 }
 
 Meaning interpret(const DeviceModel& model, const Frame& frame) {

@@ -63,6 +63,7 @@ constexpr FindingInfo registry[] = {
      "a slave address from 248 to 255, which Modbus reserves"},
     {"exception", Severity::note, "an exception response, with the model's meaning of its code"},
     {"identified", Severity::note, "the device's identification, as the model reads it"},
+    {"device-fault", Severity::error, "the device reports a fault in its fault register"},
 };
 static_assert(std::size(registry) == frame_finding_count + rule_kind_count);
 

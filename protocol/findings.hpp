@@ -59,8 +59,9 @@ enum class RuleKind : uint8_t {
   reserved_address,   // 248-255, which Modbus reserves, to a slave whose model does not allow it
   exception,          // an exception response, explained with the model's meaning
   identified,
+  device_fault,  // the device reports a fault in its fault register (a drive's trip: OL2)
 };
-inline constexpr size_t rule_kind_count = 15;
+inline constexpr size_t rule_kind_count = 16;
 
 // How much a finding matters to someone looking for a fault (Wireshark's expert severities).
 enum class Severity : uint8_t { note, warning, error };

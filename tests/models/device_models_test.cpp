@@ -184,12 +184,29 @@ TEST_F(Models, Nta5000StatusBitsAndFaultCodeHaveTheirNames) {
   EXPECT_EQ(m.registers[2].text, "S1, RELAY1");
 }
 
+// N3 0121H, "Fault description": 0 is "The inverter is normal", any other value the fault the
+// drive reports (22: OL2, inverter over load). Named as a device fault where the drive says it.
+TEST_F(Models, AFaultTheDriveReportsIsADeviceFault) {
+  const auto read = rtu("02 03 01 21 00 01");
+  const Meaning tripped = response("n3", read, rtu("02 03 02 00 16"));
+  ASSERT_THAT(kinds(tripped), ElementsAre(RuleKind::device_fault));
+  EXPECT_EQ(tripped.findings[0].text,
+            "the device reports a fault: OL2 (inverter over load) (fault = 22)");
+  EXPECT_THAT(response("n3", read, rtu("02 03 02 00 00")).findings, IsEmpty());
+  // NTA5000 2521H alike; a write to it is the master's, no report of the drive's.
+  EXPECT_THAT(kinds(response("nta5000", rtu("01 03 25 21 00 01"), rtu("01 03 02 00 0B"))),
+              ElementsAre(RuleKind::device_fault));
+  EXPECT_THAT(kinds(request("n3", rtu("02 06 01 21 00 16"))),
+              ::testing::Not(::testing::Contains(RuleKind::device_fault)));
+}
+
 TEST_F(Models, Nta5000ChineseVariantDiffersWhereItsManualDoes) {
   const auto req = rtu("01 03 25 21 00 01");
   const auto rsp = rtu("01 03 02 00 28");  // fault 40
   EXPECT_THAT(response("nta5000-cn", req, rsp).registers[0].text, HasSubstr("OVSP"));
-  // The English table stops at 39: 40 is not one of its named values.
-  EXPECT_THAT(kinds(response("nta5000", req, rsp)), ElementsAre(RuleKind::not_in_enum));
+  // The English table stops at 39: 40 is not one of its named values, but a fault still.
+  EXPECT_THAT(kinds(response("nta5000", req, rsp)),
+              ElementsAre(RuleKind::device_fault, RuleKind::not_in_enum));
   EXPECT_EQ(response("nta5000", req, rtu("01 03 02 00 0B")).registers[0].text, "Reserved");
   EXPECT_THAT(response("nta5000-cn", req, rtu("01 03 02 00 0B")).registers[0].text,
               HasSubstr("OL3"));
