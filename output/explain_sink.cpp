@@ -37,9 +37,7 @@ void ExplainSink::on_reading(const FramingStep& step) {
 }
 
 void ExplainSink::on_frame(const Frame& frame) {
-  clock_.see(frame.t_ns);
-  if (frame.index != index_) return;
-  found_ = true;
+  if (!picked(frame)) return;
   text_.on_frame(frame);
   explain(frame.channel, frame.offset, frame.mode);
   if (frame.mode == Mode::rtu && frame.damage != Damage::none)
@@ -51,9 +49,7 @@ void ExplainSink::on_frame(const Frame& frame) {
 }
 
 void ExplainSink::on_noise(const Noise& noise) {
-  clock_.see(noise.t_ns);
-  if (noise.index != index_) return;
-  found_ = true;
+  if (!picked(noise)) return;
   text_.on_noise(noise);
   explain(noise.channel, noise.offset, noise.mode);
   if (noise.mode == Mode::rtu)
@@ -64,9 +60,7 @@ void ExplainSink::on_noise(const Noise& noise) {
 }
 
 void ExplainSink::on_timeout(const Timeout& timeout) {
-  clock_.see(timeout.t_ns);
-  if (timeout.index != index_) return;
-  found_ = true;
+  if (!picked(timeout)) return;
   text_.on_timeout(timeout);
   out_.print("  a time-out: the matcher's, after the request's wait; no framing decided it\n");
 }

@@ -30,6 +30,13 @@ class ExplainSink final : public RecordSink, public FramingObserver {
 
  private:
   void explain(uint16_t channel, uint64_t offset, Mode mode);
+  // Every record moves the time column's clock; the one asked for is shown.
+  template <typename Record>
+  bool picked(const Record& record) {
+    clock_.see(record.t_ns);
+    found_ |= record.index == index_;
+    return record.index == index_;
+  }
 
   Output& out_;
   const std::vector<ChannelInfo>& channels_;
