@@ -502,7 +502,9 @@ class Diagnosis {
     constexpr std::array tables{Table::coil,  Table::discrete, Table::holding,
                                 Table::input, Table::coil,     Table::holding};
     const Table table = fc <= 0x06 ? tables[fc - 1] : fc == 0x0F ? Table::coil : Table::holding;
-    const RegisterDef* def = find_register(*slave.model, table, start).def();
+    // The lookup holds a parameter the group rule made: it lives as long as the lookup.
+    const RegisterLookup lookup = find_register(*slave.model, table, start);
+    const RegisterDef* def = lookup.def();
     return def ? def->name : "";
   }
 
