@@ -72,16 +72,20 @@ inline FindingSlots findings_of(const Frame& frame) {
   return {frame.findings, frame.meaning};
 }
 
+// The meaning the frame's device model gives its exception code, empty where it gives none (or
+// the frame is no exception read through a model).
+inline std::string_view model_exception_meaning(const Frame& frame) {
+  if (!frame.is_exception() || !frame.meaning || !frame.meaning->model) return {};
+  return exception_meaning(*frame.meaning->model, frame.adu[2]);
+}
+
 // An exception code's name as every output gives it: the device model's meaning where the model
 // gives the code one (GD20's 04H is "Operation failed", not "Server Device Failure"), else the
 // standard's; empty for a code neither names.
 inline std::string_view exception_name_of(const Frame& frame) {
   if (!frame.is_exception()) return {};
-  const uint8_t code = frame.adu[2];
-  if (frame.meaning && frame.meaning->model)
-    if (const auto meaning = exception_meaning(*frame.meaning->model, code); !meaning.empty())
-      return meaning;
-  return exception_name(code);
+  const std::string_view meaning = model_exception_meaning(frame);
+  return meaning.empty() ? exception_name(frame.adu[2]) : meaning;
 }
 
 // A frame's fields as every output shows them: its PDU decoded, the exception named as above.

@@ -142,8 +142,7 @@ void TextSink::on_frame(const Frame& frame) {
   const AddressNumbering numbering = numbering_of(frame);
   // Where the model gives the exception code its own meaning, the model's note after the fields
   // says it in full: the line does not say it twice.
-  const bool noted_exception = frame.is_exception() && frame.meaning &&
-                               !exception_meaning(*frame.meaning->model, frame.adu[2]).empty();
+  const bool noted_exception = !model_exception_meaning(frame).empty();
   for (size_t at = 0; at < pdu.fields.size();) {
     const Field& f = pdu.fields[at];
     const bool shown = f.type() != FieldType::list && f.id != FieldId::byte_count &&
