@@ -18,6 +18,11 @@ inline uint16_t wire_crc(std::span<const uint8_t> adu) {
   return static_cast<uint16_t>(adu[adu.size() - 2] | (adu[adu.size() - 1] << 8));
 }
 
+// Whether an RTU ADU (at least its two CRC bytes) carries the CRC of the bytes before it.
+inline bool rtu_crc_holds(std::span<const uint8_t> adu) {
+  return crc16(adu.first(adu.size() - 2)) == wire_crc(adu);
+}
+
 // Lists, in a step or two, where the bytes of a stream from a given start end in their own CRC,
 // so a framer can look for frame ends in junk without running the CRC from every offset.
 //

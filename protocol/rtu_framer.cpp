@@ -30,10 +30,6 @@ bool is_glitch_byte(uint8_t byte) {
   return byte == 0x00 || byte == 0xFF;
 }
 
-bool crc_ok(const uint8_t* p, size_t n) {
-  return crc16({p, n - crc_size}) == wire_crc({p, n});
-}
-
 }  // namespace
 
 RtuFramer::RtuFramer(uint16_t channel, const RtuFramerOptions& options, FrameSink& sink)
@@ -41,40 +37,26 @@ RtuFramer::RtuFramer(uint16_t channel, const RtuFramerOptions& options, FrameSin
       options_(options),
       sink_(sink),
       expected_(sink.expectation()),
-      char_ns_(options.format.char_time_ns()),
-      t15_ns_(options.format.t15_ns()),
-      gap_threshold_ns_(options.format.t35_ns() +
-                        (options.clock == ClockQuality::per_chunk ? options.chunk_jitter_ns : 0)) {
+      awaited_(expected_, options.role != ChannelRole::master),
+      timeline_(options.format, options.clock, options.chunk_jitter_ns) {
   buf_.reserve(compact_after + 4096);
 }
 
 void RtuFramer::push(const Chunk& chunk) {
   if (chunk.bytes.empty()) return;
-  const auto n = static_cast<int64_t>(chunk.bytes.size());
-  int64_t t_end = chunk.t_ns;
-  if (options_.clock == ClockQuality::none) {
-    t_end = static_cast<int64_t>(end_ + chunk.bytes.size()) * char_ns_;
-  } else if (have_time_) {
-    const int64_t first_start = t_end - n * char_ns_;
-    if (first_start - last_end_ns_ >= gap_threshold_ns_) gaps_.push_back(end_);
-  }
-  have_time_ = true;
-  last_end_ns_ = std::max(last_end_ns_, t_end);
-  if (!chunk.continues_read || marks_.empty()) ++reads_;
-  marks_.push_back({end_, end_ + chunk.bytes.size(), t_end, chunk.continues_read, reads_});
+  timeline_.add(chunk.bytes.size(), chunk.t_ns, chunk.continues_read);
   buf_.insert(buf_.end(), chunk.bytes.begin(), chunk.bytes.end());
   end_ += chunk.bytes.size();
   resolve(false);
 }
 
 void RtuFramer::flush(int64_t now_ns) {
-  if (head_ < end_ && options_.clock != ClockQuality::none &&
-      now_ns - last_end_ns_ >= gap_threshold_ns_)
+  if (head_ < end_ && options_.clock != ClockQuality::none && timeline_.boundary_silence_at(now_ns))
     resolve(true);
 }
 
 int64_t RtuFramer::held_since_ns() const {
-  return head_ < end_ ? end_time(head_) - char_ns_ : INT64_MAX;
+  return head_ < end_ ? timeline_.start_time(head_) : INT64_MAX;
 }
 
 void RtuFramer::finish() {
@@ -203,8 +185,8 @@ RtuFramer::Verdict RtuFramer::first_verdict(const Reading& r, Evidence& why) con
 // broadcast after the silence read as its five-byte answer): the other reading, if any, is the
 // frame, whatever comes after the silence.
 std::optional<RtuFramer::Verdict> RtuFramer::good_frame_before_silence(const Reading& r) const {
-  const uint64_t gap = first_gap_after(r.at);
-  if (gap < r.at + r.length && gap - r.at >= min_adu && crc_ok(at_ptr(r.at), gap - r.at))
+  const uint64_t gap = timeline_.first_gap_after(r.at);
+  if (gap < r.at + r.length && gap - r.at >= min_adu && rtu_crc_holds(bytes(r.at, gap)))
     return Verdict::other_reading;
   return std::nullopt;
 }
@@ -212,7 +194,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::good_frame_before_silence(const Rea
 // A silence inside a frame, with a good frame starting right after it, means this was a frame
 // that broke off, whatever its CRC says.
 std::optional<RtuFramer::Verdict> RtuFramer::broke_off_at_silence(const Reading& r) const {
-  const uint64_t gap = first_gap_after(r.at);
+  const uint64_t gap = timeline_.first_gap_after(r.at);
   if (gap >= r.at + r.length) return std::nullopt;
   const Match after_gap = match_at(gap, r.final, 0);
   if (after_gap.kind == Match::Kind::found) return Verdict::refuse;
@@ -231,14 +213,14 @@ std::optional<RtuFramer::Verdict> RtuFramer::broke_off_at_silence(const Reading&
 // the same block with new values begins as its echo would.)
 std::optional<RtuFramer::Verdict> RtuFramer::answer_read_as_request(const Reading& r) const {
   if (r.role != Role::request || !r.other || !first_after_request(r.at) ||
-      !too_soon_for_retry(r.at) || copies_request(r.at, r.length))
+      !awaited_.too_soon_for_retry(timeline_.start_time(r.at)) ||
+      awaited_.copies_request(from(r.at), r.length))
     return std::nullopt;
   const uint8_t* p = at_ptr(r.at);
   const bool junk_as_request =
-      begins_as_awaited(r.at) &&
+      awaited_.begins(from(r.at)) &&
       request_spec_findings({p + 1, static_cast<size_t>(r.length - 1 - crc_size)}) != 0;
-  const bool glitch_then_awaited =
-      p[0] == 0xFF && awaited_length(r.at + 1, end_ - r.at - 1).has_value();
+  const bool glitch_then_awaited = p[0] == 0xFF && awaited_.length(from(r.at + 1)).has_value();
   if (junk_as_request || glitch_then_awaited) return Verdict::refuse;
   return std::nullopt;
 }
@@ -266,8 +248,9 @@ std::optional<RtuFramer::Verdict> RtuFramer::request_inside_awaited_answer(const
 // ends in 0x00 holds a frame one byte shorter too: that is no reason to cut it.)
 std::optional<RtuFramer::Verdict> RtuFramer::retry_and_glitch(const Reading& r) const {
   if (r.other && *r.other == Role::request && zero_glitches_common() &&
-      at_ptr(r.at)[r.length - 1] == 0x00 && may_be_glitch(r.at + r.length - 1) &&
-      copies_request(r.at, r.length - 1) && !too_soon_for_retry(r.at))
+      at_ptr(r.at)[r.length - 1] == 0x00 && timeline_.after_quiet_line(r.at + r.length - 1) &&
+      awaited_.copies_request(from(r.at), r.length - 1) &&
+      !awaited_.too_soon_for_retry(timeline_.start_time(r.at)))
     return Verdict::other_reading;
   return std::nullopt;
 }
@@ -276,10 +259,11 @@ std::optional<RtuFramer::Verdict> RtuFramer::retry_and_glitch(const Reading& r) 
 // which its request would not have asked for: the copy is the reading, once its last byte is
 // there to say so.
 std::optional<RtuFramer::Verdict> RtuFramer::retry_ending_in_zero(const Reading& r) const {
-  if (!r.other || *r.other != Role::request || !starts_request_copy(r.at, r.length))
+  if (!r.other || *r.other != Role::request || !awaited_.starts_request_copy(from(r.at), r.length))
     return std::nullopt;
   if (r.at + r.length == end_) return r.final ? std::nullopt : std::optional(Verdict::wait);
-  if (copies_request(r.at, r.length + 1) && !too_soon_for_retry(r.at))
+  if (awaited_.copies_request(from(r.at), r.length + 1) &&
+      !awaited_.too_soon_for_retry(timeline_.start_time(r.at)))
     return Verdict::other_reading;
   return std::nullopt;
 }
@@ -294,20 +278,20 @@ std::optional<RtuFramer::Verdict> RtuFramer::retry_ending_in_zero(const Reading&
 // would (a FC07 poll `c7 07 12 42` again after a talked-over answer, then its own answer
 // talked over, `c7 07 31 c1 cd`; seed 1021).
 std::optional<RtuFramer::Verdict> RtuFramer::answer_copying_request(const Reading& r) const {
-  if (!r.other || *r.other != Role::response || !copies_request(r.at, r.length) ||
-      !too_soon_for_retry(r.at))
+  if (!r.other || *r.other != Role::response || !awaited_.copies_request(from(r.at), r.length) ||
+      !awaited_.too_soon_for_retry(timeline_.start_time(r.at)))
     return std::nullopt;
   const uint64_t end = r.at + r.length;
-  const auto awaited = awaited_length(r.at, end_ - r.at);
+  const auto awaited = awaited_.length(from(r.at));
   if (!awaited || *awaited <= r.length) return std::nullopt;
-  if (first_after_request(r.at) && answer_may_copy_request(r.at, r.length, *awaited))
+  if (first_after_request(r.at) && awaited_.may_begin_with_copy(bytes(r.at, end), *awaited))
     return Verdict::refuse;
   if (end == end_) return r.final ? std::nullopt : std::optional(Verdict::wait);  // what follows
-  if (gap_at(end)) return std::nullopt;
+  if (timeline_.gap_at(end)) return std::nullopt;
   const Match next = match_at(end, r.final, 0);
   if (next.kind == Match::Kind::need_more && !r.final) return Verdict::wait;
   if (next.kind == Match::Kind::none && !glitch_then_frame(end, r.final, 0) &&
-      !starts_awaited(end, end_ - end))
+      !awaited_.starts(from(end)))
     return Verdict::refuse;
   return std::nullopt;
 }
@@ -358,7 +342,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::swallows_exchange_reading(const Rea
 std::optional<bool> RtuFramer::answer_follows(uint64_t at, uint64_t end, bool final) const {
   const uint64_t answer = end + (end < end_ && is_glitch_byte(*at_ptr(end)) ? 1 : 0);
   if (answer + 2 > end_) return final ? std::optional(true) : std::nullopt;
-  if (gap_at(end) || gap_at(answer)) return true;
+  if (timeline_.gap_at(end) || timeline_.gap_at(answer)) return true;
   const uint8_t* request = at_ptr(at);
   const uint8_t* p = at_ptr(answer);
   return p[0] == request[0] && (p[1] & 0x7F) == request[1];
@@ -372,7 +356,7 @@ bool RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) cons
   if (end + 3 > end_) return false;
   const uint8_t* after = at_ptr(end);
   if (is_public_function(after[1] & 0x7F) ||
-      (is_glitch_byte(after[0]) && is_public_function(after[2] & 0x7F)) || gap_at(end) ||
+      (is_glitch_byte(after[0]) && is_public_function(after[2] & 0x7F)) || timeline_.gap_at(end) ||
       match_at(end, final, 0).kind != Match::Kind::none || glitch_then_frame(end, final, 0))
     return false;
   for (uint64_t inner = begin + 1; inner < end && inner + 3 <= end_; ++inner) {
@@ -401,32 +385,22 @@ bool RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) cons
 std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bool final) const {
   const uint64_t end = at + length;
   if (end == end_) {
-    if (final || options_.clock != ClockQuality::per_chunk || marks_.empty()) return false;
-    if (read_starts_inside(at)) return std::nullopt;
-    if (marks_.size() < 2 || marks_.back().first != end - 1) return false;
-    const TimeMark& before = marks_[marks_.size() - 2];
+    if (final || options_.clock != ClockQuality::per_chunk || timeline_.empty()) return false;
+    if (timeline_.read_starts_inside(at)) return std::nullopt;
+    if (timeline_.mark_count() < 2 || timeline_.last().first != end - 1) return false;
+    const ByteTimeline::Mark& before = timeline_.before_last();
     return before.end - before.first > 1 ? std::nullopt : std::optional<bool>(false);
   }
   // The request's function code, where the longer reading has the next frame's slave address:
   // a public one, or no request starts at the response's last byte (most responses end here).
   const uint8_t fc = *at_ptr(end);
-  if ((fc & 0x80) || !is_public_function(fc) || gap_at(end)) return false;
+  if ((fc & 0x80) || !is_public_function(fc) || timeline_.gap_at(end)) return false;
   const Match next = match_at(end - 1, final, 0);
   if (next.kind == Match::Kind::need_more && !final) return std::nullopt;
   if (next.kind != Match::Kind::found || !next.fit.request) return false;
   const Match after = match_at(end, final, 0);
   if (after.kind == Match::Kind::need_more && !final) return std::nullopt;
   return after.kind == Match::Kind::none && !glitch_then_frame(end, final, 0);
-}
-
-// Whether the read that brought byte `at` began before it: reads that do not follow the
-// frames (a timer's, every 16 ms) end wherever the bytes did, as likely right after the next
-// frame's first byte as after a frame. Reads that follow them (a packet a frame, an adapter's
-// read a frame) begin with the frame.
-bool RtuFramer::read_starts_inside(uint64_t at) const {
-  for (auto mark = marks_.rbegin(); mark != marks_.rend(); ++mark)
-    if (mark->first <= at) return mark->first < at && at < mark->end;
-  return false;
 }
 
 RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int search) const {
@@ -443,7 +417,7 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
       const uint16_t total = body.bytes + crc_size;
       if (total > max_rtu_adu) return {};
       if (avail < total) return need_more();
-      if (crc_ok(p, total)) return {Match::Kind::found, total, fit};
+      if (rtu_crc_holds({p, total})) return {Match::Kind::found, total, fit};
       return {};
     }
     case BodyLength::Kind::variable: {
@@ -451,14 +425,15 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
       if (role == Role::response && expected.echo_size && expected.slave == p[0] &&
           expected.function == p[1]) {
         if (avail < expected.echo_size) return need_more();
-        if (crc_ok(p, expected.echo_size)) {
+        if (rtu_crc_holds({p, expected.echo_size})) {
           // The echo of a request whose end was in doubt is in doubt alike: one byte longer where
           // a 0x00 follows it with no silence before it (a good frame and a 0x00 check again),
           // one byte shorter where it ends in 0x00.
           const uint16_t n = expected.echo_size;
           if (!expected.echo_end_in_doubt) return {Match::Kind::found, n, fit};
           if (avail == n && !final) return need_more();
-          const bool doubt = p[n - 1] == 0x00 || (avail > n && p[n] == 0x00 && !gap_at(at + n));
+          const bool doubt =
+              p[n - 1] == 0x00 || (avail > n && p[n] == 0x00 && !timeline_.gap_at(at + n));
           return {Match::Kind::found, n, fit, doubt};
         }
       }
@@ -575,8 +550,9 @@ RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_
 // silence right after it says that 0x00 was the frame's last CRC byte, or the next driver's
 // glitch comes right after it (one driver turning on puts one glitch on the line, not two).
 bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end, bool final, int search) const {
-  return !gap_at(end) &&
-         ((zero_glitches_common() && may_be_glitch(end - 1)) || !copy_follows(begin, end)) &&
+  return !timeline_.gap_at(end) &&
+         ((zero_glitches_common() && timeline_.after_quiet_line(end - 1)) ||
+          !copy_follows(begin, end)) &&
          !glitch_then_frame(end, final, search);
 }
 
@@ -584,20 +560,14 @@ bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end, bool final, int se
 // could be that shorter frame and a glitch: no silence after it, no clock that saw the byte
 // sent straight on, and no second glitch that reading would need.
 bool RtuFramer::shorter_reading_holds(uint64_t end, bool final, int search) const {
-  return !gap_at(end) && may_be_glitch(end - 1) && !glitch_then_frame(end, final, search);
+  return !timeline_.gap_at(end) && timeline_.after_quiet_line(end - 1) &&
+         !glitch_then_frame(end, final, search);
 }
 
 // A turnaround's glitch at `at` with a good frame right behind it.
 bool RtuFramer::glitch_then_frame(uint64_t at, bool final, int search) const {
   return at + 1 < end_ && is_glitch_byte(*at_ptr(at)) &&
          match_at(at + 1, final, search).kind == Match::Kind::found;
-}
-
-// A glitch comes as a driver turns on, after the line was quiet: where the clock times each
-// byte, a byte sent right behind the one before it is no glitch.
-bool RtuFramer::may_be_glitch(uint64_t offset) const {
-  if (options_.clock != ClockQuality::per_byte || offset == 0) return true;
-  return end_time(offset) - end_time(offset - 1) >= 2 * char_ns_;
 }
 
 // Where the bytes alone cannot tell a frame whose CRC ends in 0x00 (1 in 256) from the frame
@@ -625,14 +595,15 @@ bool RtuFramer::fits_role(Role role, uint64_t at, uint16_t length) const {
 bool RtuFramer::confirmed_end(uint64_t begin, uint64_t end, bool final, int search,
                               bool allow_glitch) const {
   if (end == end_) return final;
-  if (gap_at(end) || paused_before(end) || match_at(end, final, search).kind == Match::Kind::found)
+  if (timeline_.gap_at(end) || (end > head_ && timeline_.paused_before(end)) ||
+      match_at(end, final, search).kind == Match::Kind::found)
     return true;
   if (copy_follows(begin, end)) return true;
   // A turnaround glitch between this frame and the next still confirms this end; without
   // this, the glitch's 0x00 would be taken into the frame (it keeps the CRC residue zero).
   const uint8_t next = *at_ptr(end);
   return allow_glitch && is_glitch_byte(next) && end + 1 < end_ &&
-         (gap_at(end + 1) || match_at(end + 1, final, search).kind == Match::Kind::found);
+         (timeline_.gap_at(end + 1) || match_at(end + 1, final, search).kind == Match::Kind::found);
 }
 
 // An exact copy right behind is the echo of FC08 Return Query Data; a silence inside it says
@@ -640,7 +611,7 @@ bool RtuFramer::confirmed_end(uint64_t begin, uint64_t end, bool final, int sear
 bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
   const uint64_t size = end - begin;
   return end + size <= end_ && std::equal(at_ptr(begin), at_ptr(end), at_ptr(end)) &&
-         first_gap_after(end) >= end + size;
+         timeline_.first_gap_after(end) >= end + size;
 }
 
 // Only a frame a bus carries counts (a public function code, a standard exception): inside a
@@ -661,7 +632,7 @@ bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end) const {
 // A silence after `at` with a good frame right after it, or after the glitch of the driver
 // that sends it, bounds whatever starts at `at`.
 bool RtuFramer::blocked_by_gap(uint64_t at, bool final) const {
-  const uint64_t gap = first_gap_after(at);
+  const uint64_t gap = timeline_.first_gap_after(at);
   if (gap >= end_) return false;
   if (match_at(gap, final, 0).kind == Match::Kind::found) return true;
   const uint8_t first = *at_ptr(gap);
@@ -697,9 +668,9 @@ uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
 // driver turning on if there is one; 0 where no awaited response starts there.
 uint64_t RtuFramer::awaited_end(uint64_t at) const {
   if (at >= end_) return 0;
-  if (const auto length = awaited_length(at, end_ - at)) return at + *length;
+  if (const auto length = awaited_.length(from(at))) return at + *length;
   if (at + 1 < end_ && is_glitch_byte(*at_ptr(at)))
-    if (const auto length = awaited_length(at + 1, end_ - at - 1)) return at + 1 + *length;
+    if (const auto length = awaited_.length(from(at + 1))) return at + 1 + *length;
   return 0;
 }
 
@@ -719,52 +690,13 @@ Frame RtuFramer::frame_of(uint64_t begin, uint64_t end, RoleFit fit) const {
   frame.fit = fit;
   frame.offset = begin;
   frame.raw = frame.adu = {at_ptr(begin), static_cast<size_t>(end - begin)};
-  frame.t_ns = end_time(begin) - char_ns_;
-  frame.end_ns = end_time(end - 1);
-  const TimeMark& first = mark_of(begin);
-  frame.untimed_start = starts_untimed(first, begin);
-  frame.start_read = first.read;
-  frame.end_read = mark_of(end - 1).read;
-  if (paused_inside(begin, end)) frame.findings = finding_gap_in_frame;
+  frame.t_ns = timeline_.start_time(begin);
+  frame.end_ns = timeline_.end_time(end - 1);
+  frame.untimed_start = timeline_.starts_untimed(begin);
+  frame.start_read = timeline_.mark_of(begin).read;
+  frame.end_read = timeline_.mark_of(end - 1).read;
+  if (timeline_.paused_inside(begin, end)) frame.findings = finding_gap_in_frame;
   return frame;
-}
-
-// Whether the byte at `offset`, held by `mark`, came in one read with the byte before it
-// (Frame::untimed_start).
-bool RtuFramer::starts_untimed(const TimeMark& mark, uint64_t offset) const {
-  return options_.clock == ClockQuality::per_chunk && (mark.first < offset || mark.continues_read);
-}
-
-// The chunk that held the byte at `offset`, one not yet consumed: most often the newest.
-const RtuFramer::TimeMark& RtuFramer::mark_of(uint64_t offset) const {
-  const TimeMark& last = marks_.back();
-  if (offset >= last.first) return last;
-  auto it = std::upper_bound(marks_.begin(), marks_.end(), offset,
-                             [](uint64_t o, const TimeMark& m) { return o < m.end; });
-  return it == marks_.end() ? last : *it;
-}
-
-// Whether a clock per byte saw a silence over t1.5 before the byte at `offset`: no frame goes on
-// across one, so a CRC that holds right before it ends a frame (a request with junk after it).
-bool RtuFramer::paused_before(uint64_t offset) const {
-  return options_.clock == ClockQuality::per_byte && offset > head_ &&
-         end_time(offset) - char_ns_ - end_time(offset - 1) > t15_ns_;
-}
-
-// Whether the clock saw a silence over t1.5 between two of the bytes [begin, end), where the
-// standard allows none. Only a clock per byte can time a pause of a character or two.
-bool RtuFramer::paused_inside(uint64_t begin, uint64_t end) const {
-  if (options_.clock != ClockQuality::per_byte) return false;
-  auto it = std::upper_bound(marks_.begin(), marks_.end(), begin,
-                             [](uint64_t o, const TimeMark& m) { return o < m.end; });
-  for (; it != marks_.end(); ++it) {
-    const auto next = std::next(it);
-    if (next == marks_.end() || next->first >= end) return false;
-    const int64_t next_start =
-        next->end_ns - static_cast<int64_t>(next->end - next->first) * char_ns_;
-    if (next_start - it->end_ns > t15_ns_) return true;
-  }
-  return false;
 }
 
 void RtuFramer::emit_frame(uint64_t at, const Match& match) {
@@ -782,40 +714,10 @@ void RtuFramer::emit_frame(uint64_t at, const Match& match) {
 // is a frame with a bad CRC when its header says exactly its length, else noise.
 void RtuFramer::emit_unframed(uint64_t begin, uint64_t end) {
   while (begin < end) {
-    const uint64_t gap = std::min(first_gap_after(begin), end);
+    const uint64_t gap = std::min(timeline_.first_gap_after(begin), end);
     emit_piece(begin, gap);
     begin = gap;
   }
-}
-
-// The awaited response, when these bytes start it: how long its structure says it is.
-std::optional<uint16_t> RtuFramer::awaited_length(uint64_t begin, uint64_t size) const {
-  const uint8_t* p = at_ptr(begin);
-  if (size < 3 || options_.role == ChannelRole::master || !expected_.pending ||
-      expected_.slave != p[0] || expected_.function != (p[1] & 0x7F))
-    return std::nullopt;
-  const BodyLength body = body_length(Role::response, {p, static_cast<size_t>(size)});
-  // Cut before its structure is complete: at least one byte longer than what came.
-  if (body.kind == BodyLength::Kind::need_more) return static_cast<uint16_t>(size + 1);
-  if (body.kind != BodyLength::Kind::known) return std::nullopt;
-  return static_cast<uint16_t>(body.bytes + crc_size);
-}
-
-// What the request says of the byte at `pos` of its awaited response starting at `begin`:
-// that it is this byte (an echo, a byte count), that it cannot be, or nothing.
-std::optional<bool> RtuFramer::awaited_byte(uint64_t begin, uint64_t pos) const {
-  const uint8_t* p = at_ptr(begin);
-  const auto request = expected_.request_pdu;
-  if (pos < 2 || p[1] != expected_.function) return std::nullopt;  // an exception echoes nothing
-  const ResponsePrefix prefix = response_prefix(request);
-  if (pos - 1 < prefix.size) return prefix.pdu[pos - 1] == p[pos];
-  // A whole echo repeats the request's CRC too.
-  const size_t crc_at = 1 + request.size();
-  if (!prefix.whole_echo || pos < crc_at || pos >= crc_at + crc_size) return std::nullopt;
-  std::array<uint8_t, 1 + 8> adu{expected_.slave};
-  std::copy(request.begin(), request.end(), adu.begin() + 1);
-  const uint16_t crc = crc16({adu.data(), crc_at});
-  return (pos == crc_at ? (crc & 0xFF) : (crc >> 8)) == p[pos];
 }
 
 // Whether `at` is where the bytes after the last frame begin, or a lone glitch after it ends:
@@ -823,55 +725,6 @@ std::optional<bool> RtuFramer::awaited_byte(uint64_t begin, uint64_t pos) const 
 bool RtuFramer::first_after_request(uint64_t at) const {
   return at == answer_start_ || (at == answer_start_ + 1 && answer_start_ >= head_ &&
                                  answer_start_ < end_ && is_glitch_byte(*at_ptr(answer_start_)));
-}
-
-// Whether the awaited answer of `awaited` bytes may begin with the copy of its request at
-// [at, at + length) by chance a slave's answer often meets: no byte the request predicts is
-// otherwise, and the answer has at most one byte of its own before its CRC. Any good frame and
-// a 0x00 pass a CRC, so FC07's answer whose status equals the request's CRC low byte (1 in 256)
-// is its request and a 0x00; a read's answer would need all its data to repeat the request.
-bool RtuFramer::answer_may_copy_request(uint64_t at, uint16_t length, uint16_t awaited) const {
-  const ResponsePrefix prefix = response_prefix(expected_.request_pdu);
-  if (awaited > 1 + prefix.size + 1 + crc_size) return false;
-  for (uint64_t pos = 2; pos < length; ++pos)
-    if (awaited_byte(at, pos) == false) return false;
-  return true;
-}
-
-// Whether the bytes at `at` are the awaited response's slave, function code and what its
-// request predicts after them (at least one byte: a byte count, an echoed address).
-bool RtuFramer::begins_as_awaited(uint64_t at) const {
-  const uint8_t* p = at_ptr(at);
-  if (!expected_.pending || p[0] != expected_.slave || p[1] != expected_.function) return false;
-  const ResponsePrefix prefix = response_prefix(expected_.request_pdu);
-  return prefix.size >= 2 && at + 1 + prefix.size <= end_ &&
-         std::equal(prefix.pdu.begin() + 1, prefix.pdu.begin() + prefix.size, p + 2);
-}
-
-// Whether these bytes start the awaited response, or do with a glitch after them.
-bool RtuFramer::starts_awaited(uint64_t begin, uint64_t size) const {
-  return awaited_length(begin, size) || (size > 3 && awaited_length(begin, size - 1));
-}
-
-// Whether [at, at + size) is the pending request again, byte for byte: its slave, its PDU and
-// a good CRC (the same PDU has the same CRC).
-bool RtuFramer::copies_request(uint64_t at, uint64_t size) const {
-  return starts_request_copy(at, size - 1) && crc_ok(at_ptr(at), size);
-}
-
-// Whether [at, at + size) is the pending request again but for its last byte.
-bool RtuFramer::starts_request_copy(uint64_t at, uint64_t size) const {
-  const Expectation& expected = expected_;
-  const uint8_t* p = at_ptr(at);
-  return expected.pending && at + size <= end_ && size >= 2 && p[0] == expected.slave &&
-         size + 1 == expected.request_pdu.size() + 1 + crc_size &&
-         std::equal(expected.request_pdu.begin(), expected.request_pdu.end(), p + 1);
-}
-
-// A copy of the pending request (the caller knows it is one) that starts at `at` before the
-// master could have timed out is the answer (an echo), not the master's retry.
-bool RtuFramer::too_soon_for_retry(uint64_t at) const {
-  return expected_.retry_from_ns && end_time(at) - char_ns_ < expected_.retry_from_ns;
 }
 
 // A damaged response: reported as a frame with a bad check, so it stays in the slave's
@@ -897,12 +750,12 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
   const uint64_t size = end - begin;
   const uint8_t* p = at_ptr(begin);
   // The slave's driver turning on can put a glitch right before its damaged response.
-  if (size > 1 && is_glitch_byte(p[0]) && starts_awaited(begin + 1, size - 1)) {
+  if (size > 1 && is_glitch_byte(p[0]) && awaited_.starts(bytes(begin + 1, end))) {
     emit_piece(begin, begin + 1);
     return emit_piece(begin + 1, end, findings);
   }
   if (split_trailing_glitch(begin, end, findings, glitch_after)) return;
-  const auto length = awaited_length(begin, size);
+  const auto length = awaited_.length(bytes(begin, end));
   if (length && *length != size) {
     if (size < *length) return emit_damaged(begin, end, Damage::cut, findings);
     emit_damaged(begin, begin + *length, Damage::collision, findings);
@@ -949,19 +802,19 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
 bool RtuFramer::split_trailing_glitch(uint64_t begin, uint64_t end, uint32_t& findings,
                                       bool glitch_after) {
   const uint64_t size = end - begin;
-  const auto length = awaited_length(begin, size);
+  const auto length = awaited_.length(bytes(begin, end));
   const bool cut_short =
-      (length && size <= *length) || (!length && awaited_length(begin, size - 1));
+      (length && size <= *length) || (!length && awaited_.length(bytes(begin, end - 1)));
   const bool glitchy_bus = glitches_ * 128 > good_frames_;
   const bool bus_unknown = glitches_ == 0 && good_frames_ < 128;
   if (!cut_short || size <= 3 || !is_glitch_byte(*at_ptr(end - 1)) || glitch_after ||
-      !(glitchy_bus || bus_unknown) || end >= end_ || !may_be_glitch(end - 1))
+      !(glitchy_bus || bus_unknown) || end >= end_ || !timeline_.after_quiet_line(end - 1))
     return false;
-  const std::optional<bool> told = awaited_byte(begin, size - 1);
+  const std::optional<bool> told = awaited_.byte(bytes(begin, end), size - 1);
   // The clock has not ruled a glitch out, nor has a silence after the byte said it ended a
   // frame: unless the request rules the byte out, both readings pass every check, so say so.
-  if (told != false && !gap_at(end)) findings |= finding_ambiguous_end;
-  if (!(told ? !*told : glitchy_bus && !gap_at(end))) return false;
+  if (told != false && !timeline_.gap_at(end)) findings |= finding_ambiguous_end;
+  if (!(told ? !*told : glitchy_bus && !timeline_.gap_at(end))) return false;
   emit_piece(begin, end - 1, findings, true);
   emit_piece(end - 1, end);
   return true;
@@ -973,9 +826,9 @@ void RtuFramer::emit_noise(uint64_t begin, uint64_t end, NoiseReason reason) {
   noise.mode = Mode::rtu;
   noise.offset = begin;
   noise.raw = {at_ptr(begin), static_cast<size_t>(end - begin)};
-  noise.t_ns = end_time(begin) - char_ns_;
-  noise.end_ns = end_time(end - 1);
-  noise.untimed_start = starts_untimed(mark_of(begin), begin);
+  noise.t_ns = timeline_.start_time(begin);
+  noise.end_ns = timeline_.end_time(end - 1);
+  noise.untimed_start = timeline_.starts_untimed(begin);
   noise.reason = reason;
   sink_.on_noise(noise);
   if (reason == NoiseReason::glitch && begin == answer_start_) answer_start_ = end;
@@ -984,8 +837,7 @@ void RtuFramer::emit_noise(uint64_t begin, uint64_t end, NoiseReason reason) {
 
 void RtuFramer::consume(uint64_t to) {
   head_ = to;
-  while (!gaps_.empty() && gaps_.front() <= head_) gaps_.pop_front();
-  while (marks_.size() > 1 && marks_.front().end <= head_) marks_.pop_front();
+  timeline_.drop_before(head_);
   if (head_ == end_) {
     buf_.clear();
     crc_index_.drop_before(head_);
@@ -995,27 +847,6 @@ void RtuFramer::consume(uint64_t to) {
     crc_index_.drop_before(head_);
     base_ = head_;
   }
-}
-
-bool RtuFramer::gap_at(uint64_t offset) const {
-  return std::binary_search(gaps_.begin(), gaps_.end(), offset);
-}
-
-uint64_t RtuFramer::first_gap_after(uint64_t offset) const {
-  auto it = std::upper_bound(gaps_.begin(), gaps_.end(), offset);
-  return it == gaps_.end() ? end_ : *it;
-}
-
-// Bytes inside a chunk are placed back to back before its time, the best a chunk clock allows.
-int64_t RtuFramer::end_time(uint64_t offset) const {
-  if (options_.clock == ClockQuality::none) return static_cast<int64_t>(offset + 1) * char_ns_;
-  const TimeMark& last = marks_.back();
-  if (offset >= last.first && offset < last.end)
-    return last.end_ns - static_cast<int64_t>(last.end - 1 - offset) * char_ns_;
-  auto it = std::upper_bound(marks_.begin(), marks_.end(), offset,
-                             [](uint64_t o, const TimeMark& m) { return o < m.end; });
-  if (it == marks_.end()) return last_end_ns_;
-  return it->end_ns - static_cast<int64_t>(it->end - 1 - offset) * char_ns_;
 }
 
 }  // namespace modtap

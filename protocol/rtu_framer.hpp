@@ -9,10 +9,12 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <vector>
 
+#include "protocol/awaited_answer.hpp"
+#include "protocol/byte_timeline.hpp"
 #include "protocol/checksum.hpp"
-#include "protocol/flat_queue.hpp"
 #include "protocol/frame_sink.hpp"
 #include "protocol/framing_evidence.hpp"
 #include "protocol/function_codes.hpp"
@@ -42,7 +44,7 @@ class RtuFramer {
   // End of the stream: resolve everything.
   void finish();
 
-  int64_t last_byte_ns() const { return last_end_ns_; }
+  int64_t last_byte_ns() const { return timeline_.last_end_ns(); }
   // When the first byte not yet in a record began (INT64_MAX if none): what comes out later
   // may still be from then.
   int64_t held_since_ns() const;
@@ -62,13 +64,6 @@ class RtuFramer {
     size_t limit = 0;
     size_t count = 0;
     std::array<uint16_t, max_rtu_adu> lengths;
-  };
-  struct TimeMark {  // one per chunk: the bytes [first, end) ended at end_ns
-    uint64_t first;
-    uint64_t end;
-    int64_t end_ns;
-    bool continues_read;  // Chunk::continues_read
-    uint64_t read;        // its number (Frame::start_read)
   };
 
   struct Readings {
@@ -114,10 +109,7 @@ class RtuFramer {
   static ReadingOutcome outcome_of(Verdict verdict);
   void observe(uint64_t at, Role role, uint16_t length, ReadingOutcome outcome, Evidence why) const;
   std::optional<bool> cut_before_frame(uint64_t at, uint16_t length, bool final) const;
-  bool read_starts_inside(uint64_t at) const;
-  bool begins_as_awaited(uint64_t at) const;
   bool first_after_request(uint64_t at) const;
-  bool answer_may_copy_request(uint64_t at, uint16_t length, uint16_t awaited) const;
   Match match_role(Role role, uint64_t at, bool final, int search) const;
   // The lengths in [first, limit] that give the bytes from `at` a good CRC, ascending.
   size_t good_lengths(uint64_t at, size_t first, size_t limit,
@@ -130,7 +122,6 @@ class RtuFramer {
   bool glitch_then_frame(uint64_t at, bool final, int search) const;
   bool shorter_reading_holds(uint64_t end, bool final, int search) const;
   bool zero_glitches_common() const;
-  bool may_be_glitch(uint64_t offset) const;
   bool fits_role(Role role, uint64_t at, uint16_t length) const;
   bool confirmed_end(uint64_t begin, uint64_t end, bool final, int search, bool allow_glitch) const;
   bool blocked_by_gap(uint64_t at, bool final) const;
@@ -145,10 +136,6 @@ class RtuFramer {
   uint64_t awaited_end(uint64_t at) const;
   bool standard_frame(uint64_t at) const;
   Frame frame_of(uint64_t begin, uint64_t end, RoleFit fit) const;
-  bool paused_inside(uint64_t begin, uint64_t end) const;
-  const TimeMark& mark_of(uint64_t offset) const;
-  bool starts_untimed(const TimeMark& mark, uint64_t offset) const;
-  bool paused_before(uint64_t offset) const;
   void emit_frame(uint64_t at, const Match& match);
   void emit_unframed(uint64_t begin, uint64_t end);
   // `glitch_after`: the byte after the piece was just taken for a turnaround's glitch, so the
@@ -156,28 +143,22 @@ class RtuFramer {
   void emit_piece(uint64_t begin, uint64_t end, uint32_t findings = finding_none,
                   bool glitch_after = false);
   bool split_trailing_glitch(uint64_t begin, uint64_t end, uint32_t& findings, bool glitch_after);
-  std::optional<uint16_t> awaited_length(uint64_t begin, uint64_t size) const;
-  std::optional<bool> awaited_byte(uint64_t begin, uint64_t pos) const;
-  bool starts_awaited(uint64_t begin, uint64_t size) const;
-  bool copies_request(uint64_t at, uint64_t size) const;
-  bool starts_request_copy(uint64_t at, uint64_t size) const;
-  bool too_soon_for_retry(uint64_t at) const;
   void emit_damaged(uint64_t begin, uint64_t end, Damage damage, uint32_t findings);
   void emit_noise(uint64_t begin, uint64_t end, NoiseReason reason);
   void consume(uint64_t to);
 
-  bool gap_at(uint64_t offset) const;
-  uint64_t first_gap_after(uint64_t offset) const;  // end_ if none
-  int64_t end_time(uint64_t offset) const;
   const uint8_t* at_ptr(uint64_t offset) const { return buf_.data() + (offset - base_); }
+  std::span<const uint8_t> bytes(uint64_t begin, uint64_t end) const {
+    return {at_ptr(begin), static_cast<size_t>(end - begin)};
+  }
+  std::span<const uint8_t> from(uint64_t at) const { return bytes(at, end_); }
 
   uint16_t channel_;
   RtuFramerOptions options_;
   FrameSink& sink_;
   const Expectation& expected_;
-  int64_t char_ns_;
-  int64_t t15_ns_;
-  int64_t gap_threshold_ns_;
+  AwaitedAnswer awaited_;
+  ByteTimeline timeline_;
 
   std::vector<uint8_t> buf_;    // bytes from stream offset base_ on
   uint64_t base_ = 0;           // stream offset of buf_[0]
@@ -187,14 +168,9 @@ class RtuFramer {
   uint64_t scanned_to_ = 0;     // positions below this are known not to start a frame
   mutable CrcIndex crc_index_;  // over the searched part of buf_
   mutable CrcHits last_hits_;
-  FlatQueue<TimeMark> marks_;
-  FlatQueue<uint64_t> gaps_;  // stream offsets preceded by a boundary-sized silence
-  int64_t last_end_ns_ = 0;
   uint64_t good_frames_ = 0;    // emitted with a good CRC
   uint64_t zero_glitches_ = 0;  // lone 0x00 bytes between frames
   uint64_t glitches_ = 0;       // lone 0x00 or 0xFF bytes between frames
-  bool have_time_ = false;
-  uint64_t reads_ = 0;  // chunks pushed, those that continue a read aside
 };
 
 }  // namespace modtap

@@ -1,0 +1,77 @@
+#include "protocol/awaited_answer.hpp"
+
+#include <algorithm>
+#include <array>
+
+#include "protocol/checksum.hpp"
+#include "protocol/function_codes.hpp"
+
+namespace modtap {
+namespace {
+
+constexpr uint16_t crc_size = 2;
+
+}  // namespace
+
+std::optional<uint16_t> AwaitedAnswer::length(std::span<const uint8_t> bytes) const {
+  if (bytes.size() < 3 || !carries_answers_ || !expected_.pending || expected_.slave != bytes[0] ||
+      expected_.function != (bytes[1] & 0x7F))
+    return std::nullopt;
+  const BodyLength body = body_length(Role::response, bytes);
+  if (body.kind == BodyLength::Kind::need_more) return static_cast<uint16_t>(bytes.size() + 1);
+  if (body.kind != BodyLength::Kind::known) return std::nullopt;
+  return static_cast<uint16_t>(body.bytes + crc_size);
+}
+
+bool AwaitedAnswer::starts(std::span<const uint8_t> bytes) const {
+  return length(bytes) || (bytes.size() > 3 && length(bytes.first(bytes.size() - 1)));
+}
+
+bool AwaitedAnswer::begins(std::span<const uint8_t> bytes) const {
+  if (!expected_.pending || bytes.size() < 2 || bytes[0] != expected_.slave ||
+      bytes[1] != expected_.function)
+    return false;
+  const ResponsePrefix prefix = response_prefix(expected_.request_pdu);
+  return prefix.size >= 2 && 1u + prefix.size <= bytes.size() &&
+         std::equal(prefix.pdu.begin() + 1, prefix.pdu.begin() + prefix.size, bytes.begin() + 2);
+}
+
+std::optional<bool> AwaitedAnswer::byte(std::span<const uint8_t> bytes, size_t pos) const {
+  const auto request = expected_.request_pdu;
+  // An exception echoes nothing.
+  if (pos < 2 || pos >= bytes.size() || bytes[1] != expected_.function) return std::nullopt;
+  const ResponsePrefix prefix = response_prefix(request);
+  if (pos - 1 < prefix.size) return prefix.pdu[pos - 1] == bytes[pos];
+  // A whole echo repeats the request's CRC too.
+  const size_t crc_at = 1 + request.size();
+  if (!prefix.whole_echo || pos < crc_at || pos >= crc_at + crc_size) return std::nullopt;
+  std::array<uint8_t, 1 + 8> adu{expected_.slave};
+  std::copy(request.begin(), request.end(), adu.begin() + 1);
+  const uint16_t crc = crc16({adu.data(), crc_at});
+  return (pos == crc_at ? (crc & 0xFF) : (crc >> 8)) == bytes[pos];
+}
+
+// Any good frame and a 0x00 pass a CRC, so FC07's answer whose status equals the request's CRC
+// low byte (1 in 256) is its request and a 0x00; a read's answer would need all its data to
+// repeat the request.
+bool AwaitedAnswer::may_begin_with_copy(std::span<const uint8_t> copy, uint16_t length) const {
+  const ResponsePrefix prefix = response_prefix(expected_.request_pdu);
+  if (length > 1 + prefix.size + 1 + crc_size) return false;
+  for (size_t pos = 2; pos < copy.size(); ++pos)
+    if (byte(copy, pos) == false) return false;
+  return true;
+}
+
+bool AwaitedAnswer::copies_request(std::span<const uint8_t> bytes, size_t size) const {
+  return size <= bytes.size() && starts_request_copy(bytes, size - 1) &&
+         rtu_crc_holds(bytes.first(size));
+}
+
+bool AwaitedAnswer::starts_request_copy(std::span<const uint8_t> bytes, size_t size) const {
+  const auto request = expected_.request_pdu;
+  return expected_.pending && size <= bytes.size() && size >= 2 && bytes[0] == expected_.slave &&
+         size + 1 == request.size() + 1 + crc_size &&
+         std::equal(request.begin(), request.end(), bytes.begin() + 1);
+}
+
+}  // namespace modtap
