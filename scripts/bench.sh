@@ -25,7 +25,7 @@ BUILD=${BUILD:-build}
 WORK=${WORK:-/tmp/modtap-bench}
 PEER_MAX_FRAMES=${PEER_MAX_FRAMES:-1100000}
 MODTAP=$BUILD/tools/modtap/modtap
-BUSGEN=$BUILD/tools/busgen/modtap-busgen
+BUSGEN=$BUILD/tools/busgen/modtap-bus-simulator
 TSHARK_DLT='uat:user_dlts:"User 0 (DLT=147)","mbrtu","0","","0",""'
 sizes=("$@")
 [ ${#sizes[@]} -gt 0 ] || sizes=(100000 515000 5150000)

@@ -15,10 +15,10 @@ if [ "${1:-}" = --keep ] && [ -f "$stamp" ]; then exit 0; fi
 mkdir -p "$train"
 cmake -S . -B "$train" -DCMAKE_BUILD_TYPE=Release -DMODTAP_TESTS=OFF -DMODTAP_BENCHMARKS=OFF \
   -DMODTAP_PGO=train -DMODTAP_PGO_DIR="$profile" >/dev/null
-cmake --build "$train" -j"$(nproc)" --target modtap modtap-busgen >"$train/build.log" 2>&1 ||
+cmake --build "$train" -j"$(nproc)" --target modtap modtap-bus-simulator >"$train/build.log" 2>&1 ||
   { tail -30 "$train/build.log"; exit 1; }
 modtap=$train/tools/modtap/modtap
-busgen=$train/tools/busgen/modtap-busgen
+busgen=$train/tools/busgen/modtap-bus-simulator
 if [ -f "$stamp" ] && [ "$stamp" -nt "$modtap" ] && [ "$stamp" -nt scripts/pgo.sh ]; then exit 0; fi
 
 work=$(mktemp -d)

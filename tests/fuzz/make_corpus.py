@@ -11,7 +11,7 @@ import subprocess
 import sys
 
 BUILD = sys.argv[1]
-BUSGEN = os.path.join(BUILD, "tools/busgen/modtap-busgen")
+BUSGEN = os.path.join(BUILD, "tools/busgen/modtap-bus-simulator")
 OUT = "tests/fuzz/corpus"
 
 

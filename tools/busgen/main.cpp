@@ -1,4 +1,4 @@
-// modtap-busgen: writes simulated bus traffic as a capture file, for benchmarks and demos.
+// modtap-bus-simulator: writes simulated bus traffic as a capture file, for benchmarks and demos.
 #include <cstdio>
 #include <map>
 #include <stdexcept>
@@ -42,7 +42,8 @@ int write(const busgen::BusCapture& capture, const std::string& format, busgen::
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"modtap-busgen: simulated Modbus RTU traffic as a capture file"};
+  CLI::App app{"modtap-bus-simulator: simulated Modbus RTU traffic as a capture file"};
+  app.set_version_flag("--version", std::string("modtap-bus-simulator ") + MODTAP_VERSION);
   busgen::BusOptions o;
   std::string out = "-", format = "raw", delivery_name = "frames";
   app.add_option("-n,--transactions", o.transactions, "Request/response pairs to simulate");
@@ -108,7 +109,7 @@ int main(int argc, char** argv) {
   try {
     return write(capture, format, deliveries.at(delivery_name), o.seed, out);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "modtap-busgen: %s\n", e.what());
+    std::fprintf(stderr, "modtap-bus-simulator: %s\n", e.what());
     return 2;
   }
 }
