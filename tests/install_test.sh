@@ -12,7 +12,8 @@ for f in bin/modtap share/modtap/models/nta5000.yaml share/modtap/models/gd20.ya
          "$libdir/wireshark/plugins/modtap.lua" "$libdir/wireshark/extcap/modtap-extcap" \
          share/wireshark/profiles/modtap/preferences share/wireshark/profiles/modtap/colorfilters \
          share/wireshark/profiles/modtap/recent \
-         lib/systemd/system/modtap@.service share/modtap/line3.conf.example; do
+         lib/systemd/system/modtap@.service share/modtap/line3.conf.example \
+         share/bash-completion/completions/modtap share/man/man5/modtap-models.5.gz; do
   [ -e "$stage/$f" ] || { echo "missing after install: $f"; exit 1; }
 done
 "$stage/bin/modtap" models --models-dir "$stage/share/modtap/models" | grep -q '^nta5000 ' ||
