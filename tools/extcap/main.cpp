@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include "captures/output_file.hpp"
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/run.hpp"
 
@@ -124,6 +125,11 @@ int main(int argc, char** argv) {
   run.announce = false;
   try {
     return tools::listen(run, {}, {});
+  } catch (const captures::WriteError& e) {
+    // Wireshark stops a capture by closing the FIFO: that is its end, not an error to show.
+    if (e.broken_pipe()) return 0;
+    fmt::print(stderr, "modtap-extcap: cannot write {}\n", e.what());
+    return 1;
   } catch (const std::exception& e) {
     fmt::print(stderr, "modtap-extcap: {}\n", e.what());
     return 1;
