@@ -36,6 +36,10 @@ struct Mosquitto {
   decltype(&::mosquitto_disconnect) disconnect;
   decltype(&::mosquitto_publish) publish;
   decltype(&::mosquitto_connack_string) connack_string;
+  decltype(&::mosquitto_tls_set) tls_set;
+  decltype(&::mosquitto_tls_insecure_set) tls_insecure_set;
+  decltype(&::mosquitto_log_callback_set) log_callback_set;
+  decltype(&::mosquitto_strerror) strerror;
 };
 
 const Mosquitto& libmosquitto() {
@@ -57,6 +61,10 @@ const Mosquitto& libmosquitto() {
         .disconnect = MODTAP_SYMBOL(library, mosquitto_disconnect),
         .publish = MODTAP_SYMBOL(library, mosquitto_publish),
         .connack_string = MODTAP_SYMBOL(library, mosquitto_connack_string),
+        .tls_set = MODTAP_SYMBOL(library, mosquitto_tls_set),
+        .tls_insecure_set = MODTAP_SYMBOL(library, mosquitto_tls_insecure_set),
+        .log_callback_set = MODTAP_SYMBOL(library, mosquitto_log_callback_set),
+        .strerror = MODTAP_SYMBOL(library, mosquitto_strerror),
     };
   }();
   return loaded;
@@ -65,14 +73,21 @@ const Mosquitto& libmosquitto() {
 }  // namespace
 
 MqttUrl parse_mqtt_url(const std::string& url) {
-  const std::string scheme = "mqtt://";
   auto bad = [&](const std::string& why) {
-    return std::invalid_argument(
-        fmt::format("--mqtt {}: {}; give mqtt://[USER[:PASSWORD]@]HOST[:PORT][/PREFIX]", url, why));
+    return std::invalid_argument(fmt::format(
+        "--mqtt {}: {}; give mqtt[s]://[USER[:PASSWORD]@]HOST[:PORT][/PREFIX]", url, why));
   };
-  if (url.rfind(scheme, 0) != 0) throw bad("not an mqtt:// URL");
   MqttUrl parsed;
-  std::string rest = url.substr(scheme.size());
+  std::string rest;
+  if (url.rfind("mqtt://", 0) == 0) {
+    rest = url.substr(7);
+  } else if (url.rfind("mqtts://", 0) == 0) {
+    rest = url.substr(8);
+    parsed.tls = true;
+    parsed.port = 8883;
+  } else {
+    throw bad("not an mqtt:// or mqtts:// URL");
+  }
   if (const auto slash = rest.find('/'); slash != std::string::npos) {
     if (slash + 1 < rest.size()) parsed.prefix = rest.substr(slash + 1);
     rest.resize(slash);
@@ -103,8 +118,9 @@ MqttUrl parse_mqtt_url(const std::string& url) {
   return parsed;
 }
 
-MosquittoBroker::MosquittoBroker(const MqttUrl& url, std::string status_topic)
-    : name_(fmt::format("mqtt://{}:{}", url.host, url.port)),
+MosquittoBroker::MosquittoBroker(const MqttUrl& url, const MqttTls& tls, std::string status_topic)
+    : name_(fmt::format("{}://{}:{}", url.tls ? "mqtts" : "mqtt", url.host, url.port)),
+      host_(url.host),
       status_topic_(std::move(status_topic)) {
   const Mosquitto& m = libmosquitto();
   char host[256] = "";
@@ -117,6 +133,8 @@ MosquittoBroker::MosquittoBroker(const MqttUrl& url, std::string status_topic)
                       url.password.empty() ? nullptr : url.password.c_str());
   m.will_set(client_, status_topic_.c_str(), static_cast<int>(std::strlen(offline)), offline, 1,
              true);
+  m.log_callback_set(client_, on_log);
+  if (url.tls) set_up_tls(tls);
   m.reconnect_delay_set(client_, 1, 30, true);
   m.connect_callback_set(client_, on_connect);
   m.disconnect_callback_set(client_, on_disconnect);
@@ -127,6 +145,24 @@ MosquittoBroker::MosquittoBroker(const MqttUrl& url, std::string status_topic)
   if (m.loop_start(client_) != MOSQ_ERR_SUCCESS) {
     m.destroy(client_);
     throw std::runtime_error(fmt::format("{}: cannot start the MQTT client's thread", name_));
+  }
+}
+
+// libmosquitto checks the broker's certificate against the CA and its name against the host
+// asked for; without a CA file, against the system's store (Debian's ca-certificates).
+void MosquittoBroker::set_up_tls(const MqttTls& tls) {
+  const Mosquitto& m = libmosquitto();
+  auto file = [](const std::string& path) { return path.empty() ? nullptr : path.c_str(); };
+  const int set =
+      m.tls_set(client_, file(tls.ca_file), tls.ca_file.empty() ? "/etc/ssl/certs" : nullptr,
+                file(tls.cert_file), file(tls.key_file), nullptr);
+  if (set == MOSQ_ERR_SUCCESS && tls.insecure) m.tls_insecure_set(client_, true);
+  if (set != MOSQ_ERR_SUCCESS) {
+    m.destroy(client_);
+    throw std::runtime_error(
+        fmt::format("{}: TLS settings refused ({}): check --mqtt-ca, --mqtt-cert "
+                    "and --mqtt-key",
+                    name_, m.strerror(set)));
   }
 }
 
@@ -163,6 +199,14 @@ void MosquittoBroker::on_disconnect(mosquitto*, void* self, int) {
   broker.changed_.notify_all();
 }
 
+// Why a connection failed is only logged (a TLS handshake's certificate error): keep the last.
+void MosquittoBroker::on_log(mosquitto*, void* self, int level, const char* message) {
+  if (!(level & MOSQ_LOG_ERR) || !message) return;
+  auto& broker = *static_cast<MosquittoBroker*>(self);
+  std::lock_guard lock(broker.mutex_);
+  broker.log_error_ = message;
+}
+
 void MosquittoBroker::on_publish(mosquitto*, void* self, int message_id) {
   auto& broker = *static_cast<MosquittoBroker*>(self);
   {
@@ -196,6 +240,15 @@ bool MosquittoBroker::wait_connected(double seconds) {
 
 std::string MosquittoBroker::connect_error() const {
   if (refused_) return libmosquitto().connack_string(refused_);
+  {
+    std::lock_guard lock(mutex_);
+    if (log_error_.find("certificate verify failed") != std::string::npos)
+      return log_error_ + fmt::format(
+                              ": the broker's certificate is not signed by the CA given "
+                              "(--mqtt-ca, else the system's store), or does not name {}",
+                              host_);
+    if (!log_error_.empty()) return log_error_;
+  }
   if (start_error_) return std::strerror(start_error_);
   return "no answer";
 }

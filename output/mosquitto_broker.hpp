@@ -18,19 +18,27 @@ struct mosquitto;
 
 namespace modtap::output {
 
-// mqtt://[USER[:PASSWORD]@]HOST[:PORT][/PREFIX]
+// mqtt://[USER[:PASSWORD]@]HOST[:PORT][/PREFIX], or mqtts:// for MQTT over TLS (port 8883).
 struct MqttUrl {
+  bool tls = false;
   std::string host;
   int port = 1883;
   std::string user, password;
   std::string prefix = "modtap";
+};
+// For mqtts://: the CA that signs the broker's certificate (none: the system's store), and a
+// certificate of modtap's own where the broker asks for one. The broker's name is checked
+// against its certificate unless `insecure` (for tests only).
+struct MqttTls {
+  std::string ca_file, cert_file, key_file;
+  bool insecure = false;
 };
 // Throws std::invalid_argument naming the URL.
 MqttUrl parse_mqtt_url(const std::string& url);
 
 class MosquittoBroker final : public MessageBroker {
  public:
-  MosquittoBroker(const MqttUrl& url, std::string status_topic);
+  MosquittoBroker(const MqttUrl& url, const MqttTls& tls, std::string status_topic);
   ~MosquittoBroker() override;
   MosquittoBroker(const MosquittoBroker&) = delete;
   MosquittoBroker& operator=(const MosquittoBroker&) = delete;
@@ -53,6 +61,8 @@ class MosquittoBroker final : public MessageBroker {
   static void on_connect(mosquitto* client, void* self, int code);
   static void on_disconnect(mosquitto* client, void* self, int code);
   static void on_publish(mosquitto* client, void* self, int message_id);
+  static void on_log(mosquitto* client, void* self, int level, const char* message);
+  void set_up_tls(const MqttTls& tls);
   // Waits (a while) until libmosquitto has written out half of what it holds.
   bool wait_for_room();
   bool over_bound();
@@ -68,12 +78,14 @@ class MosquittoBroker final : public MessageBroker {
 
   mosquitto* client_ = nullptr;
   std::string name_;  // mqtt://HOST:PORT, for messages
+  std::string host_;
   std::string status_topic_;
   std::atomic<bool> connected_{false};
   std::atomic<bool> reconnected_{false};
   std::atomic<int> refused_{0};  // the broker's CONNACK code when it turned modtap away
   int start_error_ = 0;          // errno of the first attempt
-  std::mutex mutex_;
+  std::string log_error_;        // under mutex_: libmosquitto's last error (a TLS handshake's)
+  mutable std::mutex mutex_;
   std::condition_variable changed_;
   int offline_id_ = -1;
   bool offline_taken_ = false;

@@ -314,7 +314,7 @@ def last_will(broker):
 def refusals(port):
     capture = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "captures",
                            "samples", "drives-manual-examples.log")
-    for url, words in (("http://127.0.0.1/x", "not an mqtt:// URL"),
+    for url, words in (("http://127.0.0.1/x", "not an mqtt:// or mqtts:// URL"),
                        ("mqtt://127.0.0.1:99999/x", "port"),
                        (f"mqtt://127.0.0.1:{free_port()}/x", "cannot connect")):
         run = subprocess.run([MODTAP, "-r", capture, "--mqtt", url], capture_output=True,

@@ -183,8 +183,27 @@ void add_output_options(CLI::App& app, RunOptions& o, Command& command) {
   auto* mqtt = app.add_option(
       "--mqtt", o.mqtt_url,
       "Publish register values (retained, on change), a health summary and an "
-      "online/offline status to an MQTT broker: mqtt://[USER[:PASS]@]HOST[:PORT]/PREFIX "
-      "(docs/monitoring.md)");
+      "online/offline status to an MQTT broker: mqtt://[USER@]HOST[:PORT]/PREFIX, or "
+      "mqtts:// over TLS (docs/monitoring.md)");
+  app.add_option("--mqtt-password-file", o.mqtt_password_file,
+                 "The MQTT password, from the file's first line (or MODTAP_MQTT_PASSWORD): "
+                 "never on the command line, where every local user sees it")
+      ->needs(mqtt);
+  app.add_option("--mqtt-ca", o.mqtt_tls.ca_file,
+                 "For mqtts://: the CA certificate (PEM) that signs the broker's (default: the "
+                 "system's CA store)")
+      ->needs(mqtt);
+  auto* mqtt_cert = app.add_option("--mqtt-cert", o.mqtt_tls.cert_file,
+                                   "For mqtts://: modtap's client certificate (PEM), where the "
+                                   "broker asks for one")
+                        ->needs(mqtt);
+  app.add_option("--mqtt-key", o.mqtt_tls.key_file,
+                 "For mqtts://: the client certificate's private key (PEM)")
+      ->needs(mqtt_cert);
+  app.add_flag("--mqtt-insecure", o.mqtt_tls.insecure,
+               "For mqtts:// in tests only: do not check the broker's name against its "
+               "certificate")
+      ->needs(mqtt);
   app.add_option("--mqtt-interval", o.mqtt_interval_s,
                  "Seconds: a register at most this often, the health summary this often "
                  "(at least 1 s); 0 sends every change at once (default 10)")

@@ -23,6 +23,7 @@
 #include "output/csv_sink.hpp"
 #include "output/explain_sink.hpp"
 #include "output/metrics.hpp"
+#include "output/mosquitto_broker.hpp"
 #include "output/mqtt_publisher.hpp"
 #include "output/output.hpp"
 #include "output/pcapng_sink.hpp"
@@ -82,6 +83,8 @@ struct RunOptions {
   double mqtt_interval_s = 10;
   std::string mqtt_bus;
   std::string mqtt_discovery;            // Home Assistant's discovery prefix; empty: no discovery
+  output::MqttTls mqtt_tls;              // mqtts://: --mqtt-ca, --mqtt-cert, --mqtt-key
+  std::string mqtt_password_file;        // the password, kept off the command line
   std::vector<std::string> autostop;     // -a duration:S, filesize:KB, frames:N
   std::vector<std::string> ring_buffer;  // -b duration:S, filesize:KB, files:N
   // Say on standard error which port is listened to, and keep a status line there (not to

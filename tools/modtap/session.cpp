@@ -1,7 +1,9 @@
 #include "tools/modtap/session.hpp"
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -91,6 +93,25 @@ std::unique_ptr<captures::RawRecorder> raw_recorder(const RunOptions& o,
   return std::make_unique<captures::RawRecorder>(o.save_raw, channels, ring);
 }
 
+// The MQTT password: from --mqtt-password-file or MODTAP_MQTT_PASSWORD, where `ps` and a
+// unit file do not show it; one in the URL still works, with a warning.
+std::string mqtt_password(const RunOptions& o, const output::MqttUrl& url) {
+  if (!o.mqtt_password_file.empty()) {
+    std::ifstream file(o.mqtt_password_file);
+    std::string password;
+    if (!file || !std::getline(file, password))
+      throw std::runtime_error(fmt::format(
+          "--mqtt-password-file {}: cannot read a password from it", o.mqtt_password_file));
+    return password;
+  }
+  if (const char* password = std::getenv("MODTAP_MQTT_PASSWORD")) return password;
+  if (!url.password.empty())
+    fmt::print(stderr,
+               "modtap: warning: the --mqtt URL holds a password, which every local user sees in "
+               "the process list; give it with --mqtt-password-file or MODTAP_MQTT_PASSWORD\n");
+  return url.password;
+}
+
 }  // namespace
 
 // --mqtt: the publisher and its broker, connected. A file read waits for the broker and fails
@@ -99,7 +120,8 @@ std::unique_ptr<captures::RawRecorder> raw_recorder(const RunOptions& o,
 class MqttOutput {
  public:
   MqttOutput(const RunOptions& o, Pipeline& pipeline, const std::string& bus, bool live) {
-    const output::MqttUrl url = output::parse_mqtt_url(o.mqtt_url);
+    output::MqttUrl url = output::parse_mqtt_url(o.mqtt_url);
+    url.password = mqtt_password(o, url);
     output::MqttOptions options;
     options.prefix = url.prefix;
     options.bus = o.mqtt_bus.empty() ? bus : o.mqtt_bus;
@@ -108,7 +130,8 @@ class MqttOutput {
     options.follow = output::parse_follow_or_all(o.follow, base);
     options.base = base;
     if (!o.mqtt_discovery.empty()) options.discovery_prefix = o.mqtt_discovery;
-    broker_ = std::make_unique<output::MosquittoBroker>(url, output::status_topic(options));
+    broker_ =
+        std::make_unique<output::MosquittoBroker>(url, o.mqtt_tls, output::status_topic(options));
     if (!broker_->wait_connected(live ? 3 : 10)) {
       const std::string why =
           fmt::format("{}: cannot connect: {}", broker_->name(), broker_->connect_error());
