@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "output/shared_library.hpp"
+#include "output/web_config.hpp"
 #include "protocol/records.hpp"
 
 namespace modtap::output {
@@ -184,6 +185,9 @@ struct Microhttpd {
   decltype(&::MHD_add_response_header) add_response_header;
   decltype(&::MHD_queue_response) queue_response;
   decltype(&::MHD_destroy_response) destroy_response;
+  decltype(&::MHD_basic_auth_get_username_password) basic_auth_get_username_password;
+  decltype(&::MHD_queue_basic_auth_fail_response) queue_basic_auth_fail_response;
+  decltype(&::MHD_free) free;
 };
 
 const Microhttpd& libmicrohttpd() {
@@ -196,6 +200,11 @@ const Microhttpd& libmicrohttpd() {
         .add_response_header = MODTAP_SYMBOL(library, MHD_add_response_header),
         .queue_response = MODTAP_SYMBOL(library, MHD_queue_response),
         .destroy_response = MODTAP_SYMBOL(library, MHD_destroy_response),
+        .basic_auth_get_username_password =
+            MODTAP_SYMBOL(library, MHD_basic_auth_get_username_password),
+        .queue_basic_auth_fail_response =
+            MODTAP_SYMBOL(library, MHD_queue_basic_auth_fail_response),
+        .free = MODTAP_SYMBOL(library, MHD_free),
     };
   }();
   return loaded;
@@ -213,8 +222,21 @@ MHD_Result respond(MHD_Connection* connection, unsigned status, std::string_view
   return queued;
 }
 
+// 401 with the realm, and nothing of the metrics.
+MHD_Result refuse(MHD_Connection* connection) {
+  const std::string_view body = "modtap's metrics need a user and password\n";
+  MHD_Response* response = libmicrohttpd().create_response_from_buffer(
+      body.size(), const_cast<char*>(body.data()), MHD_RESPMEM_PERSISTENT);
+  if (!response) return MHD_NO;
+  const MHD_Result queued =
+      libmicrohttpd().queue_basic_auth_fail_response(connection, "modtap metrics", response);
+  libmicrohttpd().destroy_response(response);
+  return queued;
+}
+
 MHD_Result answer(void* server, MHD_Connection* connection, const char* url, const char* method,
                   const char*, const char*, size_t*, void**) {
+  if (!static_cast<MetricsServer*>(server)->admits(connection)) return refuse(connection);
   if (std::string_view(method) != MHD_HTTP_METHOD_GET &&
       std::string_view(method) != MHD_HTTP_METHOD_HEAD)
     return respond(connection, MHD_HTTP_METHOD_NOT_ALLOWED, "text/plain", "GET only\n");
@@ -270,14 +292,22 @@ struct MetricsServer::Daemon {
   }
 };
 
-MetricsServer::MetricsServer(const std::string& address, std::function<std::string()> render)
-    : render_(std::move(render)), daemon_(std::make_unique<Daemon>()) {
+MetricsServer::MetricsServer(const std::string& address, std::function<std::string()> render,
+                             WebConfig config)
+    : render_(std::move(render)), config_(std::move(config)), daemon_(std::make_unique<Daemon>()) {
   bool ipv6 = false;
   const int fd = listen_on(address, ipv6);
   unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD;
   if (ipv6) flags |= MHD_USE_IPv6;
-  daemon_->daemon = libmicrohttpd().start_daemon(flags, 0, nullptr, nullptr, &answer, this,
-                                                 MHD_OPTION_LISTEN_SOCKET, fd, MHD_OPTION_END);
+  if (config_.tls()) {
+    daemon_->daemon = libmicrohttpd().start_daemon(
+        flags | MHD_USE_TLS, 0, nullptr, nullptr, &answer, this, MHD_OPTION_LISTEN_SOCKET, fd,
+        MHD_OPTION_HTTPS_MEM_KEY, config_.key_pem.c_str(), MHD_OPTION_HTTPS_MEM_CERT,
+        config_.cert_pem.c_str(), MHD_OPTION_END);
+  } else {
+    daemon_->daemon = libmicrohttpd().start_daemon(flags, 0, nullptr, nullptr, &answer, this,
+                                                   MHD_OPTION_LISTEN_SOCKET, fd, MHD_OPTION_END);
+  }
   if (!daemon_->daemon) {
     close(fd);
     throw std::runtime_error(fmt::format("--metrics {}: the HTTP server did not start", address));
@@ -285,5 +315,26 @@ MetricsServer::MetricsServer(const std::string& address, std::function<std::stri
 }
 
 MetricsServer::~MetricsServer() = default;
+
+// bcrypt takes tens of milliseconds by design; Prometheus sends the same user and password at
+// every scrape, so the pair that last matched is kept and compared as it is.
+bool MetricsServer::admits(MHD_Connection* connection) {
+  if (config_.users.empty()) return true;
+  char* password = nullptr;
+  char* user = libmicrohttpd().basic_auth_get_username_password(connection, &password);
+  bool admitted = false;
+  if (user && password) {
+    const auto it = config_.users.find(user);
+    std::lock_guard lock(verified_mutex_);
+    std::string& verified = verified_[user];
+    if (it != config_.users.end() && (verified.empty() || verified != password) &&
+        password_matches(password, it->second))
+      verified = password;
+    admitted = it != config_.users.end() && !verified.empty() && verified == password;
+  }
+  if (user) libmicrohttpd().free(user);
+  if (password) libmicrohttpd().free(password);
+  return admitted;
+}
 
 }  // namespace modtap::output

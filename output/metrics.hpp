@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <span>
@@ -15,6 +16,9 @@
 
 #include "analysis/bus_problems.hpp"
 #include "analysis/bus_statistics.hpp"
+#include "output/web_config.hpp"
+
+struct MHD_Connection;
 
 namespace modtap::output {
 
@@ -66,18 +70,25 @@ class SharedStatistics final : public RecordSink {
 // An HTTP server (libmicrohttpd, on its own thread) that answers GET /metrics with what
 // `render` returns. `address` is HOST:PORT, [IPV6]:PORT, or :PORT for every interface.
 // Throws std::runtime_error naming the address when it cannot listen there.
+// With a WebConfig: HTTPS, and only its users (HTTP basic authentication) get an answer.
 class MetricsServer {
  public:
-  MetricsServer(const std::string& address, std::function<std::string()> render);
+  MetricsServer(const std::string& address, std::function<std::string()> render,
+                WebConfig config = {});
   ~MetricsServer();
   MetricsServer(const MetricsServer&) = delete;
   MetricsServer& operator=(const MetricsServer&) = delete;
 
   const std::function<std::string()>& render() const { return render_; }
+  // Whether the request's user and password are one of the configuration's (all, without users).
+  bool admits(MHD_Connection* connection);
 
  private:
   struct Daemon;
   std::function<std::string()> render_;
+  WebConfig config_;
+  std::mutex verified_mutex_;
+  std::map<std::string, std::string> verified_;  // the password that last matched, per user
   std::unique_ptr<Daemon> daemon_;
 };
 

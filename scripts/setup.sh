@@ -9,7 +9,7 @@ cd "$(dirname "$0")/.."
 # To build: the compiler, CMake and the libraries modtap links or loads (libmicrohttpd and
 # libmosquitto are loaded when --metrics or --mqtt asks, their headers used at build time).
 # To run: sigrok-cli reads logic-analyzer captures.
-packages=(cmake g++ make pkg-config libfmt-dev libpcap-dev libcli11-dev libyaml-dev
+packages=(cmake g++ make pkg-config libfmt-dev libpcap-dev libcli11-dev libyaml-dev libcrypt-dev
           libmicrohttpd-dev libmosquitto-dev sigrok-cli ${EXTRA_PACKAGES:-})
 missing=()
 for p in "${packages[@]}"; do

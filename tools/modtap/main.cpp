@@ -177,9 +177,14 @@ void add_output_options(CLI::App& app, RunOptions& o, Command& command) {
       "How text, CSV, statistics and the report number registers: hex (2502H, as the "
       "drives' manuals), 0 (0-based decimal, as on the wire), 1 (1-based, as mbpoll), "
       "4xxxx (Modicon: 40001 is holding register 0); --follow reads numbers the same way");
-  app.add_option("--metrics", o.metrics_address,
-                 "Serve bus-health metrics for Prometheus on http://ADDR:PORT/metrics while "
-                 "running (ADDR:PORT, [IPV6]:PORT, or :PORT for every interface)");
+  auto* metrics = app.add_option(
+      "--metrics", o.metrics_address,
+      "Serve bus-health metrics for Prometheus on http://ADDR:PORT/metrics while running "
+      "(ADDR:PORT, [IPV6]:PORT, or :PORT for every interface)");
+  app.add_option("--metrics-web-config", o.metrics_web_config,
+                 "HTTPS and users with bcrypt passwords for --metrics, in the Prometheus "
+                 "exporter toolkit's web configuration format (docs/monitoring.md)")
+      ->needs(metrics);
   auto* mqtt = app.add_option(
       "--mqtt", o.mqtt_url,
       "Publish register values (retained, on change), a health summary and an "

@@ -79,6 +79,7 @@ struct RunOptions {
   std::string follow;
   RegisterBase register_base = RegisterBase::hex;
   std::string metrics_address;
+  std::string metrics_web_config;  // HTTPS and users, in the Prometheus exporter toolkit's format
   std::string mqtt_url;
   double mqtt_interval_s = 10;
   std::string mqtt_bus;

@@ -76,14 +76,17 @@ std::unique_ptr<output::MetricsServer> serve_metrics(const RunOptions& o, Pipeli
                                                      const output::PortHealth& ports) {
   if (o.metrics_address.empty()) return nullptr;
   output::SharedStatistics& shared = *pipeline.shared_statistics();
-  return std::make_unique<output::MetricsServer>(o.metrics_address, [&shared, &pipeline, &ports] {
+  auto render = [&shared, &pipeline, &ports] {
     fmt::memory_buffer text;
     shared.read([&] {
       output::append_metrics(text, MODTAP_VERSION, *pipeline.statistics(), pipeline.problems(),
                              ports);
     });
     return fmt::to_string(text);
-  });
+  };
+  output::WebConfig web;
+  if (!o.metrics_web_config.empty()) web = output::read_web_config(o.metrics_web_config);
+  return std::make_unique<output::MetricsServer>(o.metrics_address, render, std::move(web));
 }
 
 std::unique_ptr<captures::RawRecorder> raw_recorder(const RunOptions& o,
