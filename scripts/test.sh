@@ -9,7 +9,7 @@ cd "$(dirname "$0")/.."
 export EXTRA_PACKAGES="libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
   nlohmann-json3-dev python3 python3-pil python3-pymodbus libmodbus-dev mbpoll tshark wireshark
   xvfb chromium prometheus mosquitto mosquitto-clients strace systemd jpnevulator
-  help2man dpkg-dev lintian bash-completion openssl"
+  help2man dpkg-dev lintian bash-completion openssl curl"
 # Configured for /usr so that the package test can build a .deb from this build.
 export CMAKE_ARGS="-DMODTAP_TESTS=ON -DMODTAP_BENCHMARKS=ON -DCMAKE_INSTALL_PREFIX=/usr"
 if [ "${1:-}" = "--sanitize" ]; then
