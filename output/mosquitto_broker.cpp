@@ -177,7 +177,11 @@ MosquittoBroker::~MosquittoBroker() {
 void MosquittoBroker::on_connect(mosquitto* client, void* self, int code) {
   auto& broker = *static_cast<MosquittoBroker*>(self);
   if (code != 0) {
-    broker.refused_ = code;
+    {
+      std::lock_guard lock(broker.mutex_);
+      broker.refused_ = code;
+    }
+    broker.changed_.notify_all();
     return;
   }
   libmosquitto().publish(client, nullptr, broker.status_topic_.c_str(),
@@ -203,8 +207,11 @@ void MosquittoBroker::on_disconnect(mosquitto*, void* self, int) {
 void MosquittoBroker::on_log(mosquitto*, void* self, int level, const char* message) {
   if (!(level & MOSQ_LOG_ERR) || !message) return;
   auto& broker = *static_cast<MosquittoBroker*>(self);
-  std::lock_guard lock(broker.mutex_);
-  broker.log_error_ = message;
+  {
+    std::lock_guard lock(broker.mutex_);
+    broker.log_error_ = message;
+  }
+  broker.changed_.notify_all();
 }
 
 void MosquittoBroker::on_publish(mosquitto*, void* self, int message_id) {
@@ -234,8 +241,12 @@ void MosquittoBroker::count_sent(int message_id) {
 
 bool MosquittoBroker::wait_connected(double seconds) {
   std::unique_lock lock(mutex_);
-  return changed_.wait_for(lock, std::chrono::duration<double>(seconds),
-                           [this] { return connected_.load(); });
+  // A broker that refused modtap, or a TLS handshake that failed, will say the same again:
+  // no use waiting for it. A broker not there yet may still come.
+  changed_.wait_for(lock, std::chrono::duration<double>(seconds), [this] {
+    return connected_ || refused_ || log_error_.find("OpenSSL Error") != std::string::npos;
+  });
+  return connected_;
 }
 
 std::string MosquittoBroker::connect_error() const {

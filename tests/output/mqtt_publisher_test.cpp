@@ -280,7 +280,7 @@ TEST(MqttPublisher, TopicLevelsCarryNoWildcardsOrSeparators) {
   EXPECT_EQ(topic_level(""), "_");
 }
 
-TEST(MqttUrl, ReadsHostPortCredentialsAndPrefix) {
+TEST(MqttUrl, ReadsSchemeHostPortCredentialsAndPrefix) {
   const MqttUrl url = parse_mqtt_url("mqtt://me:secret@broker.local:1884/site/a/");
   EXPECT_EQ(url.host, "broker.local");
   EXPECT_EQ(url.port, 1884);
@@ -291,7 +291,14 @@ TEST(MqttUrl, ReadsHostPortCredentialsAndPrefix) {
   EXPECT_EQ(plain.host, "::1");
   EXPECT_EQ(plain.port, 1883);
   EXPECT_EQ(plain.prefix, "modtap");
-  for (const char* bad : {"tcp://x", "mqtt://", "mqtt://x:0", "mqtt://x:70000", "mqtt://x:1a"})
+  EXPECT_FALSE(plain.tls);
+  const MqttUrl tls = parse_mqtt_url("mqtts://me@broker.plant/p");
+  EXPECT_TRUE(tls.tls);
+  EXPECT_EQ(tls.port, 8883);
+  EXPECT_EQ(tls.host, "broker.plant");
+  EXPECT_EQ(parse_mqtt_url("mqtts://broker.plant:18883").port, 18883);
+  for (const char* bad : {"tcp://x", "mqtt://", "mqtt://x:0", "mqtt://x:70000", "mqtt://x:1a",
+                          "mqtts://", "mqttss://x"})
     EXPECT_THROW(parse_mqtt_url(bad), std::invalid_argument) << bad;
 }
 
