@@ -316,25 +316,28 @@ MetricsServer::MetricsServer(const std::string& address, std::function<std::stri
 
 MetricsServer::~MetricsServer() = default;
 
-// bcrypt takes tens of milliseconds by design; Prometheus sends the same user and password at
-// every scrape, so the pair that last matched is kept and compared as it is.
 bool MetricsServer::admits(MHD_Connection* connection) {
   if (config_.users.empty()) return true;
   char* password = nullptr;
   char* user = libmicrohttpd().basic_auth_get_username_password(connection, &password);
-  bool admitted = false;
-  if (user && password) {
-    const auto it = config_.users.find(user);
-    std::lock_guard lock(verified_mutex_);
-    std::string& verified = verified_[user];
-    if (it != config_.users.end() && (verified.empty() || verified != password) &&
-        password_matches(password, it->second))
-      verified = password;
-    admitted = it != config_.users.end() && !verified.empty() && verified == password;
-  }
+  const bool admitted = user && password && verify(user, password);
   if (user) libmicrohttpd().free(user);
   if (password) libmicrohttpd().free(password);
   return admitted;
+}
+
+// bcrypt takes tens of milliseconds by design; Prometheus sends the same user and password at
+// every scrape, so the password that last matched a configured user is kept and compared as
+// it is. Only configured users get an entry: a stranger's names cannot grow the table.
+bool MetricsServer::verify(const std::string& user, std::string_view password) {
+  const auto it = config_.users.find(user);
+  if (it == config_.users.end()) return false;
+  std::lock_guard lock(verified_mutex_);
+  std::string& verified = verified_[it->first];
+  if (!verified.empty() && same_secret(verified, password)) return true;
+  if (!password_matches(password, it->second)) return false;
+  verified = password;
+  return true;
 }
 
 }  // namespace modtap::output

@@ -82,6 +82,7 @@ class MetricsServer {
   const std::function<std::string()>& render() const { return render_; }
   // Whether the request's user and password are one of the configuration's (all, without users).
   bool admits(MHD_Connection* connection);
+  bool verify(const std::string& user, std::string_view password);
 
  private:
   struct Daemon;

@@ -90,12 +90,13 @@ bool password_matches(std::string_view password, const std::string& hash) {
   const std::string given(password);
   const char* result = crypt_rn(given.c_str(), hash.c_str(), &data, sizeof data);
   if (!result || result[0] == '*') return false;
-  // Compared in full whatever differs first: the time says nothing of the hash.
-  const std::string_view computed(result);
-  if (computed.size() != hash.size()) return false;
+  return same_secret(result, hash);
+}
+
+bool same_secret(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
   unsigned char differ = 0;
-  for (size_t i = 0; i < hash.size(); ++i)
-    differ |= static_cast<unsigned char>(computed[i] ^ hash[i]);
+  for (size_t i = 0; i < a.size(); ++i) differ |= static_cast<unsigned char>(a[i] ^ b[i]);
   return differ == 0;
 }
 

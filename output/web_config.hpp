@@ -25,5 +25,8 @@ WebConfig read_web_config(const std::string& path);
 
 // Whether `password` is the one `hash` (bcrypt, checked by the system's crypt library) holds.
 bool password_matches(std::string_view password, const std::string& hash);
+// Whether two secrets are equal, compared in full whatever differs first: the time taken says
+// nothing of where they differ.
+bool same_secret(std::string_view a, std::string_view b);
 
 }  // namespace modtap::output
