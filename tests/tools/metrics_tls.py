@@ -10,7 +10,6 @@ usage: metrics_tls.py MODTAP BUS_SIMULATOR WORKDIR"""
 import json
 import os
 import shutil
-import socket
 import subprocess
 import sys
 import time
@@ -22,6 +21,9 @@ with warnings.catch_warnings():
     warnings.simplefilter("ignore", DeprecationWarning)
     import crypt
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from certificates import free_port, make_ca, make_certificate  # noqa: E402
+
 MODTAP, SIMULATOR, WORK = map(os.path.abspath, sys.argv[1:4])
 USER, PASSWORD = "prometheus", "scrape-me-not-in-clear"
 failures = []
@@ -30,16 +32,6 @@ failures = []
 def check(what, ok, detail=""):
     if not ok:
         failures.append(f"{what}: {detail}")
-
-
-def openssl(*args):
-    subprocess.run(["openssl", *args], check=True, capture_output=True, cwd=WORK)
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def fetch(url, user=None, password=None):
@@ -75,14 +67,8 @@ def prometheus_query(port, expression):
 
 shutil.rmtree(WORK, ignore_errors=True)
 os.makedirs(WORK)
-openssl("req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "2", "-subj", "/CN=test CA",
-        "-keyout", "ca.key", "-out", "ca.pem")
-openssl("req", "-newkey", "rsa:2048", "-nodes", "-subj", "/CN=localhost", "-keyout",
-        "metrics.key", "-out", "metrics.csr")
-with open(os.path.join(WORK, "san.ext"), "w") as f:
-    f.write("subjectAltName=DNS:localhost\n")
-openssl("x509", "-req", "-in", "metrics.csr", "-CA", "ca.pem", "-CAkey", "ca.key",
-        "-CAcreateserial", "-days", "2", "-extfile", "san.ext", "-out", "metrics.pem")
+make_ca(WORK, "ca")
+make_certificate(WORK, "metrics", "ca", dns_name="localhost")
 web_config = os.path.join(WORK, "web.yml")
 with open(web_config, "w") as f:
     hashed = crypt.crypt(PASSWORD, crypt.mksalt(crypt.METHOD_BLOWFISH, rounds=1024))

@@ -14,6 +14,9 @@ import subprocess
 import sys
 import time
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from certificates import free_port, make_ca, make_certificate  # noqa: E402
+
 MODTAP, SIMULATOR, WORK = map(os.path.abspath, sys.argv[1:4])
 PASSWORD = "s3cret-on-no-command-line"
 failures = []
@@ -24,31 +27,13 @@ def check(what, ok, detail=""):
         failures.append(f"{what}: {detail}")
 
 
-def openssl(*args):
-    subprocess.run(["openssl", *args], check=True, capture_output=True, cwd=WORK)
-
-
 def make_certificates():
-    """A CA, the broker's certificate for the name localhost signed by it, and another CA."""
-    for ca in ("ca", "other-ca"):
-        openssl("req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "2", "-subj",
-                f"/CN=modtap test {ca}", "-keyout", f"{ca}.key", "-out", f"{ca}.pem")
-    openssl("req", "-newkey", "rsa:2048", "-nodes", "-subj", "/CN=localhost",
-            "-keyout", "broker.key", "-out", "broker.csr")
-    with open(os.path.join(WORK, "san.ext"), "w") as f:
-        f.write("subjectAltName=DNS:localhost\n")
-    openssl("x509", "-req", "-in", "broker.csr", "-CA", "ca.pem", "-CAkey", "ca.key",
-            "-CAcreateserial", "-days", "2", "-extfile", "san.ext", "-out", "broker.pem")
-    openssl("req", "-newkey", "rsa:2048", "-nodes", "-subj", "/CN=modtap", "-keyout",
-            "client.key", "-out", "client.csr")
-    openssl("x509", "-req", "-in", "client.csr", "-CA", "ca.pem", "-CAkey", "ca.key",
-            "-CAcreateserial", "-days", "2", "-out", "client.pem")
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+    """A CA, the broker's certificate for the name localhost signed by it, another CA, and a
+    client certificate."""
+    make_ca(WORK, "ca")
+    make_ca(WORK, "other-ca")
+    make_certificate(WORK, "broker", "ca", dns_name="localhost")
+    make_certificate(WORK, "client", "ca")
 
 
 def start_broker(port, certificate_port):
