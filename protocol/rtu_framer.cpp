@@ -213,8 +213,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::broke_off_at_silence(const Reading&
 // the same block with new values begins as its echo would.)
 std::optional<RtuFramer::Verdict> RtuFramer::answer_read_as_request(const Reading& r) const {
   if (r.role != Role::request || !r.other || !first_after_request(r.at) ||
-      !awaited_.too_soon_for_retry(timeline_.start_time(r.at)) ||
-      awaited_.copies_request(from(r.at), r.length))
+      !too_soon_for_retry(r.at) || awaited_.copies_request(from(r.at), r.length))
     return std::nullopt;
   const uint8_t* p = at_ptr(r.at);
   const bool junk_as_request =
@@ -249,8 +248,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::request_inside_awaited_answer(const
 std::optional<RtuFramer::Verdict> RtuFramer::retry_and_glitch(const Reading& r) const {
   if (r.other && *r.other == Role::request && zero_glitches_common() &&
       at_ptr(r.at)[r.length - 1] == 0x00 && timeline_.after_quiet_line(r.at + r.length - 1) &&
-      awaited_.copies_request(from(r.at), r.length - 1) &&
-      !awaited_.too_soon_for_retry(timeline_.start_time(r.at)))
+      awaited_.copies_request(from(r.at), r.length - 1) && !too_soon_for_retry(r.at))
     return Verdict::other_reading;
   return std::nullopt;
 }
@@ -262,8 +260,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::retry_ending_in_zero(const Reading&
   if (!r.other || *r.other != Role::request || !awaited_.starts_request_copy(from(r.at), r.length))
     return std::nullopt;
   if (r.at + r.length == end_) return r.final ? std::nullopt : std::optional(Verdict::wait);
-  if (awaited_.copies_request(from(r.at), r.length + 1) &&
-      !awaited_.too_soon_for_retry(timeline_.start_time(r.at)))
+  if (awaited_.copies_request(from(r.at), r.length + 1) && !too_soon_for_retry(r.at))
     return Verdict::other_reading;
   return std::nullopt;
 }
@@ -279,7 +276,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::retry_ending_in_zero(const Reading&
 // talked over, `c7 07 31 c1 cd`; seed 1021).
 std::optional<RtuFramer::Verdict> RtuFramer::answer_copying_request(const Reading& r) const {
   if (!r.other || *r.other != Role::response || !awaited_.copies_request(from(r.at), r.length) ||
-      !awaited_.too_soon_for_retry(timeline_.start_time(r.at)))
+      !too_soon_for_retry(r.at))
     return std::nullopt;
   const uint64_t end = r.at + r.length;
   const auto awaited = awaited_.length(from(r.at));

@@ -110,6 +110,10 @@ class RtuFramer {
   void observe(uint64_t at, Role role, uint16_t length, ReadingOutcome outcome, Evidence why) const;
   std::optional<bool> cut_before_frame(uint64_t at, uint16_t length, bool final) const;
   bool first_after_request(uint64_t at) const;
+  // A copy of the pending request starting at `at` came before the master could time out.
+  bool too_soon_for_retry(uint64_t at) const {
+    return awaited_.too_soon_for_retry(timeline_.start_time(at));
+  }
   Match match_role(Role role, uint64_t at, bool final, int search) const;
   // The lengths in [first, limit] that give the bytes from `at` a good CRC, ascending.
   size_t good_lengths(uint64_t at, size_t first, size_t limit,
