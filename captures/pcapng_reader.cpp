@@ -159,6 +159,8 @@ void PcapngReader::interface_description() {
     if (comment.find("clock=per-byte") != std::string::npos) clock_ = ClockQuality::per_byte;
     if (comment.find("clock=none") != std::string::npos) clock_ = ClockQuality::none;
   }
+  if (const auto at = comment.find(" char_ns="); i.modtap && at != std::string::npos)
+    i.char_ns = std::strtoll(comment.c_str() + at + 9, nullptr, 10);
   ChannelRole role = ChannelRole::bus;
   if (i.modtap && comment.find("role=master") != std::string::npos) role = ChannelRole::master;
   if (i.modtap && comment.find("role=slave") != std::string::npos) role = ChannelRole::slave;
@@ -231,12 +233,16 @@ bool PcapngReader::packet(uint32_t type, Chunk& chunk) {
   if (bytes_.empty()) return false;
   const auto t_ns = static_cast<int64_t>(static_cast<__int128>(stamp) * 1'000'000'000 /
                                          static_cast<__int128>(i.ticks_per_second));
-  // modtap stamps a record at its first byte and says how long it lasted; other writers stamp a
-  // packet when its last byte was read, as every reader of a serial port does.
-  const auto duration_at = comment.find(" duration_ns=");
-  if (i.modtap && duration_at != std::string::npos) {
-    const int64_t duration = std::strtoll(comment.c_str() + duration_at + 13, nullptr, 10);
-    first_end_ns_ = t_ns + char_time_ns_;
+  // modtap stamps a record at its first byte and says how long it lasted where that was not its
+  // bytes at the line's speed; other writers stamp a packet when its last byte was read, as
+  // every reader of a serial port does.
+  if (i.modtap) {
+    const int64_t char_ns = i.char_ns > 0 ? i.char_ns : char_time_ns_;
+    const auto duration_at = comment.find(" duration_ns=");
+    const int64_t duration = duration_at != std::string::npos
+                                 ? std::strtoll(comment.c_str() + duration_at + 13, nullptr, 10)
+                                 : static_cast<int64_t>(bytes_.size()) * char_ns;
+    first_end_ns_ = t_ns + char_ns;
     chunk = {i.channel, first_end_ns_, std::span<const uint8_t>(bytes_).first(1),
              comment.find(" untimed_start=1") != std::string::npos};
     if (bytes_.size() > 1) {

@@ -35,6 +35,7 @@ class PcapngReader final : public ChunkSource {
     uint64_t ticks_per_second = 1'000'000;  // if_tsresol; microseconds unless it says
     uint16_t channel = 0;
     bool modtap = false;  // written by modtap: stamps mark a packet's first byte
+    int64_t char_ns = 0;  // a character's time, as modtap wrote it (0: not said)
   };
   bool read_block(uint32_t& type);       // its body in body_
   size_t read(void* into, size_t size);  // counts what it read in position_

@@ -51,6 +51,19 @@ captures::PacketDirection direction_of(Role role, ChannelRole channel) {
   return captures::PacketDirection::unknown;
 }
 
+// The role a reader takes a packet's direction for: a request goes out from the master.
+Role role_of(captures::PacketDirection direction) {
+  switch (direction) {
+    case captures::PacketDirection::outbound:
+      return Role::request;
+    case captures::PacketDirection::inbound:
+      return Role::response;
+    case captures::PacketDirection::unknown:
+      break;
+  }
+  return Role::unknown;
+}
+
 // " finding=NAME" for each finding in `bits`, as modtap.lua reads them.
 void append_findings(fmt::memory_buffer& out, uint32_t bits) {
   for_each_frame_finding(bits, [&](size_t slot) {
@@ -64,8 +77,6 @@ void append_findings(fmt::memory_buffer& out, uint32_t bits) {
 // Only the registers the model names: Wireshark's Modbus dissector shows every raw value, and
 // repeating them made a packet's comment kilobytes long (a read of 125 registers).
 void append_meaning(fmt::memory_buffer& out, const Meaning& meaning) {
-  put(out, " model=");  // literal pieces through fmt's compiled formats are a call each
-  put(out, meaning.model->name);
   for (const RegisterValue& reg : meaning.registers) {
     if (reg.name.empty()) continue;
     put(out, "\nregister ");
@@ -80,48 +91,51 @@ void append_meaning(fmt::memory_buffer& out, const Meaning& meaning) {
                    finding.text);
 }
 
-// The comment's fixed pieces, each made once so that a frame puts it in one copy: the words
-// after the index for each mode, role and check (" mode=rtu role=request check=ok
-// duration_ns="), and each function code's name (` function="Read Coils"`).
-struct CommentPieces {
-  static constexpr size_t roles = 3;
-  std::array<std::string, 2 * roles * 2> verdicts;
-  std::array<std::string, 256> functions;
+// Microseconds with three decimals: the nanoseconds, exactly.
+void put_microseconds(fmt::memory_buffer& out, int64_t ns) {
+  put_int(out, ns / 1000);
+  const auto rest = static_cast<int>(ns % 1000);
+  const char decimals[4] = {'.', static_cast<char>('0' + rest / 100),
+                            static_cast<char>('0' + rest / 10 % 10),
+                            static_cast<char>('0' + rest % 10)};
+  put(out, {decimals, 4});
+}
 
-  CommentPieces() {
-    for (const Mode mode : {Mode::rtu, Mode::ascii})
-      for (const Role role : {Role::request, Role::response, Role::unknown})
-        for (const bool ok : {false, true})
-          verdicts[verdicts_at(mode, role, ok)] =
-              fmt::format(" mode={} role={} check={} duration_ns=", to_string(mode),
-                          to_string(role), ok ? "ok" : "bad");
-    functions = texts_per_byte([](fmt::memory_buffer& out, uint8_t fc) {
-      if (const auto name = function_name(fc & 0x7F); !name.empty()) {
-        put(out, " function=\"");
-        put(out, name);
-        out.push_back('"');
-      }
-    });
+// The keys every record may carry, each only where it differs from what the reader assumes:
+// "modtap", the index and the mode first, the timing after the record's own keys.
+void append_head(fmt::memory_buffer& out, uint64_t index, Mode mode,
+                 const CommentDefaults& defaults) {
+  put(out, "modtap");
+  if (index != defaults.index + 1 || defaults.index == 0) {
+    put(out, " index=");
+    put_uint(out, index);
   }
-  static size_t verdicts_at(Mode mode, Role role, bool ok) {
-    return (static_cast<size_t>(mode) * roles + static_cast<size_t>(role)) * 2 + ok;
+  if (mode != Mode::rtu) {
+    put(out, " mode=");
+    put(out, to_string(mode));
   }
-};
+}
 
-const CommentPieces& comment_pieces() {
-  static const CommentPieces pieces;
-  return pieces;
+void append_timing(fmt::memory_buffer& out, int64_t duration_ns, size_t bytes, bool untimed_start,
+                   const CommentDefaults& defaults) {
+  if (defaults.char_ns == 0 || duration_ns != static_cast<int64_t>(bytes) * defaults.char_ns) {
+    put(out, " duration_ns=");
+    put_int(out, duration_ns);
+  }
+  if (untimed_start) put(out, " untimed_start=1");
 }
 
 }  // namespace
 
-void append_frame_comment(fmt::memory_buffer& out, const Frame& f) {
-  const CommentPieces& pieces = comment_pieces();
-  put(out, "modtap index=");
-  put_uint(out, f.index);
-  put(out, pieces.verdicts[CommentPieces::verdicts_at(f.mode, f.role, f.check_ok)]);
-  put_int(out, f.end_ns - f.t_ns);
-  if (f.untimed_start) put(out, " untimed_start=1");
+void append_frame_comment(fmt::memory_buffer& out, const Frame& f,
+                          const CommentDefaults& defaults) {
+  append_head(out, f.index, f.mode, defaults);
+  if (f.role != defaults.role) {
+    put(out, " role=");
+    put(out, to_string(f.role));
+  }
+  if (!f.check_ok) put(out, " check=bad");
+  append_timing(out, f.end_ns - f.t_ns, f.raw.size(), f.untimed_start, defaults);
   if (!f.check_ok && f.damage != Damage::cut)
     fmt::format_to(fmt::appender(out), FMT_COMPILE(" expected_check=0x{:0{}x}"), f.expected_check,
                    f.mode == Mode::rtu ? 4 : 2);
@@ -129,57 +143,63 @@ void append_frame_comment(fmt::memory_buffer& out, const Frame& f) {
     put(out, " damage=");
     put(out, to_string(f.damage));
   }
-  // Names from modtap's function-code table, so the plugin knows no function code itself.
-  if (f.adu.size() >= 2) put(out, pieces.functions[f.function()]);
   if (f.is_exception()) {
     put(out, " exception=");
     put_uint(out, f.adu[2]);
-    if (const auto name = exception_name_of(f); !name.empty()) {
+    if (const auto name = model_exception_meaning(f); !name.empty()) {
       put(out, " exception_name=\"");
       put(out, name);
       out.push_back('"');
     }
   }
-  if (f.request) {
+  // A response's request is the record before it unless this says otherwise.
+  if (f.request && (f.role != Role::response || *f.request + 1 != f.index)) {
     put(out, " request=");
     put_uint(out, *f.request);
+  } else if (!f.request && f.role == Role::response) {
+    put(out, " request=none");
   }
-  if (f.latency_ns) {  // microseconds with three decimals: the nanoseconds, exactly
+  if (f.latency_ns) {
     put(out, " latency_us=");
-    put_int(out, *f.latency_ns / 1000);
-    const auto ns = static_cast<int>(*f.latency_ns % 1000);
-    const char decimals[4] = {'.', static_cast<char>('0' + ns / 100),
-                              static_cast<char>('0' + ns / 10 % 10),
-                              static_cast<char>('0' + ns % 10)};
-    put(out, {decimals, 4});
+    put_microseconds(out, *f.latency_ns);
   }
   append_findings(out, f.findings);
+  // The model a slave's frames are read with changes seldom: said where it does.
+  const DeviceModel* model = f.meaning ? f.meaning->model : nullptr;
+  if (model != defaults.model) {
+    put(out, " model=");
+    put(out, model ? std::string_view(model->name) : "none");
+  }
   if (f.meaning) append_meaning(out, *f.meaning);
 }
 
-std::string frame_comment(const Frame& f) {
+std::string frame_comment(const Frame& f, const CommentDefaults& defaults) {
   fmt::memory_buffer out;
-  append_frame_comment(out, f);
+  append_frame_comment(out, f, defaults);
   return fmt::to_string(out);
 }
 
-void append_noise_comment(fmt::memory_buffer& out, const Noise& n) {
-  fmt::format_to(fmt::appender(out), FMT_COMPILE("modtap index={} mode={} noise={} duration_ns={}"),
-                 n.index, to_string(n.mode), to_string(n.reason), n.end_ns - n.t_ns);
-  if (n.untimed_start) put(out, " untimed_start=1");
+void append_noise_comment(fmt::memory_buffer& out, const Noise& n,
+                          const CommentDefaults& defaults) {
+  append_head(out, n.index, n.mode, defaults);
+  put(out, " noise=");
+  put(out, to_string(n.reason));
+  append_timing(out, n.end_ns - n.t_ns, n.raw.size(), n.untimed_start, defaults);
   if (n.request) fmt::format_to(fmt::appender(out), FMT_COMPILE(" request={}"), *n.request);
   append_findings(out, n.findings);
 }
 
-std::string noise_comment(const Noise& n) {
+std::string noise_comment(const Noise& n, const CommentDefaults& defaults) {
   fmt::memory_buffer out;
-  append_noise_comment(out, n);
+  append_noise_comment(out, n, defaults);
   return fmt::to_string(out);
 }
 
-std::string interface_comment(ChannelRole role, ClockQuality clock) {
-  return fmt::format("{} role={} clock={}", captures::pcapng::interface_convention, to_string(role),
-                     to_string(clock));
+std::string interface_comment(ChannelRole role, ClockQuality clock, int64_t char_ns) {
+  std::string comment = fmt::format("{} role={} clock={}", captures::pcapng::interface_convention,
+                                    to_string(role), to_string(clock));
+  if (char_ns > 0) comment += fmt::format(" char_ns={}", char_ns);
+  return comment;
 }
 
 PcapngSink::PcapngSink(captures::PcapngWriter& writer, const std::vector<ChannelInfo>& channels,
@@ -196,10 +216,11 @@ uint32_t PcapngSink::interface_for(uint16_t channel) {
                                                               : options_.dlt;
     const std::string name = c < channels_.size() ? channels_[c].name : "modtap";
     const ChannelRole role = c < channels_.size() ? channels_[c].role : ChannelRole::bus;
-    interface_of_channel_.push_back(static_cast<int>(writer_.add_interface(
-        dlt, name,
-        options_.link == PcapngLink::bare ? std::string()
-                                          : interface_comment(role, options_.clock))));
+    interface_of_channel_.push_back(static_cast<int>(
+        writer_.add_interface(dlt, name,
+                              options_.link == PcapngLink::bare
+                                  ? std::string()
+                                  : interface_comment(role, options_.clock, options_.char_ns))));
   }
   return static_cast<uint32_t>(interface_of_channel_[channel]);
 }
@@ -231,7 +252,10 @@ void PcapngSink::on_frame(const Frame& frame) {
   }
   if (frame.request) writer_.release(*frame.request);  // its outcome is known now
   comment_.clear();
-  append_frame_comment(comment_, frame);
+  const DeviceModel*& model = model_of_address_[frame.raw.empty() ? 0 : frame.raw[0]];
+  append_frame_comment(comment_, frame, {last_index_, role_of(direction), options_.char_ns, model});
+  last_index_ = frame.index;
+  model = frame.meaning ? frame.meaning->model : nullptr;
   std::span<const uint8_t> data = frame.raw;
   if (options_.link == PcapngLink::exported_pdu) {
     // mbrtu reads RTU only; ASCII frames go as data with their verdicts in the comment.
@@ -253,7 +277,8 @@ void PcapngSink::on_noise(const Noise& noise) {
   std::span<const uint8_t> data = noise.raw;
   if (options_.link == PcapngLink::exported_pdu) data = exported_pdu("data", true, noise.raw);
   comment_.clear();
-  append_noise_comment(comment_, noise);
+  append_noise_comment(comment_, noise, {last_index_, Role::unknown, options_.char_ns});
+  last_index_ = noise.index;
   writer_.write_packet(interface, noise.t_ns, data, captures::PacketDirection::unknown,
                        {comment_.data(), comment_.size()});
 }

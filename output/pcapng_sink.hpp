@@ -2,6 +2,7 @@
 // one interface per channel, the direction in epb_flags and the verdicts in a comment.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -11,6 +12,10 @@
 #include "captures/file_ring.hpp"
 #include "captures/pcapng_writer.hpp"
 #include "protocol/record_sink.hpp"
+
+namespace modtap {
+struct DeviceModel;
+}
 
 namespace modtap::output {
 
@@ -29,6 +34,9 @@ struct PcapngOptions {
   uint32_t master_port = 50200;
   // How well the source knew each byte's time: said in the file, so a reread times alike.
   ClockQuality clock = ClockQuality::per_chunk;
+  // A character's time on the line, said in each interface's comment: a record that lasted its
+  // bytes times this needs no duration of its own. 0 where the line's speed is not known.
+  int64_t char_ns = 0;
   // Someone reads the file as it grows (a port's capture into Wireshark's FIFO or a pipe):
   // every packet is flushed as it is written.
   bool live = false;
@@ -60,6 +68,9 @@ class PcapngSink final : public RecordSink {
   std::vector<int64_t> interface_of_channel_;  // -1 until its interface block is written
   std::vector<uint8_t> payload_;
   fmt::memory_buffer comment_;  // the packet's comment, its storage kept from frame to frame
+  uint64_t last_index_ = 0;     // the record the last packet held
+  // Per first byte (the address on the wire), the model its last frame was read with.
+  std::array<const DeviceModel*, 256> model_of_address_{};
   uint64_t packets_ = 0;
 };
 
@@ -95,15 +106,28 @@ class PcapngFiles final : public RecordSink {
   std::unique_ptr<PcapngSink> sink_;
 };
 
-// The comment modtap writes on a frame: "modtap key=value ...", parsed by modtap.lua.
-// What modtap says of each interface it writes: the time convention (pcapng_format.hpp),
-// the channel's role (a split tap) and the source's clock.
-std::string interface_comment(ChannelRole role, ClockQuality clock);
+// What a reader of modtap's pcapng knows of a packet before its comment (docs/pcapng.md): the
+// comment carries a key only where the record differs, so that it holds what Wireshark cannot
+// know and little else.
+struct CommentDefaults {
+  uint64_t index = 0;         // the record the packet before was (0: the file's first packet)
+  Role role = Role::unknown;  // the role the packet's direction says
+  int64_t char_ns = 0;        // a character's time on the line: a record lasts its bytes times this
+  const DeviceModel* model = nullptr;  // the model the last frame of this address was read with
+};
 
-std::string frame_comment(const Frame& frame);
-void append_frame_comment(fmt::memory_buffer& out, const Frame& frame);
-std::string noise_comment(const Noise& noise);
-void append_noise_comment(fmt::memory_buffer& out, const Noise& noise);
+// What modtap says of each interface it writes: the time convention (pcapng_format.hpp),
+// the channel's role (a split tap), the source's clock and a character's time (0: unknown).
+std::string interface_comment(ChannelRole role, ClockQuality clock, int64_t char_ns);
+
+// The comment modtap writes on a frame or noise record: "modtap key=value ...", then a line per
+// register and model finding; parsed by modtap.lua and by modtap's own pcapng reader.
+std::string frame_comment(const Frame& frame, const CommentDefaults& defaults = {});
+void append_frame_comment(fmt::memory_buffer& out, const Frame& frame,
+                          const CommentDefaults& defaults);
+std::string noise_comment(const Noise& noise, const CommentDefaults& defaults = {});
+void append_noise_comment(fmt::memory_buffer& out, const Noise& noise,
+                          const CommentDefaults& defaults);
 
 }  // namespace modtap::output
 

@@ -9,9 +9,11 @@
 -- paired. Modbus ASCII frames, which Wireshark has no dissector for, go the same way. With a
 -- device model (modtap --model, or a device that identified itself), each register's name,
 -- scaled value and unit, and the model's findings, come from modtap's one implementation of the
--- models, carried in the packet comment; so do the names of function and exception codes.
+-- models, carried in the packet comment. The names of function and exception codes are modtap's
+-- too: the build writes them into this file (the installed one, or build/plugins/wireshark/).
 --
--- Use: tshark -X lua_script:modtap.lua -r capture.pcapng (or install it: docs/wireshark.md).
+-- Use: tshark -X lua_script:build/plugins/wireshark/modtap.lua -r capture.pcapng (or install
+-- it: docs/wireshark.md).
 
 local modtap = Proto("modtap", "modtap serial Modbus")
 
@@ -64,47 +66,101 @@ modtap.experts = {bad_check, finding_expert, noise_expert, timeout_expert, excep
 local comment_field = Field.new("frame.comment")
 local mbtcp = Dissector.get("mbtcp")
 
+-- modtap's names of the function and exception codes, from its function-code table.
+local FUNCTION_NAMES, EXCEPTION_NAMES = {}, {}  -- filled in by the build (lua_names.cpp)
+
 -- Records are numbered by modtap, packets by Wireshark; they differ where records were left
--- out (-Y, a ring of files). Wireshark's first pass goes in order, which fills this in.
-local frame_of_record = {}
+-- out (-Y, a ring of files). A comment names its record only where it is not the one after the
+-- packet before's, so Wireshark's first pass, which goes in order, numbers them here.
+local frame_of_record, record_of_frame, last_record = {}, {}, 0
+-- The model a frame was read with is named where it changed for the frame's first byte (its
+-- address on the wire): the first pass carries it from frame to frame.
+local model_of_address, model_of_frame = {}, {}
 
 function modtap.init()  -- a new file, or everything dissected again
-  frame_of_record = {}
+  frame_of_record, record_of_frame, last_record = {}, {}, 0
+  model_of_address, model_of_frame = {}, {}
 end
 
--- "modtap index=3 mode=rtu role=response check=ok request=2 finding=... model=gd20", then a
--- line per register ("register 2502H frequency_command = 60.00 Hz") and per model finding
--- ("note read-only-write: ...") -> table
-local function verdicts()
-  local v = {findings = {}, registers = {}, notes = {}}
-  for _, c in ipairs({comment_field()}) do
-    local text = tostring(c.value)
-    if text:sub(1, 7) == "modtap " then
-      local first = text:match("^[^\n]*")
-      for key, value in first:gmatch('([%w_]+)="([^"]*)"') do v[key] = value end
-      for key, value in first:gmatch('([%w_]+)=([^"%s]%S*)') do
-        if key == "finding" then table.insert(v.findings, value) else v[key] = value end
-      end
-      for line in text:gmatch("\n([^\n]*)") do
-        local addr, name, value = line:match("^register (%x+)H (.-) = (.*)$")
-        if addr then
-          table.insert(v.registers, {addr = tonumber(addr, 16), name = name, value = value})
-        elseif line:sub(1, 5) == "note " then
-          table.insert(v.notes, line:sub(6))
-        end
-      end
+-- The comment's first line's "key=value" pairs (a value in quotes where it holds spaces) into
+-- v; a finding may come more than once.
+local function read_keys(line, v)
+  local at, size = 8, #line  -- after "modtap "
+  while at <= size do
+    local eq = line:find("=", at, true)
+    if not eq then return end
+    local key, value = line:sub(at, eq - 1), nil
+    if line:byte(eq + 1) == 34 then  -- '"'
+      local close = line:find('"', eq + 2, true) or size + 1
+      value, at = line:sub(eq + 2, close - 1), close + 2
+    else
+      local space = line:find(" ", eq + 1, true) or size + 1
+      value, at = line:sub(eq + 1, space - 1), space + 1
+    end
+    if key == "finding" then
+      v.findings = v.findings or {}
+      v.findings[#v.findings + 1] = value
+    else
+      v[key] = value
     end
   end
-  v.expected_check = v.expected_check or v.expected  -- the key's name in older files
+end
+
+-- "register 2502H frequency_command = 60.00 Hz" and "note read-only-write: ..." lines into v.
+local function read_meaning(text, from, v)
+  for line in text:sub(from):gmatch("[^\n]+") do
+    local addr, name, value = line:match("^register (%x+)H (.-) = (.*)$")
+    if addr then
+      v.registers = v.registers or {}
+      v.registers[#v.registers + 1] = {addr = tonumber(addr, 16), name = name, value = value}
+    elseif line:sub(1, 5) == "note " then
+      v.notes = v.notes or {}
+      v.notes[#v.notes + 1] = line:sub(6)
+    end
+  end
+end
+
+-- The record's verdicts: its comment (docs/pcapng.md), and what a key left out means. Most
+-- packets have no findings, registers or notes: they share one empty list.
+local ROLE_OF_DIRECTION = {[0] = "request", [1] = "response"}
+local NONE = {}
+local function verdicts(pinfo)
+  local v = {}
+  for _, c in ipairs({comment_field()}) do
+    local text = tostring(c.value)
+    if text:sub(1, 6) == "modtap" then
+      local line_end = text:find("\n", 1, true)
+      read_keys(line_end and text:sub(1, line_end - 1) or text, v)
+      if line_end then read_meaning(text, line_end + 1, v) end
+      v.modtap = true
+    end
+  end
+  v.findings, v.registers, v.notes = v.findings or NONE, v.registers or NONE, v.notes or NONE
+  if not v.modtap then return v end
+  local number = pinfo.number
+  if not pinfo.visited then
+    local index = tonumber(v.index) or last_record + 1
+    last_record, record_of_frame[number], frame_of_record[index] = index, index, number
+  end
+  v.index = record_of_frame[number]
+  v.mode = v.mode or "rtu"
+  if not v.noise then
+    v.role = v.role or ROLE_OF_DIRECTION[pinfo.p2p_dir] or "unknown"
+    v.check = v.check or "ok"
+    if v.role == "response" and v.request == nil then v.request = v.index - 1 end
+  end
+  v.request = v.request and tonumber(v.request)  -- "none": a response nobody asked for
   return v
 end
 
--- ':' hex pairs LRC CR LF -> the binary ADU (slave .. LRC), or nil.
-local function ascii_adu(tvb)
-  local text = tvb:raw()
-  local hex = text:match("^:(%x+)\r\n$")
-  if not hex or #hex % 2 ~= 0 or #hex < 6 then return nil end
-  return ByteArray.new(hex)
+local function carry_model(tvb, pinfo, v)
+  local number = pinfo.number
+  if not pinfo.visited then
+    local address = tvb:len() > 0 and tvb:raw(0, 1) or ""
+    if v.model then model_of_address[address] = v.model ~= "none" and v.model or nil end
+    model_of_frame[number] = model_of_address[address]
+  end
+  v.model = model_of_frame[number]
 end
 
 local function set_ports(pinfo, role)
@@ -116,7 +172,7 @@ local function set_ports(pinfo, role)
 end
 
 local function add_verdicts(tree, v, pinfo)
-  if v.index then tree:add(fields.index, tonumber(v.index)) end
+  if v.index then tree:add(fields.index, v.index) end
   if v.mode then tree:add(fields.mode, v.mode) end
   if v.role then tree:add(fields.role, v.role) end
   if v.check then
@@ -128,7 +184,7 @@ local function add_verdicts(tree, v, pinfo)
     end
   end
   if v.expected_check then tree:add(fields.expected_check, v.expected_check) end
-  local request = v.request and frame_of_record[tonumber(v.request)]
+  local request = v.request and frame_of_record[v.request]
   if request and request < pinfo.number then tree:add(fields.request, request) end
   if v.latency_us then tree:add(fields.latency, tonumber(v.latency_us)) end
   if v.timeout then
@@ -155,47 +211,56 @@ local function add_verdicts(tree, v, pinfo)
   end
 end
 
--- The frame's ADU without its check (binary, also for ASCII) and the source's bytes, or nil.
+-- The frame's ADU without its check (an ASCII frame's decoded) as a string of bytes, and
+-- whether the frame is ASCII; no ADU where too little of it came. Strings, not ByteArrays:
+-- each ByteArray call crosses into C, and these run for every packet.
 local function adu_of(tvb, v)
-  if v.mode == "ascii" or (not v.mode and tvb:len() > 0 and tvb(0, 1):uint() == 0x3A) then
-    local adu = ascii_adu(tvb)
-    if not adu then return nil end
+  local size = tvb:len()
+  if v.mode == "ascii" then
+    local hex = tvb:raw():match("^:(%x+)\r\n$")
+    if not hex or #hex % 2 ~= 0 or #hex < 6 then return nil, true end
+    local adu = (hex:gsub("%x%x", function(pair) return string.char(tonumber(pair, 16)) end))
     if v.damage == "cut" then return adu, true end  -- ended before its LRC
-    return adu:subset(0, adu:len() - 1), true
+    return adu:sub(1, -2), true
   end
   if v.damage == "cut" then  -- no check at its end: what there is names slave and function
-    if tvb:len() < 2 then return nil end
-    return tvb:bytes(), false
+    if size < 2 then return nil, false end
+    return tvb:raw(), false
   end
-  if tvb:len() < 4 then return nil end
-  return tvb:bytes():subset(0, tvb:len() - 2), false
+  if size < 4 then return nil, false end
+  return tvb:raw(0, size - 2), false
 end
 
--- Slave, function, exception: the fields every frame has, and the words of the Info line.
-local function add_identity(tree, adu, v)
-  local slave, fc = adu:get_index(0), adu:get_index(1)
-  tree:add(fields.slave, slave)
-  tree:add(fields.fc, bit32.band(fc, 0x7F))
-  local name = v["function"] or string.format("Function 0x%02X", bit32.band(fc, 0x7F))
-  tree:add(fields.func, name)
-  if v.exception then
-    local text = v.exception_name or "not a standard exception"
-    for _, note in ipairs(v.notes) do  -- a vendor's meaning, from the device model
-      local vendor = note:match("^exception: (vendor .*)$")
-      if vendor then text = vendor end
-    end
-    tree:add(fields.exception, tonumber(v.exception))
-    tree:add(fields.exception_name, text):add_proto_expert_info(exception_expert,
-      "Exception " .. v.exception .. ": " .. text)
-    return slave, fc, name, text
+-- Slave, function and its name, and the exception's name: the words of the Info line.
+local function identity(adu, v)
+  local slave, fc = adu:byte(1), bit32.band(adu:byte(2), 0x7F)
+  local name = FUNCTION_NAMES[fc] or string.format("Function 0x%02X", fc)
+  if not v.exception then return slave, fc, name, nil end
+  local text = v.exception_name or EXCEPTION_NAMES[tonumber(v.exception)]
+               or "not a standard exception"
+  for _, note in ipairs(v.notes) do  -- a vendor's meaning, from the device model
+    local vendor = note:match("^exception: (vendor .*)$")
+    if vendor then text = vendor end
   end
-  return slave, fc, name, nil
+  return slave, fc, name, text
+end
+
+-- The fields every frame has.
+local function add_identity(tree, v, slave, fc, name, exception)
+  tree:add(fields.slave, slave)
+  tree:add(fields.fc, fc)
+  tree:add(fields.func, name)
+  if exception then
+    tree:add(fields.exception, tonumber(v.exception))
+    tree:add(fields.exception_name, exception):add_proto_expert_info(exception_expert,
+      "Exception " .. v.exception .. ": " .. exception)
+  end
 end
 
 local ROLE_WORDS = {request = "Request ", response = "Response", unknown = "Unknown "}
 
 local function info_line(v, slave, fc, name, exception)
-  local code = v["function"] and string.format(" (%d)", bit32.band(fc, 0x7F)) or ""
+  local code = FUNCTION_NAMES[fc] and string.format(" (%d)", fc) or ""
   local words = {string.format("%s slave %-3d %s%s", ROLE_WORDS[v.role] or "Frame   ", slave, name, code)}
   if exception then
     local vendor = exception:match("^vendor ")
@@ -215,21 +280,24 @@ end
 
 -- The PDU behind a Modbus/TCP header: transaction = the request's record number.
 local function as_modbus_tcp(adu, v)
-  local pair = tonumber(v.role == "response" and v.request or v.index) or 0
-  local length = adu:len()  -- unit and PDU
-  local header = ByteArray.new()
-  header:set_size(6)
-  header:set_index(0, bit32.band(bit32.rshift(pair, 8), 0xFF))
-  header:set_index(1, bit32.band(pair, 0xFF))
-  header:set_index(4, bit32.band(bit32.rshift(length, 8), 0xFF))
-  header:set_index(5, bit32.band(length, 0xFF))
-  header:append(adu)
-  return header
+  local pair = (v.role == "response" and v.request or v.index) or 0
+  local header = string.char(bit32.band(bit32.rshift(pair, 8), 0xFF), bit32.band(pair, 0xFF), 0, 0,
+                             bit32.rshift(#adu, 8), bit32.band(#adu, 0xFF))
+  return ByteArray.new(header .. adu, true)
+end
+
+-- The ASCII frame's decoded bytes and its LRC.
+local function add_ascii(tree, tvb, adu, v)
+  local item = tree:add(tvb(), "Modbus ASCII")
+  if #adu > 2 then
+    item:add(fields.data, ByteArray.new(adu, true):tvb("Modbus ASCII, decoded")(2, #adu - 2))
+  end
+  if v.damage ~= "cut" then item:add(fields.lrc, tonumber(tvb:raw():sub(-4, -3), 16)) end
 end
 
 function modtap.dissector(tvb, pinfo, tree)
-  local v = verdicts()
-  if v.index and not pinfo.visited then frame_of_record[tonumber(v.index)] = pinfo.number end
+  local v = verdicts(pinfo)
+  if v.modtap and not v.noise then carry_model(tvb, pinfo, v) end
   local subtree = tree:add(modtap, tvb(), "modtap")
   add_verdicts(subtree, v, pinfo)
 
@@ -244,13 +312,9 @@ function modtap.dissector(tvb, pinfo, tree)
     pinfo.cols.info = "Frame cut before its function code, " .. tvb:len() .. " byte(s)"
     return
   end
-  if ascii then
-    local n = adu:len()
-    local item = subtree:add(tvb(), "Modbus ASCII")
-    if n > 2 then item:add(fields.data, adu:tvb("Modbus ASCII, decoded")(2, n - 2)) end
-    if v.damage ~= "cut" then item:add(fields.lrc, tonumber(tvb:raw():sub(-4, -3), 16)) end
-  end
-  local slave, fc, name, exception = add_identity(subtree, adu, v)
+  local slave, fc, name, exception = identity(adu, v)
+  if ascii then add_ascii(subtree, tvb, adu, v) end
+  add_identity(subtree, v, slave, fc, name, exception)
   if v.damage ~= "cut" then  -- half a PDU would only read as malformed
     set_ports(pinfo, v.role)
     mbtcp:call(as_modbus_tcp(adu, v):tvb("Modbus PDU"), pinfo, tree)

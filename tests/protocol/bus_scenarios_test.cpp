@@ -161,6 +161,7 @@ TEST_P(BusScenario, WrittenAsPcapngReadsBackToTheSameRecords) {
     output::PcapngOptions options;
     // As main does: the clock of the source (pcap and hex log files time each packet).
     options.clock = s.via == Via::direct ? busgen::clock_of(s.delivery) : ClockQuality::per_chunk;
+    options.char_ns = s.bus.format.char_time_ns();  // a record lasting its bytes says no duration
     output::PcapngSink sink(writer, channels, options);
     first = run(capture, s, &sink);
     writer.close();

@@ -1014,8 +1014,10 @@ TEST(Cli, AFullDeviceIsAnErrorNamingTheFileNotASilentSuccess) {
 TEST(Cli, ADiskThatFillsLeavesAPcapngThatReadsUpToItsLastCompleteBlock) {
   const std::string capture = many_requests("disk-fills.raw", 2000);
   const auto cut = (std::filesystem::temp_directory_path() / "disk-fills.pcapng").string();
-  // The shell's file-size limit stands in for a full disk: writes past it fail with EFBIG.
-  const std::string limited = "sh -c 'trap \"\" XFSZ; ulimit -f 64; " + std::string(MODTAP_BINARY) +
+  // The shell's file-size limit stands in for a full disk: writes past it fail with EFBIG. Its
+  // 63 blocks of 512 bytes end inside a packet's block (at 64, the alike packets here ended
+  // exactly there).
+  const std::string limited = "sh -c 'trap \"\" XFSZ; ulimit -f 63; " + std::string(MODTAP_BINARY) +
                               " -r " + capture + " --baud 9600 -w " + cut + "' 2>&1";
   FILE* pipe = popen(limited.c_str(), "r");
   char message[512] = {};

@@ -19,6 +19,9 @@ import sys
 
 MODTAP, BUSGEN, LUA, SAMPLES, WORK = sys.argv[1:6]
 TSHARK = "tshark"
+# The modtap profile, beside the plugin's source.
+PROFILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "plugins",
+                       "wireshark", "profile")
 FIELDS = ["frame.number", "modtap.role", "modtap.check", "modtap.request", "modtap.slave",
           "modtap.fc", "modtap.function", "modtap.exception", "mbtcp.unit_id",
           "modbus.func_code", "modbus.exception_code", "modbus.request_frame",
@@ -161,7 +164,7 @@ def profile_columns():
     home = os.path.join(WORK, "home")
     profile = os.path.join(home, ".config", "wireshark", "profiles", "modtap")
     shutil.rmtree(home, ignore_errors=True)
-    shutil.copytree(os.path.join(os.path.dirname(os.path.abspath(LUA)), "profile"), profile)
+    shutil.copytree(PROFILE, profile)
     env = dict(os.environ, HOME=home)
     pcapng = os.path.join(WORK, "frames.pcapng")
     records = [r for r in modtap_records(os.path.join(WORK, "frames.pcap"), [])

@@ -9,7 +9,7 @@ checked here. The screenshots are kept in WORK_DIR to look at.
 
 Exits 77 (ctest: skipped) with a message when no X server can be started.
 
-usage: wireshark_gui.py MODTAP BUSGEN PLUGIN_DIR WORK_DIR EXTCAP"""
+usage: wireshark_gui.py MODTAP BUSGEN PLUGIN_DIR WORK_DIR EXTCAP MODTAP_LUA"""
 import os
 import shutil
 import subprocess
@@ -23,7 +23,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from extcap_link import link_extcap, preference_prefix  # noqa: E402
 from modbus import with_crc  # noqa: E402
 
-MODTAP, BUSGEN, PLUGIN_DIR, WORK, EXTCAP = map(os.path.abspath, sys.argv[1:6])
+MODTAP, BUSGEN, PLUGIN_DIR, WORK, EXTCAP, MODTAP_LUA = map(os.path.abspath, sys.argv[1:7])
 WIDTH, HEIGHT = 1600, 1000
 
 # The profile's coloring rules (plugins/wireshark/profile/colorfilters), 16-bit to 8-bit.
@@ -67,7 +67,7 @@ def user_home():
     shutil.copytree(os.path.join(PLUGIN_DIR, "profile"), os.path.join(config, "profiles", "modtap"))
     plugins = os.path.join(home, ".local", "lib", "wireshark", "plugins")
     os.makedirs(plugins)
-    shutil.copy(os.path.join(PLUGIN_DIR, "modtap.lua"), plugins)
+    shutil.copy(MODTAP_LUA, plugins)
     with open(os.path.join(config, "recent_common"), "w") as f:
         f.write(f"gui.geometry_main_x: 0\ngui.geometry_main_y: 0\n"
                 f"gui.geometry_main_width: {WIDTH}\ngui.geometry_main_height: {HEIGHT}\n")

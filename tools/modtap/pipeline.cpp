@@ -173,15 +173,17 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
         catalog_.all(), choice, clock, watch_follow(o, before_filter()), needs.unnamed_registers);
   diagnostics_ =
       std::make_unique<BusDiagnostics>(format, clock, after_diagnostics(), read_jitter_ns(o));
-  if (!o.write_file.empty()) write_pcapng(o, ring, channels, clock);
+  if (!o.write_file.empty()) write_pcapng(o, ring, channels, format, clock);
 }
 
 void Pipeline::write_pcapng(const RunOptions& o, const captures::RingLimits& ring,
-                            const std::vector<ChannelInfo>& channels, ClockQuality clock) {
+                            const std::vector<ChannelInfo>& channels, const SerialFormat& format,
+                            ClockQuality clock) {
   output::PcapngOptions options;
   options.link = o.link;
   options.dlt = o.dlt;
   options.clock = clock;
+  options.char_ns = format.char_time_ns();
   // On a port, someone may read the file as it grows (Wireshark through the extcap's FIFO,
   // `-w -` into a pipe): each packet is flushed when it is written.
   options.live = !o.interfaces.empty();

@@ -167,7 +167,8 @@ class Pipeline {
   RecordSink& watch_follow(const RunOptions& o, RecordSink& next);
   void filter(const std::string& text, RegisterBase base, const std::vector<ChannelInfo>& channels);
   void write_pcapng(const RunOptions& o, const captures::RingLimits& ring,
-                    const std::vector<ChannelInfo>& channels, ClockQuality clock);
+                    const std::vector<ChannelInfo>& channels, const SerialFormat& format,
+                    ClockQuality clock);
 
   RecordClock clock_;  // of every record, before the filter: the text's time column
   FanOut fan_out_;
