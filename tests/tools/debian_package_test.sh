@@ -44,7 +44,7 @@ for page in modtap:--interface modtap-bus-simulator:--faults modtap-models:EXAMP
   man -l "$path" 2>/dev/null | grep -q -- "${page#*:}" || fail "man -l $path does not show ${page#*:}"
 done
 
-tshark -G plugins | grep -q 'modtap\.lua' || fail "tshark -G plugins does not list modtap.lua"
+tshark -G plugins | grep -q '^modtap\.so' || fail "tshark -G plugins does not list modtap.so"
 touch "$work/ttyTAP"
 MODTAP_EXTCAP_PORTS=$work/ttyTAP tshark -D 2>/dev/null | grep -q "modtap:$work/ttyTAP" ||
   fail "tshark -D does not list the installed extcap's port"

@@ -9,7 +9,7 @@ checked here. The screenshots are kept in WORK_DIR to look at.
 
 Exits 77 (ctest: skipped) with a message when no X server can be started.
 
-usage: wireshark_gui.py MODTAP BUSGEN PLUGIN_DIR WORK_DIR EXTCAP MODTAP_LUA"""
+usage: wireshark_gui.py MODTAP BUSGEN PLUGIN WORK_DIR EXTCAP"""
 import os
 import shutil
 import subprocess
@@ -22,8 +22,9 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from extcap_link import link_extcap, preference_prefix  # noqa: E402
 from modbus import with_crc  # noqa: E402
+from wireshark_home import as_user, make_home  # noqa: E402
 
-MODTAP, BUSGEN, PLUGIN_DIR, WORK, EXTCAP, MODTAP_LUA = map(os.path.abspath, sys.argv[1:7])
+MODTAP, BUSGEN, PLUGIN, WORK, EXTCAP = map(os.path.abspath, sys.argv[1:6])
 WIDTH, HEIGHT = 1600, 1000
 
 # The profile's coloring rules (plugins/wireshark/profile/colorfilters), 16-bit to 8-bit.
@@ -61,16 +62,13 @@ def start_x():
 def user_home():
     """A user's home with the plugin and the profile where a personal install puts them, and
     Wireshark's main window filling the screen (there is no window manager to maximise it)."""
-    home = os.path.join(WORK, "home")
-    shutil.rmtree(home, ignore_errors=True)
-    config = os.path.join(home, ".config", "wireshark")
-    shutil.copytree(os.path.join(PLUGIN_DIR, "profile"), os.path.join(config, "profiles", "modtap"))
-    plugins = os.path.join(home, ".local", "lib", "wireshark", "plugins")
-    os.makedirs(plugins)
-    shutil.copy(MODTAP_LUA, plugins)
-    with open(os.path.join(config, "recent_common"), "w") as f:
+    home = make_home(WORK, PLUGIN)
+    recent = os.path.join(home, ".config", "wireshark", "recent_common")
+    with open(recent, "w") as f:
         f.write(f"gui.geometry_main_x: 0\ngui.geometry_main_y: 0\n"
                 f"gui.geometry_main_width: {WIDTH}\ngui.geometry_main_height: {HEIGHT}\n")
+    if os.geteuid() == 0:
+        shutil.chown(recent, "nobody", "nogroup")
     return home
 
 
@@ -157,12 +155,12 @@ def main():
 
     xvfb, display = start_x()
     home = user_home()
-    env = dict(os.environ, HOME=home, DISPLAY=display, XDG_RUNTIME_DIR=WORK)
+    env = dict(os.environ, HOME=home, DISPLAY=display, XDG_RUNTIME_DIR=home)
     failures = []
     try:
         for name, extra in views:
-            failures += look(name, ["wireshark", "-C", "modtap", "-r", pcapng] + extra, env,
-                             expected[name], display)
+            failures += look(name, as_user(["wireshark", "-C", "modtap", "-r", pcapng] + extra,
+                                           home), env, expected[name], display)
         linked, cleanup = link_extcap(EXTCAP)
         if not linked:
             print("live: skipped: Wireshark's extcap folder cannot take the build's extcap")
@@ -171,11 +169,14 @@ def main():
             tty.setraw(master)
             tty.setraw(slave)
             port = os.ttyname(slave)
+            if os.geteuid() == 0:  # the user Wireshark runs as may read the port, as in dialout
+                shutil.chown(port, "nobody")
             prefix = preference_prefix(port)
             try:
                 failures += look(
-                    "live", ["wireshark", "-C", "modtap", "-k", "-i", f"modtap:{port}", "-o",
-                             f"{prefix}.baud:115200", "-o", f"{prefix}.parity:none"],
+                    "live", as_user(["wireshark", "-C", "modtap", "-k", "-i", f"modtap:{port}",
+                                     "-o", f"{prefix}.baud:115200", "-o", f"{prefix}.parity:none"],
+                                    home),
                     dict(env, MODTAP_EXTCAP_PORTS=port), {"request", "response", "noise",
                                                           "no response"},
                     display, live_traffic(master))

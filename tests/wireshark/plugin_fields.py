@@ -1,27 +1,31 @@
 #!/usr/bin/python3
-"""modtap.lua speaks modtap's field names: one vocabulary for JSON, -Y and Wireshark.
+"""The Wireshark plugin speaks modtap's field names: one vocabulary for JSON, -Y and Wireshark.
 
-The registry comes from `modtap fields`. Every ProtoField of modtap.lua named modtap.NAME must
+The registry comes from `modtap fields`, the plugin's fields from Wireshark itself
+(`tshark -G fields` with the plugin loaded). Every field the plugin registers as modtap.NAME must
 be a registry field with the registry's title, an item of a registry list (modtap.finding of
 `findings`), a part of either (modtap.register.name), or one of the few things only a packet
 says (PLUGIN_OWN below). Every key of the comments modtap writes into a pcapng, on traffic
 with every function code, faults, time-outs and noise, must be a registry field, a plugin
 field, or a packet's own key (COMMENT_OWN).
 
-Usage: lua_fields.py MODTAP BUSGEN LUA WORK_DIR
+Usage: plugin_fields.py MODTAP BUSGEN PLUGIN WORK_DIR
 """
 import os
 import re
 import subprocess
 import sys
 
-MODTAP, BUSGEN, LUA, WORK = sys.argv[1:5]
+from wireshark_home import as_user, make_home
+
+MODTAP, BUSGEN, PLUGIN, WORK = sys.argv[1:5]
 
 # What a packet says that no record field does, and why.
 PLUGIN_OWN = {
     "timeout": "a request's outcome, in the request's own packet (a record of its own in JSON)",
     "noise": "a noise packet's reason (JSON's `reason` of a noise record)",
     "ascii": "Modbus ASCII's own framing: data and LRC, which Wireshark has no dissector for",
+    "expert": "the expert infos Wireshark lists among the fields (modtap.expert.bad_check ...)",
 }
 COMMENT_OWN = {
     "duration_ns": "a packet keeps one time; the record's end is its start plus this",
@@ -49,9 +53,13 @@ for line in run([MODTAP, "fields"]).splitlines():
         lists.add(name)
 check("findings" in lists and "slave" in registry, f"`modtap fields` lists no registry: {registry}")
 
-lua = open(LUA, encoding="utf-8").read()
-plugin_fields = re.findall(r'ProtoField\.(\w+)\("modtap\.([\w.]+)",\s*"([^"]*)"', lua)
-check(len(plugin_fields) >= 20, f"only {len(plugin_fields)} fields found in {LUA}")
+os.makedirs(WORK, exist_ok=True)
+plugin_fields = []  # (type, name after "modtap.", title) of each field Wireshark registered
+for line in run(as_user(["tshark", "-G", "fields"], make_home(WORK, PLUGIN))).splitlines():
+    columns = line.split("\t")
+    if columns[0] == "F" and columns[2].startswith("modtap."):
+        plugin_fields.append((columns[3], columns[2][len("modtap."):], columns[1]))
+check(len(plugin_fields) >= 20, f"only {len(plugin_fields)} fields registered by {PLUGIN}")
 
 
 def known_root(root):
@@ -60,7 +68,7 @@ def known_root(root):
 
 for kind, name, title in plugin_fields:
     root = name.split(".")[0]
-    if name in registry and kind != "framenum":  # a frame number is Wireshark's, not a record's
+    if name in registry and kind != "FT_FRAMENUM":  # a frame number is Wireshark's, not a record's
         check(title in registry[name],
               f"modtap.{name} is titled {title!r}, the registry says {sorted(registry[name])}")
     elif not known_root(root) and root not in PLUGIN_OWN:
@@ -68,7 +76,6 @@ for kind, name, title in plugin_fields:
                         f"and not one of the plugin's own: {sorted(PLUGIN_OWN)}")
 
 # The comments of a capture with every function code and every kind of trouble.
-os.makedirs(WORK, exist_ok=True)
 capture = os.path.join(WORK, "faulty.log")
 pcapng = os.path.join(WORK, "faulty.pcapng")
 run([BUSGEN, "-n", "3000", "--seed", "7", "--format", "hexlog", "--faults", "-o", capture])
