@@ -10,7 +10,8 @@
 # (its Modbus RTU dissector on DLT_USER0), and pymodbus's RTU framer and decoders
 # (scripts/pymodbus_peer.py).
 # Prints a Markdown table: seconds, frames a second, peak RSS, and modtap's text against each
-# peer. Then modtap alone: text through GD20's model (names, scaling, rules) on the same
+# peer. Then Wireshark on modtap's pcapng: tshark with the plugin against tshark on the
+# exported-PDU file, and the pcapng's size against the pcap's (with the plugin built). Then modtap alone: text through GD20's model (names, scaling, rules) on the same
 # captures, and 20 MiB of random bytes read as RTU and as ASCII (a capture read with the wrong
 # settings, a noisy line). tshark's time grows faster than the frame count (143 s at 1 M
 # frames), so the peers run only up to PEER_MAX_FRAMES (default 1,100,000); set it higher to
@@ -106,6 +107,46 @@ echo
 echo "| frames | modtap --model gd20 -T text |"
 echo "| --- | --- |"
 printf '%s\n' "${model_rows[@]}"
+
+# Wireshark on modtap's pcapng: tshark with the plugin against tshark on the exported-PDU file
+# of the same capture (stock Wireshark, its own Modbus RTU dissector), and the pcapng's size
+# against the pcap's. Wireshark loads no personal plugin for root: as root, tshark runs as
+# nobody, in a home holding the build's plugin.
+plugin=$(ls "$BUILD"/plugins/wireshark/*/epan/modtap.so 2>/dev/null | head -1 || true)
+if [ -n "$plugin" ]; then
+  home=$WORK/home
+  release=$(basename "$(dirname "$(dirname "$plugin")")")
+  rm -rf "$home"
+  mkdir -p "$home/.local/lib/wireshark/plugins/$release/epan"
+  cp "$plugin" "$home/.local/lib/wireshark/plugins/$release/epan/"
+  as_user=(env "HOME=$home")
+  if [ "$(id -u)" = 0 ]; then
+    chown -R nobody:nogroup "$home"
+    as_user=(setpriv --reuid=nobody --regid=nogroup --clear-groups env "HOME=$home")
+  fi
+  echo
+  echo "| frames | pcap | modtap pcapng | size vs pcap | tshark, exported PDU | tshark, modtap's plugin | plugin vs exported PDU |"
+  echo "| --- | --- | --- | --- | --- | --- | --- |"
+  for n in "${sizes[@]}"; do
+    capture=$WORK/bus-$n.pcap
+    frames=$("$MODTAP" -r "$capture" -q --stats - | python3 -c 'import json,sys; print(json.load(sys.stdin)["frames"])')
+    [ "$frames" -le "$PEER_MAX_FRAMES" ] || continue
+    "$MODTAP" -r "$capture" -w "$WORK/user.pcapng" 2>/dev/null
+    "$MODTAP" -r "$capture" -w "$WORK/exported.pcapng" --link exported-pdu 2>/dev/null
+    chmod 644 "$WORK/user.pcapng" "$WORK/exported.pcapng"
+    times=$(measure tshark -n -r "$WORK/exported.pcapng")
+    read -r exported_s exported_kb <<< "$times"
+    times=$(measure "${as_user[@]}" tshark -n -r "$WORK/user.pcapng")
+    read -r plugin_s plugin_kb <<< "$times"
+    pcap_bytes=$(stat -c %s "$capture")
+    pcapng_bytes=$(stat -c %s "$WORK/user.pcapng")
+    echo "| $frames | $((pcap_bytes / 1000000)) MB | $((pcapng_bytes / 1000000)) MB |" \
+      "$(awk -v a="$pcapng_bytes" -v b="$pcap_bytes" 'BEGIN { printf "%.2fx", a / b }') |" \
+      "$(cell "$exported_s" "$exported_kb" "$frames") | $(cell "$plugin_s" "$plugin_kb" "$frames") |" \
+      "$(awk -v a="$plugin_s" -v b="$exported_s" 'BEGIN { printf "%.2fx", a / b }') |"
+    rm -f "$WORK/user.pcapng" "$WORK/exported.pcapng"
+  done
+fi
 
 junk=$WORK/random-20MiB.bin
 [ -s "$junk" ] || /usr/bin/python3 -c 'import random, sys
