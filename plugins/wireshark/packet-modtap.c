@@ -339,6 +339,16 @@ static void set_info(packet_info* pinfo, const verdicts_t* v, const char* role, 
   for (int i = 0; i < v->finding_count; ++i)
     if (strcmp(v->findings[i], "bad-check") != 0)
       col_append_fstr(pinfo->cinfo, COL_INFO, "  [%s]", v->findings[i]);
+  /* The model's findings by kind ("note device-fault: ..."), but the exception's meaning,
+   * which the line says already. */
+  for (const char* line = v->meaning; line && *line;) {
+    const char* colon = strchr(line, ':');
+    const char* end = strchr(line, '\n');
+    if (strncmp(line, "note ", 5) == 0 && colon && (!end || colon < end) &&
+        strncmp(line, "note exception:", 15) != 0)
+      col_append_fstr(pinfo->cinfo, COL_INFO, "  [%.*s]", (int)(colon - line - 5), line + 5);
+    line = end ? end + 1 : NULL;
+  }
 }
 
 /* The frame's PDU to Wireshark's Modbus dissector, as modtap decided its role. */

@@ -34,6 +34,7 @@ COLORS = {
     "bad check": (255, 170, 170),
     "no response": (255, 204, 153),
     "noise": (204, 204, 204),
+    "device fault": (255, 153, 153),
 }
 
 
@@ -118,6 +119,22 @@ def look(name, command, env, expected, display, feed=None):
     return []
 
 
+def drive_capture():
+    """A master polling an NTA5000 drive's fault register (2521H), which reports a fault now and
+    then: the model's device-fault finding, in the profile's own color."""
+    raw = bytearray()
+    for i in range(40):
+        raw += with_crc([1, 3, 0x25, 0x21, 0, 1])
+        raw += with_crc([1, 3, 2, 0, 3 if i % 4 == 3 else 0])
+    path = os.path.join(WORK, "drive.raw")
+    with open(path, "wb") as f:
+        f.write(raw)
+    pcapng = os.path.join(WORK, "drive.pcapng")
+    subprocess.run([MODTAP, "-r", path, "--format", "raw", "--model", "nta5000", "-w", pcapng],
+                   check=True, stderr=subprocess.DEVNULL)
+    return pcapng
+
+
 def live_traffic(master):
     """A master polling two slaves through the pty, one of which stops answering now and
     then, with a stray byte between polls: requests, responses, no response and noise."""
@@ -161,6 +178,9 @@ def main():
         for name, extra in views:
             failures += look(name, as_user(["wireshark", "-C", "modtap", "-r", pcapng] + extra,
                                            home), env, expected[name], display)
+        failures += look("drive", as_user(["wireshark", "-C", "modtap", "-r", drive_capture()],
+                                          home), env, {"device fault", "request", "response"},
+                         display)
         linked, cleanup = link_extcap(EXTCAP)
         if not linked:
             print("live: skipped: Wireshark's extcap folder cannot take the build's extcap")
