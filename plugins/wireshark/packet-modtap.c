@@ -158,7 +158,15 @@ static const char* interned_model(const char* name) {
   return kept;
 }
 
-/* What the first pass learns: the record number, the request's packet, the model. */
+static const char* role_of(const verdicts_t* v, packet_info* pinfo) {
+  if (v->role) return v->role;
+  if (pinfo->p2p_dir == P2P_DIR_SENT) return "request";
+  if (pinfo->p2p_dir == P2P_DIR_RECV) return "response";
+  return "unknown";
+}
+
+/* What the first pass learns: the record number, the request's packet, the model. Only a
+ * request's packet is kept by its record number: only a request is looked up so. */
 static packet_state_t* packet_state(tvbuff_t* tvb, packet_info* pinfo, const verdicts_t* v) {
   packet_state_t* state =
       (packet_state_t*)p_get_proto_data(wmem_file_scope(), pinfo, proto_modtap, 0);
@@ -166,11 +174,12 @@ static packet_state_t* packet_state(tvbuff_t* tvb, packet_info* pinfo, const ver
   state = wmem_new0(wmem_file_scope(), packet_state_t);
   state->record = v->index ? g_ascii_strtoull(v->index, NULL, 10) : last_record + 1;
   last_record = state->record;
-  wmem_map_insert(frame_of_record, GSIZE_TO_POINTER(state->record), GUINT_TO_POINTER(pinfo->num));
-  gboolean response = v->role ? strcmp(v->role, "response") == 0 : pinfo->p2p_dir == P2P_DIR_RECV;
+  const char* role = v->noise ? "noise" : role_of(v, pinfo);
+  if (strcmp(role, "request") == 0)
+    wmem_map_insert(frame_of_record, GSIZE_TO_POINTER(state->record), GUINT_TO_POINTER(pinfo->num));
   if (v->request)
     state->request = g_ascii_strtoull(v->request, NULL, 10); /* "none": 0 */
-  else if (response && !v->noise)
+  else if (strcmp(role, "response") == 0)
     state->request = state->record - 1;
   if (state->request)
     state->request_frame =
@@ -182,13 +191,6 @@ static packet_state_t* packet_state(tvbuff_t* tvb, packet_info* pinfo, const ver
   }
   p_add_proto_data(wmem_file_scope(), pinfo, proto_modtap, 0, state);
   return state;
-}
-
-static const char* role_of(const verdicts_t* v, packet_info* pinfo) {
-  if (v->role) return v->role;
-  if (pinfo->p2p_dir == P2P_DIR_SENT) return "request";
-  if (pinfo->p2p_dir == P2P_DIR_RECV) return "response";
-  return "unknown";
 }
 
 /* "register 2502H frequency_command = 60.00 Hz" and "note KIND: TEXT" lines. */
