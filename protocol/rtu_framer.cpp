@@ -65,7 +65,7 @@ void RtuFramer::finish() {
 
 void RtuFramer::resolve(bool final) {
   while (head_ < end_) {
-    const Match m = match_at(head_, final, max_search);
+    const Match m = match_start(head_, final);
     if (m.kind == Match::Kind::found) {
       emit_frame(head_, m);
       continue;
@@ -78,8 +78,11 @@ void RtuFramer::resolve(bool final) {
   }
 }
 
-RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search) const {
-  const bool observed = search == max_search;  // a decision at a start, not one nested in it
+RtuFramer::Match RtuFramer::match_start(uint64_t at, bool final) const {
+  return match_at(at, final, max_search, true);
+}
+
+RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search, bool observed) const {
   if (options_.observer && observed) options_.observer->on_start(channel_, at);
   if (end_ - at < 2) return need_more();
   const Readings readings = readings_at(at);
@@ -246,7 +249,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::request_inside_awaited_answer(const
 // likelier (a master's retry), unless it came too soon for a retry. (Any other frame whose CRC
 // ends in 0x00 holds a frame one byte shorter too: that is no reason to cut it.)
 std::optional<RtuFramer::Verdict> RtuFramer::retry_and_glitch(const Reading& r) const {
-  if (r.other && *r.other == Role::request && zero_glitches_common() &&
+  if (r.other && *r.other == Role::request && glitch_odds_.zero_glitch_likelier() &&
       at_ptr(r.at)[r.length - 1] == 0x00 && timeline_.after_quiet_line(r.at + r.length - 1) &&
       awaited_.copies_request(from(r.at), r.length - 1) && !too_soon_for_retry(r.at))
     return Verdict::other_reading;
@@ -548,7 +551,7 @@ RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_
 // glitch comes right after it (one driver turning on puts one glitch on the line, not two).
 bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end, bool final, int search) const {
   return !timeline_.gap_at(end) &&
-         ((zero_glitches_common() && timeline_.after_quiet_line(end - 1)) ||
+         ((glitch_odds_.zero_glitch_likelier() && timeline_.after_quiet_line(end - 1)) ||
           !copy_follows(begin, end)) &&
          !glitch_then_frame(end, final, search);
 }
@@ -565,14 +568,6 @@ bool RtuFramer::shorter_reading_holds(uint64_t end, bool final, int search) cons
 bool RtuFramer::glitch_then_frame(uint64_t at, bool final, int search) const {
   return at + 1 < end_ && is_glitch_byte(*at_ptr(at)) &&
          match_at(at + 1, final, search).kind == Match::Kind::found;
-}
-
-// Where the bytes alone cannot tell a frame whose CRC ends in 0x00 (1 in 256) from the frame
-// one byte shorter and a 0x00 glitch, the bus's own glitches decide: the glitch reading needs
-// one glitch, or two around an echo, so it is the likelier once more than 1 in 16 frames
-// comes with a 0x00 glitch.
-bool RtuFramer::zero_glitches_common() const {
-  return good_frames_ >= 16 && zero_glitches_ * 16 > good_frames_;
 }
 
 // The CRC index is kept only over what is searched: traffic whose lengths the function codes
@@ -648,7 +643,7 @@ uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
   for (; at < end_; ++at) {
     // A start too short to tell yet (an exception's code) may still stand.
     if (at < claimed_end && at + 3 <= end_ && !standard_frame(at)) continue;
-    const Match m = match_at(at, final, max_search);
+    const Match m = match_start(at, final);
     if (m.kind == Match::Kind::found) break;
     if (m.kind == Match::Kind::need_more && !final && !blocked_by_gap(at, final)) {
       scanned_to_ = at;
@@ -697,7 +692,7 @@ Frame RtuFramer::frame_of(uint64_t begin, uint64_t end, RoleFit fit) const {
 }
 
 void RtuFramer::emit_frame(uint64_t at, const Match& match) {
-  ++good_frames_;
+  glitch_odds_.frame();
   Frame frame = frame_of(at, at + match.length, match.fit);
   frame.check_ok = true;
   frame.expected_check = wire_crc(frame.adu);
@@ -778,8 +773,7 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
   NoiseReason reason = NoiseReason::junk;
   if (size == 1 && is_glitch_byte(p[0])) {
     reason = NoiseReason::glitch;
-    zero_glitches_ += p[0] == 0x00;
-    ++glitches_;
+    glitch_odds_.glitch(p[0]);
   } else if (size >= 2 && is_public_function(p[1])) {
     reason = NoiseReason::truncated;
   }
@@ -788,22 +782,22 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
     emit_noise(at, std::min<uint64_t>(end, at + max_rtu_adu), reason);
 }
 
-// A damaged response ending in 0x00 or 0xFF (2 in 256) right before the next frame, or one cut
-// short with that frame's glitch after it: on a bus where glitches come with more than 1 in 128
-// frames, the glitch, unless the request says whether the byte is the response's (then a
-// silence after it does not matter). Cut short, its length may be told only without the glitch
-// (FC08 "68 08 00" and a 0x00 read as Return Query Data). Among a capture's first frames,
-// before the bus has shown whether it has glitches, the byte is left to the frame unless the
-// request rules it out, marked: both readings stand (a cut answer and the next request's
-// glitch among the first frames; seeds 731, 981, 1233, 1390). Whether it emitted the piece so.
+// A damaged response ending in 0x00 or 0xFF right before the next frame, or one cut short with
+// that frame's glitch after it: where the bus's glitches make it the likelier, the glitch, unless
+// the request says whether the byte is the response's (then a silence after it does not matter).
+// Cut short, its length may be told only without the glitch (FC08 "68 08 00" and a 0x00 read as
+// Return Query Data). Among a capture's first frames, before the bus has shown whether it has
+// glitches, the byte is left to the frame unless the request rules it out, marked: both readings
+// stand (a cut answer and the next request's glitch among the first frames; seeds 731, 981, 1233,
+// 1390). Whether it emitted the piece so.
 bool RtuFramer::split_trailing_glitch(uint64_t begin, uint64_t end, uint32_t& findings,
                                       bool glitch_after) {
   const uint64_t size = end - begin;
   const auto length = awaited_.length(bytes(begin, end));
   const bool cut_short =
       (length && size <= *length) || (!length && awaited_.length(bytes(begin, end - 1)));
-  const bool glitchy_bus = glitches_ * 128 > good_frames_;
-  const bool bus_unknown = glitches_ == 0 && good_frames_ < 128;
+  const bool glitchy_bus = glitch_odds_.trailing_glitch_likelier();
+  const bool bus_unknown = glitch_odds_.unknown();
   if (!cut_short || size <= 3 || !is_glitch_byte(*at_ptr(end - 1)) || glitch_after ||
       !(glitchy_bus || bus_unknown) || end >= end_ || !timeline_.after_quiet_line(end - 1))
     return false;

@@ -18,6 +18,7 @@
 #include "protocol/frame_sink.hpp"
 #include "protocol/framing_evidence.hpp"
 #include "protocol/function_codes.hpp"
+#include "protocol/glitch_odds.hpp"
 #include "protocol/records.hpp"
 #include "protocol/serial_format.hpp"
 
@@ -75,8 +76,11 @@ class RtuFramer {
   Readings readings_at(uint64_t at) const;
 
   void resolve(bool final);
-  // `search` is how many variable-length frames in a row may be found by CRC search.
-  Match match_at(uint64_t at, bool final, int search) const;
+  // The decision at a frame's start, which the observer hears (--explain).
+  Match match_start(uint64_t at, bool final) const;
+  // `search` is how many variable-length frames in a row may be found by CRC search; a reading
+  // nested in another's judgement is not `observed`.
+  Match match_at(uint64_t at, bool final, int search, bool observed = false) const;
   enum class Verdict : uint8_t { keep, refuse, wait, other_reading };
   // A reading of [at, at + length) as `role` whose length rules and CRC agree; `other` is the
   // other role, where it is allowed.
@@ -125,7 +129,6 @@ class RtuFramer {
   bool glitch_appended(uint64_t begin, uint64_t end, bool final, int search) const;
   bool glitch_then_frame(uint64_t at, bool final, int search) const;
   bool shorter_reading_holds(uint64_t end, bool final, int search) const;
-  bool zero_glitches_common() const;
   bool fits_role(Role role, uint64_t at, uint16_t length) const;
   bool confirmed_end(uint64_t begin, uint64_t end, bool final, int search, bool allow_glitch) const;
   bool blocked_by_gap(uint64_t at, bool final) const;
@@ -172,9 +175,7 @@ class RtuFramer {
   uint64_t scanned_to_ = 0;     // positions below this are known not to start a frame
   mutable CrcIndex crc_index_;  // over the searched part of buf_
   mutable CrcHits last_hits_;
-  uint64_t good_frames_ = 0;    // emitted with a good CRC
-  uint64_t zero_glitches_ = 0;  // lone 0x00 bytes between frames
-  uint64_t glitches_ = 0;       // lone 0x00 or 0xFF bytes between frames
+  GlitchOdds glitch_odds_;  // the bus's glitches so far, against a frame's bytes by chance
 };
 
 }  // namespace modtap
