@@ -78,11 +78,11 @@ void RtuFramer::resolve(bool final) {
   }
 }
 
-RtuFramer::Match RtuFramer::match_start(uint64_t at, bool final) const {
+RtuFramer::Match RtuFramer::match_start(uint64_t at, bool final) {
   return match_at(at, final, max_search, true);
 }
 
-RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search, bool observed) const {
+RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search, bool observed) {
   if (options_.observer && observed) options_.observer->on_start(channel_, at);
   if (end_ - at < 2) return need_more();
   const Readings readings = readings_at(at);
@@ -158,7 +158,7 @@ void RtuFramer::observe(uint64_t at, Role role, uint16_t length, ReadingOutcome 
 
 // What the bus says against a reading of [at, at + length) whose length rules and CRC agree:
 // the first row of this table that has something to say decides, and names its evidence.
-RtuFramer::Verdict RtuFramer::judge_found(const Reading& r, Evidence& why) const {
+RtuFramer::Verdict RtuFramer::judge_found(const Reading& r, Evidence& why) {
   return first_verdict<
       Row{Evidence::good_frame_before_silence, &RtuFramer::good_frame_before_silence},
       Row{Evidence::broke_off_at_silence, &RtuFramer::broke_off_at_silence},
@@ -174,7 +174,7 @@ RtuFramer::Verdict RtuFramer::judge_found(const Reading& r, Evidence& why) const
 
 // The rows in order, unrolled at compile time: judging runs once a frame.
 template <RtuFramer::Row... rows>
-RtuFramer::Verdict RtuFramer::first_verdict(const Reading& r, Evidence& why) const {
+RtuFramer::Verdict RtuFramer::first_verdict(const Reading& r, Evidence& why) {
   std::optional<Verdict> verdict;
   const bool decided =
       ((verdict = (this->*rows.judge)(r), verdict && (why = rows.evidence, true)) || ...);
@@ -187,7 +187,7 @@ RtuFramer::Verdict RtuFramer::first_verdict(const Reading& r, Evidence& why) con
 // (a trailing 0x00 keeps a zero residue zero: a retry of FC07, four bytes, and the 0x00 of a
 // broadcast after the silence read as its five-byte answer): the other reading, if any, is the
 // frame, whatever comes after the silence.
-std::optional<RtuFramer::Verdict> RtuFramer::good_frame_before_silence(const Reading& r) const {
+std::optional<RtuFramer::Verdict> RtuFramer::good_frame_before_silence(const Reading& r) {
   const uint64_t gap = timeline_.first_gap_after(r.at);
   if (gap < r.at + r.length && gap - r.at >= min_adu && rtu_crc_holds(bytes(r.at, gap)))
     return Verdict::other_reading;
@@ -196,7 +196,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::good_frame_before_silence(const Rea
 
 // A silence inside a frame, with a good frame starting right after it, means this was a frame
 // that broke off, whatever its CRC says.
-std::optional<RtuFramer::Verdict> RtuFramer::broke_off_at_silence(const Reading& r) const {
+std::optional<RtuFramer::Verdict> RtuFramer::broke_off_at_silence(const Reading& r) {
   const uint64_t gap = timeline_.first_gap_after(r.at);
   if (gap >= r.at + r.length) return std::nullopt;
   const Match after_gap = match_at(gap, r.final, 0);
@@ -214,7 +214,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::broke_off_at_silence(const Reading&
 // for slave 255, where slave 3's answer to FC0C began after its driver's 0xFF. (A request the
 // standard allows may be the master's, after a time-out shorter than the threshold: a write of
 // the same block with new values begins as its echo would.)
-std::optional<RtuFramer::Verdict> RtuFramer::answer_read_as_request(const Reading& r) const {
+std::optional<RtuFramer::Verdict> RtuFramer::answer_read_as_request(const Reading& r) {
   if (r.role != Role::request || !r.other || !first_after_request(r.at) ||
       !too_soon_for_retry(r.at) || awaited_.copies_request(from(r.at), r.length))
     return std::nullopt;
@@ -234,7 +234,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::answer_read_as_request(const Readin
 // another slave's request (1008); a read of 10,773 inputs of slave 131 from the second byte of
 // a cut exception `ae 83 02` on (946). A silence after it may be its slave's; with no clock,
 // where the master's time-out after a silent slave cannot show, no rule.
-std::optional<RtuFramer::Verdict> RtuFramer::request_inside_awaited_answer(const Reading& r) const {
+std::optional<RtuFramer::Verdict> RtuFramer::request_inside_awaited_answer(const Reading& r) {
   if (r.role != Role::request || *at_ptr(r.at) == 0 || options_.clock == ClockQuality::none ||
       r.at <= head_ || r.at >= awaited_end(head_))
     return std::nullopt;
@@ -248,7 +248,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::request_inside_awaited_answer(const
 // (FC07: a status equal to the request's CRC low byte); on a bus of glitches, the copy is the
 // likelier (a master's retry), unless it came too soon for a retry. (Any other frame whose CRC
 // ends in 0x00 holds a frame one byte shorter too: that is no reason to cut it.)
-std::optional<RtuFramer::Verdict> RtuFramer::retry_and_glitch(const Reading& r) const {
+std::optional<RtuFramer::Verdict> RtuFramer::retry_and_glitch(const Reading& r) {
   if (r.other && *r.other == Role::request && glitch_odds_.zero_glitch_likelier() &&
       at_ptr(r.at)[r.length - 1] == 0x00 && timeline_.after_quiet_line(r.at + r.length - 1) &&
       awaited_.copies_request(from(r.at), r.length - 1) && !too_soon_for_retry(r.at))
@@ -259,7 +259,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::retry_and_glitch(const Reading& r) 
 // The pending request again (a retry) whose CRC ends in 0x00 holds a response one byte shorter,
 // which its request would not have asked for: the copy is the reading, once its last byte is
 // there to say so.
-std::optional<RtuFramer::Verdict> RtuFramer::retry_ending_in_zero(const Reading& r) const {
+std::optional<RtuFramer::Verdict> RtuFramer::retry_ending_in_zero(const Reading& r) {
   if (!r.other || *r.other != Role::request || !awaited_.starts_request_copy(from(r.at), r.length))
     return std::nullopt;
   if (r.at + r.length == end_) return r.final ? std::nullopt : std::optional(Verdict::wait);
@@ -277,7 +277,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::retry_ending_in_zero(const Reading&
 // frame explains after the copy make it the answer, unless they begin as the answer to it
 // would (a FC07 poll `c7 07 12 42` again after a talked-over answer, then its own answer
 // talked over, `c7 07 31 c1 cd`; seed 1021).
-std::optional<RtuFramer::Verdict> RtuFramer::answer_copying_request(const Reading& r) const {
+std::optional<RtuFramer::Verdict> RtuFramer::answer_copying_request(const Reading& r) {
   if (!r.other || *r.other != Role::response || !awaited_.copies_request(from(r.at), r.length) ||
       !too_soon_for_retry(r.at))
     return std::nullopt;
@@ -301,7 +301,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::answer_copying_request(const Readin
 // bytes after it tell. Only on a bus channel (on a split tap the request is on the other), and
 // only for a reading that may search on (search 0: nested in another reading's judgement, or a
 // CRC search at its depth), so that it never nests.
-std::optional<RtuFramer::Verdict> RtuFramer::answer_cut_before_request(const Reading& r) const {
+std::optional<RtuFramer::Verdict> RtuFramer::answer_cut_before_request(const Reading& r) {
   const uint8_t* p = at_ptr(r.at);
   if (r.role != Role::response || options_.role != ChannelRole::bus || r.search <= 0 ||
       !expected_.pending || expected_.slave != p[0] || expected_.function != (p[1] & 0x7F))
@@ -317,7 +317,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::answer_cut_before_request(const Rea
 // frame never swallows one whose length rules and CRC agree (a glitch, a response and the next
 // glitch can read as one; a talked-over exception's tail read as a 245-byte answer of a slave
 // nobody asked, across the next request and its answer).
-std::optional<RtuFramer::Verdict> RtuFramer::swallows_known_frame_reading(const Reading& r) const {
+std::optional<RtuFramer::Verdict> RtuFramer::swallows_known_frame_reading(const Reading& r) {
   const uint8_t* p = at_ptr(r.at);
   const bool unawaited = r.role == Role::response && expected_.pending &&
                          (expected_.slave != p[0] || expected_.function != (p[1] & 0x7F));
@@ -331,7 +331,7 @@ std::optional<RtuFramer::Verdict> RtuFramer::swallows_known_frame_reading(const 
 // `a5 0c 08 fb e1 58`, a glitch, the next request `10 0b 4d b7`, a glitch and its answer's
 // slave address passed a CRC as the 13 bytes the answer claimed (seed 1073); a FC0F request of
 // 255 bytes from inside a talked-over answer on, across the two exchanges after it (1020).
-std::optional<RtuFramer::Verdict> RtuFramer::swallows_exchange_reading(const Reading& r) const {
+std::optional<RtuFramer::Verdict> RtuFramer::swallows_exchange_reading(const Reading& r) {
   if (r.search > 0 && swallows_exchange(r.at, r.at + r.length, r.final)) return Verdict::refuse;
   return std::nullopt;
 }
@@ -352,7 +352,7 @@ std::optional<bool> RtuFramer::answer_follows(uint64_t at, uint64_t end, bool fi
 // and function code (its answer) right after it, or after a glitch. Junk first, and a public
 // function code right after (or after a glitch) is taken to begin a frame without looking
 // further: a frame follows almost every frame, and the search inside is rare.
-bool RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) const {
+bool RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) {
   if (end + 3 > end_) return false;
   const uint8_t* after = at_ptr(end);
   if (is_public_function(after[1] & 0x7F) ||
@@ -382,7 +382,7 @@ bool RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) cons
 // it (a timer's reads end anywhere). Waiting behind every response that ends a read cost a pcap
 // 17% more to frame; behind every last byte read alone, a capture read a byte at a time held
 // each response back until its channel's next byte, behind the other channel's frames.
-std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bool final) const {
+std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bool final) {
   const uint64_t end = at + length;
   if (end == end_) {
     if (final || options_.clock != ClockQuality::per_chunk || timeline_.empty()) return false;
@@ -403,7 +403,7 @@ std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bo
   return after.kind == Match::Kind::none && !glitch_then_frame(end, final, 0);
 }
 
-RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int search) const {
+RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int search) {
   const uint64_t avail = end_ - at;
   const uint8_t* p = at_ptr(at);
   const BodyLength body = body_length(role, {p, static_cast<size_t>(avail)});
@@ -452,7 +452,7 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
 // turnaround glitch stand in between. A frame found this way never swallows a standard frame
 // whose length rules and CRC agree.
 RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, bool final,
-                                       int search) const {
+                                       int search) {
   const uint64_t avail = end_ - at;
   const uint8_t* p = at_ptr(at);
   const uint64_t limit = std::min<uint64_t>(avail, max_rtu_adu);
@@ -508,7 +508,7 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
 // Both readings of a start often search the same span (an unknown function code reads as a
 // request and as a response alike), so the last answer is kept.
 size_t RtuFramer::good_lengths(uint64_t at, size_t first, size_t limit,
-                               std::array<uint16_t, max_rtu_adu>& lengths) const {
+                               std::array<uint16_t, max_rtu_adu>& lengths) {
   CrcHits& last = last_hits_;
   if (last.at != at || last.first != first || last.limit != limit) {
     last.at = at;
@@ -529,7 +529,7 @@ size_t RtuFramer::good_lengths(uint64_t at, size_t first, size_t limit,
 // as soon as something confirms it: few steps for a real frame. Where this finds nothing, the
 // bytes are junk, and the CRC index takes over for this start and the ones after it.
 RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_t limit,
-                                                RoleFit fit, bool final, int search) const {
+                                                RoleFit fit, bool final, int search) {
   const uint8_t* p = at_ptr(at);
   uint16_t crc = crc16({p, first - crc_size});
   bool previous_hit = false;
@@ -549,7 +549,7 @@ RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_
 // A CRC end right after a CRC end is the shorter frame with a 0x00 appended: a glitch, unless a
 // silence right after it says that 0x00 was the frame's last CRC byte, or the next driver's
 // glitch comes right after it (one driver turning on puts one glitch on the line, not two).
-bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end, bool final, int search) const {
+bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end, bool final, int search) {
   return !timeline_.gap_at(end) &&
          ((glitch_odds_.zero_glitch_likelier() && timeline_.after_quiet_line(end - 1)) ||
           !copy_follows(begin, end)) &&
@@ -559,20 +559,20 @@ bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end, bool final, int se
 // Whether a frame ending at `end` in a 0x00, kept though one byte shorter is a good frame too,
 // could be that shorter frame and a glitch: no silence after it, no clock that saw the byte
 // sent straight on, and no second glitch that reading would need.
-bool RtuFramer::shorter_reading_holds(uint64_t end, bool final, int search) const {
+bool RtuFramer::shorter_reading_holds(uint64_t end, bool final, int search) {
   return !timeline_.gap_at(end) && timeline_.after_quiet_line(end - 1) &&
          !glitch_then_frame(end, final, search);
 }
 
 // A turnaround's glitch at `at` with a good frame right behind it.
-bool RtuFramer::glitch_then_frame(uint64_t at, bool final, int search) const {
+bool RtuFramer::glitch_then_frame(uint64_t at, bool final, int search) {
   return at + 1 < end_ && is_glitch_byte(*at_ptr(at)) &&
          match_at(at + 1, final, search).kind == Match::Kind::found;
 }
 
 // The CRC index is kept only over what is searched: traffic whose lengths the function codes
 // tell never pays for it, and junk is indexed once, however many starts search it.
-void RtuFramer::index_span(uint64_t begin, uint64_t end) const {
+void RtuFramer::index_span(uint64_t begin, uint64_t end) {
   if (begin < crc_index_.begin() || begin > crc_index_.end()) crc_index_.restart(begin);
   const uint64_t from = crc_index_.end();
   if (end > from) crc_index_.append({at_ptr(from), static_cast<size_t>(end - from)});
@@ -585,7 +585,7 @@ bool RtuFramer::fits_role(Role role, uint64_t at, uint16_t length) const {
 }
 
 bool RtuFramer::confirmed_end(uint64_t begin, uint64_t end, bool final, int search,
-                              bool allow_glitch) const {
+                              bool allow_glitch) {
   if (end == end_) return final;
   if (timeline_.gap_at(end) || (end > head_ && timeline_.paused_before(end)) ||
       match_at(end, final, search).kind == Match::Kind::found)
@@ -614,7 +614,7 @@ bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
 // (seed 1045). A frame with its exact copy right behind it, FC08's query and echo, swallows
 // none: the same chance twice over is none (`2a 08 00 00 dd 47 07 aa 43 9a` holds an answer of
 // slave 71 to FC07 in query and echo; seed 1215).
-bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end) const {
+bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end) {
   if (copy_follows(begin, end)) return false;
   for (uint64_t inner = begin + 1; inner < end && inner + 3 <= end_; ++inner)
     if (standard_frame(inner) && match_at(inner, false, 0).kind == Match::Kind::found) return true;
@@ -623,7 +623,7 @@ bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end) const {
 
 // A silence after `at` with a good frame right after it, or after the glitch of the driver
 // that sends it, bounds whatever starts at `at`.
-bool RtuFramer::blocked_by_gap(uint64_t at, bool final) const {
+bool RtuFramer::blocked_by_gap(uint64_t at, bool final) {
   const uint64_t gap = timeline_.first_gap_after(at);
   if (gap >= end_) return false;
   if (match_at(gap, final, 0).kind == Match::Kind::found) return true;

@@ -77,10 +77,10 @@ class RtuFramer {
 
   void resolve(bool final);
   // The decision at a frame's start, which the observer hears (--explain).
-  Match match_start(uint64_t at, bool final) const;
+  Match match_start(uint64_t at, bool final);
   // `search` is how many variable-length frames in a row may be found by CRC search; a reading
   // nested in another's judgement is not `observed`.
-  Match match_at(uint64_t at, bool final, int search, bool observed = false) const;
+  Match match_at(uint64_t at, bool final, int search, bool observed = false);
   enum class Verdict : uint8_t { keep, refuse, wait, other_reading };
   // A reading of [at, at + length) as `role` whose length rules and CRC agree; `other` is the
   // other role, where it is allowed.
@@ -92,51 +92,51 @@ class RtuFramer {
     bool final;
     int search;
   };
-  Verdict judge_found(const Reading& reading, Evidence& why) const;
+  Verdict judge_found(const Reading& reading, Evidence& why);
   struct Row {  // a row of judge_found's table: its evidence, and what it says of a reading
     Evidence evidence;
-    std::optional<Verdict> (RtuFramer::*judge)(const Reading&) const;
+    std::optional<Verdict> (RtuFramer::*judge)(const Reading&);
   };
   template <Row... rows>
-  Verdict first_verdict(const Reading& reading, Evidence& why) const;
+  Verdict first_verdict(const Reading& reading, Evidence& why);
   // The rows of judge_found's table: a verdict where the evidence has one to give.
-  std::optional<Verdict> good_frame_before_silence(const Reading& r) const;
-  std::optional<Verdict> broke_off_at_silence(const Reading& r) const;
-  std::optional<Verdict> answer_read_as_request(const Reading& r) const;
-  std::optional<Verdict> request_inside_awaited_answer(const Reading& r) const;
-  std::optional<Verdict> retry_and_glitch(const Reading& r) const;
-  std::optional<Verdict> retry_ending_in_zero(const Reading& r) const;
-  std::optional<Verdict> answer_copying_request(const Reading& r) const;
-  std::optional<Verdict> answer_cut_before_request(const Reading& r) const;
-  std::optional<Verdict> swallows_known_frame_reading(const Reading& r) const;
-  std::optional<Verdict> swallows_exchange_reading(const Reading& r) const;
+  std::optional<Verdict> good_frame_before_silence(const Reading& r);
+  std::optional<Verdict> broke_off_at_silence(const Reading& r);
+  std::optional<Verdict> answer_read_as_request(const Reading& r);
+  std::optional<Verdict> request_inside_awaited_answer(const Reading& r);
+  std::optional<Verdict> retry_and_glitch(const Reading& r);
+  std::optional<Verdict> retry_ending_in_zero(const Reading& r);
+  std::optional<Verdict> answer_copying_request(const Reading& r);
+  std::optional<Verdict> answer_cut_before_request(const Reading& r);
+  std::optional<Verdict> swallows_known_frame_reading(const Reading& r);
+  std::optional<Verdict> swallows_exchange_reading(const Reading& r);
   static ReadingOutcome outcome_of(Verdict verdict);
   void observe(uint64_t at, Role role, uint16_t length, ReadingOutcome outcome, Evidence why) const;
-  std::optional<bool> cut_before_frame(uint64_t at, uint16_t length, bool final) const;
+  std::optional<bool> cut_before_frame(uint64_t at, uint16_t length, bool final);
   bool first_after_request(uint64_t at) const;
   // A copy of the pending request starting at `at` came before the master could time out.
   bool too_soon_for_retry(uint64_t at) const {
     return awaited_.too_soon_for_retry(timeline_.start_time(at));
   }
-  Match match_role(Role role, uint64_t at, bool final, int search) const;
+  Match match_role(Role role, uint64_t at, bool final, int search);
   // The lengths in [first, limit] that give the bytes from `at` a good CRC, ascending.
   size_t good_lengths(uint64_t at, size_t first, size_t limit,
-                      std::array<uint16_t, max_rtu_adu>& lengths) const;
-  void index_span(uint64_t begin, uint64_t end) const;
-  Match search_end(uint64_t at, size_t first, RoleFit fit, bool final, int search) const;
+                      std::array<uint16_t, max_rtu_adu>& lengths);
+  void index_span(uint64_t begin, uint64_t end);
+  Match search_end(uint64_t at, size_t first, RoleFit fit, bool final, int search);
   Match first_confirmed_end(uint64_t at, size_t first, size_t limit, RoleFit fit, bool final,
-                            int search) const;
-  bool glitch_appended(uint64_t begin, uint64_t end, bool final, int search) const;
-  bool glitch_then_frame(uint64_t at, bool final, int search) const;
-  bool shorter_reading_holds(uint64_t end, bool final, int search) const;
+                            int search);
+  bool glitch_appended(uint64_t begin, uint64_t end, bool final, int search);
+  bool glitch_then_frame(uint64_t at, bool final, int search);
+  bool shorter_reading_holds(uint64_t end, bool final, int search);
   bool fits_role(Role role, uint64_t at, uint16_t length) const;
-  bool confirmed_end(uint64_t begin, uint64_t end, bool final, int search, bool allow_glitch) const;
-  bool blocked_by_gap(uint64_t at, bool final) const;
+  bool confirmed_end(uint64_t begin, uint64_t end, bool final, int search, bool allow_glitch);
+  bool blocked_by_gap(uint64_t at, bool final);
   bool copy_follows(uint64_t begin, uint64_t end) const;
   // Whether a frame a bus carries (public function code, standard exception), of known length
   // and good CRC, starts inside [begin, end), wherever it ends.
-  bool swallows_known_frame(uint64_t begin, uint64_t end) const;
-  bool swallows_exchange(uint64_t begin, uint64_t end, bool final) const;
+  bool swallows_known_frame(uint64_t begin, uint64_t end);
+  bool swallows_exchange(uint64_t begin, uint64_t end, bool final);
   std::optional<bool> answer_follows(uint64_t at, uint64_t end, bool final) const;
   // First position >= from that starts a good frame; `decided` false if one is still open.
   uint64_t next_start(uint64_t from, bool final, bool& decided);
@@ -167,14 +167,14 @@ class RtuFramer {
   AwaitedAnswer awaited_;
   ByteTimeline timeline_;
 
-  std::vector<uint8_t> buf_;    // bytes from stream offset base_ on
-  uint64_t base_ = 0;           // stream offset of buf_[0]
-  uint64_t head_ = 0;           // stream offset of the first unresolved byte
-  uint64_t end_ = 0;            // stream offset one past the last byte
-  uint64_t answer_start_ = 0;   // where the last frame (and a lone glitch after it) ended
-  uint64_t scanned_to_ = 0;     // positions below this are known not to start a frame
-  mutable CrcIndex crc_index_;  // over the searched part of buf_
-  mutable CrcHits last_hits_;
+  std::vector<uint8_t> buf_;   // bytes from stream offset base_ on
+  uint64_t base_ = 0;          // stream offset of buf_[0]
+  uint64_t head_ = 0;          // stream offset of the first unresolved byte
+  uint64_t end_ = 0;           // stream offset one past the last byte
+  uint64_t answer_start_ = 0;  // where the last frame (and a lone glitch after it) ended
+  uint64_t scanned_to_ = 0;    // positions below this are known not to start a frame
+  CrcIndex crc_index_;         // over the searched part of buf_
+  CrcHits last_hits_;
   GlitchOdds glitch_odds_;  // the bus's glitches so far, against a frame's bytes by chance
 };
 
