@@ -64,7 +64,7 @@ Role role_of(captures::PacketDirection direction) {
   return Role::unknown;
 }
 
-// " finding=NAME" for each finding in `bits`, as modtap.lua reads them.
+// " finding=NAME" for each finding in `bits`, as the Wireshark plugin reads them.
 void append_findings(fmt::memory_buffer& out, uint32_t bits) {
   for_each_frame_finding(bits, [&](size_t slot) {
     put(out, " finding=");
@@ -72,7 +72,7 @@ void append_findings(fmt::memory_buffer& out, uint32_t bits) {
   });
 }
 
-// The device model's reading, one line each after the verdicts, for modtap.lua and for people:
+// The device model's reading, one line each after the verdicts, for the plugin and for people:
 // "register 2502H frequency_command = 60.00 Hz" and "note read_only_write: ... is read-only".
 // Only the registers the model names: Wireshark's Modbus dissector shows every raw value, and
 // repeating them made a packet's comment kilobytes long (a read of 125 registers).

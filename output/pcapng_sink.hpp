@@ -121,7 +121,7 @@ struct CommentDefaults {
 std::string interface_comment(ChannelRole role, ClockQuality clock, int64_t char_ns);
 
 // The comment modtap writes on a frame or noise record: "modtap key=value ...", then a line per
-// register and model finding; parsed by modtap.lua and by modtap's own pcapng reader.
+// register and model finding; parsed by the Wireshark plugin and by modtap's pcapng reader.
 std::string frame_comment(const Frame& frame, const CommentDefaults& defaults = {});
 void append_frame_comment(fmt::memory_buffer& out, const Frame& frame,
                           const CommentDefaults& defaults);

@@ -222,7 +222,8 @@ void add_output_options(CLI::App& app, RunOptions& o, Command& command) {
                "discovery prefix than homeassistant)")
       ->needs(mqtt);
   command.link = tools::add_enum_option(
-      app, "--link", o.link, "pcapng link: user (DLT_USER + modtap.lua), exported-pdu, bare");
+      app, "--link", o.link,
+      "pcapng link: user (DLT_USER + the modtap plugin), exported-pdu, bare");
   command.dlt = app.add_option("--dlt", o.dlt, "DLT_USER link type for --link user or bare")
                     ->check(CLI::Range(147, 162));
   app.add_flag("-V,--verbose", o.verbose, "Print each frame's field tree");
