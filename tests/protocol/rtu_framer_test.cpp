@@ -828,5 +828,34 @@ TEST_F(GapCollector, AQuickRetryOrNextWriteAfterASilentSlaveStaysARequest) {
   }
 }
 
+// The bus's glitches against a frame's bytes by chance. A 0x00 after a frame whose CRC holds
+// with it is a glitch only where 0x00 glitches come with more than 1 frame in 16: odds of 16
+// over a CRC ending in 0x00 (1 in 256), once 16 frames have shown it. A damaged answer's last
+// 0x00 or 0xFF is a glitch where glitches come with more than 1 frame in 128: even odds with a
+// data byte being one (2 in 256). Before 128 frames with no glitch, the bus is not known.
+TEST(GlitchOdds, EachReadingMustClearItsOwnMargin) {
+  GlitchOdds odds;
+  EXPECT_TRUE(odds.unknown());
+  for (int i = 0; i < 15; ++i) odds.frame();
+  odds.glitch(0x00);
+  odds.glitch(0x00);
+  EXPECT_FALSE(odds.zero_glitch_likelier()) << "15 frames are too few to tell";
+  EXPECT_FALSE(odds.unknown());
+  for (int i = 15; i < 32; ++i) odds.frame();
+  EXPECT_FALSE(odds.zero_glitch_likelier()) << "2 in 32 is 1 in 16: no more than the margin";
+  odds.glitch(0xFF);
+  EXPECT_FALSE(odds.zero_glitch_likelier()) << "a 0xFF glitch says nothing of a trailing 0x00";
+  odds.glitch(0x00);
+  EXPECT_TRUE(odds.zero_glitch_likelier()) << "3 in 32";
+
+  GlitchOdds trailing;
+  for (int i = 0; i < 128; ++i) trailing.frame();
+  EXPECT_FALSE(trailing.unknown()) << "128 frames without a glitch tell";
+  trailing.glitch(0xFF);
+  EXPECT_FALSE(trailing.trailing_glitch_likelier()) << "1 in 128: even, no more";
+  trailing.glitch(0x00);
+  EXPECT_TRUE(trailing.trailing_glitch_likelier()) << "2 in 128";
+}
+
 }  // namespace
 }  // namespace modtap
