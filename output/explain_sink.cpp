@@ -73,19 +73,70 @@ void ExplainSink::explain(uint16_t channel, uint64_t offset, Mode mode) {
     return;
   }
   out_.print("  at byte {} of {}, the framer weighed:\n", offset, name);
-  bool any = false;
-  for (const FramingStep& step : steps_) {
-    if (step.channel != channel || step.offset != offset) continue;
-    any = true;
-    const EvidenceInfo& why = evidence_info(step.why);
-    out_.print("    {}", to_string(step.role));
-    if (step.length) out_.print(", {} bytes", step.length);
-    out_.print(": {} ({}: {})\n", to_string(step.outcome), why.name, why.why);
-  }
-  if (!any)
+  std::vector<const FramingStep*> weighed;
+  for (const FramingStep& step : steps_)
+    if (step.channel == channel && step.offset == offset) weighed.push_back(&step);
+  for (const FramingStep* step : weighed) print_reading(*step);
+  if (weighed.empty())
     out_.print(
         "    no reading: the byte starts no frame a slave address and function code "
         "allow\n");
+  else
+    print_margin(weighed);
+}
+
+void ExplainSink::print_reading(const FramingStep& step) {
+  const EvidenceInfo& why = evidence_info(step.why);
+  out_.print("    {}", to_string(step.role));
+  if (step.length) out_.print(", {} bytes", step.length);
+  const bool weighed =
+      step.outcome == ReadingOutcome::kept || step.outcome == ReadingOutcome::refuted;
+  if (!weighed) {
+    out_.print(": {} ({}: {})\n", to_string(step.outcome), why.name, why.why);
+    return;
+  }
+  out_.print(": {}, {:+} bits\n", to_string(step.outcome), step.score());
+  print_row(evidence_info(Evidence::length_and_crc), +1);
+  if (step.outcome == ReadingOutcome::refuted) print_row(why, -1);
+}
+
+// A row's weight and why, then its features': the crc's row is its one feature.
+void ExplainSink::print_row(const EvidenceInfo& row, int sign) {
+  if (row.feature_count == 1) {
+    const FeatureInfo& feature = feature_info(row.features[0]);
+    out_.print("      {:+4}  {}: {}\n", sign * feature.bits, feature.name, feature.why);
+    return;
+  }
+  out_.print("      {:+4}  {}: {}\n", sign * row.bits(), row.name, row.why);
+  for (size_t i = 0; i < row.feature_count; ++i) {
+    const FeatureInfo& feature = feature_info(row.features[i]);
+    out_.print("              {:+4}  {}: {}\n", sign * feature.bits, feature.name, feature.why);
+  }
+}
+
+// What won at the start, against the best of the rest; no frame at all scores 0 (the bytes
+// are junk, a glitch or a damaged frame's).
+void ExplainSink::print_margin(const std::vector<const FramingStep*>& weighed) {
+  const auto kept = std::find_if(weighed.begin(), weighed.end(), [](const FramingStep* step) {
+    return step->outcome == ReadingOutcome::kept;
+  });
+  const FramingStep* runner_up = nullptr;
+  for (const FramingStep* step : weighed)
+    if (step->outcome == ReadingOutcome::refuted &&
+        (!runner_up || step->score() > runner_up->score()))
+      runner_up = step;
+  if (kept != weighed.end()) {
+    const bool beats_nothing = !runner_up || runner_up->score() < 0;
+    out_.print("  kept by {} bits over the runner-up: {}\n",
+               (*kept)->score() - (beats_nothing ? 0 : runner_up->score()),
+               beats_nothing
+                   ? std::string("no frame here (0 bits)")
+                   : fmt::format("the {} of {} bytes ({:+} bits)", to_string(runner_up->role),
+                                 runner_up->length, runner_up->score()));
+  } else if (runner_up) {
+    out_.print("  no frame here (0 bits), by {} bits over the runner-up: the {} of {} bytes\n",
+               -runner_up->score(), to_string(runner_up->role), runner_up->length);
+  }
 }
 
 }  // namespace modtap::output

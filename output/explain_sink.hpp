@@ -1,6 +1,7 @@
 // --explain INDEX: one record as the text output prints it, then why the RTU framer cut there:
-// each reading it weighed at the record's first byte (request, response), what became of it and
-// the row of the evidence table that decided (protocol/framing_evidence.hpp).
+// each reading it weighed at the record's first byte (request, response), what became of it, its
+// score in bits with the features of the row that refuted it (protocol/framing_evidence.hpp), and
+// the winner's margin over the runner-up.
 #pragma once
 
 #include <cstdint>
@@ -30,6 +31,9 @@ class ExplainSink final : public RecordSink, public FramingObserver {
 
  private:
   void explain(uint16_t channel, uint64_t offset, Mode mode);
+  void print_reading(const FramingStep& step);
+  void print_row(const EvidenceInfo& row, int sign);
+  void print_margin(const std::vector<const FramingStep*>& weighed);
   // Every record moves the time column's clock; the one asked for is shown.
   template <typename Record>
   bool picked(const Record& record) {

@@ -1,6 +1,11 @@
-// The evidence the RTU framer weighs at a frame's start, one row each: what it is and why it
-// decides. A reading (request or response) whose length rules and CRC agree is kept unless a
-// row below says otherwise; `--explain` prints the rows that decided a record.
+// The evidence the RTU framer weighs where a reading's length rules and CRC agree on a span of
+// bytes. Each row is evidence that the span is not one frame, in whichever role it is read;
+// each is made of features weighed in bits: log2 of how many times likelier the bytes are if
+// the span is not one frame than if it is. The span's own CRC is worth 16 bits to it, and
+// every row carries a coincidence as unlikely (another span whose CRC holds, two bytes the
+// pending request predicts) and a feature more: one row outweighs the CRC, and a span that
+// scores below nothing (junk, or a damaged frame's bytes) is refuted. `--explain` prints the
+// score of each reading weighed and the features of the row that refuted it.
 #pragma once
 
 #include <array>
@@ -10,6 +15,69 @@
 #include "protocol/records.hpp"
 
 namespace modtap {
+
+enum class Feature : uint8_t {
+  crc_holds,
+  another_crc,
+  silence_inside,
+  awaited_header,
+  too_soon_for_retry,
+  glitch_odds,
+  request_again,
+  no_answer_after,
+  answer_after,
+  nothing_after,
+  bus_frame_inside,
+  unexpected_sender,
+};
+
+struct FeatureInfo {
+  std::string_view name;
+  int bits;
+  std::string_view why;
+};
+
+inline constexpr std::array<FeatureInfo, 12> feature_table{{
+    {"crc-holds", 16, "bytes that are no frame pass a CRC 1 time in 65,536"},
+    {"another-crc", 16,
+     "another span over these bytes passes its own length rules and CRC, as unlikely by "
+     "chance as this span's"},
+    {"silence-inside", 8,
+     "the clock saw a silence of t3.5 and its slack inside the span: no sender pauses so "
+     "mid-frame (the standard ends a frame at t1.5), and a clock's false silence is taken as 1 "
+     "in 256, a USB adapter's reads at worst"},
+    {"awaited-header", 16,
+     "the span starts as the awaited answer: the pending request's slave and function code "
+     "where its answer is due, 2 bytes, by chance 1 time in 65,536"},
+    {"too-soon-for-retry", 4,
+     "it came before the master's retry could (twice the longest turnaround seen, plus 20 "
+     "ms): taken as 1 in 16, a master with a shorter time-out"},
+    {"glitch-odds", 4,
+     "the bus shows 0x00 glitches at least 16 times as often as a CRC ends in 0x00 "
+     "(GlitchOdds)"},
+    {"request-again", 4,
+     "the longer span is the pending request again, byte for byte, late enough to be its "
+     "retry: taken as 1 in 16 for an answer one byte shorter its request did not ask for"},
+    {"no-answer-after", 4,
+     "no answer of its own (its slave and function code) after it, where a slave answers "
+     "nearly every request: taken as 1 in 16"},
+    {"answer-after", 16,
+     "its own answer's slave and function code right after it: 2 bytes, by chance 1 time in "
+     "65,536"},
+    {"nothing-after", 4,
+     "nothing starts where this span ends, where a frame follows nearly every frame: taken as "
+     "1 in 16"},
+    {"bus-frame-inside", 2,
+     "the frame inside has a public function code and, as an exception, a standard code: "
+     "about 1 code in 6 by chance"},
+    {"unexpected-sender", 4,
+     "a reserved address (248-255, most often a turnaround's 0xFF) or an answer nobody "
+     "awaits: taken as 1 in 16"},
+}};
+
+inline const FeatureInfo& feature_info(Feature f) {
+  return feature_table[static_cast<size_t>(f)];
+}
 
 enum class Evidence : uint8_t {
   length_and_crc,
@@ -30,56 +98,98 @@ enum class Evidence : uint8_t {
 struct EvidenceInfo {
   std::string_view name;
   std::string_view why;
+  std::array<Feature, 3> features{};
+  size_t feature_count = 0;
+
+  constexpr int bits() const {
+    int sum = 0;
+    for (size_t i = 0; i < feature_count; ++i) sum += feature_table[size_t(features[i])].bits;
+    return sum;
+  }
 };
 
 inline constexpr std::array<EvidenceInfo, 13> evidence_table{{
-    {"length-and-crc", "its function code's length rules and its CRC agree on where it ends"},
+    {"length-and-crc",
+     "its function code's length rules and its CRC agree on where it ends",
+     {Feature::crc_holds},
+     1},
     {"no-good-end",
      "neither its function code's length rules nor a CRC search give it an end where its CRC "
      "holds"},
     {"more-bytes-needed", "its length rules need bytes that have not come yet"},
     {"good-frame-before-silence",
      "a silence falls inside it, and the bytes before the silence are a frame with a good CRC "
-     "of their own (a 0x00 after a frame keeps a CRC good)"},
+     "of their own (a 0x00 after a frame keeps a CRC good)",
+     {Feature::another_crc, Feature::silence_inside},
+     2},
     {"broke-off-at-silence",
-     "a silence falls inside it and a good frame starts right after it: it broke off there"},
+     "a silence falls inside it and a good frame starts right after it: it broke off there",
+     {Feature::another_crc, Feature::silence_inside},
+     2},
     {"answer-read-as-request",
      "these are the first bytes after the request, beginning as the awaited answer (or a 0xFF "
      "glitch and that answer), read as a request the standard does not allow, too soon for the "
-     "master's next one"},
+     "master's next one",
+     {Feature::awaited_header, Feature::too_soon_for_retry},
+     2},
     {"request-inside-awaited-answer",
      "a request inside the span the awaited answer's structure claims, with no answer of its "
-     "own after it: a collision's junk whose CRC held by chance"},
+     "own after it: a collision's junk whose CRC held by chance",
+     {Feature::awaited_header, Feature::no_answer_after},
+     2},
     {"retry-and-glitch",
      "on a bus of 0x00 glitches, a copy of the pending request and a glitch read as one byte "
-     "more, late enough for the master's retry"},
+     "more, late enough for the master's retry",
+     {Feature::another_crc, Feature::glitch_odds},
+     2},
     {"retry-ending-in-zero",
      "the pending request again, whose CRC ends in 0x00, holds an answer one byte shorter that "
-     "its request did not ask for"},
+     "its request did not ask for",
+     {Feature::another_crc, Feature::request_again},
+     2},
     {"answer-copying-request",
      "a copy of the pending request too soon for a retry, where the awaited answer is longer: "
-     "that answer, cut or talked over"},
+     "that answer, cut or talked over",
+     {Feature::awaited_header, Feature::too_soon_for_retry},
+     2},
     {"answer-cut-before-request",
      "the awaited answer cut a byte short, whose missing CRC byte the next request's address "
-     "repeats, with that request right behind it"},
+     "repeats, with that request right behind it",
+     {Feature::another_crc, Feature::nothing_after},
+     2},
     {"swallows-known-frame",
      "a reserved address or an answer nobody awaits would swallow a frame whose length rules "
-     "and CRC agree"},
+     "and CRC agree",
+     {Feature::another_crc, Feature::bus_frame_inside, Feature::unexpected_sender},
+     3},
     {"swallows-exchange",
      "its CRC holds by chance across a whole exchange: a request and its answer inside it, junk "
-     "after it"},
+     "after it",
+     {Feature::another_crc, Feature::answer_after},
+     2},
 }};
 
 inline const EvidenceInfo& evidence_info(Evidence e) {
   return evidence_table[static_cast<size_t>(e)];
 }
 
+// What a span whose length rules and CRC agree scores for itself: its CRC.
+inline constexpr int span_bits = evidence_table[size_t(Evidence::length_and_crc)].bits();
+
+// Why the first row that holds may refute a span without weighing the rest: each alone
+// outweighs the CRC, and rows only ever weigh against a span.
+constexpr bool every_row_outweighs_the_crc() {
+  for (size_t i = size_t(Evidence::good_frame_before_silence); i < evidence_table.size(); ++i)
+    if (evidence_table[i].bits() <= span_bits) return false;
+  return true;
+}
+static_assert(every_row_outweighs_the_crc());
+
 // What became of one reading of the bytes at a frame's start.
-enum class ReadingOutcome : uint8_t { kept, refused, waiting, other_reading, no_frame };
+enum class ReadingOutcome : uint8_t { kept, refuted, waiting, no_frame };
 template <>
 struct EnumNames<ReadingOutcome> {
-  static constexpr std::array<std::string_view, 5> names{
-      "kept", "refused", "waiting", "gave way to the other reading", "no frame"};
+  static constexpr std::array<std::string_view, 4> names{"kept", "refuted", "waiting", "no frame"};
 };
 
 struct FramingStep {
@@ -89,6 +199,13 @@ struct FramingStep {
   uint16_t length = 0;  // the frame it found, 0 if none
   ReadingOutcome outcome = ReadingOutcome::no_frame;
   Evidence why = Evidence::no_good_end;
+
+  // Its score in bits against no frame at all (0): its CRC, less the row that refuted it.
+  int score() const {
+    if (outcome == ReadingOutcome::kept) return span_bits;
+    if (outcome == ReadingOutcome::refuted) return span_bits - evidence_info(why).bits();
+    return 0;
+  }
 };
 
 // Told each reading the framer weighs at the start of what it emits next (--explain).

@@ -87,6 +87,7 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search, bool o
   if (end_ - at < 2) return need_more();
   const Readings readings = readings_at(at);
   bool waiting = false;
+  std::optional<std::pair<uint16_t, Evidence>> refuted;  // a span refuted, in either role
   for (size_t i = 0; i < readings.count; ++i) {
     const Role role = readings.order[i];
     Match m = match_role(role, at, final, search);
@@ -95,17 +96,15 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search, bool o
     if (m.kind == Match::Kind::found) {
       Evidence why = Evidence::length_and_crc;
       const Verdict verdict =
-          judge_found({at, role, m.length, other_allowed ? &other : nullptr, final, search}, why);
+          refuted && refuted->first == m.length
+              ? (why = refuted->second, Verdict::refuted)
+              : weigh_span({at, role, m.length, other_allowed ? &other : nullptr, final, search},
+                           why);
       if (observed) observe(at, role, m.length, outcome_of(verdict), why);
-      switch (verdict) {
-        case Verdict::refuse:
-          return {};
-        case Verdict::wait:
-          return need_more();
-        case Verdict::other_reading:
-          continue;
-        case Verdict::keep:
-          break;
+      if (verdict == Verdict::wait) return need_more();
+      if (verdict == Verdict::refuted) {
+        refuted = {m.length, why};
+        continue;
       }
       // The same bytes may read as the other role too (echo codes 05, 06, 08, ...).
       if (other_allowed && fits_role(other, at, m.length)) m.fit = {true, true};
@@ -145,9 +144,8 @@ RtuFramer::Readings RtuFramer::readings_at(uint64_t at) const {
 }
 
 ReadingOutcome RtuFramer::outcome_of(Verdict verdict) {
-  static constexpr ReadingOutcome outcomes[] = {ReadingOutcome::kept, ReadingOutcome::refused,
-                                                ReadingOutcome::waiting,
-                                                ReadingOutcome::other_reading};
+  static constexpr ReadingOutcome outcomes[] = {ReadingOutcome::kept, ReadingOutcome::refuted,
+                                                ReadingOutcome::waiting};
   return outcomes[static_cast<size_t>(verdict)];
 }
 
@@ -156,53 +154,58 @@ void RtuFramer::observe(uint64_t at, Role role, uint16_t length, ReadingOutcome 
   if (options_.observer) options_.observer->on_reading({channel_, at, role, length, outcome, why});
 }
 
-// What the bus says against a reading of [at, at + length) whose length rules and CRC agree:
-// the first row of this table that has something to say decides, and names its evidence.
-RtuFramer::Verdict RtuFramer::judge_found(const Reading& r, Evidence& why) {
-  return first_verdict<
-      Row{Evidence::good_frame_before_silence, &RtuFramer::good_frame_before_silence},
-      Row{Evidence::broke_off_at_silence, &RtuFramer::broke_off_at_silence},
-      Row{Evidence::answer_read_as_request, &RtuFramer::answer_read_as_request},
-      Row{Evidence::request_inside_awaited_answer, &RtuFramer::request_inside_awaited_answer},
-      Row{Evidence::retry_and_glitch, &RtuFramer::retry_and_glitch},
-      Row{Evidence::retry_ending_in_zero, &RtuFramer::retry_ending_in_zero},
-      Row{Evidence::answer_copying_request, &RtuFramer::answer_copying_request},
-      Row{Evidence::answer_cut_before_request, &RtuFramer::answer_cut_before_request},
-      Row{Evidence::swallows_known_frame, &RtuFramer::swallows_known_frame_reading},
-      Row{Evidence::swallows_exchange, &RtuFramer::swallows_exchange_reading}>(r, why);
+// What the bus says against the span [at, at + length) being one frame, where a reading's length
+// rules and CRC agree on it. Each row is evidence that it is not, heavier than its CRC
+// (framing_evidence.hpp): the span is refuted, in either role, by the first row that holds, and
+// waits where a row's bytes have not come yet and none refutes it.
+RtuFramer::Verdict RtuFramer::weigh_span(const Reading& r, Evidence& why) {
+  return weigh_rows<Row{Evidence::good_frame_before_silence, &RtuFramer::good_frame_before_silence},
+                    Row{Evidence::broke_off_at_silence, &RtuFramer::broke_off_at_silence},
+                    Row{Evidence::answer_read_as_request, &RtuFramer::answer_read_as_request},
+                    Row{Evidence::request_inside_awaited_answer,
+                        &RtuFramer::request_inside_awaited_answer},
+                    Row{Evidence::retry_and_glitch, &RtuFramer::retry_and_glitch},
+                    Row{Evidence::retry_ending_in_zero, &RtuFramer::retry_ending_in_zero},
+                    Row{Evidence::answer_copying_request, &RtuFramer::answer_copying_request},
+                    Row{Evidence::answer_cut_before_request, &RtuFramer::answer_cut_before_request},
+                    Row{Evidence::swallows_known_frame, &RtuFramer::swallows_known_frame_reading},
+                    Row{Evidence::swallows_exchange, &RtuFramer::swallows_exchange_reading}>(r,
+                                                                                             why);
 }
 
-// The rows in order, unrolled at compile time: judging runs once a frame.
+// The rows unrolled at compile time: weighing runs once a frame.
 template <RtuFramer::Row... rows>
-RtuFramer::Verdict RtuFramer::first_verdict(const Reading& r, Evidence& why) {
-  std::optional<Verdict> verdict;
-  const bool decided =
-      ((verdict = (this->*rows.judge)(r), verdict && (why = rows.evidence, true)) || ...);
-  if (decided) return *verdict;
-  why = Evidence::length_and_crc;
-  return Verdict::keep;
+RtuFramer::Verdict RtuFramer::weigh_rows(const Reading& r, Evidence& why) {
+  std::optional<Evidence> unknown;
+  const auto refutes = [&](Evidence evidence, Say say) {
+    if (say == Say::unknown && !unknown) unknown = evidence;
+    return say == Say::refutes && (why = evidence, true);
+  };
+  if ((refutes(rows.evidence, (this->*rows.says)(r)) || ...)) return Verdict::refuted;
+  why = unknown.value_or(Evidence::length_and_crc);
+  return unknown ? Verdict::wait : Verdict::keep;
 }
 
 // A frame ends before a silence inside the reading, and what came after it kept the CRC good
 // (a trailing 0x00 keeps a zero residue zero: a retry of FC07, four bytes, and the 0x00 of a
 // broadcast after the silence read as its five-byte answer): the other reading, if any, is the
 // frame, whatever comes after the silence.
-std::optional<RtuFramer::Verdict> RtuFramer::good_frame_before_silence(const Reading& r) {
+RtuFramer::Say RtuFramer::good_frame_before_silence(const Reading& r) {
   const uint64_t gap = timeline_.first_gap_after(r.at);
   if (gap < r.at + r.length && gap - r.at >= min_adu && rtu_crc_holds(bytes(r.at, gap)))
-    return Verdict::other_reading;
-  return std::nullopt;
+    return Say::refutes;
+  return Say::nothing;
 }
 
 // A silence inside a frame, with a good frame starting right after it, means this was a frame
 // that broke off, whatever its CRC says.
-std::optional<RtuFramer::Verdict> RtuFramer::broke_off_at_silence(const Reading& r) {
+RtuFramer::Say RtuFramer::broke_off_at_silence(const Reading& r) {
   const uint64_t gap = timeline_.first_gap_after(r.at);
-  if (gap >= r.at + r.length) return std::nullopt;
+  if (gap >= r.at + r.length) return Say::nothing;
   const Match after_gap = match_at(gap, r.final, 0);
-  if (after_gap.kind == Match::Kind::found) return Verdict::refuse;
-  if (after_gap.kind == Match::Kind::need_more && !r.final) return Verdict::wait;
-  return std::nullopt;
+  if (after_gap.kind == Match::Kind::found) return Say::refutes;
+  if (after_gap.kind == Match::Kind::need_more && !r.final) return Say::unknown;
+  return Say::nothing;
 }
 
 // The first bytes after the request (a glitch aside), beginning as the awaited answer with
@@ -214,17 +217,17 @@ std::optional<RtuFramer::Verdict> RtuFramer::broke_off_at_silence(const Reading&
 // for slave 255, where slave 3's answer to FC0C began after its driver's 0xFF. (A request the
 // standard allows may be the master's, after a time-out shorter than the threshold: a write of
 // the same block with new values begins as its echo would.)
-std::optional<RtuFramer::Verdict> RtuFramer::answer_read_as_request(const Reading& r) {
+RtuFramer::Say RtuFramer::answer_read_as_request(const Reading& r) {
   if (r.role != Role::request || !r.other || !first_after_request(r.at) ||
       !too_soon_for_retry(r.at) || awaited_.copies_request(from(r.at), r.length))
-    return std::nullopt;
+    return Say::nothing;
   const uint8_t* p = at_ptr(r.at);
   const bool junk_as_request =
       awaited_.begins(from(r.at)) &&
       request_spec_findings({p + 1, static_cast<size_t>(r.length - 1 - crc_size)}) != 0;
   const bool glitch_then_awaited = p[0] == 0xFF && awaited_.length(from(r.at + 1)).has_value();
-  if (junk_as_request || glitch_then_awaited) return Verdict::refuse;
-  return std::nullopt;
+  if (junk_as_request || glitch_then_awaited) return Say::refutes;
+  return Say::nothing;
 }
 
 // A request inside the span the awaited answer's structure claims is a collision's junk that
@@ -234,38 +237,38 @@ std::optional<RtuFramer::Verdict> RtuFramer::answer_read_as_request(const Readin
 // another slave's request (1008); a read of 10,773 inputs of slave 131 from the second byte of
 // a cut exception `ae 83 02` on (946). A silence after it may be its slave's; with no clock,
 // where the master's time-out after a silent slave cannot show, no rule.
-std::optional<RtuFramer::Verdict> RtuFramer::request_inside_awaited_answer(const Reading& r) {
+RtuFramer::Say RtuFramer::request_inside_awaited_answer(const Reading& r) {
   if (r.role != Role::request || *at_ptr(r.at) == 0 || options_.clock == ClockQuality::none ||
       r.at <= head_ || r.at >= awaited_end(head_))
-    return std::nullopt;
+    return Say::nothing;
   const auto answered = answer_follows(r.at, r.at + r.length, r.final);
-  if (!answered) return Verdict::wait;
-  if (!*answered) return Verdict::refuse;
-  return std::nullopt;
+  if (!answered) return Say::unknown;
+  if (!*answered) return Say::refutes;
+  return Say::nothing;
 }
 
 // A copy of the pending request with a glitch after it reads as a response of one more byte
 // (FC07: a status equal to the request's CRC low byte); on a bus of glitches, the copy is the
 // likelier (a master's retry), unless it came too soon for a retry. (Any other frame whose CRC
 // ends in 0x00 holds a frame one byte shorter too: that is no reason to cut it.)
-std::optional<RtuFramer::Verdict> RtuFramer::retry_and_glitch(const Reading& r) {
+RtuFramer::Say RtuFramer::retry_and_glitch(const Reading& r) {
   if (r.other && *r.other == Role::request && glitch_odds_.zero_glitch_likelier() &&
       at_ptr(r.at)[r.length - 1] == 0x00 && timeline_.after_quiet_line(r.at + r.length - 1) &&
       awaited_.copies_request(from(r.at), r.length - 1) && !too_soon_for_retry(r.at))
-    return Verdict::other_reading;
-  return std::nullopt;
+    return Say::refutes;
+  return Say::nothing;
 }
 
 // The pending request again (a retry) whose CRC ends in 0x00 holds a response one byte shorter,
 // which its request would not have asked for: the copy is the reading, once its last byte is
 // there to say so.
-std::optional<RtuFramer::Verdict> RtuFramer::retry_ending_in_zero(const Reading& r) {
+RtuFramer::Say RtuFramer::retry_ending_in_zero(const Reading& r) {
   if (!r.other || *r.other != Role::request || !awaited_.starts_request_copy(from(r.at), r.length))
-    return std::nullopt;
-  if (r.at + r.length == end_) return r.final ? std::nullopt : std::optional(Verdict::wait);
+    return Say::nothing;
+  if (r.at + r.length == end_) return r.final ? Say::nothing : Say::unknown;
   if (awaited_.copies_request(from(r.at), r.length + 1) && !too_soon_for_retry(r.at))
-    return Verdict::other_reading;
-  return std::nullopt;
+    return Say::refutes;
+  return Say::nothing;
 }
 
 // A copy of the pending request too soon for a retry, where the awaited answer is longer, is
@@ -277,23 +280,23 @@ std::optional<RtuFramer::Verdict> RtuFramer::retry_ending_in_zero(const Reading&
 // frame explains after the copy make it the answer, unless they begin as the answer to it
 // would (a FC07 poll `c7 07 12 42` again after a talked-over answer, then its own answer
 // talked over, `c7 07 31 c1 cd`; seed 1021).
-std::optional<RtuFramer::Verdict> RtuFramer::answer_copying_request(const Reading& r) {
+RtuFramer::Say RtuFramer::answer_copying_request(const Reading& r) {
   if (!r.other || *r.other != Role::response || !awaited_.copies_request(from(r.at), r.length) ||
       !too_soon_for_retry(r.at))
-    return std::nullopt;
+    return Say::nothing;
   const uint64_t end = r.at + r.length;
   const auto awaited = awaited_.length(from(r.at));
-  if (!awaited || *awaited <= r.length) return std::nullopt;
+  if (!awaited || *awaited <= r.length) return Say::nothing;
   if (first_after_request(r.at) && awaited_.may_begin_with_copy(bytes(r.at, end), *awaited))
-    return Verdict::refuse;
-  if (end == end_) return r.final ? std::nullopt : std::optional(Verdict::wait);  // what follows
-  if (timeline_.gap_at(end)) return std::nullopt;
+    return Say::refutes;
+  if (end == end_) return r.final ? Say::nothing : Say::unknown;  // what follows
+  if (timeline_.gap_at(end)) return Say::nothing;
   const Match next = match_at(end, r.final, 0);
-  if (next.kind == Match::Kind::need_more && !r.final) return Verdict::wait;
+  if (next.kind == Match::Kind::need_more && !r.final) return Say::unknown;
   if (next.kind == Match::Kind::none && !glitch_then_frame(end, r.final, 0) &&
       !awaited_.starts(from(end)))
-    return Verdict::refuse;
-  return std::nullopt;
+    return Say::refutes;
+  return Say::nothing;
 }
 
 // The awaited response cut one byte short, whose missing CRC byte the next request's slave
@@ -301,15 +304,15 @@ std::optional<RtuFramer::Verdict> RtuFramer::answer_copying_request(const Readin
 // bytes after it tell. Only on a bus channel (on a split tap the request is on the other), and
 // only for a reading that may search on (search 0: nested in another reading's judgement, or a
 // CRC search at its depth), so that it never nests.
-std::optional<RtuFramer::Verdict> RtuFramer::answer_cut_before_request(const Reading& r) {
+RtuFramer::Say RtuFramer::answer_cut_before_request(const Reading& r) {
   const uint8_t* p = at_ptr(r.at);
   if (r.role != Role::response || options_.role != ChannelRole::bus || r.search <= 0 ||
       !expected_.pending || expected_.slave != p[0] || expected_.function != (p[1] & 0x7F))
-    return std::nullopt;
+    return Say::nothing;
   const auto cut = cut_before_frame(r.at, r.length, r.final);
-  if (!cut) return Verdict::wait;
-  if (*cut) return Verdict::refuse;
-  return std::nullopt;
+  if (!cut) return Say::unknown;
+  if (*cut) return Say::refutes;
+  return Say::nothing;
 }
 
 // A reserved address is as often a turnaround's 0xFF, and an answer nobody awaits (another
@@ -317,13 +320,13 @@ std::optional<RtuFramer::Verdict> RtuFramer::answer_cut_before_request(const Rea
 // frame never swallows one whose length rules and CRC agree (a glitch, a response and the next
 // glitch can read as one; a talked-over exception's tail read as a 245-byte answer of a slave
 // nobody asked, across the next request and its answer).
-std::optional<RtuFramer::Verdict> RtuFramer::swallows_known_frame_reading(const Reading& r) {
+RtuFramer::Say RtuFramer::swallows_known_frame_reading(const Reading& r) {
   const uint8_t* p = at_ptr(r.at);
   const bool unawaited = r.role == Role::response && expected_.pending &&
                          (expected_.slave != p[0] || expected_.function != (p[1] & 0x7F));
   if ((p[0] > max_unicast_slave || unawaited) && swallows_known_frame(r.at, r.at + r.length))
-    return Verdict::refuse;
-  return std::nullopt;
+    return Say::refutes;
+  return Say::nothing;
 }
 
 // Nor does any frame whose CRC holds by chance across a whole exchange: junk after it, and
@@ -331,9 +334,9 @@ std::optional<RtuFramer::Verdict> RtuFramer::swallows_known_frame_reading(const 
 // `a5 0c 08 fb e1 58`, a glitch, the next request `10 0b 4d b7`, a glitch and its answer's
 // slave address passed a CRC as the 13 bytes the answer claimed (seed 1073); a FC0F request of
 // 255 bytes from inside a talked-over answer on, across the two exchanges after it (1020).
-std::optional<RtuFramer::Verdict> RtuFramer::swallows_exchange_reading(const Reading& r) {
-  if (r.search > 0 && swallows_exchange(r.at, r.at + r.length, r.final)) return Verdict::refuse;
-  return std::nullopt;
+RtuFramer::Say RtuFramer::swallows_exchange_reading(const Reading& r) {
+  if (r.search > 0 && swallows_exchange(r.at, r.at + r.length, r.final)) return Say::refutes;
+  return Say::nothing;
 }
 
 // Whether what follows the request [at, end), after a glitch if one comes, may be its answer:

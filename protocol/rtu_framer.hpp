@@ -81,7 +81,10 @@ class RtuFramer {
   // `search` is how many variable-length frames in a row may be found by CRC search; a reading
   // nested in another's judgement is not `observed`.
   Match match_at(uint64_t at, bool final, int search, bool observed = false);
-  enum class Verdict : uint8_t { keep, refuse, wait, other_reading };
+  enum class Verdict : uint8_t { keep, refuted, wait };
+  // What a row of the evidence table says of a span: nothing, that it is not one frame, or
+  // that the bytes that would tell have not come yet.
+  enum class Say : uint8_t { nothing, refutes, unknown };
   // A reading of [at, at + length) as `role` whose length rules and CRC agree; `other` is the
   // other role, where it is allowed.
   struct Reading {
@@ -92,24 +95,24 @@ class RtuFramer {
     bool final;
     int search;
   };
-  Verdict judge_found(const Reading& reading, Evidence& why);
-  struct Row {  // a row of judge_found's table: its evidence, and what it says of a reading
+  Verdict weigh_span(const Reading& reading, Evidence& why);
+  struct Row {  // a row of weigh_span's table: its evidence, and what it says of a span
     Evidence evidence;
-    std::optional<Verdict> (RtuFramer::*judge)(const Reading&);
+    Say (RtuFramer::*says)(const Reading&);
   };
   template <Row... rows>
-  Verdict first_verdict(const Reading& reading, Evidence& why);
-  // The rows of judge_found's table: a verdict where the evidence has one to give.
-  std::optional<Verdict> good_frame_before_silence(const Reading& r);
-  std::optional<Verdict> broke_off_at_silence(const Reading& r);
-  std::optional<Verdict> answer_read_as_request(const Reading& r);
-  std::optional<Verdict> request_inside_awaited_answer(const Reading& r);
-  std::optional<Verdict> retry_and_glitch(const Reading& r);
-  std::optional<Verdict> retry_ending_in_zero(const Reading& r);
-  std::optional<Verdict> answer_copying_request(const Reading& r);
-  std::optional<Verdict> answer_cut_before_request(const Reading& r);
-  std::optional<Verdict> swallows_known_frame_reading(const Reading& r);
-  std::optional<Verdict> swallows_exchange_reading(const Reading& r);
+  Verdict weigh_rows(const Reading& reading, Evidence& why);
+  // The rows of weigh_span's table.
+  Say good_frame_before_silence(const Reading& r);
+  Say broke_off_at_silence(const Reading& r);
+  Say answer_read_as_request(const Reading& r);
+  Say request_inside_awaited_answer(const Reading& r);
+  Say retry_and_glitch(const Reading& r);
+  Say retry_ending_in_zero(const Reading& r);
+  Say answer_copying_request(const Reading& r);
+  Say answer_cut_before_request(const Reading& r);
+  Say swallows_known_frame_reading(const Reading& r);
+  Say swallows_exchange_reading(const Reading& r);
   static ReadingOutcome outcome_of(Verdict verdict);
   void observe(uint64_t at, Role role, uint16_t length, ReadingOutcome outcome, Evidence why) const;
   std::optional<bool> cut_before_frame(uint64_t at, uint16_t length, bool final);

@@ -501,7 +501,7 @@ class Weighed final : public FramingObserver, public RecordSink {
   void on_timeout(const Timeout&) override {}
 
   std::vector<uint64_t> good_frames_not_kept, bad_frames_kept, noise_kept;
-  std::map<Evidence, size_t> deciding;  // rows that refused, held back or gave way
+  std::map<Evidence, size_t> deciding;  // rows that refuted a span or held it back
 
  private:
   bool kept_at(uint64_t offset, size_t size) const {

@@ -600,6 +600,27 @@ TEST_F(GapCollector, AnAnswerThatStartsAsACopyOfItsRequestIsNotARetry) {
   }
 }
 
+// A span the bytes refute is no frame in either role. FC06's echo cut one byte short, the next
+// request's slave address (155) its missing CRC byte: the eight bytes read as the echo and as
+// the request again, byte for byte. What follows refutes the span as the answer (a whole
+// request starts at its last byte, nothing after it), and so as the master's retry too, though
+// no row speaks against the retry (slave 155 does not answer, so no exchange is swallowed).
+TEST_F(GapCollector, ASpanRefutedAsTheAnswerIsNoRetryEither) {
+  const auto request = hex("11 06 00 01 00 03 9a 9b");
+  const auto cut = hex("11 06 00 01 00 03 9a");
+  const auto next = hex("9b 03 00 00 00 01 99 f0");
+  const std::vector<Piece> pieces{
+      {20'000'000, request}, {2'000'000, concat({cut, next})}, {200'000'000, read_request}};
+  const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+  ASSERT_EQ(frames.size(), 4u);
+  EXPECT_EQ(frames[1].raw, cut);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].damage, Damage::cut);
+  EXPECT_EQ(frames[2].raw, next);
+  EXPECT_EQ(frames[2].role, Role::request);
+  EXPECT_TRUE(frames[2].check_ok);
+}
+
 // An FC07 answer cut one byte short, and the next request's slave address (142) is its missing
 // CRC byte: the bytes read as the whole answer and a request one byte short. What follows
 // tells: nothing starts after the longer answer, and a whole request starts at its last byte.

@@ -1133,20 +1133,26 @@ TEST(Cli, AModelsMeaningOfAnExceptionCodeIsItsNameInEveryOutput) {
 
 // --explain answers "why did modtap cut here?". A master's retry of FC07 (`01 07 41 E2`), a
 // silence, then a broadcast: the retry and the broadcast's 0x00 pass a CRC as the five-byte
-// answer the bus waits for, but a silence lies inside that reading and the four bytes before it
-// hold their own CRC, so the reading gives way and the request is kept.
+// answer the bus waits for, but a silence lies inside that span and the four bytes before it
+// hold their own CRC: 24 bits against the span's 16, so it is refuted and the request, 16 bits
+// over no frame at all, is kept.
 TEST(Cli, ExplainNamesTheReadingsWeighedAndTheEvidenceThatDecided) {
   const std::string log =
       hexlog("modtap-explain.log", {"00.000000", "01 07 41 E2", "00.300000", "01 07 41 E2",
                                     "00.400000", "00 06 00 10 00 05 49 DD"});
   const Outcome r = run("-r " + log + " --explain 2");
   ASSERT_EQ(r.status, 0);
-  ASSERT_EQ(r.lines.size(), 4u) << ::testing::PrintToString(r.lines);
+  ASSERT_EQ(r.lines.size(), 10u) << ::testing::PrintToString(r.lines);
   EXPECT_THAT(r.lines[0], ::testing::MatchesRegex(" +2 +0\\.300000 req slave 1 .*"));
   EXPECT_THAT(r.lines[1], ::testing::HasSubstr("at byte 4 of"));
-  EXPECT_THAT(r.lines[2], ::testing::StartsWith("    response, 5 bytes: gave way to the other "
-                                                "reading (good-frame-before-silence: "));
-  EXPECT_THAT(r.lines[3], ::testing::StartsWith("    request, 4 bytes: kept (length-and-crc: "));
+  EXPECT_EQ(r.lines[2], "    response, 5 bytes: refuted, -8 bits");
+  EXPECT_THAT(r.lines[3], ::testing::StartsWith("       +16  crc-holds: "));
+  EXPECT_THAT(r.lines[4], ::testing::StartsWith("       -24  good-frame-before-silence: "));
+  EXPECT_THAT(r.lines[5], ::testing::StartsWith("               -16  another-crc: "));
+  EXPECT_THAT(r.lines[6], ::testing::StartsWith("                -8  silence-inside: "));
+  EXPECT_EQ(r.lines[7], "    request, 4 bytes: kept, +16 bits");
+  EXPECT_THAT(r.lines[8], ::testing::StartsWith("       +16  crc-holds: "));
+  EXPECT_EQ(r.lines[9], "  kept by 16 bits over the runner-up: no frame here (0 bits)");
   const Outcome missing = run("-r " + log + " --explain 9");
   EXPECT_NE(missing.status, 0);
   EXPECT_THAT(missing.lines, ::testing::Contains(
