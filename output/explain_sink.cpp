@@ -96,6 +96,10 @@ void ExplainSink::print_reading(const FramingStep& step) {
     return;
   }
   out_.print(": {}, {:+} bits\n", to_string(step.outcome), step.score());
+  if (step.end != SpanEnd::length_rules) {
+    const SpanEndInfo& end = span_end_info(step.end);
+    out_.print("            its end ({}): {}\n", end.name, end.why);
+  }
   print_row(evidence_info(Evidence::length_and_crc), +1);
   if (step.outcome == ReadingOutcome::refuted) print_row(why, -1);
 }

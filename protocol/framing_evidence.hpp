@@ -185,6 +185,49 @@ constexpr bool every_row_outweighs_the_crc() {
 }
 static_assert(every_row_outweighs_the_crc());
 
+// What says where a span ends. Its function code's length rules, mostly; for a code with no
+// length of its own (a vendor's, FC08 Return Query Data), a CRC search, whose hit is weak
+// evidence (a CRC holds at one of up to 256 ends, and a 0x00 after a frame keeps it holding)
+// until something confirms the end.
+enum class SpanEnd : uint8_t {
+  length_rules,
+  echo_length,
+  silence_after,
+  pause_after,
+  frame_after,
+  copy_after,
+  glitch_then_frame,
+  input_end,
+  header_alone,
+};
+
+struct SpanEndInfo {
+  std::string_view name;
+  std::string_view why;
+};
+
+inline constexpr std::array<SpanEndInfo, 9> span_end_table{{
+    {"length-rules", "its function code's length rules"},
+    {"echo-length", "the pending FC08 request's length: its echo is as long"},
+    {"silence-after", "a CRC search, its end confirmed by a silence of t3.5 right after it"},
+    {"pause-after",
+     "a CRC search, its end confirmed by a pause over t1.5 right after it (a clock per byte): "
+     "no frame goes on across one"},
+    {"frame-after", "a CRC search, its end confirmed by a good frame starting right after it"},
+    {"copy-after",
+     "a CRC search, its end confirmed by its exact copy right after it (FC08's echo)"},
+    {"glitch-then-frame",
+     "a CRC search, its end confirmed by a turnaround's glitch and a good frame after it"},
+    {"input-end", "a CRC search, its end where the input ends"},
+    {"header-alone",
+     "a CRC search with nothing to confirm its end: FC08 Return Query Data, standing on its "
+     "header (slave, 08, sub-function 0000) and CRC once nothing more can"},
+}};
+
+inline const SpanEndInfo& span_end_info(SpanEnd e) {
+  return span_end_table[static_cast<size_t>(e)];
+}
+
 // What became of one reading of the bytes at a frame's start.
 enum class ReadingOutcome : uint8_t { kept, refuted, waiting, no_frame };
 template <>
@@ -197,6 +240,7 @@ struct FramingStep {
   uint64_t offset = 0;  // where the reading starts
   Role role = Role::request;
   uint16_t length = 0;  // the frame it found, 0 if none
+  SpanEnd end = SpanEnd::length_rules;
   ReadingOutcome outcome = ReadingOutcome::no_frame;
   Evidence why = Evidence::no_good_end;
 

@@ -100,7 +100,7 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search, bool o
               ? (why = refuted->second, Verdict::refuted)
               : weigh_span({at, role, m.length, other_allowed ? &other : nullptr, final, search},
                            why);
-      if (observed) observe(at, role, m.length, outcome_of(verdict), why);
+      if (observed) observe(at, role, m, outcome_of(verdict), why);
       if (verdict == Verdict::wait) return need_more();
       if (verdict == Verdict::refuted) {
         refuted = {m.length, why};
@@ -112,7 +112,7 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search, bool o
     }
     const bool open = m.kind == Match::Kind::need_more;
     if (observed)
-      observe(at, role, 0, open ? ReadingOutcome::waiting : ReadingOutcome::no_frame,
+      observe(at, role, {}, open ? ReadingOutcome::waiting : ReadingOutcome::no_frame,
               open ? Evidence::more_bytes_needed : Evidence::no_good_end);
     // The likelier reading is still open: wait for it rather than take the other one early,
     // unless a silence with a good frame after it says it never completes (a master's retry
@@ -149,9 +149,10 @@ ReadingOutcome RtuFramer::outcome_of(Verdict verdict) {
   return outcomes[static_cast<size_t>(verdict)];
 }
 
-void RtuFramer::observe(uint64_t at, Role role, uint16_t length, ReadingOutcome outcome,
+void RtuFramer::observe(uint64_t at, Role role, const Match& match, ReadingOutcome outcome,
                         Evidence why) const {
-  if (options_.observer) options_.observer->on_reading({channel_, at, role, length, outcome, why});
+  if (options_.observer)
+    options_.observer->on_reading({channel_, at, role, match.length, match.end, outcome, why});
 }
 
 // What the bus says against the span [at, at + length) being one frame, where a reading's length
@@ -433,11 +434,12 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
           // a 0x00 follows it with no silence before it (a good frame and a 0x00 check again),
           // one byte shorter where it ends in 0x00.
           const uint16_t n = expected.echo_size;
-          if (!expected.echo_end_in_doubt) return {Match::Kind::found, n, fit};
+          if (!expected.echo_end_in_doubt)
+            return {Match::Kind::found, n, fit, false, SpanEnd::echo_length};
           if (avail == n && !final) return need_more();
           const bool doubt =
               p[n - 1] == 0x00 || (avail > n && p[n] == 0x00 && !timeline_.gap_at(at + n));
-          return {Match::Kind::found, n, fit, doubt};
+          return {Match::Kind::found, n, fit, doubt, SpanEnd::echo_length};
         }
       }
       // No station answers to 255 on a serial line (N3 counts to 254), and 0xFF is what a
@@ -477,7 +479,8 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
         continue;
       }
       // Whether it swallows a frame is the costly question: asked only where it decides.
-      const bool confirmed = confirmed_end(at, at + n, final, search - 1, allow_glitch);
+      const std::optional<SpanEnd> confirmed =
+          confirmed_end(at, at + n, final, search - 1, allow_glitch);
       const bool at_end = at + n == end_;
       // A reserved address is as often a turnaround's 0xFF: its frame needs confirming.
       const bool may_stand_alone = !unconfirmed && p[1] == 0x08 && p[0] <= max_unicast_slave;
@@ -487,7 +490,7 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       // ending in a 0x00 that could be a glitch after a good frame one byte shorter.
       const bool doubt = (allow_glitch && i + 1 < hit_count && hits[i + 1] == n + 1) ||
                          (zero_appended && shorter_reading_holds(at + n, final, search - 1));
-      if (confirmed) return {Match::Kind::found, n, fit, doubt};
+      if (confirmed) return {Match::Kind::found, n, fit, doubt, *confirmed};
       open |= at_end;
       if (may_stand_alone) unconfirmed = n;
     }
@@ -502,7 +505,8 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       (final || (avail >= max_rtu_adu && !open) || blocked_by_gap(at, final))) {
     const bool longer_holds = std::find(hits.begin(), hits.begin() + hit_count, unconfirmed + 1) !=
                               hits.begin() + hit_count;
-    return {Match::Kind::found, static_cast<uint16_t>(unconfirmed), fit, longer_holds};
+    return {Match::Kind::found, static_cast<uint16_t>(unconfirmed), fit, longer_holds,
+            SpanEnd::header_alone};
   }
   if (!final && (avail < max_rtu_adu || open)) return need_more();
   return {};
@@ -542,9 +546,10 @@ RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_
     previous_hit = hit;
     crc = crc16_step(crc, p[n - crc_size]);
     if (!hit || (zero_appended && glitch_appended(at, at + n, final, search - 1))) continue;
-    if (confirmed_end(at, at + n, final, search - 1, false) && !swallows_known_frame(at, at + n))
+    const std::optional<SpanEnd> confirmed = confirmed_end(at, at + n, final, search - 1, false);
+    if (confirmed && !swallows_known_frame(at, at + n))
       return {Match::Kind::found, static_cast<uint16_t>(n), fit,
-              zero_appended && shorter_reading_holds(at + n, final, search - 1)};
+              zero_appended && shorter_reading_holds(at + n, final, search - 1), *confirmed};
   }
   return {};
 }
@@ -587,18 +592,20 @@ bool RtuFramer::fits_role(Role role, uint64_t at, uint16_t length) const {
   return body.kind == BodyLength::Kind::variable && body.bytes + crc_size <= length;
 }
 
-bool RtuFramer::confirmed_end(uint64_t begin, uint64_t end, bool final, int search,
-                              bool allow_glitch) {
-  if (end == end_) return final;
-  if (timeline_.gap_at(end) || (end > head_ && timeline_.paused_before(end)) ||
-      match_at(end, final, search).kind == Match::Kind::found)
-    return true;
-  if (copy_follows(begin, end)) return true;
+std::optional<SpanEnd> RtuFramer::confirmed_end(uint64_t begin, uint64_t end, bool final,
+                                                int search, bool allow_glitch) {
+  if (end == end_) return final ? std::optional(SpanEnd::input_end) : std::nullopt;
+  if (timeline_.gap_at(end)) return SpanEnd::silence_after;
+  if (end > head_ && timeline_.paused_before(end)) return SpanEnd::pause_after;
+  if (match_at(end, final, search).kind == Match::Kind::found) return SpanEnd::frame_after;
+  if (copy_follows(begin, end)) return SpanEnd::copy_after;
   // A turnaround glitch between this frame and the next still confirms this end; without
   // this, the glitch's 0x00 would be taken into the frame (it keeps the CRC residue zero).
   const uint8_t next = *at_ptr(end);
-  return allow_glitch && is_glitch_byte(next) && end + 1 < end_ &&
-         (timeline_.gap_at(end + 1) || match_at(end + 1, final, search).kind == Match::Kind::found);
+  if (allow_glitch && is_glitch_byte(next) && end + 1 < end_ &&
+      (timeline_.gap_at(end + 1) || match_at(end + 1, final, search).kind == Match::Kind::found))
+    return SpanEnd::glitch_then_frame;
+  return std::nullopt;
 }
 
 // An exact copy right behind is the echo of FC08 Return Query Data; a silence inside it says

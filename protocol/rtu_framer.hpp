@@ -57,6 +57,7 @@ class RtuFramer {
     RoleFit fit;
     // One byte longer or shorter reads as a good frame too, a 0x00 the frame's or a glitch.
     bool ambiguous_end = false;
+    SpanEnd end = SpanEnd::length_rules;
   };
   static Match need_more() { return {Match::Kind::need_more, 0, {}}; }
   struct CrcHits {
@@ -114,7 +115,8 @@ class RtuFramer {
   Say swallows_known_frame_reading(const Reading& r);
   Say swallows_exchange_reading(const Reading& r);
   static ReadingOutcome outcome_of(Verdict verdict);
-  void observe(uint64_t at, Role role, uint16_t length, ReadingOutcome outcome, Evidence why) const;
+  void observe(uint64_t at, Role role, const Match& match, ReadingOutcome outcome,
+               Evidence why) const;
   std::optional<bool> cut_before_frame(uint64_t at, uint16_t length, bool final);
   bool first_after_request(uint64_t at) const;
   // A copy of the pending request starting at `at` came before the master could time out.
@@ -133,7 +135,9 @@ class RtuFramer {
   bool glitch_then_frame(uint64_t at, bool final, int search);
   bool shorter_reading_holds(uint64_t end, bool final, int search);
   bool fits_role(Role role, uint64_t at, uint16_t length) const;
-  bool confirmed_end(uint64_t begin, uint64_t end, bool final, int search, bool allow_glitch);
+  // What confirms a CRC search's hit at `end`, if anything does.
+  std::optional<SpanEnd> confirmed_end(uint64_t begin, uint64_t end, bool final, int search,
+                                       bool allow_glitch);
   bool blocked_by_gap(uint64_t at, bool final);
   bool copy_follows(uint64_t begin, uint64_t end) const;
   // Whether a frame a bus carries (public function code, standard exception), of known length

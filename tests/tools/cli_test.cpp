@@ -1131,6 +1131,22 @@ TEST(Cli, AModelsMeaningOfAnExceptionCodeIsItsNameInEveryOutput) {
   }
 }
 
+// A vendor's function code has no length of its own: its end is where a CRC search found one
+// and something confirmed it, here the silence before the next request. --explain says which.
+TEST(Cli, ExplainSaysWhatConfirmedAnEndACrcSearchFound) {
+  const std::string log =
+      hexlog("modtap-explain-search.log",
+             {"00.000000", "01 41 02 03 10 AD", "00.100000", "01 03 00 00 00 01 84 0A"});
+  const Outcome r = run("-r " + log + " --explain 1");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_GE(r.lines.size(), 4u) << ::testing::PrintToString(r.lines);
+  EXPECT_EQ(r.lines[2], "    request, 6 bytes: kept, +16 bits");
+  EXPECT_THAT(r.lines[3],
+              ::testing::StartsWith("            its end (silence-after): a CRC search"));
+  const Outcome known = run("-r " + log + " --explain 2");
+  EXPECT_THAT(known.lines, ::testing::Not(::testing::Contains(::testing::HasSubstr("its end ("))));
+}
+
 // --explain answers "why did modtap cut here?". A master's retry of FC07 (`01 07 41 E2`), a
 // silence, then a broadcast: the retry and the broadcast's 0x00 pass a CRC as the five-byte
 // answer the bus waits for, but a silence lies inside that span and the four bytes before it
