@@ -430,15 +430,14 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
           expected.function == p[1]) {
         if (avail < expected.echo_size) return need_more();
         if (rtu_crc_holds({p, expected.echo_size})) {
-          // The echo of a request whose end was in doubt is in doubt alike: one byte longer where
-          // a 0x00 follows it with no silence before it (a good frame and a 0x00 check again),
-          // one byte shorter where it ends in 0x00.
+          // The echo of a request whose end was in doubt is in doubt alike, where the runner-up
+          // of its end stands.
           const uint16_t n = expected.echo_size;
           if (!expected.echo_end_in_doubt)
             return {Match::Kind::found, n, fit, false, SpanEnd::echo_length};
           if (avail == n && !final) return need_more();
           const bool doubt =
-              p[n - 1] == 0x00 || (avail > n && p[n] == 0x00 && !timeline_.gap_at(at + n));
+              longer_end_stands(at, at + n) || shorter_end_stands(at + n, final, search - 1);
           return {Match::Kind::found, n, fit, doubt, SpanEnd::echo_length};
         }
       }
@@ -488,8 +487,8 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       if (swallows_known_frame(at, at + n)) continue;
       // Confirmed only by taking the next 0x00 for a glitch, where one byte more holds too; or
       // ending in a 0x00 that could be a glitch after a good frame one byte shorter.
-      const bool doubt = (allow_glitch && i + 1 < hit_count && hits[i + 1] == n + 1) ||
-                         (zero_appended && shorter_reading_holds(at + n, final, search - 1));
+      const bool doubt = (allow_glitch && longer_end_stands(at, at + n)) ||
+                         (zero_appended && shorter_end_stands(at + n, final, search - 1));
       if (confirmed) return {Match::Kind::found, n, fit, doubt, *confirmed};
       open |= at_end;
       if (may_stand_alone) unconfirmed = n;
@@ -503,10 +502,8 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
   // exception; seed 1690).
   if (unconfirmed && p[1] == 0x08 &&
       (final || (avail >= max_rtu_adu && !open) || blocked_by_gap(at, final))) {
-    const bool longer_holds = std::find(hits.begin(), hits.begin() + hit_count, unconfirmed + 1) !=
-                              hits.begin() + hit_count;
-    return {Match::Kind::found, static_cast<uint16_t>(unconfirmed), fit, longer_holds,
-            SpanEnd::header_alone};
+    return {Match::Kind::found, static_cast<uint16_t>(unconfirmed), fit,
+            longer_end_stands(at, at + unconfirmed), SpanEnd::header_alone};
   }
   if (!final && (avail < max_rtu_adu || open)) return need_more();
   return {};
@@ -549,7 +546,7 @@ RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_
     const std::optional<SpanEnd> confirmed = confirmed_end(at, at + n, final, search - 1, false);
     if (confirmed && !swallows_known_frame(at, at + n))
       return {Match::Kind::found, static_cast<uint16_t>(n), fit,
-              zero_appended && shorter_reading_holds(at + n, final, search - 1), *confirmed};
+              zero_appended && shorter_end_stands(at + n, final, search - 1), *confirmed};
   }
   return {};
 }
@@ -564,12 +561,20 @@ bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end, bool final, int se
          !glitch_then_frame(end, final, search);
 }
 
-// Whether a frame ending at `end` in a 0x00, kept though one byte shorter is a good frame too,
-// could be that shorter frame and a glitch: no silence after it, no clock that saw the byte
-// sent straight on, and no second glitch that reading would need.
-bool RtuFramer::shorter_reading_holds(uint64_t end, bool final, int search) {
-  return !timeline_.gap_at(end) && timeline_.after_quiet_line(end - 1) &&
-         !glitch_then_frame(end, final, search);
+// The runner-up reading of a good frame's end: the same frame one byte longer, the 0x00 after
+// it its own (a CRC that holds keeps holding with a 0x00 appended), or one byte shorter, its
+// last 0x00 the next driver's glitch. Both pass every check; the bus's glitch odds rank them,
+// but odds are a rate of the bus, not evidence on this byte, so a frame whose runner-up stands
+// is marked ambiguous-end. The longer stands unless a silence falls before the byte; the
+// shorter unless a silence falls after it, a clock per byte saw it sent straight on, or that
+// reading would need a second glitch at one turnaround.
+bool RtuFramer::longer_end_stands(uint64_t at, uint64_t end) const {
+  return end < end_ && end - at < max_rtu_adu && *at_ptr(end) == 0x00 && !timeline_.gap_at(end);
+}
+
+bool RtuFramer::shorter_end_stands(uint64_t end, bool final, int search) {
+  return *at_ptr(end - 1) == 0x00 && !timeline_.gap_at(end) &&
+         timeline_.after_quiet_line(end - 1) && !glitch_then_frame(end, final, search);
 }
 
 // A turnaround's glitch at `at` with a good frame right behind it.

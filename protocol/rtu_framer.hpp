@@ -133,7 +133,8 @@ class RtuFramer {
                             int search);
   bool glitch_appended(uint64_t begin, uint64_t end, bool final, int search);
   bool glitch_then_frame(uint64_t at, bool final, int search);
-  bool shorter_reading_holds(uint64_t end, bool final, int search);
+  bool longer_end_stands(uint64_t at, uint64_t end) const;
+  bool shorter_end_stands(uint64_t end, bool final, int search);
   bool fits_role(Role role, uint64_t at, uint16_t length) const;
   // What confirms a CRC search's hit at `end`, if anything does.
   std::optional<SpanEnd> confirmed_end(uint64_t begin, uint64_t end, bool final, int search,

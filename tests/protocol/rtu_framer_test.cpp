@@ -562,6 +562,24 @@ TEST_F(GapCollector, AnEchoPairWhoseCrcEndsInZeroSaysItsEndIsInDoubt) {
   EXPECT_TRUE(frames[33].findings & finding_ambiguous_end);
 }
 
+// The runner-up of an end stands only where nothing refutes it. A FC08 query whose CRC ends in
+// 0x00, its echo right behind it in the same read: the query could be one byte shorter with a
+// glitch after it (no silence there), the echo could not, for a silence follows its 0x00: a
+// glitch comes before the next frame, not before a silence.
+TEST_F(GapCollector, AnEchoWhoseZeroASilenceFollowsIsNotInDoubt) {
+  const auto query = hex("11 08 00 00 00 da 63 00");
+  const std::vector<Piece> pieces{{20'000'000, concat({query, query})},
+                                  {200'000'000, read_request},
+                                  {2'000'000, read_response}};
+  const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+  ASSERT_EQ(frames.size(), 4u);
+  EXPECT_EQ(frames[0].raw, query);
+  EXPECT_TRUE(frames[0].findings & finding_ambiguous_end);
+  EXPECT_EQ(frames[1].raw, query);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_FALSE(frames[1].findings & finding_ambiguous_end);
+}
+
 // FC07's answer whose status equals the request's CRC low byte starts with a copy of the
 // request; its last byte talked over, the copy came too soon to be the master's retry and runs
 // on into a byte no frame explains: it is the answer, damaged. Read in one piece, or with the
