@@ -37,7 +37,12 @@ void ExplainSink::on_reading(const FramingStep& step) {
 }
 
 void ExplainSink::on_frame(const Frame& frame) {
-  if (!picked(frame)) return;
+  const bool is_picked = picked(frame);
+  if (is_picked) explain_frame(frame);
+  place(segment_of(frame), is_picked);
+}
+
+void ExplainSink::explain_frame(const Frame& frame) {
   text_.on_frame(frame);
   explain(frame.channel, frame.offset, frame.mode);
   if (frame.mode == Mode::rtu && frame.damage != Damage::none)
@@ -49,7 +54,12 @@ void ExplainSink::on_frame(const Frame& frame) {
 }
 
 void ExplainSink::on_noise(const Noise& noise) {
-  if (!picked(noise)) return;
+  const bool is_picked = picked(noise);
+  if (is_picked) explain_noise(noise);
+  place(segment_of(noise), is_picked);
+}
+
+void ExplainSink::explain_noise(const Noise& noise) {
   text_.on_noise(noise);
   explain(noise.channel, noise.offset, noise.mode);
   if (noise.mode == Mode::rtu)
@@ -65,6 +75,46 @@ void ExplainSink::on_timeout(const Timeout& timeout) {
   out_.print("  a time-out: the matcher's, after the request's wait; no framing decided it\n");
 }
 
+ExplainSink::Segment ExplainSink::segment_of(const Frame& frame) {
+  return {frame.index, frame.channel,  frame.offset, frame.raw.size(), false,
+          frame.role,  frame.check_ok, frame.damage, NoiseReason::junk};
+}
+
+ExplainSink::Segment ExplainSink::segment_of(const Noise& noise) {
+  return {noise.index,   noise.channel, noise.offset, noise.raw.size(), true,
+          Role::request, false,         Damage::none, noise.reason};
+}
+
+void ExplainSink::place(const Segment& segment, bool is_picked) {
+  if (after_due_ == segment.channel) {
+    print_segment(segment, false);
+    after_due_.reset();
+  }
+  if (is_picked) {
+    out_.print("  the segmentation around it:\n");
+    if (const auto before = last_on_channel_.find(segment.channel);
+        before != last_on_channel_.end())
+      print_segment(before->second, false);
+    print_segment(segment, true);
+    after_due_ = segment.channel;
+  }
+  last_on_channel_[segment.channel] = segment;
+}
+
+void ExplainSink::print_segment(const Segment& segment, bool is_picked) {
+  out_.print("    #{} bytes {}-{}: ", segment.index, segment.offset,
+             segment.offset + segment.size - 1);
+  if (is_picked)
+    out_.print("this record\n");
+  else if (segment.noise)
+    out_.print("noise ({}), {} bytes\n", to_string(segment.reason), segment.size);
+  else if (segment.check_ok)
+    out_.print("{}, {} bytes, check ok\n", to_string(segment.role), segment.size);
+  else
+    out_.print("{}, {} bytes, check bad ({})\n", to_string(segment.role), segment.size,
+               to_string(segment.damage));
+}
+
 void ExplainSink::explain(uint16_t channel, uint64_t offset, Mode mode) {
   const std::string_view name =
       channel < channels_.size() ? std::string_view(channels_[channel].name) : "the capture";
@@ -76,7 +126,18 @@ void ExplainSink::explain(uint16_t channel, uint64_t offset, Mode mode) {
   std::vector<const FramingStep*> weighed;
   for (const FramingStep& step : steps_)
     if (step.channel == channel && step.offset == offset) weighed.push_back(&step);
-  for (const FramingStep* step : weighed) print_reading(*step);
+  for (size_t i = 0; i < weighed.size(); ++i) {
+    const bool same_span = i > 0 && weighed[i]->outcome == ReadingOutcome::refuted &&
+                           weighed[i - 1]->outcome == ReadingOutcome::refuted &&
+                           weighed[i]->length == weighed[i - 1]->length;
+    if (same_span)
+      out_.print(
+          "    {}, {} bytes: refuted, the same span: the evidence is of the bytes, "
+          "whatever role they are read in\n",
+          to_string(weighed[i]->role), weighed[i]->length);
+    else
+      print_reading(*weighed[i]);
+  }
   if (weighed.empty())
     out_.print(
         "    no reading: the byte starts no frame a slave address and function code "

@@ -6,6 +6,8 @@
 
 #include <cstdint>
 #include <deque>
+#include <map>
+#include <optional>
 #include <vector>
 
 #include "output/output.hpp"
@@ -30,6 +32,26 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   bool found() const { return found_; }
 
  private:
+  // A record's place in the segmentation: its bytes and what they became.
+  struct Segment {
+    uint64_t index = 0;
+    uint16_t channel = 0;
+    uint64_t offset = 0;
+    size_t size = 0;
+    bool noise = false;
+    Role role = Role::request;
+    bool check_ok = true;
+    Damage damage = Damage::none;
+    NoiseReason reason = NoiseReason::junk;
+  };
+  static Segment segment_of(const Frame& frame);
+  static Segment segment_of(const Noise& noise);
+  // Prints the records on either side of the one asked for, on its channel: the one before
+  // with it, the one after when it comes.
+  void place(const Segment& segment, bool is_picked);
+  void print_segment(const Segment& segment, bool is_picked);
+  void explain_frame(const Frame& frame);
+  void explain_noise(const Noise& noise);
   void explain(uint16_t channel, uint64_t offset, Mode mode);
   void print_reading(const FramingStep& step);
   void print_row(const EvidenceInfo& row, int sign);
@@ -50,6 +72,8 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   bool found_ = false;
   // The readings weighed at the latest starts; a record is emitted right after its own.
   std::deque<FramingStep> steps_;
+  std::map<uint16_t, Segment> last_on_channel_;
+  std::optional<uint16_t> after_due_;  // the channel whose next record is still to show
 };
 
 }  // namespace modtap::output

@@ -1131,6 +1131,28 @@ TEST(Cli, AModelsMeaningOfAnExceptionCodeIsItsNameInEveryOutput) {
   }
 }
 
+// FC06's echo cut a byte short, the next request's address its missing CRC byte: the span
+// is refuted as the answer and so, the same bytes, as the request again; no frame starts
+// there, and the bytes are the cut answer.
+TEST(Cli, ExplainSaysASpanRefutedInOneRoleIsRefutedInTheOther) {
+  const std::string log =
+      hexlog("modtap-explain-span.log", {"00.000000", "11 06 00 01 00 03 9A 9B", "00.020000",
+                                         "11 06 00 01 00 03 9A 9B 03 00 00 00 01 99 F0"});
+  const Outcome r = run("-r " + log + " --explain 2");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_EQ(r.lines.size(), 14u) << ::testing::PrintToString(r.lines);
+  EXPECT_THAT(r.lines[0], ::testing::HasSubstr("crc BAD (cut)"));
+  EXPECT_EQ(r.lines[2], "    response, 8 bytes: refuted, -4 bits");
+  EXPECT_THAT(r.lines[4], ::testing::StartsWith("       -20  answer-cut-before-request: "));
+  EXPECT_THAT(r.lines[7], ::testing::StartsWith("    request, 8 bytes: refuted, the same span"));
+  EXPECT_EQ(r.lines[8],
+            "  no frame here (0 bits), by 4 bits over the runner-up: the response of 8 bytes");
+  EXPECT_THAT(r.lines[9], ::testing::EndsWith("a frame with a bad check: cut"));
+  EXPECT_EQ(r.lines[11], "    #1 bytes 0-7: request, 8 bytes, check ok");
+  EXPECT_EQ(r.lines[12], "    #2 bytes 8-14: this record");
+  EXPECT_EQ(r.lines[13], "    #3 bytes 15-22: request, 8 bytes, check ok");
+}
+
 // A vendor's function code has no length of its own: its end is where a CRC search found one
 // and something confirmed it, here the silence before the next request. --explain says which.
 TEST(Cli, ExplainSaysWhatConfirmedAnEndACrcSearchFound) {
@@ -1158,7 +1180,7 @@ TEST(Cli, ExplainNamesTheReadingsWeighedAndTheEvidenceThatDecided) {
                                     "00.400000", "00 06 00 10 00 05 49 DD"});
   const Outcome r = run("-r " + log + " --explain 2");
   ASSERT_EQ(r.status, 0);
-  ASSERT_EQ(r.lines.size(), 10u) << ::testing::PrintToString(r.lines);
+  ASSERT_EQ(r.lines.size(), 14u) << ::testing::PrintToString(r.lines);
   EXPECT_THAT(r.lines[0], ::testing::MatchesRegex(" +2 +0\\.300000 req slave 1 .*"));
   EXPECT_THAT(r.lines[1], ::testing::HasSubstr("at byte 4 of"));
   EXPECT_EQ(r.lines[2], "    response, 5 bytes: refuted, -8 bits");
@@ -1169,6 +1191,10 @@ TEST(Cli, ExplainNamesTheReadingsWeighedAndTheEvidenceThatDecided) {
   EXPECT_EQ(r.lines[7], "    request, 4 bytes: kept, +16 bits");
   EXPECT_THAT(r.lines[8], ::testing::StartsWith("       +16  crc-holds: "));
   EXPECT_EQ(r.lines[9], "  kept by 16 bits over the runner-up: no frame here (0 bits)");
+  EXPECT_EQ(r.lines[10], "  the segmentation around it:");
+  EXPECT_EQ(r.lines[11], "    #1 bytes 0-3: request, 4 bytes, check ok");
+  EXPECT_EQ(r.lines[12], "    #2 bytes 4-7: this record");
+  EXPECT_EQ(r.lines[13], "    #3 bytes 8-15: request, 8 bytes, check ok");
   const Outcome missing = run("-r " + log + " --explain 9");
   EXPECT_NE(missing.status, 0);
   EXPECT_THAT(missing.lines, ::testing::Contains(
