@@ -464,6 +464,44 @@ TEST_F(GapCollector, ALoopTestToAReservedStationAndItsEchoInOneReadAreTwoFrames)
   }
 }
 
+// With junk right after the echo, nothing confirms the echo's end but the input's, and nothing
+// confirms the query's but its exact copy behind it: the same CRC by chance twice over. A
+// reserved station's query may not stand on its header alone (it is as often a turnaround's
+// 0xFF), so the copy is what makes it a frame.
+TEST_F(GapCollector, AnExactCopyConfirmsTheEndOfAFrameNoLengthRuleBounds) {
+  const auto query = hex("fa 08 00 00 12 34 f8 f7");
+  const auto junk = hex("55 aa 55");
+  const auto out =
+      run({{0, concat({query, query, junk})}, {20'000'000, read_request}}, ClockQuality::per_chunk);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[0].raw, query);
+  EXPECT_TRUE(frames[0].check_ok);
+  EXPECT_EQ(frames[1].raw, query);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[2].raw, read_request);
+  ASSERT_EQ(out.noise().size(), 1u);
+  EXPECT_EQ(out.noise()[0].raw, junk);
+}
+
+// Where each byte is timed, a pause over t1.5 right after a CRC that holds ends the frame: no
+// frame goes on across one (Serial Line 2.5.1.1). A vendor's request, then a slave answering at
+// another baud rate 2.5 ms on (t1.5 is 1.7 ms at 9600 baud, t3.5 4 ms): the request stands,
+// the junk is noise.
+TEST_F(GapCollector, APauseOverT15ConfirmsTheEndOfAFrameNoLengthRuleBounds) {
+  const auto vendor = hex("01 41 02 03 10 ad");
+  const auto junk = hex("55 aa 55 aa");
+  const auto out = run({{20'000'000, vendor}, {2'500'000, junk}, {20'000'000, read_request}},
+                       ClockQuality::per_byte);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].raw, vendor);
+  EXPECT_TRUE(frames[0].check_ok);
+  EXPECT_EQ(frames[1].raw, read_request);
+  ASSERT_EQ(out.noise().size(), 1u);
+  EXPECT_EQ(out.noise()[0].raw, junk);
+}
+
 // Noise while a request waits is marked with that request; a glitch, or noise once the request
 // was answered, is not.
 TEST_F(GapCollector, NoiseWhereAnAnswerWasAwaitedIsGarbageAfterTheRequest) {
