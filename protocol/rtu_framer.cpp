@@ -174,17 +174,19 @@ RtuFramer::Verdict RtuFramer::weigh_span(const Reading& r, Evidence& why) {
                                                                                              why);
 }
 
-// The rows unrolled at compile time: weighing runs once a frame.
+// The rows unrolled at compile time: weighing runs once a frame. The span starts with its CRC's
+// bits; each row that holds takes its own off, and below nothing the span is refuted (the rows
+// after need not be weighed: they only take off). A row whose bytes have not come holds the
+// span back where its bits could refute it.
 template <RtuFramer::Row... rows>
 RtuFramer::Verdict RtuFramer::weigh_rows(const Reading& r, Evidence& why) {
-  std::optional<Evidence> unknown;
-  const auto refutes = [&](Evidence evidence, Say say) {
-    if (say == Say::unknown && !unknown) unknown = evidence;
-    return say == Say::refutes && (why = evidence, true);
-  };
-  if ((refutes(rows.evidence, (this->*rows.says)(r)) || ...)) return Verdict::refuted;
-  why = unknown.value_or(Evidence::length_and_crc);
-  return unknown ? Verdict::wait : Verdict::keep;
+  Weight weight;
+  if ((weight.refuted<rows.evidence>((this->*rows.says)(r)) || ...)) {
+    why = *weight.refuting;
+    return Verdict::refuted;
+  }
+  why = weight.unknown.value_or(Evidence::length_and_crc);
+  return weight.unknown ? Verdict::wait : Verdict::keep;
 }
 
 // A frame ends before a silence inside the reading, and what came after it kept the CRC good

@@ -103,6 +103,22 @@ class RtuFramer {
   };
   template <Row... rows>
   Verdict weigh_rows(const Reading& reading, Evidence& why);
+  // A span's score as the rows are weighed: its CRC's bits, less each row that holds.
+  struct Weight {
+    int score = span_bits;
+    std::optional<Evidence> unknown;   // a row whose bytes have not come, heavy enough to refute
+    std::optional<Evidence> refuting;  // the row that took the score below nothing
+    template <Evidence row>
+    bool refuted(Say say) {
+      constexpr int bits = row_bits<row>;
+      if (say == Say::unknown && !unknown && score < bits) unknown = row;
+      if (say != Say::refutes) return false;
+      score -= bits;
+      if (score >= 0) return false;
+      refuting = row;
+      return true;
+    }
+  };
   // The rows of weigh_span's table.
   Say good_frame_before_silence(const Reading& r);
   Say broke_off_at_silence(const Reading& r);
