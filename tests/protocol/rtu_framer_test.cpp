@@ -656,6 +656,18 @@ TEST_F(GapCollector, AnAnswerThatStartsAsACopyOfItsRequestIsNotARetry) {
   }
 }
 
+// Frames 1 and 2: the awaited answer cut a byte short, then the next request, whole.
+void expect_cut_answer_then_request(const std::vector<Record>& frames,
+                                    const std::vector<uint8_t>& cut,
+                                    const std::vector<uint8_t>& next) {
+  EXPECT_EQ(frames[1].raw, cut);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].damage, Damage::cut);
+  EXPECT_EQ(frames[2].raw, next);
+  EXPECT_EQ(frames[2].role, Role::request);
+  EXPECT_TRUE(frames[2].check_ok);
+}
+
 // A span the bytes refute is no frame in either role. FC06's echo cut one byte short, the next
 // request's slave address (155) its missing CRC byte: the eight bytes read as the echo and as
 // the request again, byte for byte. What follows refutes the span as the answer (a whole
@@ -669,12 +681,7 @@ TEST_F(GapCollector, ASpanRefutedAsTheAnswerIsNoRetryEither) {
       {20'000'000, request}, {2'000'000, concat({cut, next})}, {200'000'000, read_request}};
   const auto frames = run(pieces, ClockQuality::per_chunk).frames();
   ASSERT_EQ(frames.size(), 4u);
-  EXPECT_EQ(frames[1].raw, cut);
-  EXPECT_EQ(frames[1].role, Role::response);
-  EXPECT_EQ(frames[1].damage, Damage::cut);
-  EXPECT_EQ(frames[2].raw, next);
-  EXPECT_EQ(frames[2].role, Role::request);
-  EXPECT_TRUE(frames[2].check_ok);
+  expect_cut_answer_then_request(frames, cut, next);
 }
 
 // An FC07 answer cut one byte short, and the next request's slave address (142) is its missing
@@ -703,12 +710,7 @@ TEST_F(GapCollector, AResponseCutOneByteShortGivesTheNextRequestBackItsSlaveAddr
     pieces.push_back({2'000'000, answer});
     const auto frames = run(pieces, ClockQuality::per_chunk).frames();
     ASSERT_EQ(frames.size(), 4u) << r;
-    EXPECT_EQ(frames[1].raw, cut);
-    EXPECT_EQ(frames[1].role, Role::response);
-    EXPECT_EQ(frames[1].damage, Damage::cut);
-    EXPECT_EQ(frames[2].raw, next);
-    EXPECT_EQ(frames[2].role, Role::request);
-    EXPECT_TRUE(frames[2].check_ok);
+    expect_cut_answer_then_request(frames, cut, next);
     EXPECT_EQ(frames[3].request, frames[2].index);
   }
   // Its last byte read alone and nothing after it: the answer, whole, once the capture ends.
