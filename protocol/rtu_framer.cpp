@@ -94,10 +94,11 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search, bool o
     const Role other = role == Role::request ? Role::response : Role::request;
     const bool other_allowed = readings.allows(other);
     if (m.kind == Match::Kind::found) {
-      Evidence why = Evidence::length_and_crc;
+      const bool refuted_span = refuted && refuted->first == m.length;
+      Evidence why = refuted_span ? refuted->second : Evidence::length_and_crc;
       const Verdict verdict =
-          refuted && refuted->first == m.length
-              ? (why = refuted->second, Verdict::refuted)
+          refuted_span
+              ? Verdict::refuted
               : weigh_span({at, role, m.length, other_allowed ? &other : nullptr, final, search},
                            why);
       if (observed) observe(at, role, m, outcome_of(verdict), why);
@@ -156,9 +157,9 @@ void RtuFramer::observe(uint64_t at, Role role, const Match& match, ReadingOutco
 }
 
 // What the bus says against the span [at, at + length) being one frame, where a reading's length
-// rules and CRC agree on it. Each row is evidence that it is not, heavier than its CRC
-// (framing_evidence.hpp): the span is refuted, in either role, by the first row that holds, and
-// waits where a row's bytes have not come yet and none refutes it.
+// rules and CRC agree on it. Each row is evidence, in bits, that it is not (framing_evidence.hpp):
+// the span is refuted, in either role, once the rows that hold outweigh its CRC, and waits where
+// a row whose bytes have not come could refute it and none has.
 RtuFramer::Verdict RtuFramer::weigh_span(const Reading& r, Evidence& why) {
   return weigh_rows<Row{Evidence::good_frame_before_silence, &RtuFramer::good_frame_before_silence},
                     Row{Evidence::broke_off_at_silence, &RtuFramer::broke_off_at_silence},
