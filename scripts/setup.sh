@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 # libmosquitto are loaded when --metrics or --mqtt asks, their headers used at build time).
 # To run: sigrok-cli reads logic-analyzer captures.
 packages=(cmake g++ make pkg-config libfmt-dev libpcap-dev libcli11-dev libyaml-dev libcrypt-dev
-          libmicrohttpd-dev libmosquitto-dev sigrok-cli ${EXTRA_PACKAGES:-})
+          libmicrohttpd-dev libmosquitto-dev libncurses-dev sigrok-cli ${EXTRA_PACKAGES:-})
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 export EXTRA_PACKAGES="libgtest-dev libgmock-dev libbenchmark-dev clang libclang-rt-14-dev
   nlohmann-json3-dev python3 python3-pil python3-pymodbus libmodbus-dev mbpoll tshark wireshark
-  xvfb chromium prometheus mosquitto mosquitto-clients strace systemd jpnevulator
+  xvfb chromium prometheus mosquitto mosquitto-clients strace systemd jpnevulator tmux
   help2man dpkg-dev lintian bash-completion openssl curl libwireshark-dev libglib2.0-dev"
 # Configured for /usr so that the package test can build a .deb from this build.
 export CMAKE_ARGS="-DMODTAP_TESTS=ON -DMODTAP_BENCHMARKS=ON -DCMAKE_INSTALL_PREFIX=/usr"

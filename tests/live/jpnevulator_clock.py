@@ -12,7 +12,6 @@ pty and the scheduler.
 
 Usage: jpnevulator_clock.py MODTAP BUSGEN WORK_DIR
 """
-import datetime
 import json
 import os
 import subprocess
@@ -21,7 +20,7 @@ import time
 import tty
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
-from modbus import wait_until_open  # noqa: E402
+from modbus import replay, simulated_blocks, wait_until_open  # noqa: E402
 
 MODTAP, BUSGEN, WORK = sys.argv[1:4]
 CHAR_SECONDS = 11 / 19200
@@ -35,36 +34,10 @@ def check(name, condition, message):
         failures.append(f"{name}: {message}")
 
 
-def simulated_blocks(path):
-    """(stamp, bytes) of each block of the simulator's hex log: one frame each, stamped at its
-    end."""
-    blocks = []
-    for line in open(path):
-        line = line.rstrip("\n")
-        if len(line) >= 27 and line[4] == "-" and line[26] == ":":
-            stamp = datetime.datetime.strptime(line[:26], "%Y-%m-%d %H:%M:%S.%f").timestamp()
-            blocks.append((stamp, bytearray()))
-        elif line.strip():
-            blocks[-1][1].extend(bytes.fromhex(line))
-    return blocks
-
-
 def records(log):
     out = subprocess.run([MODTAP, "-r", log, "-T", "json", "--baud", "19200", "--parity", "even"],
                          capture_output=True, text=True, timeout=60)
     return [json.loads(line) for line in out.stdout.splitlines()], out.stderr
-
-
-def replay(blocks, ptys):
-    """Writes each block to every pty when its last byte arrives, as a UART's FIFO hands it."""
-    start = time.monotonic() + 0.2
-    first = blocks[0][0]
-    for stamp, data in blocks:
-        due = start + stamp - first
-        while (left := due - time.monotonic()) > 0:
-            time.sleep(min(left, 0.0005))
-        for pty in ptys:
-            os.write(pty, bytes(data))
 
 
 def main():

@@ -1,4 +1,5 @@
 """Small helpers shared by the Python test programs."""
+import datetime
 import os
 import time
 
@@ -26,3 +27,29 @@ def wait_until_open(process, path, timeout=20):
             pass
         time.sleep(0.01)
     return False
+
+
+def simulated_blocks(path):
+    """(stamp, bytes) of each block of the simulator's hex log: one frame each, stamped at its
+    end."""
+    blocks = []
+    for line in open(path):
+        line = line.rstrip("\n")
+        if len(line) >= 27 and line[4] == "-" and line[26] == ":":
+            stamp = datetime.datetime.strptime(line[:26], "%Y-%m-%d %H:%M:%S.%f").timestamp()
+            blocks.append((stamp, bytearray()))
+        elif line.strip():
+            blocks[-1][1].extend(bytes.fromhex(line))
+    return blocks
+
+
+def replay(blocks, ptys):
+    """Writes each block to every pty when its last byte arrives, as a UART's FIFO hands it."""
+    start = time.monotonic() + 0.2
+    first = blocks[0][0]
+    for stamp, data in blocks:
+        due = start + stamp - first
+        while (left := due - time.monotonic()) > 0:
+            time.sleep(min(left, 0.0005))
+        for pty in ptys:
+            os.write(pty, bytes(data))

@@ -1200,3 +1200,39 @@ TEST(Cli, ExplainNamesTheReadingsWeighedAndTheEvidenceThatDecided) {
   EXPECT_THAT(missing.lines, ::testing::Contains(
                                  ::testing::HasSubstr("--explain 9: " + log + " has no record 9")));
 }
+
+namespace {
+
+// modtap top without a terminal (here a pipe) prints its screen as plain text, the last one
+// at the end of a replay, with the numbers -T stats gives.
+TEST(Cli, TopWithoutATerminalPrintsItsScreenAsPlainText) {
+  const std::string capture = std::string(MODTAP_SAMPLES) + "/drives-manual-examples.log";
+  const Outcome top = run("top " + capture + " --speed 100000");
+  ASSERT_EQ(top.status, 0);
+  const auto title = std::find_if(top.lines.rbegin(), top.lines.rend(), [](const auto& line) {
+    return line.rfind("modtap top  ", 0) == 0;
+  });
+  ASSERT_NE(title, top.lines.rend());
+  EXPECT_NE(title->find("end of capture"), std::string::npos) << *title;
+  EXPECT_EQ(title->find("q quits"), std::string::npos) << *title;  // no key is read
+  const Outcome stats = run("-r " + capture + " -T stats");
+  const auto frames = std::find_if(stats.lines.begin(), stats.lines.end(),
+                                   [](const auto& line) { return line.rfind("frames ", 0) == 0; });
+  ASSERT_NE(frames, stats.lines.end());
+  std::istringstream words(*frames);
+  std::string word, count;
+  words >> word >> count;
+  EXPECT_NE((title - 1)->find(" " + count + " frames"), std::string::npos)
+      << *(title - 1) << " / " << *frames;
+}
+
+TEST(Cli, TopRefusesAnOutputThatWouldDrawOnItsTerminal) {
+  const std::string capture = std::string(MODTAP_SAMPLES) + "/drives-manual-examples.log";
+  const Outcome refused = run("top -r " + capture + " -T json");
+  EXPECT_EQ(refused.status >> 8, 2);
+  ASSERT_FALSE(refused.lines.empty());
+  EXPECT_NE(refused.lines[0].find("modtap top draws on the terminal"), std::string::npos)
+      << refused.lines[0];
+}
+
+}  // namespace

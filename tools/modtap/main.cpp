@@ -135,6 +135,7 @@ struct Command {
   CLI::App* fields = nullptr;
   CLI::App* models = nullptr;
   CLI::App* check = nullptr;
+  CLI::App* top = nullptr;
   std::vector<std::string> check_files;
 };
 
@@ -273,7 +274,7 @@ void add_analysis_options(CLI::App& app, RunOptions& o, Command& command) {
   app.add_option("--models-dir", o.models_dir, "A folder of the user's model files (*.yaml)");
 }
 
-void add_subcommands(CLI::App& app, Command& command) {
+void add_subcommands(CLI::App& app, RunOptions& o, Command& command) {
   command.fields = app.add_subcommand(
       "fields",
       "List every field: name (JSON key, -Y, Wireshark's modtap.NAME), place, JSON kind, type, "
@@ -282,6 +283,15 @@ void add_subcommands(CLI::App& app, Command& command) {
   command.models->fallthrough();  // `modtap models --models-dir DIR` lists the user's models too
   command.check = command.models->add_subcommand("check", "Validate model files");
   command.check->add_option("FILE", command.check_files, "Model files (YAML)")->required();
+  command.top = app.add_subcommand(
+      "top",
+      "A live view of the bus on the terminal: the slaves, their rates and latencies, the "
+      "problems, the latest transactions (docs/top.md); with -i PORT, or -r FILE replayed at its "
+      "own pace");
+  command.top->fallthrough();  // modtap's options, `modtap top -i PORT --baud auto`
+  command.top->add_option("--speed", o.top_speed, "With -r: replay this many times faster")
+      ->check(tools::positive("needs a number above 0"));
+  command.top->add_option("capture", command.named_capture, "The capture file, as with -r");
 }
 
 // What options left at their defaults mean beside the others given: -w alone writes nothing
@@ -295,6 +305,9 @@ void settle_implied(RunOptions& o, const Command& command) {
   if (!o.follow.empty() && command.output->count() == 0)
     o.output = o.report_file.empty() ? OutputKind::csv : OutputKind::text;
   if (o.quiet && o.output != OutputKind::stats) o.output = OutputKind::none;
+  o.top = command.top->parsed();
+  if (o.top && command.output->count() == 0) o.output = OutputKind::none;
+  if (o.top) o.announce = false;  // the screen says what is listened to
 }
 
 std::optional<std::string> refuse_source(const RunOptions& o) {
@@ -310,6 +323,12 @@ std::optional<std::string> refuse(const RunOptions& o, const Autostop& autostop,
                                   const captures::RingLimits& ring) {
   if (autostop.filesize_bytes && o.write_file.empty())
     return "-a filesize stops on the size of the -w file: give -w";
+  if (o.top && o.output != OutputKind::none)
+    return fmt::format(
+        "modtap top draws on the terminal; -T {} would print there too: write "
+        "the statistics with --stats FILE",
+        o.output);
+  if (o.top && o.explain) return "--explain prints a record; modtap top shows the bus";
   if (o.explain && (o.read_file.empty() || o.output != OutputKind::text))
     return "--explain prints one record of a capture read with -r, as text";
   if (auto refusal = refuse_ring(o, ring)) return refusal;
@@ -385,7 +404,7 @@ int main(int argc, char** argv) {
   add_input_options(app, o, command);
   add_output_options(app, o, command);
   add_analysis_options(app, o, command);
-  add_subcommands(app, command);
+  add_subcommands(app, o, command);
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {  // --help, --version

@@ -60,6 +60,7 @@ Needs needs_of(const RunOptions& o) {
       {!o.report_file.empty(), statistics},
       {!o.metrics_address.empty(), statistics},
       {!o.mqtt_url.empty(), statistics},
+      {o.top, statistics},
       // The pcapng comments carry the models' verdicts, but a bare file has no comments.
       {!o.write_file.empty() && o.link != output::PcapngLink::bare, {false, true, false}},
       {!o.display_filter.empty(), {false, true, true}},  // a filter may name any register
@@ -146,9 +147,10 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
       health_.add(*evidence_);
     }
     health_.add(*statistics_);
-    if (o.metrics_address.empty()) {
+    if (o.top) feed_top(o, channels, format, clock);
+    if (o.metrics_address.empty() && !o.top) {
       fan_out_.add(health_);
-    } else {  // read by the metrics server's thread while records come in
+    } else {  // read by the metrics server's or the screen's thread while records come in
       shared_statistics_ = std::make_unique<output::SharedStatistics>(health_);
       fan_out_.add(*shared_statistics_);
     }
@@ -176,9 +178,10 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
   if (!o.write_file.empty()) write_pcapng(o, ring, channels, format, clock);
 }
 
-void Pipeline::write_pcapng(const RunOptions& o, const captures::RingLimits& ring,
-                            const std::vector<ChannelInfo>& channels, const SerialFormat& format,
-                            ClockQuality clock) {
+namespace {
+
+output::PcapngOptions pcapng_options(const RunOptions& o, const SerialFormat& format,
+                                     ClockQuality clock) {
   output::PcapngOptions options;
   options.link = o.link;
   options.dlt = o.dlt;
@@ -187,8 +190,29 @@ void Pipeline::write_pcapng(const RunOptions& o, const captures::RingLimits& rin
   // On a port, someone may read the file as it grows (Wireshark through the extcap's FIFO,
   // `-w -` into a pipe): each packet is flushed when it is written.
   options.live = !o.interfaces.empty();
-  pcapng_ = std::make_unique<output::PcapngFiles>(o.write_file, ring, channels, options);
+  return options;
+}
+
+}  // namespace
+
+void Pipeline::write_pcapng(const RunOptions& o, const captures::RingLimits& ring,
+                            const std::vector<ChannelInfo>& channels, const SerialFormat& format,
+                            ClockQuality clock) {
+  pcapng_ = std::make_unique<output::PcapngFiles>(o.write_file, ring, channels,
+                                                  pcapng_options(o, format, clock));
   fan_out_.add(*pcapng_);
+}
+
+// Beside the statistics, under their lock: the screen's thread reads both.
+void Pipeline::feed_top(const RunOptions& o, const std::vector<ChannelInfo>& channels,
+                        const SerialFormat& format, ClockQuality clock) {
+  const output::TextOptions text{false, time_format_for(o, clock), o.register_base, nullptr};
+  auto filter_for = [this, base = o.register_base, &channels](const std::string& text) {
+    return compile_filter(text, base, channels);
+  };
+  top_feed_ =
+      std::make_unique<top::TopFeed>(channels, text, pcapng_options(o, format, clock), filter_for);
+  health_.add(*top_feed_);
 }
 
 std::vector<Problem> Pipeline::problems() const {
@@ -249,6 +273,11 @@ std::vector<std::string> FollowWatch::unseen() const {
 // -Y: every output (text, JSON, statistics, pcapng) sees only the records it matches.
 void Pipeline::filter(const std::string& text, RegisterBase base,
                       const std::vector<ChannelInfo>& channels) {
+  filter_ = std::make_unique<FilterStage>(compile_filter(text, base, channels), fan_out_);
+}
+
+DisplayFilter Pipeline::compile_filter(const std::string& text, RegisterBase base,
+                                       const std::vector<ChannelInfo>& channels) const {
   const auto models = catalog_.all();
   const auto is_register_name = [models](std::string_view name) {
     return std::any_of(models.begin(), models.end(),
@@ -258,7 +287,7 @@ void Pipeline::filter(const std::string& text, RegisterBase base,
   std::vector<std::string> names;
   for (const auto& channel : channels) names.push_back(channel.name);
   filter.set_channel_names(std::move(names));
-  filter_ = std::make_unique<FilterStage>(std::move(filter), fan_out_);
+  return filter;
 }
 
 }  // namespace modtap::tools

@@ -31,6 +31,7 @@
 #include "protocol/analyzer.hpp"
 #include "protocol/record_sink.hpp"
 #include "tools/modtap/model_catalog.hpp"
+#include "tools/top/top_feed.hpp"
 
 namespace modtap::tools {
 
@@ -88,6 +89,9 @@ struct RunOptions {
   std::string mqtt_password_file;        // the password, kept off the command line
   std::vector<std::string> autostop;     // -a duration:S, filesize:KB, frames:N
   std::vector<std::string> ring_buffer;  // -b duration:S, filesize:KB, files:N
+  // modtap top: the live view instead of lines; a file replayed at `top_speed` times its pace.
+  bool top = false;
+  double top_speed = 1;
   // Say on standard error which port is listened to, and keep a status line there (not to
   // Wireshark: it reads anything there as an error).
   bool announce = true;
@@ -143,6 +147,9 @@ class Pipeline {
   output::ExplainSink* explain() const { return explain_; }
   uint64_t pcapng_files() const { return pcapng_ ? pcapng_->files_begun() : 0; }
   const BusStatistics* statistics() const { return statistics_.get(); }
+  const ProblemEvidence* evidence() const { return evidence_.get(); }
+  // modtap top's records, read under shared_statistics()'s lock.
+  top::TopFeed* top_feed() { return top_feed_.get(); }
   // The problems the statistics and the evidence beside them show (none without statistics).
   // With --metrics, call it under shared_statistics()'s lock.
   std::vector<Problem> problems() const;
@@ -166,6 +173,10 @@ class Pipeline {
   RecordSink& before_filter();  // the clock stage in front of the filter, or the sinks
   RecordSink& watch_follow(const RunOptions& o, RecordSink& next);
   void filter(const std::string& text, RegisterBase base, const std::vector<ChannelInfo>& channels);
+  DisplayFilter compile_filter(const std::string& text, RegisterBase base,
+                               const std::vector<ChannelInfo>& channels) const;
+  void feed_top(const RunOptions& o, const std::vector<ChannelInfo>& channels,
+                const SerialFormat& format, ClockQuality clock);
   void write_pcapng(const RunOptions& o, const captures::RingLimits& ring,
                     const std::vector<ChannelInfo>& channels, const SerialFormat& format,
                     ClockQuality clock);
@@ -191,6 +202,7 @@ class Pipeline {
   std::unique_ptr<output::PcapngFiles> pcapng_;
   std::unique_ptr<RecordLimit> limit_;
   std::unique_ptr<output::MqttPublisher> mqtt_;
+  std::unique_ptr<top::TopFeed> top_feed_;
 };
 
 }  // namespace modtap::tools

@@ -17,6 +17,7 @@
 #include "tools/modtap/enum_option.hpp"
 #include "tools/modtap/progress.hpp"
 #include "tools/modtap/session.hpp"
+#include "tools/top/top_view.hpp"
 
 namespace modtap::tools {
 namespace {
@@ -31,7 +32,7 @@ bool terminal_free_for_status(const RunOptions& o) {
 // A bar for a file read straight through, on a terminal that has room for it.
 std::unique_ptr<ProgressBar> progress_bar(const RunOptions& o, const captures::ChunkSource& source,
                                           bool piped) {
-  if (piped || !source.file_position() || !terminal_free_for_status(o)) return nullptr;
+  if (o.top || piped || !source.file_position() || !terminal_free_for_status(o)) return nullptr;
   std::error_code error;
   const auto size = std::filesystem::file_size(o.read_file, error);
   if (error) return nullptr;
@@ -102,6 +103,28 @@ void hint_settings(const SerialFormat& format, const LineHealth& health, const C
                100 * health.good_share(), health.bytes, describe(format));
 }
 
+// modtap top's screen over the session's statistics; none without `top`.
+std::unique_ptr<top::TopView> top_view(const RunOptions& o, Session& session,
+                                       const SerialFormat& format, ClockQuality clock,
+                                       std::function<void()> on_quit = {}) {
+  if (!o.top) return nullptr;
+  Pipeline& pipeline = session.pipeline();
+  top::TopSources sources{*pipeline.shared_statistics(), *pipeline.statistics(),
+                          *pipeline.evidence(), *pipeline.top_feed(),
+                          [&pipeline] { return pipeline.problems(); }};
+  top::TopSettings settings;
+  settings.source = o.read_file.empty() ? fmt::format("port {}", fmt::join(o.interfaces, " "))
+                                        : fmt::format("file {}", o.read_file);
+  settings.settings = fmt::format("{}, {}", describe(format),
+                                  o.baud && o.parity ? "as given" : "found by --baud auto");
+  settings.clock = std::string(to_string(clock));
+  if (!o.read_file.empty()) settings.replay_speed = o.top_speed;
+  settings.follow = output::parse_follow_or_all(o.follow, o.register_base);
+  settings.register_base = o.register_base;
+  settings.on_quit = std::move(on_quit);
+  return std::make_unique<top::TopView>(std::move(sources), std::move(settings));
+}
+
 // -a frames:N, where the run's record limit (the smaller of it and -c) was it and was reached.
 std::optional<std::string> frames_met(const RunOptions& o, const Autostop& stop,
                                       const Session& session) {
@@ -145,9 +168,11 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   std::optional<captures::CaptureError> broken;
   std::optional<std::string> stopped_by;  // the -a condition met
   auto progress = progress_bar(o, *source, piped);
+  auto view = top_view(o, session, open.serial, source->clock());
   try {
     std::optional<int64_t> first_ns;
     while (!session.limit_reached() && source->next(chunk)) {
+      if (view && !view->pace(chunk.t_ns)) break;
       if (!first_ns) first_ns = chunk.t_ns;
       stopped_by = autostop_met(autostop, chunk.t_ns - *first_ns, session.pcapng_bytes());
       if (stopped_by) break;
@@ -161,6 +186,8 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   }
   progress.reset();  // wiped before anything else reaches the terminal
   bus.finish();
+  if (view) view->end_of_capture();
+  view.reset();  // the terminal given back before anything is said on it
   session.finish(!broken, frames_met(o, autostop, session).value_or(stopped_by.value_or("")));
   if (bus.clock_steps_back())
     fmt::print(stderr,
@@ -234,7 +261,10 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
   if (session.publishes()) options.on_wake = [&](int64_t now_ns) { session.tick(now_ns); };
   // A status line on the terminal, unless frame lines are printed on that same terminal.
   options.status_line = o.announce && terminal_free_for_status(o);
+  auto view =
+      top_view(o, session, options.analyzer.format, ClockQuality::per_chunk, live::request_stop);
   const int status = live::run_live(ports, options, health, stop);
+  view.reset();
   // Ctrl-C, -c and -a end a live run whole; a port gone (status 1) breaks it off.
   session.finish(status == 0, frames_met(o, autostop, session).value_or(stopped_by.value_or("")));
   hint_settings(options.analyzer.format, health, pace, HintContext{});

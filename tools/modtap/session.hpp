@@ -42,6 +42,7 @@ class Session {
   // Where the analyzer's records go.
   RecordSink& records() { return pipeline_.all(); }
   const Pipeline& pipeline() const { return pipeline_; }
+  Pipeline& pipeline() { return pipeline_; }
   output::ExplainSink* explain() const { return pipeline_.explain(); }
   bool limit_reached() const { return pipeline_.limit_reached(); }
   uint64_t pcapng_bytes() const { return pipeline_.pcapng_bytes(); }
