@@ -71,6 +71,7 @@ void BusStatistics::count_exchange(const Frame& frame, SlaveStatistics& s) {
   count(s.counts, frame);
   s.last_frame_ns = std::max(s.last_frame_ns, frame.end_ns);
   if (!frame.check_ok) return;  // its function code may be as corrupted as its check
+  if (frame.role == Role::response) s.last_answer_ns = frame.end_ns;
   count(s.by_function[frame.function() & 0x7F], frame);
   if (frame.role == Role::response && frame.is_exception() && frame.adu.size() > 2)
     ++s.exceptions_by_code[frame.adu[2]];

@@ -42,6 +42,7 @@ struct SlaveStatistics {
   Histogram latency_ns;                           // end of request to start of response
   Histogram poll_interval_ns;                     // start of one request to the next's
   int64_t last_frame_ns = 0;
+  std::optional<int64_t> last_answer_ns;  // the end of its last good answer: when it last spoke
   bool good = false;  // a frame with a good check came from or went to this address
 };
 

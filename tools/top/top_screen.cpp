@@ -94,8 +94,13 @@ constexpr std::array<ColumnSpec, column_count> columns{{
      [](const SlaveRow& r) { return r.p50_ms.value_or(-1); }},
     {"p99ms", 5, true, [](const SlaveRow& r, int64_t) { return ms_text(r.p99_ms); },
      [](const SlaveRow& r) { return r.p99_ms.value_or(-1); }},
-    {"seen", 4, true, [](const SlaveRow& r, int64_t now) { return age_text(now - r.last_seen_ns); },
-     [](const SlaveRow& r) { return -double(r.last_seen_ns); }},
+    {"seen", 4, true,
+     [](const SlaveRow& r, int64_t now) {
+       return r.last_answer_ns ? age_text(now - *r.last_answer_ns) : std::string("-");
+     },
+     [](const SlaveRow& r) {  // higher: silent for longer, or never heard
+       return r.last_answer_ns ? -double(*r.last_answer_ns) : 1e30;
+     }},
     {"problem", 0, false, [](const SlaveRow& r, int64_t) { return r.problem; }, severity_rank},
 }};
 
@@ -135,7 +140,7 @@ std::string duration_text(double s) {
 std::string numbers_line(const Snapshot& s) {
   const std::string load =
       s.bus_load ? fmt::format("load {:.0f}%", 100 * *s.bus_load) : std::string("load -");
-  return fmt::format("running {}  {:.0f} frames/s  {}  {} frames  {} bad checks  {} noise ({} B)",
+  return fmt::format("up {}  {:.0f} frames/s  {}  {} frames  {} bad checks  {} noise ({} B)",
                      duration_text(s.running_s), s.frames_per_s, load, s.frames, s.bad_checks,
                      s.noise_records, s.noise_bytes);
 }
@@ -167,10 +172,10 @@ constexpr std::string_view help_text[] = {
     "  ?              this help; any key closes it",
     "  q              quit",
     "",
-    "A row is coloured by the worst problem of its slave: red an error, yellow a warning.",
-    "ans% is answers to requests; t/o time-outs; exc exceptions; bad bad checks;",
-    "p50ms and p99ms the latency from a request's end to its answer's start; seen the",
-    "time since the slave's last frame.",
+    "A row's colour is its slave's worst problem: red an error, yellow a warning.",
+    "ans% answers to requests, t/o time-outs, exc exceptions, bad bad checks and",
+    "garbled answers, p50ms p99ms the latency from a request's end to its answer's",
+    "start, seen how long ago the slave last answered (- never).",
 };
 
 constexpr std::string_view footer =

@@ -358,7 +358,7 @@ Snapshot TopView::take() {
         row.p50_ms = static_cast<double>(slave.latency_ns.percentile(50)) / 1e6;
         row.p99_ms = static_cast<double>(slave.latency_ns.percentile(99)) / 1e6;
       }
-      row.last_seen_ns = slave.last_frame_ns;
+      row.last_answer_ns = slave.last_answer_ns;
       const auto& evidence = sources_.evidence.slaves();
       if (const auto found = evidence.find(address); found != evidence.end() && found->second.model)
         row.model = found->second.model->name;
