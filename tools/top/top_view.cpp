@@ -74,6 +74,34 @@ std::string value_text(const LastValue& value) {
   return text;
 }
 
+// A slave's row: its counts, latencies, model, and its worst problem (`problems` come errors
+// first, so the first of this slave's is its worst).
+SlaveRow slave_row(uint8_t address, const SlaveStatistics& slave, const DeviceModel* model,
+                   const std::vector<Problem>& problems) {
+  SlaveRow row;
+  row.address = address;
+  const ExchangeCounts& c = slave.counts;
+  row.requests = c.requests;
+  row.responses = c.responses;
+  row.timeouts = c.timeouts;
+  row.retries = c.retries;
+  row.exceptions = c.exceptions;
+  row.bad_checks = c.bad_checks + c.garbled;
+  if (slave.latency_ns.count()) {
+    row.p50_ms = static_cast<double>(slave.latency_ns.percentile(50)) / 1e6;
+    row.p99_ms = static_cast<double>(slave.latency_ns.percentile(99)) / 1e6;
+  }
+  row.last_answer_ns = slave.last_answer_ns;
+  if (model) row.model = model->name;
+  const auto worst = std::find_if(problems.begin(), problems.end(),
+                                  [&](const Problem& p) { return p.slave == address; });
+  if (worst != problems.end()) {
+    row.problem = problem_info(worst->kind).name;
+    row.severity = worst->severity;
+  }
+  return row;
+}
+
 }  // namespace
 
 // The curses screen, while it is up.
@@ -322,55 +350,18 @@ Snapshot TopView::take() {
             : settings_.replay_speed ? fmt::format("replay x{:g}", *settings_.replay_speed)
                                      : "live";
   sources_.shared.read([&] {
-    const BusStatistics& st = sources_.statistics;
-    const TopFeed& feed = sources_.feed;
-    s.frames = st.frames;
-    s.bad_checks = st.bad_checks;
-    s.noise_records = st.noise_records;
-    s.noise_bytes = st.noise_bytes;
-    s.bus_load = st.bus_load();
-    s.now_ns = feed.last_t_ns().value_or(0);
-    s.running_s = settings_.replay_speed
-                      ? st.duration_s()
-                      : std::chrono::duration<double>(steady_clock::now() - started_).count();
-    if (previous_t_ns_ && s.now_ns > *previous_t_ns_)
-      s.frames_per_s = static_cast<double>(feed.frames() - previous_frames_) /
-                       (static_cast<double>(s.now_ns - *previous_t_ns_) / 1e9);
-    else
-      s.frames_per_s = snapshot_.frames_per_s;
-    previous_frames_ = feed.frames();
-    previous_t_ns_ = s.now_ns;
-    const auto worst = sources_.problems();
-    for (const Problem& p : worst) s.problems.push_back({p.severity, p.since_ns, p.text});
+    fill_numbers(s);
+    const auto problems = sources_.problems();
+    for (const Problem& p : problems) s.problems.push_back({p.severity, p.since_ns, p.text});
     std::stable_sort(s.problems.begin(), s.problems.end(),
                      [](const auto& a, const auto& b) { return a.since_ns > b.since_ns; });
-    st.for_each_slave([&](uint8_t address, const SlaveStatistics& slave) {
-      SlaveRow row;
-      row.address = address;
-      const auto& c = slave.counts;
-      row.requests = c.requests;
-      row.responses = c.responses;
-      row.timeouts = c.timeouts;
-      row.retries = c.retries;
-      row.exceptions = c.exceptions;
-      row.bad_checks = c.bad_checks + c.garbled;
-      if (slave.latency_ns.count()) {
-        row.p50_ms = static_cast<double>(slave.latency_ns.percentile(50)) / 1e6;
-        row.p99_ms = static_cast<double>(slave.latency_ns.percentile(99)) / 1e6;
-      }
-      row.last_answer_ns = slave.last_answer_ns;
-      const auto& evidence = sources_.evidence.slaves();
-      if (const auto found = evidence.find(address); found != evidence.end() && found->second.model)
-        row.model = found->second.model->name;
-      // The problems come errors first: the first of this slave's is its worst.
-      for (const Problem& p : worst)
-        if (p.slave == address) {
-          row.problem = problem_info(p.kind).name;
-          row.severity = p.severity;
-          break;
-        }
-      s.slaves.push_back(std::move(row));
+    const auto& evidence = sources_.evidence.slaves();
+    sources_.statistics.for_each_slave([&](uint8_t address, const SlaveStatistics& slave) {
+      const auto found = evidence.find(address);
+      s.slaves.push_back(slave_row(
+          address, slave, found == evidence.end() ? nullptr : found->second.model, problems));
     });
+    const TopFeed& feed = sources_.feed;
     s.transactions = feed.recent().lines(view_.chosen);
     s.filter = feed.filter();
     if (feed.writing())
@@ -379,6 +370,27 @@ Snapshot TopView::take() {
     fill_registers(s);
   });
   return s;
+}
+
+// The header's numbers; frames a second over the capture's time since the snapshot before.
+void TopView::fill_numbers(Snapshot& s) {
+  const BusStatistics& st = sources_.statistics;
+  const TopFeed& feed = sources_.feed;
+  s.frames = st.frames;
+  s.bad_checks = st.bad_checks;
+  s.noise_records = st.noise_records;
+  s.noise_bytes = st.noise_bytes;
+  s.bus_load = st.bus_load();
+  s.now_ns = feed.last_t_ns().value_or(0);
+  s.running_s = settings_.replay_speed
+                    ? st.duration_s()
+                    : std::chrono::duration<double>(steady_clock::now() - started_).count();
+  s.frames_per_s = snapshot_.frames_per_s;
+  if (previous_t_ns_ && s.now_ns > *previous_t_ns_)
+    s.frames_per_s = static_cast<double>(feed.frames() - previous_frames_) /
+                     (static_cast<double>(s.now_ns - *previous_t_ns_) / 1e9);
+  previous_frames_ = feed.frames();
+  previous_t_ns_ = s.now_ns;
 }
 
 // The chosen slave's registers, or the followed ones with their values over the refreshes.

@@ -66,6 +66,7 @@ class TopView {
   void type_filter(int key);
   void sort_by(int step);
   Snapshot take();
+  void fill_numbers(Snapshot& s);
   void fill_registers(Snapshot& s);
   void toggle_writing();
   void apply_filter(const std::string& text);
