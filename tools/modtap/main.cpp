@@ -136,6 +136,7 @@ struct Command {
   CLI::App* models = nullptr;
   CLI::App* check = nullptr;
   CLI::App* top = nullptr;
+  CLI::Option* speed = nullptr;
   std::vector<std::string> check_files;
 };
 
@@ -289,8 +290,12 @@ void add_subcommands(CLI::App& app, RunOptions& o, Command& command) {
       "problems, the latest transactions (docs/top.md); with -i PORT, or -r FILE replayed at its "
       "own pace");
   command.top->fallthrough();  // modtap's options, `modtap top -i PORT --baud auto`
-  command.top->add_option("--speed", o.top_speed, "With -r: replay this many times faster")
-      ->check(tools::positive("needs a number above 0"));
+  command.speed =
+      command.top->add_option("--speed", o.top_speed, "With -r: replay this many times faster")
+          ->check(tools::positive("needs a number above 0"));
+  command.top->footer(
+      "modtap's options apply: -i, -r, --baud, --parity, --model, --follow, -Y, -t, --stats, "
+      "--report, -w, --metrics, --mqtt (modtap --help)");
   command.top->add_option("capture", command.named_capture, "The capture file, as with -r");
 }
 
@@ -354,6 +359,8 @@ void warn_idle_options(const RunOptions& o, const Command& command) {
       {!o.follow.empty(), values_over_time,
        "--follow picks the registers of -T csv, --report and --mqtt"},
       {o.verbose, lines, "-V adds the field tree to the text output (-T text)"},
+      {command.speed->count() > 0, !o.read_file.empty(),
+       "--speed is how fast modtap top replays a capture (-r)"},
   };
   for (const auto& option : options)
     if (option.given && !option.used)

@@ -186,7 +186,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   }
   progress.reset();  // wiped before anything else reaches the terminal
   bus.finish();
-  if (view) view->end_of_capture();
+  if (view) view->end_of_capture(!broken);
   view.reset();  // the terminal given back before anything is said on it
   session.finish(!broken, frames_met(o, autostop, session).value_or(stopped_by.value_or("")));
   if (bus.clock_steps_back())

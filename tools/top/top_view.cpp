@@ -187,7 +187,8 @@ bool TopView::pace(int64_t t_ns) {
   return !stopping();
 }
 
-void TopView::end_of_capture() {
+void TopView::end_of_capture(bool complete) {
+  broken_ = !complete;
   ended_ = true;
   if (!terminal_) {
     stop_ = true;  // the plain screen prints its last one as it stops
@@ -341,14 +342,22 @@ void TopView::toggle_writing() {
   }
 }
 
+// Line 1's word on the run: live, a replay and its pace, or how the replay ended.
+std::string TopView::state_text() const {
+  if (ended_) {
+    const std::string ended = broken_ ? "the capture broke off" : "end of capture";
+    return view_.keys ? ended + " (q quits)" : ended;
+  }
+  if (settings_.replay_speed) return fmt::format("replay x{:g}", *settings_.replay_speed);
+  return "live";
+}
+
 Snapshot TopView::take() {
   Snapshot s;
   s.source = settings_.source;
   s.settings = settings_.settings;
   s.clock = settings_.clock;
-  s.state = ended_                   ? (view_.keys ? "end of capture (q quits)" : "end of capture")
-            : settings_.replay_speed ? fmt::format("replay x{:g}", *settings_.replay_speed)
-                                     : "live";
+  s.state = state_text();
   sources_.shared.read([&] {
     fill_numbers(s);
     const auto problems = sources_.problems();
@@ -385,7 +394,11 @@ void TopView::fill_numbers(Snapshot& s) {
   s.running_s = settings_.replay_speed
                     ? st.duration_s()
                     : std::chrono::duration<double>(steady_clock::now() - started_).count();
-  s.frames_per_s = snapshot_.frames_per_s;
+  // The first snapshot (a short replay may need no second) has the average so far.
+  const double duration_s = st.duration_s();
+  s.frames_per_s = previous_t_ns_   ? snapshot_.frames_per_s
+                   : duration_s > 0 ? static_cast<double>(st.frames) / duration_s
+                                    : 0.0;
   if (previous_t_ns_ && s.now_ns > *previous_t_ns_)
     s.frames_per_s = static_cast<double>(feed.frames() - previous_frames_) /
                      (static_cast<double>(s.now_ns - *previous_t_ns_) / 1e9);

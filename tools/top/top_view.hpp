@@ -56,8 +56,9 @@ class TopView {
   // A replay: waits until the capture's moment `t_ns` comes at the replay's pace. False once
   // the person quit (q, Ctrl-C): read no further.
   bool pace(int64_t t_ns);
-  // A replay's end: the last screen stays until q (at once in plain text).
-  void end_of_capture();
+  // A replay's end: the last screen stays until q (at once in plain text). `complete` false:
+  // the capture broke off, and the error is said once the screen is gone.
+  void end_of_capture(bool complete);
 
  private:
   void run();
@@ -66,6 +67,7 @@ class TopView {
   void type_filter(int key);
   void sort_by(int step);
   Snapshot take();
+  std::string state_text() const;
   void fill_numbers(Snapshot& s);
   void fill_registers(Snapshot& s);
   void toggle_writing();
@@ -78,7 +80,7 @@ class TopView {
   TopSettings settings_;
   std::unique_ptr<Terminal> terminal_;
   std::thread thread_;
-  std::atomic<bool> stop_{false}, quit_{false}, ended_{false};
+  std::atomic<bool> stop_{false}, quit_{false}, ended_{false}, broken_{false};
   const std::atomic<bool>& signalled_;
 
   Snapshot snapshot_;
