@@ -231,6 +231,14 @@ def replay_ends_on_the_statistics():
     check("plain", plain.returncode == 0 and "end of capture" in last[0]
           and f"{truth['frames']} frames" in last[1] and "\x1b" not in plain.stdout,
           plain.stdout[-2000:] + plain.stderr)
+    # The reader goes away after one line: the replay stops at the next screen, quietly, and
+    # does not end in success, as modtap's own lines into `head` do.
+    head = subprocess.run(f"{MODTAP} top -r {capture} --speed 10 | head -1; "
+                          "exit ${PIPESTATUS[0]}", shell=True, executable="/bin/bash",
+                          env={**os.environ, "TERM": "dumb"}, capture_output=True, text=True,
+                          timeout=60)
+    check("pipe closed", head.returncode == 2 and not head.stderr,
+          f"exit status {head.returncode}: {head.stderr!r}")
 
 
 def waits_on_terminal(process):

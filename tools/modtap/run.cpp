@@ -186,8 +186,10 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   }
   progress.reset();  // wiped before anything else reaches the terminal
   bus.finish();
-  if (view) view->end_of_capture(!broken);
-  view.reset();  // the terminal given back before anything is said on it
+  if (view) {
+    view->end_of_capture(!broken);
+    view->close();  // the terminal given back before anything is said on it
+  }
   session.finish(!broken, frames_met(o, autostop, session).value_or(stopped_by.value_or("")));
   if (bus.clock_steps_back())
     fmt::print(stderr,
@@ -264,7 +266,7 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
   auto view =
       top_view(o, session, options.analyzer.format, ClockQuality::per_chunk, live::request_stop);
   const int status = live::run_live(ports, options, health, stop);
-  view.reset();
+  if (view) view->close();
   // Ctrl-C, -c and -a end a live run whole; a port gone (status 1) breaks it off.
   session.finish(status == 0, frames_met(o, autostop, session).value_or(stopped_by.value_or("")));
   hint_settings(options.analyzer.format, health, pace, HintContext{});

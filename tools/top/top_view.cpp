@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <clocale>
 #include <cstdio>
 #include <cstdlib>
@@ -11,6 +12,7 @@
 
 #include <fmt/format.h>
 
+#include "captures/output_file.hpp"
 #include "tools/live/live_capture.hpp"
 
 #define NCURSES_NOMACROS
@@ -20,6 +22,7 @@ namespace modtap::top {
 namespace {
 
 using std::chrono::steady_clock;
+constexpr int escape = 27;
 constexpr auto refresh_every = std::chrono::seconds(1);
 constexpr size_t history_kept = 120;  // a followed register's values, one a refresh
 
@@ -29,8 +32,6 @@ size_t plain_size(const char* variable, size_t otherwise) {
   const long number = value ? std::strtol(value, nullptr, 10) : 0;
   return number >= 10 && number <= 1000 ? static_cast<size_t>(number) : otherwise;
 }
-constexpr int escape = 27;
-
 int attributes_of(Look look) {
   switch (look) {
     case Look::title:
@@ -164,9 +165,18 @@ TopView::TopView(TopSources sources, TopSettings settings)
 }
 
 TopView::~TopView() {
+  stop_screen();
+}
+
+void TopView::stop_screen() {
   stop_ = true;
   if (thread_.joinable()) thread_.join();
   terminal_.reset();
+}
+
+void TopView::close() {
+  stop_screen();
+  if (write_error_) throw captures::WriteError("standard output", write_error_);
 }
 
 bool TopView::stopping() const {
@@ -225,14 +235,22 @@ void TopView::run_plain() {
       continue;
     }
     snapshot_ = take();
+    std::string page;
     for (const ScreenLine& line :
          lay_out(snapshot_, view_, plain_size("COLUMNS", 132), plain_size("LINES", 40))) {
       std::string_view text(line.text);
       while (!text.empty() && text.back() == ' ') text.remove_suffix(1);
-      fmt::print("{}\n", text);
+      page.append(text).push_back('\n');
     }
-    fmt::print("\n");
-    std::fflush(stdout);
+    page.push_back('\n');
+    if (std::fwrite(page.data(), 1, page.size(), stdout) != page.size() ||
+        std::fflush(stdout) != 0) {
+      // The reader went away (`| head`) or the disk is full: the run ends, and close() says so.
+      write_error_ = errno ? errno : EIO;
+      quit_ = true;
+      if (settings_.on_quit) settings_.on_quit();
+      return;
+    }
     next = steady_clock::now() + refresh_every;
   }
 }

@@ -56,6 +56,9 @@ class TopView {
   // A replay: waits until the capture's moment `t_ns` comes at the replay's pace. False once
   // the person quit (q, Ctrl-C): read no further.
   bool pace(int64_t t_ns);
+  // The screen's thread stopped and the terminal given back; throws WriteError where the plain
+  // screen could not be written (its reader went away).
+  void close();
   // A replay's end: the last screen stays until q (at once in plain text). `complete` false:
   // the capture broke off, and the error is said once the screen is gone.
   void end_of_capture(bool complete);
@@ -63,6 +66,7 @@ class TopView {
  private:
   void run();
   void run_plain();
+  void stop_screen();
   bool handle_key(int key);
   void type_filter(int key);
   void sort_by(int step);
@@ -81,6 +85,7 @@ class TopView {
   std::unique_ptr<Terminal> terminal_;
   std::thread thread_;
   std::atomic<bool> stop_{false}, quit_{false}, ended_{false}, broken_{false};
+  std::atomic<int> write_error_{0};
   const std::atomic<bool>& signalled_;
 
   Snapshot snapshot_;
