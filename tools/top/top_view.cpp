@@ -4,7 +4,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <clocale>
 #include <cstdio>
 #include <cstdlib>
@@ -32,6 +31,19 @@ size_t plain_size(const char* variable, size_t otherwise) {
   const long number = value ? std::strtol(value, nullptr, 10) : 0;
   return number >= 10 && number <= 1000 ? static_cast<size_t>(number) : otherwise;
 }
+// The screen as text: its lines without the spaces that pad them, and a blank line after.
+std::string plain_page(const Snapshot& snapshot, const ViewState& view) {
+  std::string page;
+  for (const ScreenLine& line :
+       lay_out(snapshot, view, plain_size("COLUMNS", 132), plain_size("LINES", 40))) {
+    std::string_view text(line.text);
+    while (!text.empty() && text.back() == ' ') text.remove_suffix(1);
+    page.append(text).push_back('\n');
+  }
+  page.push_back('\n');
+  return page;
+}
+
 int attributes_of(Look look) {
   switch (look) {
     case Look::title:
@@ -176,7 +188,7 @@ void TopView::stop_screen() {
 
 void TopView::close() {
   stop_screen();
-  if (write_error_) throw captures::WriteError("standard output", write_error_);
+  if (write_failed_) std::rethrow_exception(write_failed_);
 }
 
 bool TopView::stopping() const {
@@ -226,6 +238,7 @@ void TopView::run() {
 }
 
 void TopView::run_plain() {
+  captures::OutputFile standard_output("-");
   auto next = steady_clock::now() + refresh_every;
   bool last = false;
   while (!last) {
@@ -235,18 +248,12 @@ void TopView::run_plain() {
       continue;
     }
     snapshot_ = take();
-    std::string page;
-    for (const ScreenLine& line :
-         lay_out(snapshot_, view_, plain_size("COLUMNS", 132), plain_size("LINES", 40))) {
-      std::string_view text(line.text);
-      while (!text.empty() && text.back() == ' ') text.remove_suffix(1);
-      page.append(text).push_back('\n');
-    }
-    page.push_back('\n');
-    if (std::fwrite(page.data(), 1, page.size(), stdout) != page.size() ||
-        std::fflush(stdout) != 0) {
+    try {
+      standard_output.write(plain_page(snapshot_, view_));
+      standard_output.flush();
+    } catch (const captures::WriteError&) {
       // The reader went away (`| head`) or the disk is full: the run ends, and close() says so.
-      write_error_ = errno ? errno : EIO;
+      write_failed_ = std::current_exception();
       quit_ = true;
       if (settings_.on_quit) settings_.on_quit();
       return;

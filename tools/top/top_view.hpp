@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <map>
 #include <memory>
@@ -85,7 +86,7 @@ class TopView {
   std::unique_ptr<Terminal> terminal_;
   std::thread thread_;
   std::atomic<bool> stop_{false}, quit_{false}, ended_{false}, broken_{false};
-  std::atomic<int> write_error_{0};
+  std::exception_ptr write_failed_;  // set by the screen's thread, read after it ended
   const std::atomic<bool>& signalled_;
 
   Snapshot snapshot_;
