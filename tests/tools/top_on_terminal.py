@@ -123,6 +123,8 @@ def live_screen():
           "\n".join(lines))
     check("slow row", (slave_row(lines, 2) or [""])[-1].startswith("slow-resp"),
           "\n".join(lines))
+    check("never answered", (slave_row(lines, 3) or [""] * 11)[10] == "-",
+          "slave 3 never answered, yet its row says it was seen")
     check("slow latency", float((slave_row(lines, 2) or ["0"] * 9)[8]) > 100,
           "slave 2's p50 is not its 131 ms turnaround")
     rate = re.search(r"(\d+) frames/s", lines[1])
@@ -231,6 +233,17 @@ def replay_ends_on_the_statistics():
     check("plain", plain.returncode == 0 and "end of capture" in last[0]
           and f"{truth['frames']} frames" in last[1] and "\x1b" not in plain.stdout,
           plain.stdout[-2000:] + plain.stderr)
+    # A capture that breaks off says so on its last screen, and the run fails after it.
+    cut = os.path.join(WORK, "cut.pcap")
+    with open(capture, "rb") as whole, open(cut, "wb") as part:
+        part.write(whole.read(os.path.getsize(capture) * 2 // 3))
+    broken = subprocess.run([MODTAP, "top", "-r", cut, "--speed", "1000"],
+                            env={**os.environ, "TERM": "dumb"}, capture_output=True, text=True,
+                            timeout=120)
+    titles = [line for line in broken.stdout.splitlines() if line.startswith("modtap top")]
+    check("broken capture", broken.returncode == 2 and titles and
+          "the capture broke off" in titles[-1] and "truncated" in broken.stderr,
+          f"exit status {broken.returncode}, {titles[-1:]}, {broken.stderr!r}")
     # The reader goes away after one line: the replay stops at the next screen, quietly, and
     # does not end in success, as modtap's own lines into `head` do.
     head = subprocess.run(f"{MODTAP} top -r {capture} --speed 10 | head -1; "

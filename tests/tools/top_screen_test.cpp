@@ -1,7 +1,10 @@
 #include "tools/top/top_screen.hpp"
 
 #include <algorithm>
+#include <iterator>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -79,6 +82,23 @@ TEST(TopScreen, AFaultySlavesRowNamesItsProblemInItsColour) {
   EXPECT_EQ(healthy->look, Look::plain);
   EXPECT_EQ(line_starting(lines, "    1 nta5000")->look, Look::selected);  // the cursor's row
   EXPECT_NE(line_starting(lines, "latest problem: Slave 3 never answers"), nullptr);
+}
+
+TEST(TopScreen, SeenCountsFromASlavesLastAnswerAndSaysNeverWithADash) {
+  Snapshot s = bus();
+  s.now_ns = 100'000'000'000;
+  s.slaves[0].last_answer_ns = 75'000'000'000;
+  s.slaves[1].last_answer_ns = 100'000'000'000;
+  const auto lines = lay_out(s, ViewState{}, 100, 24);
+  const auto seen = [&](const char* start) {
+    const std::string& text = line_starting(lines, start)->text;
+    std::istringstream cells(text);
+    std::vector<std::string> words{std::istream_iterator<std::string>(cells), {}};
+    return words.at(10);
+  };
+  EXPECT_EQ(seen("    1 nta5000"), "25s");
+  EXPECT_EQ(seen("    2 nta5000"), "0s");
+  EXPECT_EQ(seen("    3 nta5000"), "-");
 }
 
 TEST(TopScreen, SortsByAColumnEitherWayWithTheAddressBreakingTies) {

@@ -80,11 +80,11 @@ std::string pcapng_name() {
   return name;
 }
 
-std::string value_text(const LastValue& value) {
-  std::string text =
-      value.text.empty() ? fmt::format("{:.{}f}", value.value, value.decimals) : value.text;
-  if (!value.unit.empty()) text += " " + value.unit;
-  return text;
+// A register's last value as people read it, as the text output writes it.
+std::string value_text(const RegisterKey& key, const LastValue& value) {
+  fmt::memory_buffer text;
+  append_value_text(text, value.as_register(key.table, key.address));
+  return fmt::to_string(text);
 }
 
 // A slave's row: its counts, latencies, model, and its worst problem (`problems` come errors
@@ -227,7 +227,7 @@ void TopView::run() {
     was_ended = ended_;
     const bool due = steady_clock::now() >= next;
     if ((due && !view_.paused) || ended_now) {
-      snapshot_ = take();
+      snapshot_ = take(true);
       next = steady_clock::now() + refresh_every;
     }
     if (due || ended_now) draw();
@@ -247,7 +247,7 @@ void TopView::run_plain() {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
       continue;
     }
-    snapshot_ = take();
+    snapshot_ = take(true);
     try {
       standard_output.write(plain_page(snapshot_, view_));
       standard_output.flush();
@@ -329,7 +329,7 @@ bool TopView::handle_key(int key) {
     if (std::find(binding.keys.begin(), binding.keys.end(), key) == binding.keys.end()) continue;
     view_.message.clear();
     binding.act(*this);
-    if (binding.shows_other_records && !view_.paused) snapshot_ = take();
+    if (binding.shows_other_records && !view_.paused) snapshot_ = take(false);
     return !quit_;
   }
   return false;
@@ -377,14 +377,14 @@ std::string TopView::state_text() const {
   return "live";
 }
 
-Snapshot TopView::take() {
+Snapshot TopView::take(bool refresh) {
   Snapshot s;
   s.source = settings_.source;
   s.settings = settings_.settings;
   s.clock = settings_.clock;
   s.state = state_text();
   sources_.shared.read([&] {
-    fill_numbers(s);
+    fill_numbers(s, refresh);
     const auto problems = sources_.problems();
     for (const Problem& p : problems) s.problems.push_back({p.severity, p.since_ns, p.text});
     std::stable_sort(s.problems.begin(), s.problems.end(),
@@ -401,13 +401,14 @@ Snapshot TopView::take() {
     if (feed.writing())
       s.writing =
           fmt::format("writing {} ({} packets)", feed.written_path(), feed.packets_written());
-    fill_registers(s);
+    fill_registers(s, refresh);
   });
   return s;
 }
 
-// The header's numbers; frames a second over the capture's time since the snapshot before.
-void TopView::fill_numbers(Snapshot& s) {
+// The header's numbers; frames a second over the capture's time since the refresh before (a
+// snapshot a key asks for in between keeps the rate it had).
+void TopView::fill_numbers(Snapshot& s, bool refresh) {
   const BusStatistics& st = sources_.statistics;
   const TopFeed& feed = sources_.feed;
   s.frames = st.frames;
@@ -424,6 +425,7 @@ void TopView::fill_numbers(Snapshot& s) {
   s.frames_per_s = previous_t_ns_   ? snapshot_.frames_per_s
                    : duration_s > 0 ? static_cast<double>(st.frames) / duration_s
                                     : 0.0;
+  if (!refresh) return;
   if (previous_t_ns_ && s.now_ns > *previous_t_ns_)
     s.frames_per_s = static_cast<double>(feed.frames() - previous_frames_) /
                      (static_cast<double>(s.now_ns - *previous_t_ns_) / 1e9);
@@ -431,28 +433,29 @@ void TopView::fill_numbers(Snapshot& s) {
   previous_t_ns_ = s.now_ns;
 }
 
-// The chosen slave's registers, or the followed ones with their values over the refreshes.
-void TopView::fill_registers(Snapshot& s) {
+// A register by its model's name, or by its number where no model names it.
+std::string TopView::register_label(const RegisterKey& key, const LastValue& value) const {
+  if (!value.name.empty()) return value.name;
+  return fmt::format("{}", RegisterNumber{key.table, key.address, settings_.register_base});
+}
+
+// The chosen slave's registers, or the followed ones with their values, one a refresh.
+void TopView::fill_registers(Snapshot& s, bool refresh) {
   const auto& registers = sources_.statistics.registers;
   if (view_.chosen) {
     for (const auto& [key, value] : registers)
       if (key.slave == *view_.chosen)
-        s.registers.push_back({value.name.empty()
-                                   ? fmt::format("{}", RegisterNumber{key.table, key.address,
-                                                                      settings_.register_base})
-                                   : value.name,
-                               value_text(value),
-                               {}});
+        s.registers.push_back({register_label(key, value), value_text(key, value), {}});
     return;
   }
   if (settings_.follow.empty()) return;
   for (const auto& [key, value] : registers) {
     if (!output::follows(settings_.follow, value.as_register(key.table, key.address))) continue;
-    const std::string name = fmt::format("{} (slave {})", value.name, key.slave);
+    const std::string name = fmt::format("{} (slave {})", register_label(key, value), key.slave);
     auto& history = history_[name];
-    if (!view_.paused) history.push_back(value.value);
+    if (refresh) history.push_back(value.value);
     if (history.size() > history_kept) history.erase(history.begin());
-    s.registers.push_back({name, value_text(value), history});
+    s.registers.push_back({name, value_text(key, value), history});
   }
 }
 

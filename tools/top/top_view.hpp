@@ -42,7 +42,7 @@ struct TopSettings {
   std::optional<double> replay_speed;  // a file replayed at this pace; none: live
   std::vector<output::FollowedRegister> follow;
   RegisterBase register_base = RegisterBase::hex;
-  std::function<void()> on_quit;  // `q` on a live run: stop the capture
+  std::function<void()> on_quit;  // `q`, or a plain screen nobody reads: stop the capture
 };
 
 class Terminal;
@@ -71,10 +71,12 @@ class TopView {
   bool handle_key(int key);
   void type_filter(int key);
   void sort_by(int step);
-  Snapshot take();
+  // `refresh`: the once-a-second one, which measures the rate and samples the followed values.
+  Snapshot take(bool refresh);
   std::string state_text() const;
-  void fill_numbers(Snapshot& s);
-  void fill_registers(Snapshot& s);
+  void fill_numbers(Snapshot& s, bool refresh);
+  void fill_registers(Snapshot& s, bool refresh);
+  std::string register_label(const RegisterKey& key, const LastValue& value) const;
   void toggle_writing();
   void apply_filter(const std::string& text);
   void draw();
