@@ -492,152 +492,170 @@ class Simulator {
     }
   }
 
+  // A request of each function code and the answer it gets, with random fields, by code.
+  using Filler = void (Simulator::*)(uint8_t fc, Bytes& req, Bytes& rsp);
   void fill(uint8_t fc, Bytes& req, Bytes& rsp) {
-    switch (fc) {
-      case 0x01:
-      case 0x02: {
-        const unsigned qty = pick(1, 80);
-        u16(req, pick(0, 0xFFFF - qty));
-        u16(req, qty);
-        rsp.push_back(static_cast<uint8_t>((qty + 7) / 8));
-        random_bytes(rsp, (qty + 7) / 8);
-        break;
-      }
-      case 0x03:
-      case 0x04: {
-        const unsigned qty = pick(1, 40);
-        u16(req, pick(0, 0xFFFF - qty));
-        u16(req, qty);
-        rsp.push_back(static_cast<uint8_t>(qty * 2));
-        random_bytes(rsp, qty * 2);
-        break;
-      }
-      case 0x05:
-        u16(req, pick(0, 0xFFFF));
-        u16(req, chance(0.5) ? 0xFF00 : 0x0000);
-        rsp.assign(req.begin(), req.end());
-        break;
-      case 0x06:
-      case 0x16:
-        u16(req, pick(0, 0xFFFF));
-        random_bytes(req, fc == 0x06 ? 2 : 4);
-        rsp.assign(req.begin(), req.end());
-        break;
-      case 0x07:
-        rsp.push_back(static_cast<uint8_t>(pick(0, 255)));
-        break;
-      case 0x08: {
-        static constexpr uint16_t subs[] = {0x0000, 0x000A, 0x000B, 0x000C, 0x000D, 0x000E, 0x0012};
-        const uint16_t sub = subs[pick(0, 6)];
-        u16(req, sub);
-        random_bytes(req, sub == 0 ? pick(1, 4) * 2 : 2);
-        rsp.assign(req.begin(), req.end());
-        if (sub != 0) {
-          rsp.resize(rsp.size() - 2);
-          random_bytes(rsp, 2);
-        }
-        break;
-      }
-      case 0x0B:
-        random_bytes(rsp, 4);
-        break;
-      case 0x0C: {
-        const unsigned events = pick(0, 20);
-        rsp.push_back(static_cast<uint8_t>(6 + events));
-        random_bytes(rsp, 6 + events);
-        break;
-      }
-      case 0x0F:
-      case 0x10: {
-        const unsigned qty = fc == 0x0F ? pick(1, 80) : pick(1, 30);
-        const unsigned count = fc == 0x0F ? (qty + 7) / 8 : qty * 2;
-        u16(req, pick(0, 0xFFFF - qty));
-        u16(req, qty);
-        req.push_back(static_cast<uint8_t>(count));
-        random_bytes(req, count);
-        rsp.insert(rsp.end(), req.begin() + 2, req.begin() + 6);
-        break;
-      }
-      case 0x11: {
-        const unsigned count = pick(2, 20);
-        rsp.push_back(static_cast<uint8_t>(count));
-        random_bytes(rsp, count);
-        break;
-      }
-      case 0x14: {
-        const unsigned subs = pick(1, 3);
-        req.push_back(static_cast<uint8_t>(subs * 7));
-        Bytes data;
-        for (unsigned i = 0; i < subs; ++i) {
-          const unsigned length = pick(1, 5);
-          req.push_back(6);
-          u16(req, pick(1, 10));
-          u16(req, pick(0, 9999));
-          u16(req, length);
-          data.push_back(static_cast<uint8_t>(1 + length * 2));
-          data.push_back(6);
-          random_bytes(data, length * 2);
-        }
-        rsp.push_back(static_cast<uint8_t>(data.size()));
-        rsp.insert(rsp.end(), data.begin(), data.end());
-        break;
-      }
-      case 0x15: {
-        const unsigned subs = pick(1, 3);
-        // 245 bytes of data at most (Modbus Application Protocol 6.15): 7 of header a record.
-        const unsigned longest = o_.long_file_records ? (245 / subs - 7) / 2 : 5;
-        Bytes data;
-        for (unsigned i = 0; i < subs; ++i) {
-          const unsigned length = pick(1, longest);
-          data.push_back(6);
-          u16(data, pick(1, 10));
-          u16(data, pick(0, 9999));
-          u16(data, length);
-          random_bytes(data, length * 2);
-        }
-        req.push_back(static_cast<uint8_t>(data.size()));
-        req.insert(req.end(), data.begin(), data.end());
-        rsp.assign(req.begin(), req.end());
-        break;
-      }
-      case 0x17: {
-        const unsigned read_qty = pick(1, 20), write_qty = pick(1, 10);
-        u16(req, pick(0, 1000));
-        u16(req, read_qty);
-        u16(req, pick(0, 1000));
-        u16(req, write_qty);
-        req.push_back(static_cast<uint8_t>(write_qty * 2));
-        random_bytes(req, write_qty * 2);
-        rsp.push_back(static_cast<uint8_t>(read_qty * 2));
-        random_bytes(rsp, read_qty * 2);
-        break;
-      }
-      case 0x18: {
-        const unsigned count = pick(0, 31);
-        u16(req, pick(0, 0xFFFF));
-        u16(rsp, 2 + count * 2);
-        u16(rsp, count);
-        random_bytes(rsp, count * 2);
-        break;
-      }
-      case 0x2B: {
-        const uint8_t code = static_cast<uint8_t>(pick(1, 4));
-        req.insert(req.end(), {0x0E, code, 0x00});
-        static constexpr const char* values[] = {"modtap", "BUSGEN-1", "V1.02"};
-        rsp.insert(rsp.end(), {0x0E, code, 0x81, 0x00, 0x00, 0x03});
-        for (uint8_t id = 0; id < 3; ++id) {
-          const std::string value = values[id];
-          rsp.push_back(id);
-          rsp.push_back(static_cast<uint8_t>(value.size()));
-          rsp.insert(rsp.end(), value.begin(), value.end());
-        }
-        break;
-      }
-      default: {  // a vendor code: some data both ways
-        random_bytes(req, pick(0, 6));
-        random_bytes(rsp, pick(0, 6));
-      }
+    static constexpr std::pair<uint8_t, Filler> fillers[] = {
+        {0x01, &Simulator::read_bits},      {0x02, &Simulator::read_bits},
+        {0x03, &Simulator::read_registers}, {0x04, &Simulator::read_registers},
+        {0x05, &Simulator::write_coil},     {0x06, &Simulator::write_register},
+        {0x16, &Simulator::write_register}, {0x07, &Simulator::read_status},
+        {0x08, &Simulator::diagnostics},    {0x0B, &Simulator::event_counter},
+        {0x0C, &Simulator::event_log},      {0x0F, &Simulator::write_multiple},
+        {0x10, &Simulator::write_multiple}, {0x11, &Simulator::server_id},
+        {0x14, &Simulator::read_file},      {0x15, &Simulator::write_file},
+        {0x17, &Simulator::read_write},     {0x18, &Simulator::read_fifo},
+        {0x2B, &Simulator::identification},
+    };
+    for (const auto& [code, filler] : fillers)
+      if (code == fc) return (this->*filler)(fc, req, rsp);
+    vendor_function(fc, req, rsp);
+  }
+
+  void read_bits(uint8_t, Bytes& req, Bytes& rsp) {
+    const unsigned qty = pick(1, 80);
+    u16(req, pick(0, 0xFFFF - qty));
+    u16(req, qty);
+    rsp.push_back(static_cast<uint8_t>((qty + 7) / 8));
+    random_bytes(rsp, (qty + 7) / 8);
+  }
+
+  void read_registers(uint8_t, Bytes& req, Bytes& rsp) {
+    const unsigned qty = pick(1, 40);
+    u16(req, pick(0, 0xFFFF - qty));
+    u16(req, qty);
+    rsp.push_back(static_cast<uint8_t>(qty * 2));
+    random_bytes(rsp, qty * 2);
+  }
+
+  void write_coil(uint8_t, Bytes& req, Bytes& rsp) {
+    u16(req, pick(0, 0xFFFF));
+    u16(req, chance(0.5) ? 0xFF00 : 0x0000);
+    rsp.assign(req.begin(), req.end());
+  }
+
+  // FC06, and FC16 Mask Write Register: both answered by their echo.
+  void write_register(uint8_t fc, Bytes& req, Bytes& rsp) {
+    u16(req, pick(0, 0xFFFF));
+    random_bytes(req, fc == 0x06 ? 2 : 4);
+    rsp.assign(req.begin(), req.end());
+  }
+
+  void read_status(uint8_t, Bytes&, Bytes& rsp) {
+    rsp.push_back(static_cast<uint8_t>(pick(0, 255)));
+  }
+
+  // Return Query Data (0000) echoes its data; the counters answer with a value of their own.
+  void diagnostics(uint8_t, Bytes& req, Bytes& rsp) {
+    static constexpr uint16_t subs[] = {0x0000, 0x000A, 0x000B, 0x000C, 0x000D, 0x000E, 0x0012};
+    const uint16_t sub = subs[pick(0, 6)];
+    u16(req, sub);
+    random_bytes(req, sub == 0 ? pick(1, 4) * 2 : 2);
+    rsp.assign(req.begin(), req.end());
+    if (sub != 0) {
+      rsp.resize(rsp.size() - 2);
+      random_bytes(rsp, 2);
     }
+  }
+
+  void event_counter(uint8_t, Bytes&, Bytes& rsp) { random_bytes(rsp, 4); }
+
+  void event_log(uint8_t, Bytes&, Bytes& rsp) {
+    const unsigned events = pick(0, 20);
+    rsp.push_back(static_cast<uint8_t>(6 + events));
+    random_bytes(rsp, 6 + events);
+  }
+
+  // FC0F coils and FC10 registers: the answer repeats the address and quantity.
+  void write_multiple(uint8_t fc, Bytes& req, Bytes& rsp) {
+    const unsigned qty = fc == 0x0F ? pick(1, 80) : pick(1, 30);
+    const unsigned count = fc == 0x0F ? (qty + 7) / 8 : qty * 2;
+    u16(req, pick(0, 0xFFFF - qty));
+    u16(req, qty);
+    req.push_back(static_cast<uint8_t>(count));
+    random_bytes(req, count);
+    rsp.insert(rsp.end(), req.begin() + 2, req.begin() + 6);
+  }
+
+  void server_id(uint8_t, Bytes&, Bytes& rsp) {
+    const unsigned count = pick(2, 20);
+    rsp.push_back(static_cast<uint8_t>(count));
+    random_bytes(rsp, count);
+  }
+
+  void read_file(uint8_t, Bytes& req, Bytes& rsp) {
+    const unsigned subs = pick(1, 3);
+    req.push_back(static_cast<uint8_t>(subs * 7));
+    Bytes data;
+    for (unsigned i = 0; i < subs; ++i) {
+      const unsigned length = pick(1, 5);
+      req.push_back(6);
+      u16(req, pick(1, 10));
+      u16(req, pick(0, 9999));
+      u16(req, length);
+      data.push_back(static_cast<uint8_t>(1 + length * 2));
+      data.push_back(6);
+      random_bytes(data, length * 2);
+    }
+    rsp.push_back(static_cast<uint8_t>(data.size()));
+    rsp.insert(rsp.end(), data.begin(), data.end());
+  }
+
+  void write_file(uint8_t, Bytes& req, Bytes& rsp) {
+    const unsigned subs = pick(1, 3);
+    // 245 bytes of data at most (Modbus Application Protocol 6.15): 7 of header a record.
+    const unsigned longest = o_.long_file_records ? (245 / subs - 7) / 2 : 5;
+    Bytes data;
+    for (unsigned i = 0; i < subs; ++i) {
+      const unsigned length = pick(1, longest);
+      data.push_back(6);
+      u16(data, pick(1, 10));
+      u16(data, pick(0, 9999));
+      u16(data, length);
+      random_bytes(data, length * 2);
+    }
+    req.push_back(static_cast<uint8_t>(data.size()));
+    req.insert(req.end(), data.begin(), data.end());
+    rsp.assign(req.begin(), req.end());
+  }
+
+  void read_write(uint8_t, Bytes& req, Bytes& rsp) {
+    const unsigned read_qty = pick(1, 20), write_qty = pick(1, 10);
+    u16(req, pick(0, 1000));
+    u16(req, read_qty);
+    u16(req, pick(0, 1000));
+    u16(req, write_qty);
+    req.push_back(static_cast<uint8_t>(write_qty * 2));
+    random_bytes(req, write_qty * 2);
+    rsp.push_back(static_cast<uint8_t>(read_qty * 2));
+    random_bytes(rsp, read_qty * 2);
+  }
+
+  void read_fifo(uint8_t, Bytes& req, Bytes& rsp) {
+    const unsigned count = pick(0, 31);
+    u16(req, pick(0, 0xFFFF));
+    u16(rsp, 2 + count * 2);
+    u16(rsp, count);
+    random_bytes(rsp, count * 2);
+  }
+
+  void identification(uint8_t, Bytes& req, Bytes& rsp) {
+    const uint8_t code = static_cast<uint8_t>(pick(1, 4));
+    req.insert(req.end(), {0x0E, code, 0x00});
+    static constexpr const char* values[] = {"modtap", "BUSGEN-1", "V1.02"};
+    rsp.insert(rsp.end(), {0x0E, code, 0x81, 0x00, 0x00, 0x03});
+    for (uint8_t id = 0; id < 3; ++id) {
+      const std::string value = values[id];
+      rsp.push_back(id);
+      rsp.push_back(static_cast<uint8_t>(value.size()));
+      rsp.insert(rsp.end(), value.begin(), value.end());
+    }
+  }
+
+  // A vendor's code: some data both ways.
+  void vendor_function(uint8_t, Bytes& req, Bytes& rsp) {
+    random_bytes(req, pick(0, 6));
+    random_bytes(rsp, pick(0, 6));
   }
 
   BusOptions o_;
