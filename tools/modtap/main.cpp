@@ -179,6 +179,10 @@ void add_output_options(CLI::App& app, RunOptions& o, Command& command) {
       "How text, CSV, statistics and the report number registers: hex (2502H, as the "
       "drives' manuals), 0 (0-based decimal, as on the wire), 1 (1-based, as mbpoll), "
       "4xxxx (Modicon: 40001 is holding register 0); --follow reads numbers the same way");
+}
+
+// Metrics for Prometheus and MQTT: what a run left on a bus serves while it runs.
+void add_monitoring_options(CLI::App& app, RunOptions& o) {
   auto* metrics = app.add_option(
       "--metrics", o.metrics_address,
       "Serve bus-health metrics for Prometheus on http://ADDR:PORT/metrics while running "
@@ -223,6 +227,10 @@ void add_output_options(CLI::App& app, RunOptions& o, Command& command) {
                "Announce each register to Home Assistant (--mqtt-discovery=PREFIX for another "
                "discovery prefix than homeassistant)")
       ->needs(mqtt);
+}
+
+// How the records are written and shown, and which of them and for how long.
+void add_record_options(CLI::App& app, RunOptions& o, Command& command) {
   command.link = tools::add_enum_option(
       app, "--link", o.link,
       "pcapng link: user (DLT_USER + the modtap plugin), exported-pdu, bare");
@@ -410,6 +418,8 @@ int main(int argc, char** argv) {
   Command command;
   add_input_options(app, o, command);
   add_output_options(app, o, command);
+  add_monitoring_options(app, o);
+  add_record_options(app, o, command);
   add_analysis_options(app, o, command);
   add_subcommands(app, o, command);
   try {
