@@ -236,10 +236,10 @@ RtuFramer::Say RtuFramer::answer_read_as_request(const Reading& r) {
 
 // A request inside the span the awaited answer's structure claims is a collision's junk that
 // passed a CRC unless its own answer follows it (after a cut answer, the master's next request
-// and its answer): a FC0C poll of slave 113, then junk, inside a talked-over answer of 51 bytes
-// (seed 896); a FC06 write of slave 3 from the last bytes of a talked-over FC14 answer on, then
-// another slave's request (1008); a read of 10,773 inputs of slave 131 from the second byte of
-// a cut exception `ae 83 02` on (946). A silence after it may be its slave's; with no clock,
+// and its answer): a FC0C poll of slave 113, then junk, inside a talked-over answer of 51 bytes;
+// a FC06 write of slave 3 from the last bytes of a talked-over FC14 answer on, then another
+// slave's request; a read of 10,773 inputs of slave 131 from the second byte of a cut
+// exception `ae 83 02` on. A silence after it may be its slave's; with no clock,
 // where the master's time-out after a silent slave cannot show, no rule.
 RtuFramer::Say RtuFramer::request_inside_awaited_answer(const Reading& r) {
   if (r.role != Role::request || *at_ptr(r.at) == 0 || options_.clock == ClockQuality::none ||
@@ -283,7 +283,7 @@ RtuFramer::Say RtuFramer::retry_ending_in_zero(const Reading& r) {
 // on, after a damaged answer, a master may repeat its request as soon: there only bytes no
 // frame explains after the copy make it the answer, unless they begin as the answer to it
 // would (a FC07 poll `c7 07 12 42` again after a talked-over answer, then its own answer
-// talked over, `c7 07 31 c1 cd`; seed 1021).
+// talked over, `c7 07 31 c1 cd`).
 RtuFramer::Say RtuFramer::answer_copying_request(const Reading& r) {
   if (!r.other || *r.other != Role::response || !awaited_.copies_request(from(r.at), r.length) ||
       !too_soon_for_retry(r.at))
@@ -336,8 +336,8 @@ RtuFramer::Say RtuFramer::swallows_known_frame_reading(const Reading& r) {
 // Nor does any frame whose CRC holds by chance across a whole exchange: junk after it, and
 // inside it a request with its own answer's first bytes after it. A cut FC0C answer
 // `a5 0c 08 fb e1 58`, a glitch, the next request `10 0b 4d b7`, a glitch and its answer's
-// slave address passed a CRC as the 13 bytes the answer claimed (seed 1073); a FC0F request of
-// 255 bytes from inside a talked-over answer on, across the two exchanges after it (1020).
+// slave address passed a CRC as the 13 bytes the answer claimed; a FC0F request of
+// 255 bytes from inside a talked-over answer on, across the two exchanges after it.
 RtuFramer::Say RtuFramer::swallows_exchange_reading(const Reading& r) {
   if (r.search > 0 && swallows_exchange(r.at, r.at + r.length, r.final)) return Say::refutes;
   return Say::nothing;
@@ -386,9 +386,10 @@ bool RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) {
 // waits for them only where its last byte came in a read of its own after a read of several,
 // as the next frame's first byte does in modtap's own pcapng (its reader reads a packet's
 // first byte apart, to time it), or where the read that brought its first byte began before
-// it (a timer's reads end anywhere). Waiting behind every response that ends a read cost a pcap
-// 17% more to frame; behind every last byte read alone, a capture read a byte at a time held
-// each response back until its channel's next byte, behind the other channel's frames.
+// it (a timer's reads end anywhere). Waiting behind every response that ends a read would hold
+// most of a pcap's frames back for nothing; behind every last byte read alone, a capture read a
+// byte at a time held each response back until its channel's next byte, behind the other channel's
+// frames.
 std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bool final) {
   const uint64_t end = at + length;
   if (end == end_) {
@@ -502,7 +503,7 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
   // it bounds the junk as the end of the input does (a glitch, a cut answer and a glitch, then
   // the master's next request after its time-out). Where a 0x00 after it makes one byte more
   // good too, that reading stands as well (a query whose CRC ends in 0x00, answered by a cut
-  // exception; seed 1690).
+  // exception).
   if (unconfirmed && p[1] == 0x08 &&
       (final || (avail >= max_rtu_adu && !open) || blocked_by_gap(at, final))) {
     return {Match::Kind::found, static_cast<uint16_t>(unconfirmed), fit,
@@ -628,10 +629,10 @@ bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
 // long frame, bytes pass a CRC as a vendor code or an unnamed exception now and then (FC08's
 // query `ba 08 00 00 58 a9 54 52 cd d5 45 1e` holds `52 cd d5 45 1e`). One that starts in the
 // last bytes and runs on past them is swallowed too: a collision's junk `c0 f1 a0`, then the
-// next request `34 14 0e ...`, passed a CRC as an answer of slave 192 ending in `34 14`
-// (seed 1045). A frame with its exact copy right behind it, FC08's query and echo, swallows
-// none: the same chance twice over is none (`2a 08 00 00 dd 47 07 aa 43 9a` holds an answer of
-// slave 71 to FC07 in query and echo; seed 1215).
+// next request `34 14 0e ...`, passed a CRC as an answer of slave 192 ending in `34 14`. A frame
+// with its exact copy right behind it, FC08's query and echo, swallows none: the same chance twice
+// over is none (`2a 08 00 00 dd 47 07 aa 43 9a` holds an answer of slave 71 to FC07 in query and
+// echo).
 bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end) {
   if (copy_follows(begin, end)) return false;
   for (uint64_t inner = begin + 1; inner < end && inner + 3 <= end_; ++inner)
@@ -806,8 +807,8 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
 // Cut short, its length may be told only without the glitch (FC08 "68 08 00" and a 0x00 read as
 // Return Query Data). Among a capture's first frames, before the bus has shown whether it has
 // glitches, the byte is left to the frame unless the request rules it out, marked: both readings
-// stand (a cut answer and the next request's glitch among the first frames; seeds 731, 981, 1233,
-// 1390). Whether it emitted the piece so.
+// stand (a cut answer and the next request's glitch among the first frames). Whether it emitted the
+// piece so.
 bool RtuFramer::split_trailing_glitch(uint64_t begin, uint64_t end, uint32_t& findings,
                                       bool glitch_after) {
   const uint64_t size = end - begin;
