@@ -64,20 +64,12 @@ Role role_of(captures::PacketDirection direction) {
   return Role::unknown;
 }
 
-// " finding=NAME" for each finding in `bits`, as the Wireshark plugin reads them.
-void append_findings(fmt::memory_buffer& out, uint32_t bits) {
-  for_each_frame_finding(bits, [&](size_t slot) {
-    put(out, " finding=");
-    put(out, frame_findings()[slot].name);
-  });
-}
-
 // The device model's reading, one line each after the verdicts, for the plugin and for people:
 // "register 2502H frequency_command = 60.00 Hz" and "note read_only_write: ... is read-only".
 // Only the registers the model names: Wireshark's Modbus dissector shows every raw value, and
 // repeating them made a packet's comment kilobytes long (a read of 125 registers).
-void append_meaning(fmt::memory_buffer& out, const Meaning& meaning) {
-  for (const RegisterValue& reg : meaning.registers) {
+void append_register_lines(fmt::memory_buffer& out, std::span<const RegisterValue> registers) {
+  for (const RegisterValue& reg : registers) {
     if (reg.name.empty()) continue;
     put(out, "\nregister ");
     put_hex4(out, reg.address);
@@ -86,7 +78,10 @@ void append_meaning(fmt::memory_buffer& out, const Meaning& meaning) {
     put(out, " = ");
     append_value_text(out, reg);
   }
-  for (const RuleFinding& finding : meaning.findings)
+}
+
+void append_note_lines(fmt::memory_buffer& out, std::span<const RuleFinding> notes) {
+  for (const RuleFinding& finding : notes)
     fmt::format_to(fmt::appender(out), FMT_COMPILE("\nnote {}: {}"), to_string(finding.kind),
                    finding.text);
 }
@@ -101,76 +96,166 @@ void put_microseconds(fmt::memory_buffer& out, int64_t ns) {
   put(out, {decimals, 4});
 }
 
-// The keys every record may carry, each only where it differs from what the reader assumes:
-// "modtap", the index and the mode first, the timing after the record's own keys.
-void append_head(fmt::memory_buffer& out, uint64_t index, Mode mode,
-                 const CommentDefaults& defaults) {
-  put(out, "modtap");
-  if (index != defaults.index + 1 || defaults.index == 0) {
-    put(out, " index=");
-    put_uint(out, index);
-  }
-  if (mode != Mode::rtu) {
-    put(out, " mode=");
-    put(out, to_string(mode));
-  }
-}
+// What the comment carries beside the record's fields: where its first byte's time is
+// unknown (a reread places it by its duration), and the name a device model gives its
+// exception code.
+struct CommentExtras {
+  bool untimed_start = false;
+  std::string_view exception_meaning;
+};
 
-void append_timing(fmt::memory_buffer& out, int64_t duration_ns, size_t bytes, bool untimed_start,
-                   const CommentDefaults& defaults) {
-  if (defaults.char_ns == 0 || duration_ns != static_cast<int64_t>(bytes) * defaults.char_ns) {
-    put(out, " duration_ns=");
-    put_int(out, duration_ns);
+// A record's comment rendered from its field walk (models/record_fields.hpp): each key is a
+// field's registry name, written only where its value differs from what the reader assumes
+// (docs/pcapng.md); the walk says which fields the record has. Where the walk has a field the
+// reader can tell from the packet itself (its bytes, the slave, the function), no key.
+class CommentFields {
+ public:
+  CommentFields(fmt::memory_buffer& out, const CommentDefaults& defaults, CommentExtras extras)
+      : out_(out), defaults_(defaults), extras_(extras) {}
+
+  template <FieldId id, NamedEnum Enum>
+  void choice(FieldTag<id>, Enum chosen) {
+    using enum FieldId;
+    if constexpr (id == type) {
+      type_ = chosen;
+    } else if constexpr (id == mode) {
+      mode_ = chosen;
+      if (chosen != Mode::rtu) key(id, to_string(chosen));
+    } else if constexpr (id == role) {
+      role_ = chosen;
+      if (chosen != defaults_.role) key(id, to_string(chosen));
+    } else if constexpr (id == check) {
+      check_bad_ = chosen == CheckResult::bad;
+      if (check_bad_) key(id, to_string(chosen));
+    } else if constexpr (id == reason) {  // what the noise is, or why its request timed out
+      key(to_string(type_), to_string(chosen));
+    } else {
+      key(id, to_string(chosen));
+    }
   }
-  if (untimed_start) put(out, " untimed_start=1");
-}
+  template <FieldId id>
+  void number(FieldTag<id>, uint64_t n) {
+    using enum FieldId;
+    if constexpr (id == index) {
+      index_ = n;
+      if (n != defaults_.index + 1 || defaults_.index == 0) key(id, n);
+    } else if constexpr (id == expected_check) {
+      if (check_bad_)
+        fmt::format_to(fmt::appender(out_), FMT_COMPILE(" {}=0x{:0{}x}"), field_info(id).name, n,
+                       mode_ == Mode::rtu ? 4 : 2);
+    } else if constexpr (id == exception) {
+      key(id, n);
+      if (!extras_.exception_meaning.empty())
+        fmt::format_to(fmt::appender(out_), FMT_COMPILE(" {}=\"{}\""),
+                       field_info(exception_name).name, extras_.exception_meaning);
+    } else if constexpr (id == request) {
+      // A response's request is the record before it unless this says otherwise.
+      if (type_ != RecordType::timeout && (role_ != Role::response || n + 1 != index_)) key(id, n);
+    }
+  }
+  template <FieldId id>
+  void absent(FieldTag<id>) {
+    if constexpr (id == FieldId::request)
+      if (role_ == Role::response) key(id, "none");
+  }
+  template <FieldId id>
+  void time(FieldTag<id>, int64_t ns) {
+    if constexpr (id == FieldId::t_ns) t_ns_ = ns;
+    if constexpr (id == FieldId::end_ns) end_ns_ = ns;
+  }
+  // A record lasts its bytes times a character's time unless this says otherwise.
+  template <FieldId id>
+  void bytes(FieldTag<id>, std::span<const uint8_t> raw) {
+    const int64_t duration = end_ns_ - t_ns_;
+    if (defaults_.char_ns == 0 ||
+        duration != static_cast<int64_t>(raw.size()) * defaults_.char_ns) {
+      put_key("duration_ns");
+      put_int(out_, duration);
+    }
+    if (extras_.untimed_start) put(out_, " untimed_start=1");
+  }
+  template <FieldId id>
+  void micros(FieldTag<id>, int64_t ns) {
+    put_key(field_info(id).name);
+    put_microseconds(out_, ns);
+  }
+  // The frame's own findings, one key each; a model's come as note lines.
+  template <FieldId id>
+  void findings(FieldTag<id>, FindingSlots slots) {
+    for_each_frame_finding(slots.bits,
+                           [&](size_t slot) { key("finding", frame_findings()[slot].name); });
+  }
+  // The model a slave's frames are read with changes seldom: said where it does.
+  template <FieldId id>
+  void name(FieldTag<id>, std::string_view model) {
+    model_walked_ = true;
+    if (!defaults_.model || defaults_.model->name != model) key(id, model);
+  }
+  template <FieldId id>
+  void registers(FieldTag<id>, std::span<const RegisterValue> values) {
+    end_first_line();
+    append_register_lines(out_, values);
+  }
+  template <FieldId id>
+  void notes(FieldTag<id>, std::span<const RuleFinding> notes) {
+    end_first_line();
+    append_note_lines(out_, notes);
+  }
+  void end_first_line() {
+    if (!model_walked_ && defaults_.model && type_ == RecordType::frame)
+      key(FieldId::model, "none");
+    model_walked_ = true;
+  }
+
+  template <FieldId fc, FieldId function>
+  void function_code(FieldTag<fc>, FieldTag<function>, uint8_t) {}
+  void channel(FieldId, uint16_t) {}
+  template <FieldId id>
+  void boolean(FieldTag<id>, bool) {}
+  template <FieldId id>
+  void flag(FieldTag<id>) {}
+  void pdu(const DecodedPdu&) {}
+
+ private:
+  void put_key(std::string_view name) {
+    out_.push_back(' ');
+    put(out_, name);
+    out_.push_back('=');
+  }
+  void key(std::string_view name, std::string_view value) {
+    put_key(name);
+    put(out_, value);
+  }
+  void key(std::string_view name, uint64_t value) {
+    put_key(name);
+    put_uint(out_, value);
+  }
+  void key(FieldId id, std::string_view value) { key(field_info(id).name, value); }
+  void key(FieldId id, uint64_t value) { key(field_info(id).name, value); }
+
+  fmt::memory_buffer& out_;
+  const CommentDefaults& defaults_;
+  CommentExtras extras_;
+  RecordType type_ = RecordType::frame;
+  Mode mode_ = Mode::rtu;
+  Role role_ = Role::unknown;
+  uint64_t index_ = 0;
+  int64_t t_ns_ = 0, end_ns_ = 0;
+  bool check_bad_ = false;
+  bool model_walked_ = false;
+};
+
+// The PDU's fields are Wireshark's Modbus dissector's to show: the comment walks none.
+const DecodedPdu no_pdu_fields;
 
 }  // namespace
 
 void append_frame_comment(fmt::memory_buffer& out, const Frame& f,
                           const CommentDefaults& defaults) {
-  append_head(out, f.index, f.mode, defaults);
-  if (f.role != defaults.role) {
-    put(out, " role=");
-    put(out, to_string(f.role));
-  }
-  if (!f.check_ok) put(out, " check=bad");
-  append_timing(out, f.end_ns - f.t_ns, f.raw.size(), f.untimed_start, defaults);
-  if (!f.check_ok && f.damage != Damage::cut)
-    fmt::format_to(fmt::appender(out), FMT_COMPILE(" expected_check=0x{:0{}x}"), f.expected_check,
-                   f.mode == Mode::rtu ? 4 : 2);
-  if (f.damage != Damage::none) {
-    put(out, " damage=");
-    put(out, to_string(f.damage));
-  }
-  if (f.is_exception()) {
-    put(out, " exception=");
-    put_uint(out, f.adu[2]);
-    if (const auto name = model_exception_meaning(f); !name.empty()) {
-      put(out, " exception_name=\"");
-      put(out, name);
-      out.push_back('"');
-    }
-  }
-  // A response's request is the record before it unless this says otherwise.
-  if (f.request && (f.role != Role::response || *f.request + 1 != f.index)) {
-    put(out, " request=");
-    put_uint(out, *f.request);
-  } else if (!f.request && f.role == Role::response) {
-    put(out, " request=none");
-  }
-  if (f.latency_ns) {
-    put(out, " latency_us=");
-    put_microseconds(out, *f.latency_ns);
-  }
-  append_findings(out, f.findings);
-  // The model a slave's frames are read with changes seldom: said where it does.
-  const DeviceModel* model = f.meaning ? f.meaning->model : nullptr;
-  if (model != defaults.model) {
-    put(out, " model=");
-    put(out, model ? std::string_view(model->name) : "none");
-  }
-  if (f.meaning) append_meaning(out, *f.meaning);
+  put(out, "modtap");
+  CommentFields fields(out, defaults, {f.untimed_start, model_exception_meaning(f)});
+  walk_fields(f, no_pdu_fields, fields);
+  fields.end_first_line();
 }
 
 std::string frame_comment(const Frame& f, const CommentDefaults& defaults) {
@@ -181,18 +266,20 @@ std::string frame_comment(const Frame& f, const CommentDefaults& defaults) {
 
 void append_noise_comment(fmt::memory_buffer& out, const Noise& n,
                           const CommentDefaults& defaults) {
-  append_head(out, n.index, n.mode, defaults);
-  put(out, " noise=");
-  put(out, to_string(n.reason));
-  append_timing(out, n.end_ns - n.t_ns, n.raw.size(), n.untimed_start, defaults);
-  if (n.request) fmt::format_to(fmt::appender(out), FMT_COMPILE(" request={}"), *n.request);
-  append_findings(out, n.findings);
+  put(out, "modtap");
+  CommentFields fields(out, defaults, {n.untimed_start, {}});
+  walk_fields(n, fields);
 }
 
 std::string noise_comment(const Noise& n, const CommentDefaults& defaults) {
   fmt::memory_buffer out;
   append_noise_comment(out, n, defaults);
   return fmt::to_string(out);
+}
+
+void append_timeout_comment(fmt::memory_buffer& out, const Timeout& timeout) {
+  CommentFields fields(out, {}, {});
+  walk_fields(timeout, fields);
 }
 
 std::string interface_comment(ChannelRole role, ClockQuality clock, int64_t char_ns) {
@@ -286,8 +373,7 @@ void PcapngSink::on_noise(const Noise& noise) {
 void PcapngSink::on_timeout(const Timeout& timeout) {
   if (timeout.timed_out()) {  // not when the capture merely ended first
     comment_.clear();
-    fmt::format_to(fmt::appender(comment_), FMT_COMPILE(" timeout={} waited_us={}.{:03}"),
-                   to_string(timeout.reason), timeout.waited_ns / 1000, timeout.waited_ns % 1000);
+    append_timeout_comment(comment_, timeout);
     writer_.extend_comment(timeout.request, {comment_.data(), comment_.size()});
   }
   writer_.release(timeout.request);

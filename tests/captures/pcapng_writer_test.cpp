@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <set>
 
 #include "output/pcapng_sink.hpp"
 #include "tests/support/collector.hpp"
@@ -176,7 +177,7 @@ TEST(PcapngSink, CommentsCarryOnlyWhatAReaderCannotKnow) {
   frame.t_ns = 1'000'000;
   frame.end_ns = 4'645'831;  // 7 bytes of 520,833 ns: what a reread needs to time it again
   EXPECT_EQ(output::frame_comment(frame),
-            "modtap index=7 role=response check=bad duration_ns=3645831 expected_check=0xe8bb "
+            "modtap index=7 role=response duration_ns=3645831 check=bad expected_check=0xe8bb "
             "latency_us=2500.000 finding=bad-check");
   const output::CommentDefaults after_6{6, Role::response, 520'833};
   EXPECT_EQ(output::frame_comment(frame, after_6),
@@ -184,7 +185,7 @@ TEST(PcapngSink, CommentsCarryOnlyWhatAReaderCannotKnow) {
   frame.end_ns += 1;  // no longer its bytes at the line's speed
   frame.request = 4;  // not the record before
   EXPECT_EQ(output::frame_comment(frame, after_6),
-            "modtap check=bad duration_ns=3645832 expected_check=0xe8bb request=4 "
+            "modtap duration_ns=3645832 check=bad expected_check=0xe8bb request=4 "
             "latency_us=2500.000 finding=bad-check");
   frame.request.reset();
   frame.latency_ns.reset();
@@ -198,6 +199,41 @@ TEST(PcapngSink, CommentsCarryOnlyWhatAReaderCannotKnow) {
   frame.end_ns = frame.t_ns + 5 * 520'833;
   frame.request = 6;
   EXPECT_EQ(output::frame_comment(frame, after_6), "modtap exception=2");
+}
+
+// A comment renders the record's field walk: its keys are the field registry's names (the
+// plugin's modtap.NAME), but for what only a packet says: its duration, an untimed start, one
+// key a finding, and what noise is or why a request timed out.
+TEST(PcapngSink, ACommentsKeysAreTheFieldRegistrysNames) {
+  std::set<std::string_view> names{"duration_ns", "untimed_start", "finding", "noise", "timeout"};
+  for (const FieldInfo& field : field_registry()) names.insert(field.name);
+  Frame frame;
+  const auto raw = hex("01 83 02 c0 f2");
+  frame.raw = frame.adu = raw;
+  frame.index = 7;
+  frame.mode = Mode::ascii;
+  frame.role = Role::response;
+  frame.damage = Damage::corrupted;
+  frame.findings = finding_bad_check | finding_unsolicited;
+  frame.latency_ns = 1000;
+  frame.untimed_start = true;
+  Noise noise;
+  noise.raw = raw;
+  noise.request = 3;
+  Timeout timeout;
+  timeout.reason = TimeoutReason::silence;
+  fmt::memory_buffer waited;
+  output::append_timeout_comment(waited, timeout);
+  const std::string comments =
+      output::frame_comment(frame) + " " + output::noise_comment(noise) + fmt::to_string(waited);
+  size_t keys = 0;
+  for (size_t equals = comments.find('='); equals != std::string::npos;
+       equals = comments.find('=', equals + 1), ++keys) {
+    const size_t space = comments.rfind(' ', equals);
+    const std::string_view key(comments.data() + space + 1, equals - space - 1);
+    EXPECT_TRUE(names.contains(key)) << key << " in " << comments;
+  }
+  EXPECT_GE(keys, 16u) << comments;
 }
 
 // A request that timed out says so in its own comment: the sink holds it, and what follows it,
@@ -252,7 +288,7 @@ TEST(PcapngSink, ARequestThatTimedOutSaysSoAndOrderIsKept) {
     std::ifstream in(path, std::ios::binary);
     return std::string(std::istreambuf_iterator<char>(in), {});
   }();
-  EXPECT_NE(file.find("modtap index=1 duration_ns=0 timeout=silence waited_us=1000000.123"),
+  EXPECT_NE(file.find("modtap index=1 duration_ns=0 waited_us=1000000.123 timeout=silence"),
             std::string::npos);
   EXPECT_EQ(file.find("timeout=", file.find("index=4 ")), std::string::npos);
   std::filesystem::remove(path);
