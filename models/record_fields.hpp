@@ -98,6 +98,10 @@ inline const DecodedPdu& fields_of(const Frame& frame, DecodedPdu& kept) {
   return kept;
 }
 
+// The PDU's fields for an output that shows none of them (CSV, the pcapng comment): a frame's
+// walk without decoding its PDU.
+inline const DecodedPdu no_pdu_fields;
+
 // Where a frame or a noise record was: the fields both begin with.
 template <typename Record, typename Visitor>
 void walk_place(const Record& r, RecordType kind, Visitor& v) {
@@ -181,6 +185,124 @@ void walk_fields(const Timeout& timeout, Visitor& v) {
   v.number(field<fc>, timeout.function);
   v.micros(field<waited_us>, timeout.waited_ns);
   v.choice(field<reason>, timeout.reason);
+}
+
+// A record's fields gathered from its walk, for an output that lays them out in an order of its
+// own (the text line, -V's tree, CSV): what the walk leaves absent is empty here, so such an
+// output still learns from the walk alone which fields a record has.
+struct RecordFields {
+  RecordType type = RecordType::frame;
+  uint64_t index = 0;
+  int64_t t_ns = 0, end_ns = 0;
+  uint16_t channel = 0;
+  uint64_t offset = 0;
+  Mode mode = Mode::rtu;
+  Role role = Role::unknown;
+  uint8_t slave = 0;
+  uint8_t function = 0;  // the function code's byte, exception bit and all
+  std::span<const uint8_t> raw;
+  CheckResult check = CheckResult::ok;
+  std::optional<uint64_t> check_value, expected_check;  // none where the frame was cut
+  std::optional<Damage> damage;
+  std::optional<uint64_t> exception;
+  std::optional<uint64_t> request;
+  std::optional<int64_t> latency_ns;
+  FindingSlots findings;
+  std::string_view model;  // empty where no model read the frame
+  std::span<const RegisterValue> registers;
+  std::span<const RuleFinding> notes;
+  const DecodedPdu* pdu = nullptr;
+  bool truncated = false;
+  std::optional<NoiseReason> noise_reason;
+  bool damaged_answer = false;
+  std::optional<TimeoutReason> timeout_reason;
+  int64_t waited_ns = 0;
+};
+
+// The visitor that fills RecordFields.
+class FieldGatherer {
+ public:
+  explicit FieldGatherer(RecordFields& out) : out_(out) {}
+
+  template <FieldId id, NamedEnum Enum>
+  void choice(FieldTag<id>, Enum chosen) {
+    if constexpr (std::is_same_v<Enum, RecordType>) out_.type = chosen;
+    if constexpr (std::is_same_v<Enum, Mode>) out_.mode = chosen;
+    if constexpr (std::is_same_v<Enum, Role>) out_.role = chosen;
+    if constexpr (std::is_same_v<Enum, CheckResult>) out_.check = chosen;
+    if constexpr (std::is_same_v<Enum, Damage>) out_.damage = chosen;
+    if constexpr (std::is_same_v<Enum, NoiseReason>) out_.noise_reason = chosen;
+    if constexpr (std::is_same_v<Enum, TimeoutReason>) out_.timeout_reason = chosen;
+  }
+  template <FieldId fc, FieldId function>
+  void function_code(FieldTag<fc>, FieldTag<function>, uint8_t byte) {
+    out_.function = byte;
+  }
+  template <FieldId id>
+  void number(FieldTag<id>, uint64_t n) {
+    using enum FieldId;
+    if constexpr (id == index) out_.index = n;
+    if constexpr (id == offset) out_.offset = n;
+    if constexpr (id == slave) out_.slave = static_cast<uint8_t>(n);
+    if constexpr (id == fc) out_.function = static_cast<uint8_t>(n);
+    if constexpr (id == check_value) out_.check_value = n;
+    if constexpr (id == expected_check) out_.expected_check = n;
+    if constexpr (id == exception) out_.exception = n;
+    if constexpr (id == request) out_.request = n;
+  }
+  template <FieldId id>
+  void time(FieldTag<id>, int64_t ns) {
+    if constexpr (id == FieldId::t_ns) out_.t_ns = ns;
+    if constexpr (id == FieldId::end_ns) out_.end_ns = ns;
+  }
+  template <FieldId id>
+  void micros(FieldTag<id>, int64_t ns) {
+    if constexpr (id == FieldId::latency_us) out_.latency_ns = ns;
+    if constexpr (id == FieldId::waited_us) out_.waited_ns = ns;
+  }
+  void channel(FieldId, uint16_t number) { out_.channel = number; }
+  template <FieldId id>
+  void bytes(FieldTag<id>, std::span<const uint8_t> raw) {
+    out_.raw = raw;
+  }
+  template <FieldId id>
+  void boolean(FieldTag<id>, bool value) {
+    out_.damaged_answer = value;
+  }
+  template <FieldId id>
+  void absent(FieldTag<id>) {}
+  template <FieldId id>
+  void findings(FieldTag<id>, FindingSlots slots) {
+    out_.findings = slots;
+  }
+  template <FieldId id>
+  void name(FieldTag<id>, std::string_view model) {
+    out_.model = model;
+  }
+  template <FieldId id>
+  void registers(FieldTag<id>, std::span<const RegisterValue> values) {
+    out_.registers = values;
+  }
+  template <FieldId id>
+  void notes(FieldTag<id>, std::span<const RuleFinding> notes) {
+    out_.notes = notes;
+  }
+  void pdu(const DecodedPdu& fields) { out_.pdu = &fields; }
+  template <FieldId id>
+  void flag(FieldTag<id>) {
+    out_.truncated = true;
+  }
+
+ private:
+  RecordFields& out_;
+};
+
+template <typename Record, typename... Pdu>
+RecordFields gather_fields(const Record& record, const Pdu&... pdu) {
+  RecordFields fields;
+  FieldGatherer gatherer(fields);
+  walk_fields(record, pdu..., gatherer);
+  return fields;
 }
 
 }  // namespace modtap

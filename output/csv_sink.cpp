@@ -5,6 +5,7 @@
 
 #include <fmt/chrono.h>
 
+#include "models/record_fields.hpp"
 #include "output/render.hpp"
 
 namespace modtap::output {
@@ -77,14 +78,13 @@ void CsvSink::time(int64_t t_ns) {
 
 void CsvSink::on_frame(const Frame& frame) {
   see(frame.t_ns);
-  const Meaning* meaning = frame.meaning;
   if (!states_values(frame)) return;
+  const RecordFields f = gather_fields(frame, no_pdu_fields);
   auto& buf = out_.buffer();
-  for (const RegisterValue& reg : meaning->registers) {
+  for (const RegisterValue& reg : f.registers) {
     if (!follows(follow_, reg)) continue;
-    time(frame.t_ns);
-    out_.print(FMT_COMPILE(",{},{},"), frame.slave(),
-               RegisterNumber{reg.table, reg.address, base_});
+    time(f.t_ns);
+    out_.print(FMT_COMPILE(",{},{},"), f.slave, RegisterNumber{reg.table, reg.address, base_});
     append_field(buf, reg.name);
     buf.push_back(',');
     append_number(buf, reg.value, reg.decimals);

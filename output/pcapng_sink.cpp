@@ -245,16 +245,13 @@ class CommentFields {
   bool model_walked_ = false;
 };
 
-// The PDU's fields are Wireshark's Modbus dissector's to show: the comment walks none.
-const DecodedPdu no_pdu_fields;
-
 }  // namespace
 
 void append_frame_comment(fmt::memory_buffer& out, const Frame& f,
                           const CommentDefaults& defaults) {
   put(out, "modtap");
   CommentFields fields(out, defaults, {f.untimed_start, model_exception_meaning(f)});
-  walk_fields(f, no_pdu_fields, fields);
+  walk_fields(f, no_pdu_fields, fields);  // the PDU is Wireshark's Modbus dissector's to show
   fields.end_first_line();
 }
 

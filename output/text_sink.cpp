@@ -57,14 +57,15 @@ void append_check(fmt::memory_buffer& buf, uint16_t check, Mode mode) {
   }
 }
 
-// What a bad check says: the check it should have been, and how the frame was damaged.
-void append_bad_check(fmt::memory_buffer& buf, const Frame& frame) {
-  if (frame.damage == Damage::cut) {
+// What a bad check says: the check it should have been (none where the frame was cut before
+// its check), and how the frame was damaged.
+void append_bad_check(fmt::memory_buffer& buf, const RecordFields& frame) {
+  if (!frame.expected_check) {
     fmt::format_to(fmt::appender(buf), "cut");
     return;
   }
   fmt::format_to(fmt::appender(buf), "expected ");
-  append_check(buf, frame.expected_check, frame.mode);
+  append_check(buf, static_cast<uint16_t>(*frame.expected_check), frame.mode);
   if (frame.damage == Damage::collision) fmt::format_to(fmt::appender(buf), ", collision");
 }
 
@@ -131,57 +132,58 @@ void TextSink::channel_column(uint16_t channel) {
 }
 
 void TextSink::on_frame(const Frame& frame) {
+  const RecordFields f = gather_fields(frame, fields_of(frame, decoded_));
   auto& buf = out_.buffer();
-  put_right_aligned(buf, frame.index, 6);
-  time_column(frame.t_ns);
-  channel_column(frame.channel);
-  put(buf, role_and_slave(frame.role));
-  put_left_aligned(buf, frame.slave(), 3);
-  put(buf, spaced_function_label(frame.function()));
-  const DecodedPdu& pdu = fields_of(frame, decoded_);
+  put_right_aligned(buf, f.index, 6);
+  time_column(f.t_ns);
+  channel_column(f.channel);
+  put(buf, role_and_slave(f.role));
+  put_left_aligned(buf, f.slave, 3);
+  put(buf, spaced_function_label(f.function));
   const AddressNumbering numbering = numbering_of(frame);
   // Where the model gives the exception code its own meaning, the model's note after the fields
   // says it in full: the line does not say it twice.
   const bool noted_exception = !model_exception_meaning(frame).empty();
+  const DecodedPdu& pdu = *f.pdu;
   for (size_t at = 0; at < pdu.fields.size();) {
-    const Field& f = pdu.fields[at];
-    const bool shown = f.type() != FieldType::list && f.id != FieldId::byte_count &&
-                       !(noted_exception && f.id == FieldId::exception_name);
+    const Field& field = pdu.fields[at];
+    const bool shown = field.type() != FieldType::list && field.id != FieldId::byte_count &&
+                       !(noted_exception && field.id == FieldId::exception_name);
     if (!shown) {
       at = pdu.next(at);
       continue;
     }
     buf.push_back(' ');
-    put(buf, f.name());
+    put(buf, field.name());
     buf.push_back('=');
     at = append_text_value(buf, pdu, at, line_items, numbering);
   }
-  const bool rtu = frame.mode == Mode::rtu;
-  if (frame.check_ok) {
+  const bool rtu = f.mode == Mode::rtu;
+  if (f.check == CheckResult::ok) {
     put(buf, rtu ? "  crc ok" : "  lrc ok");
   } else {
     put(buf, rtu ? "  crc BAD (" : "  lrc BAD (");
-    append_bad_check(buf, frame);
+    append_bad_check(buf, f);
     buf.push_back(')');
   }
-  if (frame.request) {
+  if (f.request) {
     put(buf, "  req #");
-    put_uint(buf, *frame.request);
+    put_uint(buf, *f.request);
   }
-  if (frame.latency_ns) {
+  if (f.latency_ns) {
     buf.push_back(' ');
-    put_fixed(buf, Fixed{*frame.latency_ns, 6, 3});
+    put_fixed(buf, Fixed{*f.latency_ns, 6, 3});
     put(buf, " ms");
   }
-  // A bad check is said in the check column already.
-  for_each_frame_finding(frame.findings & ~finding_bad_check, [&](size_t slot) {
+  // A bad check is said in the check column already; the model's findings follow its values.
+  for_each_frame_finding(f.findings.bits & ~finding_bad_check, [&](size_t slot) {
     put(buf, " [");
     put(buf, frame_findings()[slot].name);
     buf.push_back(']');
   });
-  if (frame.meaning) registers_line(*frame.meaning);
+  registers_line(f);
   buf.push_back('\n');
-  if (options_.verbose) tree(frame, pdu, numbering);
+  if (options_.verbose) tree(f, numbering);
   out_.end_record();
 }
 
@@ -191,46 +193,45 @@ AddressNumbering TextSink::numbering_of(const Frame& frame) const {
   return {options_.register_base, addressed_table(frame)};
 }
 
-void TextSink::tree(const Frame& frame, const DecodedPdu& pdu, AddressNumbering numbering) {
+void TextSink::tree(const RecordFields& f, AddressNumbering numbering) {
   auto& buf = out_.buffer();
-  out_.print(FMT_COMPILE("    Frame {}: {} bytes, {}, channel {}, offset {}\n"), frame.index,
-             frame.raw.size(), to_string(frame.mode),
-             frame.channel < channels_.size() ? channels_[frame.channel].name : "?", frame.offset);
+  out_.print(FMT_COMPILE("    Frame {}: {} bytes, {}, channel {}, offset {}\n"), f.index,
+             f.raw.size(), to_string(f.mode),
+             f.channel < channels_.size() ? channels_[f.channel].name : "?", f.offset);
   out_.print(FMT_COMPILE("    Raw: "));
-  append_hex(buf, frame.raw, true);
+  append_hex(buf, f.raw, true);
   out_.print(FMT_COMPILE("\n    Role: {}\n    Slave: {}\n    Function: {} ({})\n"),
-             to_string(frame.role), frame.slave(), frame.function(),
-             FunctionLabel{frame.function()});
+             to_string(f.role), f.slave, f.function, FunctionLabel{f.function});
+  const DecodedPdu& pdu = *f.pdu;
   for (size_t at = 0; at < pdu.fields.size();) {
     out_.print(FMT_COMPILE("    {}: "), pdu.fields[at].name());
     at = append_text_value(buf, pdu, at, SIZE_MAX, numbering);
     out_.print(FMT_COMPILE("\n"));
   }
-  if (pdu.truncated) out_.print(FMT_COMPILE("    [PDU shorter than its fields]\n"));
-  out_.print(FMT_COMPILE("    {}: "), frame.mode == Mode::rtu ? "CRC" : "LRC");
-  if (frame.damage == Damage::cut) {
+  if (f.truncated) out_.print(FMT_COMPILE("    [PDU shorter than its fields]\n"));
+  out_.print(FMT_COMPILE("    {}: "), f.mode == Mode::rtu ? "CRC" : "LRC");
+  if (!f.check_value) {
     out_.print(FMT_COMPILE("none, the frame was cut before it\n"));
   } else {
-    append_check(buf, frame.wire_check(), frame.mode);
-    out_.print(FMT_COMPILE(" ({})"), frame.check_ok ? "ok" : "bad");
-    if (!frame.check_ok) {
+    append_check(buf, static_cast<uint16_t>(*f.check_value), f.mode);
+    out_.print(FMT_COMPILE(" ({})"), to_string(f.check));
+    if (f.check == CheckResult::bad) {
       out_.print(FMT_COMPILE(", "));
-      append_bad_check(buf, frame);
+      append_bad_check(buf, f);
     }
     out_.print(FMT_COMPILE("\n"));
   }
-  if (frame.request) out_.print(FMT_COMPILE("    Request in frame: {}\n"), *frame.request);
-  if (frame.latency_ns)
-    out_.print(FMT_COMPILE("    Latency: {} ms\n"), Fixed{*frame.latency_ns, 6, 3});
-  if (frame.meaning) registers_tree(*frame.meaning);
+  if (f.request) out_.print(FMT_COMPILE("    Request in frame: {}\n"), *f.request);
+  if (f.latency_ns) out_.print(FMT_COMPILE("    Latency: {} ms\n"), Fixed{*f.latency_ns, 6, 3});
+  registers_tree(f);
 }
 
 // The named registers after the summary line, then the model's findings, marked so they stand
 // out: "| frequency_command=60.00 Hz  !! 2520H is read-only".
-void TextSink::registers_line(const Meaning& meaning) {
+void TextSink::registers_line(const RecordFields& f) {
   auto& buf = out_.buffer();
   size_t shown = 0;
-  for (const RegisterValue& reg : meaning.registers) {
+  for (const RegisterValue& reg : f.registers) {
     if (reg.name.empty()) continue;
     if (shown++ == line_items) {
       out_.print(FMT_COMPILE(" ..."));
@@ -239,15 +240,13 @@ void TextSink::registers_line(const Meaning& meaning) {
     out_.print(FMT_COMPILE("{}{}="), shown == 1 ? "  | " : " ", reg.name);
     append_value_text(buf, reg);
   }
-  for (const RuleFinding& finding : meaning.findings)
-    out_.print(FMT_COMPILE("  !! {}"), finding.text);
+  for (const RuleFinding& finding : f.notes) out_.print(FMT_COMPILE("  !! {}"), finding.text);
 }
 
-void TextSink::registers_tree(const Meaning& meaning) {
+void TextSink::registers_tree(const RecordFields& f) {
   auto& buf = out_.buffer();
-  if (!meaning.registers.empty())
-    out_.print(FMT_COMPILE("    Registers ({}):\n"), meaning.model->name);
-  for (const RegisterValue& reg : meaning.registers) {
+  if (!f.registers.empty()) out_.print(FMT_COMPILE("    Registers ({}):\n"), f.model);
+  for (const RegisterValue& reg : f.registers) {
     out_.print(FMT_COMPILE("      {} {}"),
                RegisterNumber{reg.table, reg.address, options_.register_base},
                reg.name.empty() ? "(unknown)" : reg.name);
@@ -256,41 +255,44 @@ void TextSink::registers_tree(const Meaning& meaning) {
     append_value_text(buf, reg);
     out_.print(FMT_COMPILE("\n"));
   }
-  for (const RuleFinding& finding : meaning.findings)
+  for (const RuleFinding& finding : f.notes)
     out_.print(FMT_COMPILE("    Finding ({}): {}\n"), to_string(finding.kind), finding.text);
 }
 
 void TextSink::on_noise(const Noise& noise) {
-  out_.print(FMT_COMPILE("{:6}"), noise.index);
-  time_column(noise.t_ns);
-  channel_column(noise.channel);
-  out_.print(FMT_COMPILE(" noise {} ({})"), counted(noise.raw.size(), "byte", "bytes"),
-             to_string(noise.reason));
-  if (noise.request) out_.print(FMT_COMPILE(" after request #{}"), *noise.request);
-  if (noise.damaged_answer)
-    out_.print(FMT_COMPILE(", slave {}'s answer garbled"), noise.request_slave);
-  for_each_frame_finding(noise.findings, [&](size_t slot) {
+  const RecordFields f = gather_fields(noise);
+  out_.print(FMT_COMPILE("{:6}"), f.index);
+  time_column(f.t_ns);
+  channel_column(f.channel);
+  out_.print(FMT_COMPILE(" noise {} ({})"), counted(f.raw.size(), "byte", "bytes"),
+             to_string(*f.noise_reason));
+  if (f.request) out_.print(FMT_COMPILE(" after request #{}"), *f.request);
+  // Whose answer it was is the line's to say, from the request: no field of the record.
+  if (f.damaged_answer) out_.print(FMT_COMPILE(", slave {}'s answer garbled"), noise.request_slave);
+  for_each_frame_finding(f.findings.bits, [&](size_t slot) {
     out_.print(FMT_COMPILE(" [{}]"), frame_findings()[slot].name);
   });
   out_.print(FMT_COMPILE(": "));
-  append_hex(out_.buffer(), noise.raw.first(std::min<size_t>(noise.raw.size(), 32)), true);
-  if (noise.raw.size() > 32) out_.print(FMT_COMPILE(" ..."));
+  append_hex(out_.buffer(), f.raw.first(std::min<size_t>(f.raw.size(), 32)), true);
+  if (f.raw.size() > 32) out_.print(FMT_COMPILE(" ..."));
   out_.print(FMT_COMPILE("\n"));
   out_.end_record();
 }
 
-void TextSink::on_timeout(const Timeout& t) {
+void TextSink::on_timeout(const Timeout& timeout) {
+  const RecordFields f = gather_fields(timeout);
   out_.print(FMT_COMPILE("{:6}"), "-");
-  time_column(t.t_ns);
-  channel_column(t.channel);
-  const Fixed waited_ms{t.waited_ns, 6, 3};
-  if (t.timed_out()) {
+  time_column(f.t_ns);
+  channel_column(f.channel);
+  const Fixed waited_ms{f.waited_ns, 6, 3};
+  if (f.type == RecordType::timeout) {
     out_.print(FMT_COMPILE(" TIMEOUT request #{} slave {} {}: no response after {} ms ({})\n"),
-               t.request, t.slave, FunctionLabel{t.function}, waited_ms, to_string(t.reason));
+               *f.request, f.slave, FunctionLabel{f.function}, waited_ms,
+               to_string(*f.timeout_reason));
   } else {
     out_.print(
         FMT_COMPILE(" UNANSWERED request #{} slave {} {}: the capture ends {} ms after it\n"),
-        t.request, t.slave, FunctionLabel{t.function}, waited_ms);
+        *f.request, f.slave, FunctionLabel{f.function}, waited_ms);
   }
   out_.end_record();
 }

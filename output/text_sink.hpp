@@ -12,6 +12,10 @@
 #include "protocol/record_sink.hpp"
 #include "protocol/register_numbering.hpp"
 
+namespace modtap {
+struct RecordFields;
+}
+
 namespace modtap::output {
 
 // How the time column reads, as tshark's -t: since the capture's first record (r), the time of
@@ -43,9 +47,9 @@ class TextSink final : public RecordSink {
   void absolute_time(int64_t t_ns);
   void channel_column(uint16_t channel);
   AddressNumbering numbering_of(const Frame& frame) const;
-  void tree(const Frame& frame, const DecodedPdu& pdu, AddressNumbering numbering);
-  void registers_line(const Meaning& meaning);
-  void registers_tree(const Meaning& meaning);
+  void tree(const RecordFields& frame, AddressNumbering numbering);
+  void registers_line(const RecordFields& frame);
+  void registers_tree(const RecordFields& frame);
 
   Output& out_;
   const std::vector<ChannelInfo>& channels_;
