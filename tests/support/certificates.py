@@ -1,6 +1,5 @@
-"""Test certificates made with openssl, and a free local port for a test's server."""
+"""Test certificates made with openssl."""
 import os
-import socket
 import subprocess
 
 
@@ -26,8 +25,3 @@ def make_certificate(folder, name, ca, dns_name=None):
     _openssl(folder, "x509", "-req", "-in", f"{name}.csr", "-CA", f"{ca}.pem", "-CAkey",
              f"{ca}.key", "-CAcreateserial", "-days", "2", *extension, "-out", f"{name}.pem")
 
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]

@@ -22,7 +22,8 @@ with warnings.catch_warnings():
     import crypt
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
-from certificates import free_port, make_ca, make_certificate  # noqa: E402
+from certificates import make_ca, make_certificate  # noqa: E402
+from checks import free_port  # noqa: E402
 
 MODTAP, SIMULATOR, WORK = map(os.path.abspath, sys.argv[1:4])
 USER, PASSWORD = "prometheus", "scrape-me-not-in-clear"

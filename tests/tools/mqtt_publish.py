@@ -19,12 +19,11 @@ import time
 import tty
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from checks import check, failures, free_port, verdict  # noqa: E402
 from modbus import with_crc  # noqa: E402
 
 MODTAP, WORK = map(os.path.abspath, sys.argv[1:3])
 PREFIX, BUS = "plant", "line3"
-failures = []
-
 # (slave, first register, the model's names, scales and units for the registers read)
 DRIVES = {
     1: (0x2524, [("output_frequency", 0.01, "Hz"), ("output_voltage", 0.1, "V"),
@@ -33,17 +32,6 @@ DRIVES = {
                  ("bus_voltage", 1, "V"), ("output_voltage", 1, "V"),
                  ("output_current", 0.1, "A")]),
 }
-
-
-def check(what, got, expected):
-    if got != expected:
-        failures.append(f"{what}: {got!r}, expected {expected!r}")
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 class Broker:
@@ -336,10 +324,7 @@ def main():
         refusals(broker.port)
     finally:
         broker.stop()
-    for failure in failures:
-        print("FAIL:", failure)
-    print("mqtt:", "failed" if failures else "ok")
-    return 1 if failures else 0
+    return verdict("mqtt")
 
 
 if __name__ == "__main__":

@@ -16,9 +16,11 @@ import sys
 import time
 import tty
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from checks import failures, verdict  # noqa: E402
+
 MODTAP, BUSGEN, WORK = map(os.path.abspath, sys.argv[1:4])
 ENV = dict(os.environ, TZ="UTC")  # the names' time stamps, checked below, are local time
-failures = []
 
 
 def check(what, got, expected):
@@ -221,10 +223,7 @@ def main():
     subprocess.run([BUSGEN, "-n", "1500", "--slaves", "4", "-o", live_capture], check=True,
                    stderr=subprocess.DEVNULL)
     live_ring(live_capture)
-    for failure in failures:
-        print("FAIL:", failure)
-    print("ring buffer:", "failed" if failures else "ok")
-    return 1 if failures else 0
+    return verdict("ring buffer")
 
 
 if __name__ == "__main__":

@@ -12,7 +12,6 @@ import pwd
 import shlex
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -20,21 +19,10 @@ import tty
 import urllib.request
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from checks import check, failures, free_port, verdict  # noqa: E402
 from modbus import with_crc  # noqa: E402
 
 BUILD, WORK = map(os.path.abspath, sys.argv[1:3])
-failures = []
-
-
-def check(what, got, expected):
-    if got != expected:
-        failures.append(f"{what}: {got!r}, expected {expected!r}")
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def install():
@@ -178,10 +166,7 @@ def main():
         print("service unit: skipping the unprivileged run: it needs root to switch users")
     else:
         run_the_service(unit, example)
-    for failure in failures:
-        print("FAIL:", failure)
-    print("service unit:", "failed" if failures else "ok")
-    return 1 if failures else 0
+    return verdict("service unit")
 
 
 if __name__ == "__main__":

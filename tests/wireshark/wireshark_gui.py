@@ -21,6 +21,7 @@ import tty
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from extcap_link import link_extcap, preference_prefix  # noqa: E402
+from checks import verdict  # noqa: E402
 from modbus import with_crc  # noqa: E402
 from wireshark_home import as_user, make_home  # noqa: E402
 
@@ -207,10 +208,7 @@ def main():
     finally:
         xvfb.terminate()
         xvfb.wait(timeout=20)
-    for failure in failures:
-        print("FAIL:", failure)
-    print("wireshark window:", "failed" if failures else "ok")
-    return 1 if failures else 0
+    return verdict("wireshark window", failures)
 
 
 if __name__ == "__main__":
