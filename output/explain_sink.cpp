@@ -107,7 +107,8 @@ void ExplainSink::print_segment(const Segment& segment, bool is_picked) {
   if (is_picked)
     out_.print("this record\n");
   else if (segment.noise)
-    out_.print("noise ({}), {} bytes\n", to_string(segment.reason), segment.size);
+    out_.print("noise ({}), {}\n", to_string(segment.reason),
+               counted(segment.size, "byte", "bytes"));
   else if (segment.check_ok)
     out_.print("{}, {} bytes, check ok\n", to_string(segment.role), segment.size);
   else
@@ -163,6 +164,23 @@ void ExplainSink::print_reading(const FramingStep& step) {
   }
   print_row(evidence_info(Evidence::length_and_crc), +1);
   if (step.outcome == ReadingOutcome::refuted) print_row(why, -1);
+  if (step.outcome == ReadingOutcome::kept) print_end_margin(step.end_margin);
+}
+
+// A kept frame's end against its runner-up, where it has one: ruled out by what told, or
+// standing beside it (ambiguous-end).
+void ExplainSink::print_end_margin(const Margin& margin) {
+  if (margin.runner_up == RunnerUp::none) return;
+  out_.print("            its end's runner-up: {}\n", to_string(margin.runner_up));
+  if (!margin.told) {
+    out_.print(
+        "              stands: nothing in the bytes or their times tells the two apart "
+        "(0 of {} bits): ambiguous-end\n",
+        decisive_bits);
+    return;
+  }
+  const FeatureInfo& told = feature_info(*margin.told);
+  out_.print("              ruled out, {} bits: {}: {}\n", margin.bits, told.name, told.why);
 }
 
 // A row's weight and why, then its features': the crc's row is its one feature.

@@ -54,6 +54,7 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   void explain_noise(const Noise& noise);
   void explain(uint16_t channel, uint64_t offset, Mode mode);
   void print_reading(const FramingStep& step);
+  void print_end_margin(const Margin& margin);
   void print_row(const EvidenceInfo& row, int sign);
   void print_margin(const std::vector<const FramingStep*>& weighed);
   // Every record moves the time column's clock; the one asked for is shown.

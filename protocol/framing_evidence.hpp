@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string_view>
 
 #include "protocol/records.hpp"
@@ -29,6 +30,11 @@ enum class Feature : uint8_t {
   nothing_after,
   bus_frame_inside,
   unexpected_sender,
+  silence_after,
+  sent_straight_on,
+  second_glitch,
+  byte_ruled_out,
+  late_as_a_retry,
 };
 
 struct FeatureInfo {
@@ -37,7 +43,7 @@ struct FeatureInfo {
   std::string_view why;
 };
 
-inline constexpr std::array<FeatureInfo, 12> feature_table{{
+inline constexpr std::array<FeatureInfo, 17> feature_table{{
     {"crc-holds", 16, "bytes that are no frame pass a CRC 1 time in 65,536"},
     {"another-crc", 16,
      "another span over these bytes passes its own length rules and CRC, as unlikely by "
@@ -73,6 +79,22 @@ inline constexpr std::array<FeatureInfo, 12> feature_table{{
     {"unexpected-sender", 4,
      "a reserved address (248-255, most often a turnaround's 0xFF) or an answer nobody "
      "awaits: taken as 1 in 16"},
+    {"silence-after", 8,
+     "the clock saw a silence of t3.5 and its slack right after the byte: a glitch comes "
+     "before the next frame, not before a silence; a clock's false silence taken as 1 in 256"},
+    {"sent-straight-on", 8,
+     "a clock per byte saw the byte sent right after the one before it: a glitch is a driver "
+     "turning on after a quiet line; the clock's error taken as 1 in 256"},
+    {"second-glitch", 4,
+     "the reading needs a second glitch at one turnaround, where one driver turning on puts "
+     "one on the line: taken as 1 in 16"},
+    {"byte-ruled-out", 16,
+     "the pending request says what the answer's byte is, and it is not this one: by the "
+     "standard's rules, no chance at all; weighed as the CRC is"},
+    {"late-as-a-retry", 4,
+     "it came as late as the master's retries do: past twice the slave's longest turnaround "
+     "plus 20 ms and the clock's lag, or as late as the master's own retries have come; taken "
+     "as 1 in 16, a slave that answered that late"},
 }};
 
 inline const FeatureInfo& feature_info(Feature f) {
@@ -189,6 +211,56 @@ constexpr bool every_row_outweighs_the_crc() {
 }
 static_assert(every_row_outweighs_the_crc());
 
+// A reading's runner-up, where both pass every check: a frame's end one byte longer (the 0x00
+// after it the frame's own) or shorter (its last 0x00 the next driver's glitch), a damaged
+// answer's last byte its own or a glitch, a copy of the pending request its echo or the
+// master's retry. What the bytes and their times say against the runner-up is weighed in bits
+// from the feature table; below `decisive_bits` it stands, and the record is marked as
+// ambiguous (`ambiguous-end`, `ambiguous-echo`). The bus's rates (its glitch odds) rank the
+// two readings, but they are a habit of the bus, not evidence on these bytes: they pick the
+// winner and never count here.
+inline constexpr int decisive_bits = 4;  // 1 in 16: what a bus does rarely, but does
+
+enum class RunnerUp : uint8_t { none, longer, shorter, keeps_byte, glitch_byte, retry, echo };
+template <>
+struct EnumNames<RunnerUp> {
+  static constexpr std::array<std::string_view, 7> names{
+      "none",
+      "the same frame one byte longer, the 0x00 after it its own",
+      "the same frame one byte shorter, its last 0x00 the next driver's glitch",
+      "the answer one byte longer, its last byte its own",
+      "the answer one byte shorter, its last byte the next driver's glitch",
+      "the master's retry",
+      "the slave's echo"};
+};
+
+struct Margin {
+  RunnerUp runner_up = RunnerUp::none;
+  int bits = 0;                                // what tells against the runner-up
+  std::optional<Feature> told = std::nullopt;  // the first feature that did
+
+  // Adds `feature` where `holds`; whether the runner-up is ruled out now.
+  bool tell(Feature feature, bool holds) {
+    if (holds) {
+      if (!told) told = feature;
+      bits += feature_info(feature).bits;
+    }
+    return decided();
+  }
+  bool decided() const { return bits >= decisive_bits; }
+  bool stands() const { return runner_up != RunnerUp::none && !decided(); }
+};
+
+// Every feature that tells a runner-up apart decides alone: one is enough to stop weighing.
+constexpr bool every_tell_decides() {
+  for (const Feature f : {Feature::silence_inside, Feature::too_soon_for_retry,
+                          Feature::silence_after, Feature::sent_straight_on, Feature::second_glitch,
+                          Feature::byte_ruled_out, Feature::late_as_a_retry})
+    if (feature_table[size_t(f)].bits < decisive_bits) return false;
+  return true;
+}
+static_assert(every_tell_decides());
+
 // What says where a span ends. Its function code's length rules, mostly; for a code with no
 // length of its own (a vendor's, FC08 Return Query Data), a CRC search, whose hit is weak
 // evidence (a CRC holds at one of up to 256 ends, and a 0x00 after a frame keeps it holding)
@@ -247,6 +319,7 @@ struct FramingStep {
   SpanEnd end = SpanEnd::length_rules;
   ReadingOutcome outcome = ReadingOutcome::no_frame;
   Evidence why = Evidence::no_good_end;
+  Margin end_margin{};  // a kept frame's end against its runner-up, where it has one
 
   // Its score in bits against no frame at all (0): its CRC, less the row that refuted it.
   int score() const {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <utility>
 
+#include "protocol/framing_evidence.hpp"
 #include "protocol/function_codes.hpp"
 
 namespace modtap {
@@ -131,15 +132,24 @@ bool Matcher::copies(const Frame& frame, const Pending& request) {
 // A master that gets no answer sends the same request again after its own time-out (50 ms to
 // 1 s in practice); for the echo codes that copy is byte for byte what the response would be.
 // The slave's turnaround, learned from answers no retry could fake, tells them apart: a copy
-// much later than the slave ever answered is a retry. With no clock, nothing learned, or a copy
-// only as late as the clock may stamp the answer late, it is taken for the response and marked
-// ambiguous.
+// much later than the slave ever answered is a retry. Each reading is the other's runner-up
+// (framing_evidence.hpp, Margin): the echo wins where its time tells against a retry, the retry
+// where its time tells against an echo; where neither does (no clock, nothing learned, a copy
+// only as late as the clock may stamp the answer late) it is taken for the echo, the retry
+// standing beside it.
 Matcher::Copy Matcher::judge_copy(const Frame& frame) const {
   if (!pending_ || !copies_pending(frame)) return Copy::none;
-  if (!options_.timed) return Copy::ambiguous;
   const int64_t waited = frame.t_ns - pending_->end_ns;
-  if (waited < answered_within_ns(pending_->slave)) return Copy::response;
-  return long_after_answer_due(frame) || as_late_as_a_retry(waited) ? Copy::retry : Copy::ambiguous;
+  const bool timed = options_.timed;
+  Margin against_retry{RunnerUp::retry};
+  if (against_retry.tell(Feature::too_soon_for_retry,
+                         timed && waited < answered_within_ns(pending_->slave)))
+    return Copy::response;
+  Margin against_echo{RunnerUp::echo};
+  if (against_echo.tell(Feature::late_as_a_retry,
+                        timed && (long_after_answer_due(frame) || as_late_as_a_retry(waited))))
+    return Copy::retry;
+  return Copy::ambiguous;
 }
 
 // How soon the master sends a request again, from retries no echo could fake: a copy of a

@@ -153,7 +153,8 @@ ReadingOutcome RtuFramer::outcome_of(Verdict verdict) {
 void RtuFramer::observe(uint64_t at, Role role, const Match& match, ReadingOutcome outcome,
                         Evidence why) const {
   if (options_.observer)
-    options_.observer->on_reading({channel_, at, role, match.length, match.end, outcome, why});
+    options_.observer->on_reading(
+        {channel_, at, role, match.length, match.end, outcome, why, match.end_margin});
 }
 
 // What the bus says against the span [at, at + length) being one frame, where a reading's length
@@ -438,10 +439,10 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
           // of its end stands.
           const uint16_t n = expected.echo_size;
           if (!expected.echo_end_in_doubt)
-            return {Match::Kind::found, n, fit, false, SpanEnd::echo_length};
+            return {Match::Kind::found, n, fit, {}, SpanEnd::echo_length};
           if (avail == n && !final) return need_more();
-          const bool doubt =
-              longer_end_stands(at, at + n) || shorter_end_stands(at + n, final, search - 1);
+          Margin doubt = longer_end(at, at + n);
+          if (!doubt.stands()) consider(doubt, shorter_end(at + n, final, search - 1));
           return {Match::Kind::found, n, fit, doubt, SpanEnd::echo_length};
         }
       }
@@ -491,8 +492,8 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       if (swallows_known_frame(at, at + n)) continue;
       // Confirmed only by taking the next 0x00 for a glitch, where one byte more holds too; or
       // ending in a 0x00 that could be a glitch after a good frame one byte shorter.
-      const bool doubt = (allow_glitch && longer_end_stands(at, at + n)) ||
-                         (zero_appended && shorter_end_stands(at + n, final, search - 1));
+      Margin doubt = allow_glitch ? longer_end(at, at + n) : Margin{};
+      if (zero_appended && !doubt.stands()) consider(doubt, shorter_end(at + n, final, search - 1));
       if (confirmed) return {Match::Kind::found, n, fit, doubt, *confirmed};
       open |= at_end;
       if (may_stand_alone) unconfirmed = n;
@@ -507,7 +508,7 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
   if (unconfirmed && p[1] == 0x08 &&
       (final || (avail >= max_rtu_adu && !open) || blocked_by_gap(at, final))) {
     return {Match::Kind::found, static_cast<uint16_t>(unconfirmed), fit,
-            longer_end_stands(at, at + unconfirmed), SpanEnd::header_alone};
+            longer_end(at, at + unconfirmed), SpanEnd::header_alone};
   }
   if (!final && (avail < max_rtu_adu || open)) return need_more();
   return {};
@@ -550,7 +551,7 @@ RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_
     const std::optional<SpanEnd> confirmed = confirmed_end(at, at + n, final, search - 1, false);
     if (confirmed && !swallows_known_frame(at, at + n))
       return {Match::Kind::found, static_cast<uint16_t>(n), fit,
-              zero_appended && shorter_end_stands(at + n, final, search - 1), *confirmed};
+              zero_appended ? shorter_end(at + n, final, search - 1) : Margin{}, *confirmed};
   }
   return {};
 }
@@ -565,20 +566,30 @@ bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end, bool final, int se
          !glitch_then_frame(end, final, search);
 }
 
-// The runner-up reading of a good frame's end: the same frame one byte longer, the 0x00 after
-// it its own (a CRC that holds keeps holding with a 0x00 appended), or one byte shorter, its
-// last 0x00 the next driver's glitch. Both pass every check; the bus's glitch odds rank them,
-// but odds are a rate of the bus, not evidence on this byte, so a frame whose runner-up stands
-// is marked ambiguous-end. The longer stands unless a silence falls before the byte; the
-// shorter unless a silence falls after it, a clock per byte saw it sent straight on, or that
-// reading would need a second glitch at one turnaround.
-bool RtuFramer::longer_end_stands(uint64_t at, uint64_t end) const {
-  return end < end_ && end - at < max_rtu_adu && *at_ptr(end) == 0x00 && !timeline_.gap_at(end);
+// The runner-up of a good frame's end (framing_evidence.hpp, Margin): the same frame one byte
+// longer, the 0x00 after it its own (a CRC that holds keeps holding with a 0x00 appended), or
+// one byte shorter, its last 0x00 the next driver's glitch. Both pass every check; the longer is
+// told apart by a silence before the byte, the shorter by a silence after it, a clock per byte
+// that saw it sent straight on, or a second glitch that reading would need at one turnaround.
+Margin RtuFramer::longer_end(uint64_t at, uint64_t end) const {
+  if (end >= end_ || end - at >= max_rtu_adu || *at_ptr(end) != 0x00) return {};
+  Margin margin{RunnerUp::longer};
+  margin.tell(Feature::silence_inside, timeline_.gap_at(end));
+  return margin;
 }
 
-bool RtuFramer::shorter_end_stands(uint64_t end, bool final, int search) {
-  return *at_ptr(end - 1) == 0x00 && !timeline_.gap_at(end) &&
-         timeline_.after_quiet_line(end - 1) && !glitch_then_frame(end, final, search);
+Margin RtuFramer::shorter_end(uint64_t end, bool final, int search) {
+  if (*at_ptr(end - 1) != 0x00) return {};
+  Margin margin{RunnerUp::shorter};
+  margin.tell(Feature::silence_after, timeline_.gap_at(end)) ||
+      margin.tell(Feature::sent_straight_on, !timeline_.after_quiet_line(end - 1)) ||
+      margin.tell(Feature::second_glitch, glitch_then_frame(end, final, search));
+  return margin;
+}
+
+// Of two runner-ups, the one that stands, else the first there is (--explain names it).
+void RtuFramer::consider(Margin& margin, const Margin& other) {
+  if (other.stands() || margin.runner_up == RunnerUp::none) margin = other;
 }
 
 // A turnaround's glitch at `at` with a good frame right behind it.
@@ -715,7 +726,7 @@ void RtuFramer::emit_frame(uint64_t at, const Match& match) {
   Frame frame = frame_of(at, at + match.length, match.fit);
   frame.check_ok = true;
   frame.expected_check = wire_crc(frame.adu);
-  if (match.ambiguous_end) frame.findings |= finding_ambiguous_end;
+  if (match.end_margin.stands()) frame.findings |= finding_ambiguous_end;
   sink_.on_frame(frame);
   answer_start_ = at + match.length;
   consume(at + match.length);
@@ -820,11 +831,19 @@ bool RtuFramer::split_trailing_glitch(uint64_t begin, uint64_t end, uint32_t& fi
   if (!cut_short || size <= 3 || !is_glitch_byte(*at_ptr(end - 1)) || glitch_after ||
       !(glitchy_bus || bus_unknown) || end >= end_ || !timeline_.after_quiet_line(end - 1))
     return false;
+  // The clock has not ruled a glitch out. The request may rule the byte in or out; else the
+  // glitch reading is taken on a bus of glitches unless a silence after the byte says it ended
+  // a frame. The other reading stands unless the request or the silence tells against it.
   const std::optional<bool> told = awaited_.byte(bytes(begin, end), size - 1);
-  // The clock has not ruled a glitch out, nor has a silence after the byte said it ended a
-  // frame: unless the request rules the byte out, both readings pass every check, so say so.
-  if (told != false && !timeline_.gap_at(end)) findings |= finding_ambiguous_end;
-  if (!(told ? !*told : glitchy_bus && !timeline_.gap_at(end))) return false;
+  const bool gap = timeline_.gap_at(end);
+  const bool glitch = told ? !*told : glitchy_bus && !gap;
+  Margin margin{glitch ? RunnerUp::keeps_byte : RunnerUp::glitch_byte};
+  if (glitch)
+    margin.tell(Feature::byte_ruled_out, told == false);
+  else
+    margin.tell(Feature::silence_after, gap);
+  if (margin.stands()) findings |= finding_ambiguous_end;
+  if (!glitch) return false;
   emit_piece(begin, end - 1, findings, true);
   emit_piece(end - 1, end);
   return true;

@@ -55,8 +55,8 @@ class RtuFramer {
     enum class Kind : uint8_t { found, need_more, none } kind = Kind::none;
     uint16_t length = 0;
     RoleFit fit;
-    // One byte longer or shorter reads as a good frame too, a 0x00 the frame's or a glitch.
-    bool ambiguous_end = false;
+    // The end one byte longer or shorter, a 0x00 the frame's or a glitch, and what tells it.
+    Margin end_margin{};
     SpanEnd end = SpanEnd::length_rules;
   };
   static Match need_more() { return {Match::Kind::need_more, 0, {}}; }
@@ -149,8 +149,9 @@ class RtuFramer {
                             int search);
   bool glitch_appended(uint64_t begin, uint64_t end, bool final, int search);
   bool glitch_then_frame(uint64_t at, bool final, int search);
-  bool longer_end_stands(uint64_t at, uint64_t end) const;
-  bool shorter_end_stands(uint64_t end, bool final, int search);
+  Margin longer_end(uint64_t at, uint64_t end) const;
+  Margin shorter_end(uint64_t end, bool final, int search);
+  static void consider(Margin& margin, const Margin& other);
   bool fits_role(Role role, uint64_t at, uint16_t length) const;
   // What confirms a CRC search's hit at `end`, if anything does.
   std::optional<SpanEnd> confirmed_end(uint64_t begin, uint64_t end, bool final, int search,

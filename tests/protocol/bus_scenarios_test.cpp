@@ -491,9 +491,15 @@ class Weighed final : public FramingObserver, public RecordSink {
     if (decided) ++deciding[step.why];
   }
   void on_frame(const Frame& frame) override {
-    const bool kept = kept_at(frame.offset, frame.adu.size());
+    const FramingStep* kept = kept_at(frame.offset, frame.adu.size());
     if (frame.check_ok && !kept) good_frames_not_kept.push_back(frame.offset);
     if (!frame.check_ok && kept) bad_frames_kept.push_back(frame.offset);
+    if (!frame.check_ok || !kept) return;
+    const Margin& margin = kept->end_margin;
+    if (margin.stands() != bool(frame.findings & finding_ambiguous_end))
+      margin_not_said.push_back(frame.offset);
+    if (margin.stands()) ++end_runner_ups_standing;
+    if (margin.told) ++ruling_out[*margin.told];
   }
   void on_noise(const Noise& noise) override {
     if (kept_at(noise.offset, 0)) noise_kept.push_back(noise.offset);
@@ -502,13 +508,18 @@ class Weighed final : public FramingObserver, public RecordSink {
 
   std::vector<uint64_t> good_frames_not_kept, bad_frames_kept, noise_kept;
   std::map<Evidence, size_t> deciding;  // rows that refuted a span or held it back
+  // Good frames whose ambiguous-end is not what their end's margin says.
+  std::vector<uint64_t> margin_not_said;
+  size_t end_runner_ups_standing = 0;
+  std::map<Feature, size_t> ruling_out;  // what ruled an end's runner-up out
 
  private:
-  bool kept_at(uint64_t offset, size_t size) const {
-    return std::any_of(steps_.begin(), steps_.end(), [&](const FramingStep& step) {
-      return step.offset == offset && step.outcome == ReadingOutcome::kept &&
-             (size == 0 || step.length == size);
+  const FramingStep* kept_at(uint64_t offset, size_t size) const {
+    const auto step = std::find_if(steps_.begin(), steps_.end(), [&](const FramingStep& s) {
+      return s.offset == offset && s.outcome == ReadingOutcome::kept &&
+             (size == 0 || s.length == size);
     });
+    return step == steps_.end() ? nullptr : &*step;
   }
   std::vector<FramingStep> steps_;
 };
@@ -528,6 +539,11 @@ TEST(FramingEvidence, WhatWasWeighedAtEachStartIsWhatCameOut) {
   EXPECT_THAT(weighed.good_frames_not_kept, ::testing::IsEmpty());
   EXPECT_THAT(weighed.bad_frames_kept, ::testing::IsEmpty());
   EXPECT_THAT(weighed.noise_kept, ::testing::IsEmpty());
+  // A good frame is ambiguous-end exactly where its end's runner-up stands; here some do, and
+  // some are ruled out.
+  EXPECT_THAT(weighed.margin_not_said, ::testing::IsEmpty());
+  EXPECT_GT(weighed.end_runner_ups_standing, 0u);
+  EXPECT_FALSE(weighed.ruling_out.empty());
   for (size_t row = 0; row < evidence_table.size(); ++row) {
     const auto evidence = static_cast<Evidence>(row);
     if (evidence == Evidence::length_and_crc || evidence == Evidence::no_good_end ||

@@ -1169,6 +1169,44 @@ TEST(Cli, ExplainSaysWhatConfirmedAnEndACrcSearchFound) {
   EXPECT_THAT(known.lines, ::testing::Not(::testing::Contains(::testing::HasSubstr("its end ("))));
 }
 
+// A frame found by CRC search whose end has a 0x00 beside it has a runner-up end, and --explain
+// weighs it. A vendor frame ending in 0x00 before a silence: one byte shorter would make the
+// 0x00 the next driver's glitch, but a glitch comes before a frame, not before a silence, and 8
+// bits rule that end out. The same bytes with the next request right behind: the frame one byte
+// shorter, confirmed by the 0x00 as a glitch and the request, has the longer end beside it, and
+// nothing tells them apart: ambiguous-end.
+TEST(Cli, ExplainWeighsAnEndsRunnerUpAndSaysWhenItStands) {
+  const std::string apart =
+      hexlog("modtap-explain-end-apart.log",
+             {"00.000000", "01 41 02 03 10 AD 00", "00.100000", "01 03 00 00 00 01 84 0A"});
+  const Outcome ruled_out = run("-r " + apart + " --explain 1");
+  ASSERT_EQ(ruled_out.status, 0);
+  ASSERT_GE(ruled_out.lines.size(), 7u) << ::testing::PrintToString(ruled_out.lines);
+  EXPECT_THAT(ruled_out.lines[0], ::testing::Not(::testing::HasSubstr("ambiguous-end")));
+  EXPECT_EQ(ruled_out.lines[2], "    request, 7 bytes: kept, +16 bits");
+  EXPECT_EQ(ruled_out.lines[5],
+            "            its end's runner-up: the same frame one byte shorter, its last 0x00 the "
+            "next driver's glitch");
+  EXPECT_THAT(ruled_out.lines[6],
+              ::testing::StartsWith("              ruled out, 8 bits: silence-after: "));
+
+  const std::string together =
+      hexlog("modtap-explain-end-together.log",
+             {"00.000000", "01 41 02 03 10 AD 00 01 03 00 00 00 01 84 0A"});
+  const Outcome stands = run("-r " + together + " --explain 1");
+  ASSERT_EQ(stands.status, 0);
+  ASSERT_EQ(stands.lines.size(), 11u) << ::testing::PrintToString(stands.lines);
+  EXPECT_THAT(stands.lines[0], ::testing::HasSubstr("crc ok [ambiguous-end]"));
+  EXPECT_EQ(stands.lines[2], "    request, 6 bytes: kept, +16 bits");
+  EXPECT_EQ(stands.lines[5],
+            "            its end's runner-up: the same frame one byte longer, the 0x00 after it "
+            "its own");
+  EXPECT_EQ(stands.lines[6],
+            "              stands: nothing in the bytes or their times tells the two apart (0 of "
+            "4 bits): ambiguous-end");
+  EXPECT_EQ(stands.lines[10], "    #2 bytes 6-6: noise (glitch), 1 byte");
+}
+
 // --explain answers "why did modtap cut here?". A master's retry of FC07 (`01 07 41 E2`), a
 // silence, then a broadcast: the retry and the broadcast's 0x00 pass a CRC as the five-byte
 // answer the bus waits for, but a silence lies inside that span and the four bytes before it
