@@ -224,15 +224,17 @@ class FieldGatherer {
  public:
   explicit FieldGatherer(RecordFields& out) : out_(out) {}
 
+  // A field by its id; `reason` by what it is a reason of.
   template <FieldId id, NamedEnum Enum>
   void choice(FieldTag<id>, Enum chosen) {
-    if constexpr (std::is_same_v<Enum, RecordType>) out_.type = chosen;
-    if constexpr (std::is_same_v<Enum, Mode>) out_.mode = chosen;
-    if constexpr (std::is_same_v<Enum, Role>) out_.role = chosen;
-    if constexpr (std::is_same_v<Enum, CheckResult>) out_.check = chosen;
-    if constexpr (std::is_same_v<Enum, Damage>) out_.damage = chosen;
-    if constexpr (std::is_same_v<Enum, NoiseReason>) out_.noise_reason = chosen;
-    if constexpr (std::is_same_v<Enum, TimeoutReason>) out_.timeout_reason = chosen;
+    using enum FieldId;
+    if constexpr (id == type) out_.type = chosen;
+    if constexpr (id == mode) out_.mode = chosen;
+    if constexpr (id == role) out_.role = chosen;
+    if constexpr (id == check) out_.check = chosen;
+    if constexpr (id == damage) out_.damage = chosen;
+    if constexpr (id == reason && std::is_same_v<Enum, NoiseReason>) out_.noise_reason = chosen;
+    if constexpr (id == reason && std::is_same_v<Enum, TimeoutReason>) out_.timeout_reason = chosen;
   }
   template <FieldId fc, FieldId function>
   void function_code(FieldTag<fc>, FieldTag<function>, uint8_t byte) {
@@ -263,34 +265,34 @@ class FieldGatherer {
   void channel(FieldId, uint16_t number) { out_.channel = number; }
   template <FieldId id>
   void bytes(FieldTag<id>, std::span<const uint8_t> raw) {
-    out_.raw = raw;
+    if constexpr (id == FieldId::raw) out_.raw = raw;
   }
   template <FieldId id>
   void boolean(FieldTag<id>, bool value) {
-    out_.damaged_answer = value;
+    if constexpr (id == FieldId::damaged_answer) out_.damaged_answer = value;
   }
   template <FieldId id>
   void absent(FieldTag<id>) {}
   template <FieldId id>
   void findings(FieldTag<id>, FindingSlots slots) {
-    out_.findings = slots;
+    if constexpr (id == FieldId::findings) out_.findings = slots;
   }
   template <FieldId id>
-  void name(FieldTag<id>, std::string_view model) {
-    out_.model = model;
+  void name(FieldTag<id>, std::string_view text) {
+    if constexpr (id == FieldId::model) out_.model = text;
   }
   template <FieldId id>
   void registers(FieldTag<id>, std::span<const RegisterValue> values) {
-    out_.registers = values;
+    if constexpr (id == FieldId::registers) out_.registers = values;
   }
   template <FieldId id>
   void notes(FieldTag<id>, std::span<const RuleFinding> notes) {
-    out_.notes = notes;
+    if constexpr (id == FieldId::notes) out_.notes = notes;
   }
   void pdu(const DecodedPdu& fields) { out_.pdu = &fields; }
   template <FieldId id>
   void flag(FieldTag<id>) {
-    out_.truncated = true;
+    if constexpr (id == FieldId::truncated) out_.truncated = true;
   }
 
  private:

@@ -234,7 +234,7 @@ class CommentFields {
   void key(FieldId id, uint64_t value) { key(field_info(id).name, value); }
 
   fmt::memory_buffer& out_;
-  const CommentDefaults& defaults_;
+  CommentDefaults defaults_;
   CommentExtras extras_;
   RecordType type_ = RecordType::frame;
   Mode mode_ = Mode::rtu;
@@ -275,6 +275,7 @@ std::string noise_comment(const Noise& n, const CommentDefaults& defaults) {
 }
 
 void append_timeout_comment(fmt::memory_buffer& out, const Timeout& timeout) {
+  if (!timeout.timed_out()) return;  // the capture ended first: nothing to say on the request
   CommentFields fields(out, {}, {});
   walk_fields(timeout, fields);
 }

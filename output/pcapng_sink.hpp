@@ -128,7 +128,8 @@ void append_frame_comment(fmt::memory_buffer& out, const Frame& frame,
 std::string noise_comment(const Noise& noise, const CommentDefaults& defaults = {});
 void append_noise_comment(fmt::memory_buffer& out, const Noise& noise,
                           const CommentDefaults& defaults);
-// What a time-out adds to its request's comment: " waited_us=... timeout=REASON".
+// What a time-out adds to its request's comment: " waited_us=... timeout=REASON"; nothing
+// where the capture ended before the request's time ran out.
 void append_timeout_comment(fmt::memory_buffer& out, const Timeout& timeout);
 
 }  // namespace modtap::output

@@ -140,6 +140,8 @@ void TextSink::on_frame(const Frame& frame) {
   put(buf, role_and_slave(f.role));
   put_left_aligned(buf, f.slave, 3);
   put(buf, spaced_function_label(f.function));
+  // How registers are numbered and the model's name for an exception are not fields: the
+  // frame's function code and model say them.
   const AddressNumbering numbering = numbering_of(frame);
   // Where the model gives the exception code its own meaning, the model's note after the fields
   // says it in full: the line does not say it twice.

@@ -47,9 +47,9 @@ class TextSink final : public RecordSink {
   void absolute_time(int64_t t_ns);
   void channel_column(uint16_t channel);
   AddressNumbering numbering_of(const Frame& frame) const;
-  void tree(const RecordFields& frame, AddressNumbering numbering);
-  void registers_line(const RecordFields& frame);
-  void registers_tree(const RecordFields& frame);
+  void tree(const RecordFields& f, AddressNumbering numbering);
+  void registers_line(const RecordFields& f);
+  void registers_tree(const RecordFields& f);
 
   Output& out_;
   const std::vector<ChannelInfo>& channels_;

@@ -387,10 +387,10 @@ bool RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) {
 // waits for them only where its last byte came in a read of its own after a read of several,
 // as the next frame's first byte does in modtap's own pcapng (its reader reads a packet's
 // first byte apart, to time it), or where the read that brought its first byte began before
-// it (a timer's reads end anywhere). Waiting behind every response that ends a read would hold
-// most of a pcap's frames back for nothing; behind every last byte read alone, a capture read a
-// byte at a time held each response back until its channel's next byte, behind the other channel's
-// frames.
+// it (a timer's reads end anywhere). Waiting behind every response that ends a read costs a
+// pcap, whose packets each end a frame, a wait at every frame; behind every last byte read
+// alone, a capture read a byte at a time would hold each response back until its channel's next
+// byte, behind the other channel's frames.
 std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bool final) {
   const uint64_t end = at + length;
   if (end == end_) {
@@ -833,7 +833,8 @@ bool RtuFramer::split_trailing_glitch(uint64_t begin, uint64_t end, uint32_t& fi
     return false;
   // The clock has not ruled a glitch out. The request may rule the byte in or out; else the
   // glitch reading is taken on a bus of glitches unless a silence after the byte says it ended
-  // a frame. The other reading stands unless the request or the silence tells against it.
+  // a frame. The kept byte's reading is told apart only by the request ruling it out, the
+  // glitch's only by the silence: a glitch may repeat the very byte the request predicts.
   const std::optional<bool> told = awaited_.byte(bytes(begin, end), size - 1);
   const bool gap = timeline_.gap_at(end);
   const bool glitch = told ? !*told : glitchy_bus && !gap;

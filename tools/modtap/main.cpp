@@ -140,8 +140,8 @@ struct Command {
   std::vector<std::string> check_files;
 };
 
-// Options are added in the order --help lists them: what to read, what to write, how to read
-// the line, then the subcommands.
+// Options are added in the order --help lists them: what to read; what to write, what to serve
+// while running and which records to show; how to read the line; then the subcommands.
 void add_input_options(CLI::App& app, RunOptions& o, Command& command) {
   auto* read = app.add_option("-r,--read", o.read_file,
                               "Capture file to read; - for standard input or a pipe");
@@ -156,6 +156,7 @@ void add_input_options(CLI::App& app, RunOptions& o, Command& command) {
                          {{"pcapng", captures::Format::pcap}});
 }
 
+// The outputs and the files a run writes.
 void add_output_options(CLI::App& app, RunOptions& o, Command& command) {
   command.output =
       tools::add_enum_option(app, "-T,--output", o.output,
@@ -181,7 +182,7 @@ void add_output_options(CLI::App& app, RunOptions& o, Command& command) {
       "4xxxx (Modicon: 40001 is holding register 0); --follow reads numbers the same way");
 }
 
-// Metrics for Prometheus and MQTT: what a run left on a bus serves while it runs.
+// Metrics for Prometheus and MQTT: what a run that stays on a bus serves while it runs.
 void add_monitoring_options(CLI::App& app, RunOptions& o) {
   auto* metrics = app.add_option(
       "--metrics", o.metrics_address,
