@@ -9,6 +9,7 @@
 
 #include "models/record_fields.hpp"
 #include "models/register_meaning.hpp"
+#include "protocol/clock_time.hpp"
 
 namespace modtap {
 
@@ -177,7 +178,7 @@ std::string moment_text(const BusStatistics& s, int64_t t_ns) {
     return fmt::format("{:.3f} s into the capture",
                        static_cast<double>(t_ns - s.first_t_ns.value_or(0)) / 1e9);
   constexpr int64_t day_ns = 86'400'000'000'000;
-  const auto utc = fmt::gmtime(static_cast<std::time_t>(t_ns / 1'000'000'000));
+  const auto utc = fmt::gmtime(static_cast<std::time_t>(seconds_and_micros(t_ns).second));
   if (*s.first_t_ns / day_ns == *s.last_t_ns / day_ns) return fmt::format("{:%H:%M:%S} UTC", utc);
   return fmt::format("{:%Y-%m-%d %H:%M:%S} UTC", utc);
 }

@@ -12,6 +12,7 @@
 
 #include "models/register_meaning.hpp"
 #include "protocol/buffer_put.hpp"
+#include "protocol/clock_time.hpp"
 #include "protocol/pdu_fields.hpp"
 #include "protocol/records.hpp"
 #include "protocol/register_numbering.hpp"
@@ -47,18 +48,6 @@ struct FunctionLabel {
   uint8_t fc;
 };
 void put_function_label(fmt::memory_buffer& out, uint8_t fc);
-
-// A moment as whole seconds and the microseconds after them, rounded to the microsecond
-// (before 1970 too): the clock time text and CSV print.
-struct SecondsAndMicros {
-  int64_t second;
-  int64_t micros;
-};
-inline SecondsAndMicros seconds_and_micros(int64_t t_ns) {
-  const int64_t us = t_ns >= 0 ? (t_ns + 500) / 1000 : -((-t_ns + 500) / 1000);
-  const int64_t second = us >= 0 ? us / 1'000'000 : (us + 1) / 1'000'000 - 1;
-  return {second, us - second * 1'000'000};
-}
 
 // "1 bad check", "2 bad checks": a count with its noun in the number it takes.
 inline std::string counted(uint64_t n, std::string_view one, std::string_view many) {

@@ -95,7 +95,7 @@ struct TimeAxis {
 
 // The capture's clock time of `t_ns`, as the page's header writes it.
 std::string clock_time(int64_t t_ns, const char* format = "%Y-%m-%d %H:%M:%S") {
-  const auto seconds = static_cast<std::time_t>(t_ns / 1'000'000'000);
+  const auto seconds = static_cast<std::time_t>(seconds_and_micros(t_ns).second);
   return fmt::format(fmt::runtime(fmt::format("{{:{}}}", format)), fmt::gmtime(seconds));
 }
 

@@ -37,7 +37,7 @@ void print_span(Output& out, const BusStatistics& s) {
   }
   out.print("{:<16}{:.3f} s", "capture", s.duration_s());
   if (s.dated()) {
-    const std::time_t first = static_cast<std::time_t>(*s.first_t_ns / 1'000'000'000);
+    const auto first = static_cast<std::time_t>(seconds_and_micros(*s.first_t_ns).second);
     out.print(" from {:%Y-%m-%d %H:%M:%S} UTC", fmt::gmtime(first));
   }
   out.print(", {}, clock {}\n", describe(s.format()), to_string(s.clock()));

@@ -832,6 +832,20 @@ std::string hexlog(const std::string& name, const std::vector<std::string>& time
   return path.string();
 }
 
+// The sample's first byte is placed 0.3 us before 09:00:00 (its read's stamp less its bytes'
+// time); its record prints 09:00:00.000000, and the statistics' header says the same second.
+TEST(Cli, TheStatisticsHeaderSaysTheSecondTheFirstRecordPrints) {
+  const std::string sample = std::string(MODTAP_SAMPLES) + "/drives-manual-examples.log";
+  const Outcome text = run("-r " + sample + " -t ad -c 1");
+  ASSERT_EQ(text.status, 0);
+  ASSERT_FALSE(text.lines.empty());
+  EXPECT_THAT(text.lines[0], ::testing::HasSubstr(" 2026-11-22 09:00:00.000000 "));
+  const Outcome stats = run("-r " + sample + " -T stats");
+  ASSERT_EQ(stats.status, 0);
+  EXPECT_THAT(stats.lines,
+              ::testing::Contains(::testing::HasSubstr(" from 2026-11-22 09:00:00 UTC, ")));
+}
+
 TEST(Cli, TheDrivesSampleReadsInEachDrivesTerms) {
   const Outcome r = run(std::string("-r ") + MODTAP_SAMPLES +
                         "/drives-manual-examples.log --model 1=nta5000 --model 2=n3");
