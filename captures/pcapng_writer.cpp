@@ -226,10 +226,15 @@ void PcapngWriter::extend_comment(uint64_t hold, std::string_view more) {
   uint16_t length;
   std::memcpy(&length, &pending_[option + 2], 2);
   more = more.substr(0, 0xFFFF - length);
-  const size_t text_end = option + 4 + length;
+  const size_t text = option + 4, text_end = text + length;
   const size_t grown = padded(length + more.size()) - padded(length);
-  insert_room(option + 4 + padded(length), grown);
-  std::memcpy(&pending_[text_end], more.data(), more.size());
+  insert_room(text + padded(length), grown);
+  // Readers take a comment's verdicts from its first line: the lines after it move along.
+  const auto first_line_end =
+      static_cast<size_t>(std::find(&pending_[text], &pending_[text_end], '\n') - &pending_[0]);
+  std::memmove(&pending_[first_line_end + more.size()], &pending_[first_line_end],
+               text_end - first_line_end);
+  std::memcpy(&pending_[first_line_end], more.data(), more.size());
   std::memset(&pending_[text_end + more.size()], 0,
               padded(length + more.size()) - length - more.size());
   length = static_cast<uint16_t>(length + more.size());

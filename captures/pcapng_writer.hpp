@@ -34,7 +34,8 @@ class PcapngWriter {
   // held packets, or 4 MiB from the first of them on, the oldest goes out as it is.
   void write_packet(uint32_t interface, int64_t t_ns, std::span<const uint8_t> data,
                     PacketDirection direction, std::string_view comment, uint64_t hold = 0);
-  // Appends to a held packet's comment (no more than a comment's 65,535 bytes).
+  // Appends to a held packet's comment's first line, where readers take its verdicts from (no
+  // more than a comment's 65,535 bytes).
   void extend_comment(uint64_t hold, std::string_view more);
   void release(uint64_t hold);  // a key not held is no error: it may have gone out already
   void release_all();

@@ -8,6 +8,8 @@
 #include <iterator>
 #include <set>
 
+#include "models/device_model.hpp"
+#include "models/register_meaning.hpp"
 #include "output/pcapng_sink.hpp"
 #include "tests/support/collector.hpp"
 
@@ -90,7 +92,7 @@ TEST(PcapngWriter, HeldPacketsWaitAndTheirCommentsGrowInPlace) {
   OneInterfaceFile file("modtap-held-test.pcapng");
   PcapngWriter& writer = file.writer;
   writer.write_packet(file.bus, 1, hex("01"), PacketDirection::outbound, "held a", 1);
-  writer.write_packet(file.bus, 2, hex("02 02"), PacketDirection::outbound, "held b", 2);
+  writer.write_packet(file.bus, 2, hex("02 02"), PacketDirection::outbound, "held b\nline 2", 2);
   writer.write_packet(file.bus, 3, hex("03 03 03"), PacketDirection::inbound, "after");
   writer.flush();
   EXPECT_EQ(file.packet_bytes(), 0u);  // nothing passes the first held packet
@@ -107,7 +109,7 @@ TEST(PcapngWriter, HeldPacketsWaitAndTheirCommentsGrowInPlace) {
   EXPECT_EQ(packet_lengths(file.path), (std::vector<size_t>{1, 2, 3}));
   const std::string text = file_text(file.path);
   EXPECT_NE(text.find("held a grown by eleven"), std::string::npos);
-  EXPECT_NE(text.find("held b!"), std::string::npos);
+  EXPECT_NE(text.find("held b!\nline 2"), std::string::npos);  // the first line grows
   EXPECT_EQ(text.find("not held"), std::string::npos);
 }
 
@@ -199,6 +201,43 @@ TEST(PcapngSink, CommentsCarryOnlyWhatAReaderCannotKnow) {
   frame.end_ns = frame.t_ns + 5 * 520'833;
   frame.request = 6;
   EXPECT_EQ(output::frame_comment(frame, after_6), "modtap exception=2");
+}
+
+// Readers take the verdicts from a comment's first line: a time-out goes there, ahead of a
+// device model's note lines.
+TEST(PcapngSink, ATimeOutJoinsTheCommentsFirstLineAheadOfTheModelsNotes) {
+  const auto path = temp_path("modtap-timeout-note-test.pcapng");
+  const std::vector<ChannelInfo> channels{{"bus", ChannelRole::bus}};
+  const auto request = hex("01 03 00 00 00 01 84 0a");
+  DeviceModel model;
+  model.name = "drive";
+  Meaning meaning;
+  meaning.model = &model;
+  meaning.findings.add(RuleKind::unmapped_register, 0x0000, "0000H is in none of its tables");
+  Frame frame;
+  frame.index = 1;
+  frame.role = Role::request;
+  frame.raw = frame.adu = request;
+  frame.check_ok = true;
+  frame.meaning = &meaning;
+  {
+    PcapngWriter writer(path);
+    output::PcapngSink sink(writer, channels, {});
+    sink.on_frame(frame);
+    Timeout timeout;
+    timeout.index = 2;
+    timeout.request = 1;
+    timeout.waited_ns = 1'000'000'000;
+    timeout.reason = TimeoutReason::silence;
+    sink.on_timeout(timeout);
+    sink.finish();
+    writer.close();
+  }
+  EXPECT_NE(file_text(path).find("modtap index=1 duration_ns=0 model=drive waited_us=1000000.000 "
+                                 "timeout=silence\nnote unmapped-register: 0000H is in none"),
+            std::string::npos)
+      << file_text(path);
+  std::filesystem::remove(path);
 }
 
 // A comment renders the record's field walk: its keys are the field registry's names (the
