@@ -36,6 +36,11 @@ void ExplainSink::on_reading(const FramingStep& step) {
   if (steps_.size() > kept_steps) steps_.pop_front();
 }
 
+void ExplainSink::on_copy(uint16_t channel, uint64_t offset, const Margin& margin) {
+  copies_.push_back({channel, offset, margin});
+  if (copies_.size() > kept_steps) copies_.pop_front();
+}
+
 void ExplainSink::on_frame(const Frame& frame) {
   const bool is_picked = picked(frame);
   if (is_picked) explain_frame(frame);
@@ -45,6 +50,7 @@ void ExplainSink::on_frame(const Frame& frame) {
 void ExplainSink::explain_frame(const Frame& frame) {
   text_.on_frame(frame);
   explain(frame.channel, frame.offset, frame.mode);
+  print_copy(frame);
   if (frame.mode == Mode::rtu && frame.damage != Damage::none)
     out_.print(
         "  then, no reading holding, the bytes up to the next good frame or silence were "
@@ -167,20 +173,36 @@ void ExplainSink::print_reading(const FramingStep& step) {
   if (step.outcome == ReadingOutcome::kept) print_end_margin(step.end_margin);
 }
 
-// A kept frame's end against its runner-up, where it has one: ruled out by what told, or
-// standing beside it (ambiguous-end).
+// A kept frame's end against its runner-up, where it has one.
 void ExplainSink::print_end_margin(const Margin& margin) {
   if (margin.runner_up == RunnerUp::none) return;
   out_.print("            its end's runner-up: {}\n", to_string(margin.runner_up));
+  print_runner_up(margin, "ambiguous-end");
+}
+
+void ExplainSink::print_runner_up(const Margin& margin, std::string_view finding) {
   if (!margin.told) {
     out_.print(
         "              stands: nothing in the bytes or their times tells the two apart "
-        "(0 of {} bits): ambiguous-end\n",
-        decisive_bits);
+        "(0 of {} bits): {}\n",
+        decisive_bits, finding);
     return;
   }
   const FeatureInfo& told = feature_info(*margin.told);
   out_.print("              ruled out, {} bits: {}: {}\n", margin.bits, told.name, told.why);
+}
+
+// A frame that copies the pending request: the slave's echo or the master's retry, as the
+// matcher judged it by its time.
+void ExplainSink::print_copy(const Frame& frame) {
+  const auto copy = std::find_if(copies_.rbegin(), copies_.rend(), [&](const Copy& c) {
+    return c.channel == frame.channel && c.offset == frame.offset;
+  });
+  if (copy == copies_.rend()) return;
+  const bool echo = copy->margin.runner_up == RunnerUp::retry;
+  out_.print("  a copy of the pending request, taken for {}; its runner-up: {}\n",
+             to_string(echo ? RunnerUp::echo : RunnerUp::retry), to_string(copy->margin.runner_up));
+  print_runner_up(copy->margin, "ambiguous-echo");
 }
 
 // A row's weight and why, then its features': the crc's row is its one feature.

@@ -24,6 +24,7 @@ class ExplainSink final : public RecordSink, public FramingObserver {
 
   void on_start(uint16_t channel, uint64_t offset) override;
   void on_reading(const FramingStep& step) override;
+  void on_copy(uint16_t channel, uint64_t offset, const Margin& margin) override;
   void on_frame(const Frame& frame) override;
   void on_noise(const Noise& noise) override;
   void on_timeout(const Timeout& timeout) override;
@@ -55,6 +56,9 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   void explain(uint16_t channel, uint64_t offset, Mode mode);
   void print_reading(const FramingStep& step);
   void print_end_margin(const Margin& margin);
+  // A runner-up's lines: what ruled it out, or that it stands and the record says so.
+  void print_runner_up(const Margin& margin, std::string_view finding);
+  void print_copy(const Frame& frame);
   void print_row(const EvidenceInfo& row, int sign);
   void print_margin(const std::vector<const FramingStep*>& weighed);
   // Every record moves the time column's clock; the one asked for is shown.
@@ -73,6 +77,13 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   bool found_ = false;
   // The readings weighed at the latest starts; a record is emitted right after its own.
   std::deque<FramingStep> steps_;
+  // The matcher's judgements of the latest copies of a pending request.
+  struct Copy {
+    uint16_t channel;
+    uint64_t offset;
+    Margin margin;
+  };
+  std::deque<Copy> copies_;
   std::map<uint16_t, Segment> last_on_channel_;
   std::optional<uint16_t> after_due_;  // the channel whose next record is still to show
 };

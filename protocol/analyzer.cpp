@@ -96,6 +96,7 @@ MatcherOptions matcher_options(const AnalyzerOptions& o) {
   m.timed = o.clock != ClockQuality::none;
   m.exact_clock = o.clock == ClockQuality::per_byte;
   m.clock_lag_ns = o.clock == ClockQuality::per_chunk ? o.chunk_jitter_ns : 0;
+  m.observer = o.framing_observer;
   return m;
 }
 

@@ -329,13 +329,17 @@ struct FramingStep {
   }
 };
 
-// Told each reading the framer weighs at the start of what it emits next (--explain).
+// Told each reading the framer weighs at the start of what it emits next, and how the matcher
+// judged a copy of the pending request (--explain).
 class FramingObserver {
  public:
   virtual ~FramingObserver() = default;
   // The framer weighs the bytes at `offset` (again, once more of them came).
   virtual void on_start(uint16_t channel, uint64_t offset) = 0;
   virtual void on_reading(const FramingStep& step) = 0;
+  // The matcher's judgement of a frame that copies the pending request, at `offset`: the
+  // slave's echo or the master's retry, and what told the runner-up apart.
+  virtual void on_copy(uint16_t /*channel*/, uint64_t /*offset*/, const Margin& /*margin*/) {}
 };
 
 }  // namespace modtap

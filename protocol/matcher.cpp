@@ -31,8 +31,9 @@ void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
   const bool garbage = !frame.check_ok && awaits_answer(channel_role) && !pending_matches(frame);
   if (garbage) frame.findings |= finding_garbage_after_request;
   if (garbage && in_answer_time(frame.t_ns, channel_role)) return garbled_answer(frame);
-  const Copy copy = judge_copy(frame);
-  frame.role = decide_role(frame, channel_role, copy);
+  const CopyJudgement judgement = judge_copy(frame);
+  const Copy copy = judgement.copy;
+  frame.role = decide_role(frame, channel_role, judgement);
   // Right after an echo that may have been a retry, a frame that may answer the same request
   // is as ambiguous as a request, and an answer only a retry leaves room for answers that.
   const auto echo = std::exchange(ambiguous_echo_, std::nullopt);
@@ -84,7 +85,8 @@ bool Matcher::awaits_answer(ChannelRole channel_role) const {
   return pending_ && channel_role != ChannelRole::master;
 }
 
-Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role, Copy copy) const {
+Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role,
+                          const CopyJudgement& judgement) const {
   if (channel_role == ChannelRole::master) return Role::request;
   if (channel_role == ChannelRole::slave) return Role::response;
   // The exception bit says response, even on a damaged frame or an unexpected slave.
@@ -97,6 +99,9 @@ Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role, Copy cop
   // master's, after its time-out. A late answer that fits (a FC08 counter, a read of 3 bytes
   // of coils, as long as their requests) stays the answer.
   if (pending_matches(frame)) {
+    const Copy copy = judgement.copy;
+    if (copy != Copy::none && options_.observer)  // --explain: what told echo and retry apart
+      options_.observer->on_copy(frame.channel, frame.offset, judgement.margin);
     const bool another_request = copy == Copy::none && frame.check_ok && frame.fit.request &&
                                  !fits_pending(frame) && long_after_answer_due(frame);
     return copy == Copy::retry || another_request ? Role::request : Role::response;
@@ -137,19 +142,19 @@ bool Matcher::copies(const Frame& frame, const Pending& request) {
 // where its time tells against an echo; where neither does (no clock, nothing learned, a copy
 // only as late as the clock may stamp the answer late) it is taken for the echo, the retry
 // standing beside it.
-Matcher::Copy Matcher::judge_copy(const Frame& frame) const {
-  if (!pending_ || !copies_pending(frame)) return Copy::none;
+Matcher::CopyJudgement Matcher::judge_copy(const Frame& frame) const {
+  if (!pending_ || !copies_pending(frame)) return {};
   const int64_t waited = frame.t_ns - pending_->end_ns;
   const bool timed = options_.timed;
   Margin against_retry{RunnerUp::retry};
   if (against_retry.tell(Feature::too_soon_for_retry,
                          timed && waited < answered_within_ns(pending_->slave)))
-    return Copy::response;
+    return {Copy::response, against_retry};
   Margin against_echo{RunnerUp::echo};
   if (against_echo.tell(Feature::late_as_a_retry,
                         timed && (long_after_answer_due(frame) || as_late_as_a_retry(waited))))
-    return Copy::retry;
-  return Copy::ambiguous;
+    return {Copy::retry, against_echo};
+  return {Copy::ambiguous, against_retry};
 }
 
 // How soon the master sends a request again, from retries no echo could fake: a copy of a

@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "protocol/frame_sink.hpp"
+#include "protocol/framing_evidence.hpp"
 #include "protocol/records.hpp"
 
 namespace modtap {
@@ -23,6 +24,7 @@ struct MatcherOptions {
   // How late a clock that stamps reads, not bytes, may put a frame: a read that also holds the
   // frame after it is stamped when that one ended.
   int64_t clock_lag_ns = 0;
+  FramingObserver* observer = nullptr;  // told how a copy of the pending request was judged
 };
 
 class Matcher {
@@ -74,7 +76,12 @@ class Matcher {
   // What a frame that repeats the pending request byte for byte is: its (echo) response, the
   // master's retry, or either; none when it is no such copy.
   enum class Copy : uint8_t { none, response, retry, ambiguous };
-  Copy judge_copy(const Frame& frame) const;
+  // A copy of the pending request judged, with what told its runner-up apart.
+  struct CopyJudgement {
+    Copy copy = Copy::none;
+    Margin margin{};
+  };
+  CopyJudgement judge_copy(const Frame& frame) const;
   bool copies_pending(const Frame& frame) const { return pending_ && copies(frame, *pending_); }
   static bool copies(const Frame& frame, const Pending& request);
   static bool may_answer(const Frame& frame, const Pending& request);
@@ -92,7 +99,8 @@ class Matcher {
     bus_turnaround_ns_ = std::max(bus_turnaround_ns_, latency_ns);
   }
 
-  Role decide_role(const Frame& frame, ChannelRole channel_role, Copy copy) const;
+  Role decide_role(const Frame& frame, ChannelRole channel_role,
+                   const CopyJudgement& judgement) const;
   // Whether the frame fits as the request's answer.
   static bool fits(const Frame& frame, const Pending& request);
   bool fits_pending(const Frame& frame) const { return fits(frame, *pending_); }

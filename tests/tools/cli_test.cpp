@@ -1221,6 +1221,33 @@ TEST(Cli, ExplainWeighsAnEndsRunnerUpAndSaysWhenItStands) {
   EXPECT_EQ(stands.lines[10], "    #2 bytes 6-6: noise (glitch), 1 byte");
 }
 
+// A copy of the pending request is its slave's echo or the master's retry, and --explain says
+// what told them apart: 10 ms after the request, too soon for any retry; in a raw file, with
+// no clock, nothing: the echo is taken and the retry stands beside it (ambiguous-echo).
+TEST(Cli, ExplainSaysWhatToldAnEchoFromARetry) {
+  const std::string timed =
+      hexlog("modtap-explain-echo.log",
+             {"00.000000", "11 06 00 01 00 03 9A 9B", "00.010000", "11 06 00 01 00 03 9A 9B"});
+  const Outcome soon = run("-r " + timed + " --explain 2");
+  ASSERT_EQ(soon.status, 0);
+  EXPECT_THAT(soon.lines, ::testing::Contains(
+                              "  a copy of the pending request, taken for the slave's echo; its "
+                              "runner-up: the master's retry"));
+  EXPECT_THAT(soon.lines, ::testing::Contains(::testing::StartsWith(
+                              "              ruled out, 4 bits: too-soon-for-retry: ")));
+
+  const std::string raw =
+      raw_capture("modtap-explain-echo.raw",
+                  {{0x11, 0x06, 0x00, 0x01, 0x00, 0x03}, {0x11, 0x06, 0x00, 0x01, 0x00, 0x03}});
+  const Outcome untimed = run("-r " + raw + " --explain 2");
+  ASSERT_EQ(untimed.status, 0);
+  ASSERT_FALSE(untimed.lines.empty());
+  EXPECT_THAT(untimed.lines[0], ::testing::HasSubstr("[ambiguous-echo]"));
+  EXPECT_THAT(untimed.lines,
+              ::testing::Contains("              stands: nothing in the bytes or their times tells "
+                                  "the two apart (0 of 4 bits): ambiguous-echo"));
+}
+
 // --explain answers "why did modtap cut here?". A master's retry of FC07 (`01 07 41 E2`), a
 // silence, then a broadcast: the retry and the broadcast's 0x00 pass a CRC as the five-byte
 // answer the bus waits for, but a silence lies inside that span and the four bytes before it
