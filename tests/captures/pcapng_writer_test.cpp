@@ -18,6 +18,16 @@ namespace {
 
 using testing::hex;
 
+// Request `request` timed out in silence after `waited_ns`, as record `index`.
+Timeout silent_time_out(uint64_t index, uint64_t request, int64_t waited_ns) {
+  Timeout timeout;
+  timeout.index = index;
+  timeout.request = request;
+  timeout.waited_ns = waited_ns;
+  timeout.reason = TimeoutReason::silence;
+  return timeout;
+}
+
 std::string temp_path(const char* name) {
   return (std::filesystem::temp_directory_path() / name).string();
 }
@@ -224,12 +234,7 @@ TEST(PcapngSink, ATimeOutJoinsTheCommentsFirstLineAheadOfTheModelsNotes) {
     PcapngWriter writer(path);
     output::PcapngSink sink(writer, channels, {});
     sink.on_frame(frame);
-    Timeout timeout;
-    timeout.index = 2;
-    timeout.request = 1;
-    timeout.waited_ns = 1'000'000'000;
-    timeout.reason = TimeoutReason::silence;
-    sink.on_timeout(timeout);
+    sink.on_timeout(silent_time_out(2, 1, 1'000'000'000));
     sink.finish();
     writer.close();
   }
@@ -300,12 +305,7 @@ TEST(PcapngSink, ARequestThatTimedOutSaysSoAndOrderIsKept) {
     const auto junk = hex("ff");
     noise.raw = junk;
     sink.on_noise(noise);
-    Timeout timeout;
-    timeout.index = 3;
-    timeout.request = 1;
-    timeout.waited_ns = 1'000'000'123;
-    timeout.reason = TimeoutReason::silence;
-    sink.on_timeout(timeout);
+    sink.on_timeout(silent_time_out(3, 1, 1'000'000'123));
     sink.on_frame(frame(4, Role::request, request));
     auto response = frame(5, Role::response, answer);
     response.request = 4;
