@@ -520,8 +520,15 @@ class Parser {
     return text;
   }
 
-  // Case does not matter, as in Wireshark's `matches`.
+  // Case does not matter, as in Wireshark's `matches`. libstdc++ compiles a regular expression
+  // by recursion, a level or more for each character and group: a pattern is held to what a
+  // filter needs, so that no filter text can run the stack out (thousands of '(' did).
+  static constexpr size_t max_pattern = 256;
   std::shared_ptr<const std::regex> pattern(const std::string& text) const {
+    if (text.size() > max_pattern)
+      throw FilterError(token_.column, fmt::format("a regular expression of {} characters: at "
+                                                   "most {} are read",
+                                                   text.size(), max_pattern));
     try {
       return std::make_shared<const std::regex>(
           text, std::regex::ECMAScript | std::regex::icase | std::regex::optimize);

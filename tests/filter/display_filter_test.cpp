@@ -128,6 +128,10 @@ TEST(DisplayFilter, ContainsInAndMatchesAsWiresharkHasThem) {
   EXPECT_EQ(refusal("slave in {1"), "column 12: the set has no closing '}'");
   EXPECT_EQ(refusal("slave in 1"), "column 10: expected '{' after in");
   EXPECT_EQ(refusal("function matches \"(\""), "column 18: \"(\" is no regular expression");
+  EXPECT_EQ(refusal("raw ~ \"" + std::string(3000, '(') + "\""),
+            "column 7: a regular expression of 3000 characters: at most 256 are read");
+  EXPECT_TRUE(
+      matches("function ~ \"" + std::string(120, '(') + "read" + std::string(120, ')') + "\""));
   EXPECT_NE(refusal("role in {req, foo}").find("not \"foo\""), std::string::npos);
 }
 
