@@ -478,7 +478,8 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
     for (size_t i = 0; i < hit_count; ++i) {
       const uint16_t n = hits[i];
       const bool zero_appended = i > 0 && hits[i - 1] == n - 1;
-      if (zero_appended && glitch_appended(at, at + n, final, search - 1)) {
+      const Margin shorter = zero_appended ? shorter_end(at + n, final, search - 1) : Margin{};
+      if (glitch_appended(at, at + n, shorter)) {
         open |= at + n == end_;
         continue;
       }
@@ -493,7 +494,7 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       // Confirmed only by taking the next 0x00 for a glitch, where one byte more holds too; or
       // ending in a 0x00 that could be a glitch after a good frame one byte shorter.
       Margin doubt = allow_glitch ? longer_end(at, at + n) : Margin{};
-      if (zero_appended && !doubt.stands()) consider(doubt, shorter_end(at + n, final, search - 1));
+      if (!doubt.stands()) consider(doubt, shorter);
       if (confirmed) return {Match::Kind::found, n, fit, doubt, *confirmed};
       open |= at_end;
       if (may_stand_alone) unconfirmed = n;
@@ -547,23 +548,24 @@ RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_
     const bool zero_appended = hit && previous_hit;
     previous_hit = hit;
     crc = crc16_step(crc, p[n - crc_size]);
-    if (!hit || (zero_appended && glitch_appended(at, at + n, final, search - 1))) continue;
+    if (!hit) continue;
+    const Margin shorter = zero_appended ? shorter_end(at + n, final, search - 1) : Margin{};
+    if (glitch_appended(at, at + n, shorter)) continue;
     const std::optional<SpanEnd> confirmed = confirmed_end(at, at + n, final, search - 1, false);
     if (confirmed && !swallows_known_frame(at, at + n))
-      return {Match::Kind::found, static_cast<uint16_t>(n), fit,
-              zero_appended ? shorter_end(at + n, final, search - 1) : Margin{}, *confirmed};
+      return {Match::Kind::found, static_cast<uint16_t>(n), fit, shorter, *confirmed};
   }
   return {};
 }
 
-// A CRC end right after a CRC end is the shorter frame with a 0x00 appended: a glitch, unless a
-// silence right after it says that 0x00 was the frame's last CRC byte, or the next driver's
-// glitch comes right after it (one driver turning on puts one glitch on the line, not two).
-bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end, bool final, int search) {
-  return !timeline_.gap_at(end) &&
-         ((glitch_odds_.zero_glitch_likelier() && timeline_.after_quiet_line(end - 1)) ||
-          !copy_follows(begin, end)) &&
-         !glitch_then_frame(end, final, search);
+// A CRC end right after a CRC end is the shorter frame with a 0x00 appended, the next driver's
+// glitch, unless what tells against that reading decides (`shorter`: a silence right after
+// the 0x00, a clock per byte that saw it sent straight on, a second glitch it would need), or
+// the longer frame's exact copy follows it (FC08's echo) on a bus whose glitches do not make
+// the glitch the likelier.
+bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end, const Margin& shorter) const {
+  if (shorter.runner_up != RunnerUp::shorter || shorter.decided()) return false;
+  return glitch_odds_.zero_glitch_likelier() || !copy_follows(begin, end);
 }
 
 // The runner-up of a good frame's end (framing_evidence.hpp, Margin): the same frame one byte

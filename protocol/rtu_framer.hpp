@@ -147,7 +147,8 @@ class RtuFramer {
   Match search_end(uint64_t at, size_t first, RoleFit fit, bool final, int search);
   Match first_confirmed_end(uint64_t at, size_t first, size_t limit, RoleFit fit, bool final,
                             int search);
-  bool glitch_appended(uint64_t begin, uint64_t end, bool final, int search);
+  // `shorter`: the margin against the frame one byte shorter (shorter_end), if it is one.
+  bool glitch_appended(uint64_t begin, uint64_t end, const Margin& shorter) const;
   bool glitch_then_frame(uint64_t at, bool final, int search);
   Margin longer_end(uint64_t at, uint64_t end) const;
   Margin shorter_end(uint64_t end, bool final, int search);

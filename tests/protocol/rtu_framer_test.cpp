@@ -502,6 +502,28 @@ TEST_F(GapCollector, APauseOverT15ConfirmsTheEndOfAFrameNoLengthRuleBounds) {
   EXPECT_EQ(out.noise()[0].raw, junk);
 }
 
+// A frame of no fixed length whose CRC ends in 0x00 holds a good frame one byte shorter: the
+// 0x00 is the frame's own or the next driver's glitch. A clock per byte that saw the 0x00 sent
+// straight on after the byte before it tells: no driver turned on there, so it is the frame's,
+// and the frame's end is in no doubt. With a clock per read nothing tells, and the shorter
+// frame and a glitch is the reading, marked as in doubt.
+TEST_F(GapCollector, AZeroSentStraightOnIsTheFramesOwnNotAGlitch) {
+  const auto vendor = concat({with_crc(hex("01 41 02 03")), hex("00")});
+  const auto per_byte = run({{20'000'000, vendor}, {0, read_request}}, ClockQuality::per_byte);
+  ASSERT_EQ(per_byte.frames().size(), 2u);
+  EXPECT_EQ(per_byte.frames()[0].raw, vendor);
+  EXPECT_EQ(per_byte.frames()[0].findings & finding_ambiguous_end, 0u);
+  EXPECT_TRUE(per_byte.noise().empty());
+
+  const auto per_read =
+      run({{20'000'000, concat({vendor, read_request})}}, ClockQuality::per_chunk).stream();
+  ASSERT_EQ(per_read.size(), 3u);
+  EXPECT_EQ(per_read[0].raw, with_crc(hex("01 41 02 03")));
+  EXPECT_EQ(per_read[0].findings & finding_ambiguous_end, finding_ambiguous_end);
+  EXPECT_EQ(per_read[1].raw, hex("00"));
+  EXPECT_EQ(per_read[2].raw, read_request);
+}
+
 // Noise while a request waits is marked with that request; a glitch, or noise once the request
 // was answered, is not.
 TEST_F(GapCollector, NoiseWhereAnAnswerWasAwaitedIsGarbageAfterTheRequest) {
