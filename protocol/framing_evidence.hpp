@@ -145,7 +145,8 @@ inline constexpr std::array<EvidenceInfo, 13> evidence_table{{
      {Feature::another_crc, Feature::silence_inside},
      2},
     {"broke-off-at-silence",
-     "a silence falls inside it and a good frame starts right after it: it broke off there",
+     "a silence falls inside it and a good frame starts right after it, or after its driver's "
+     "glitch: it broke off there",
      {Feature::another_crc, Feature::silence_inside},
      2},
     {"answer-read-as-request",

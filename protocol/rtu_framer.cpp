@@ -202,15 +202,20 @@ RtuFramer::Say RtuFramer::good_frame_before_silence(const Reading& r) {
   return Say::nothing;
 }
 
-// A silence inside a frame, with a good frame starting right after it, means this was a frame
-// that broke off, whatever its CRC says.
+// A silence inside a frame, with a good frame starting right after it (or after the glitch of
+// the driver that sends it), means this was a frame that broke off, whatever its CRC says.
 RtuFramer::Say RtuFramer::broke_off_at_silence(const Reading& r) {
   const uint64_t gap = timeline_.first_gap_after(r.at);
   if (gap >= r.at + r.length) return Say::nothing;
-  const Match after_gap = match_at(gap, r.final, 0);
-  if (after_gap.kind == Match::Kind::found) return Say::refutes;
-  if (after_gap.kind == Match::Kind::need_more && !r.final) return Say::unknown;
-  return Say::nothing;
+  return frame_after_silence(gap, r.final);
+}
+
+// What the bytes after the silence at `gap` say of a span across it: that it broke off there,
+// where a good frame starts right after the silence or after its driver's glitch.
+RtuFramer::Say RtuFramer::frame_after_silence(uint64_t gap, bool final) {
+  const Match after = match_at(gap, final, 0);
+  if (after.kind == Match::Kind::found || glitch_then_frame(gap, final, 0)) return Say::refutes;
+  return after.kind == Match::Kind::need_more && !final ? Say::unknown : Say::nothing;
 }
 
 // The first bytes after the request (a glitch aside), beginning as the awaited answer with
@@ -653,15 +658,11 @@ bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end) {
   return false;
 }
 
-// A silence after `at` with a good frame right after it, or after the glitch of the driver
-// that sends it, bounds whatever starts at `at`.
+// Where `broke-off-at-silence` refutes every span across the first silence after `at`, every
+// reading of the bytes at `at` ends before it: none waits for bytes beyond it.
 bool RtuFramer::blocked_by_gap(uint64_t at, bool final) {
   const uint64_t gap = timeline_.first_gap_after(at);
-  if (gap >= end_) return false;
-  if (match_at(gap, final, 0).kind == Match::Kind::found) return true;
-  const uint8_t first = *at_ptr(gap);
-  return is_glitch_byte(first) && gap + 1 < end_ &&
-         match_at(gap + 1, final, 0).kind == Match::Kind::found;
+  return gap < end_ && frame_after_silence(gap, final) == Say::refutes;
 }
 
 uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {

@@ -122,6 +122,7 @@ class RtuFramer {
   // The rows of weigh_span's table.
   Say good_frame_before_silence(const Reading& r);
   Say broke_off_at_silence(const Reading& r);
+  Say frame_after_silence(uint64_t gap, bool final);
   Say answer_read_as_request(const Reading& r);
   Say request_inside_awaited_answer(const Reading& r);
   Say retry_and_glitch(const Reading& r);

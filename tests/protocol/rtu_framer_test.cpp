@@ -785,6 +785,26 @@ TEST_F(GapCollector, AFrameEndingBeforeASilenceIsReadThereWhateverFollows) {
   EXPECT_EQ(frames[4].raw, broadcast);
 }
 
+// A write broken off, a silence, then the next driver's glitch and a whole request: the write's
+// byte count claims all of it, and a CRC that holds over the claimed length (made so here, 1
+// span in 65,536 by chance) comes with the request's read. The silence inside with a good frame
+// after its glitch says the write broke off there, as a frame right after the silence does;
+// and the bound that keeps a reading from waiting across a silence is this same evidence.
+TEST_F(GapCollector, ASpanBrokeOffAtASilenceThatAGlitchAndAFrameFollow) {
+  const auto broken_off = hex("01 10 00 01 00 05 0a 7e");
+  const auto claimed = with_crc(concat({broken_off, hex("00"), read_request}));
+  const std::vector<uint8_t> rest(claimed.begin() + 8, claimed.end());
+  const auto stream =
+      run({{60'000'000, broken_off}, {60'000'000, rest}}, ClockQuality::per_chunk).stream();
+  ASSERT_EQ(stream.size(), 4u);
+  EXPECT_EQ(stream[0].raw, broken_off);
+  EXPECT_FALSE(stream[0].check_ok);  // eight bytes, read as a FC16 answer with a bad check
+  EXPECT_EQ(stream[1].reason, NoiseReason::glitch);
+  EXPECT_EQ(stream[2].raw, read_request);
+  EXPECT_TRUE(stream[2].check_ok);
+  EXPECT_EQ(stream[3].type, Record::Type::noise);
+}
+
 // FC07's answer whose first four bytes are its request again, its status talked over: inside
 // the answer's span, "07 12 ..." starts a vendor code whose end only a CRC search could tell.
 // It cannot stand there, so it does not hold the damaged answer and the next request back
