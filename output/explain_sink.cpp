@@ -167,10 +167,27 @@ void ExplainSink::print_reading(const FramingStep& step) {
   if (step.end != SpanEnd::length_rules) {
     const SpanEndInfo& end = span_end_info(step.end);
     out_.print("            its end ({}): {}\n", end.name, end.why);
+    print_confirmation(step.end);
   }
   print_row(evidence_info(Evidence::length_and_crc), +1);
   if (step.outcome == ReadingOutcome::refuted) print_row(why, -1);
   if (step.outcome == ReadingOutcome::kept) print_end_margin(step.end_margin);
+}
+
+// What made up for a CRC search's tries at the end it found, where the search made one.
+void ExplainSink::print_confirmation(SpanEnd end) {
+  if (end == SpanEnd::echo_length) return;
+  const std::optional<Feature> by = span_end_info(end).confirmed_by;
+  if (!by) {
+    out_.print(
+        "              stands unconfirmed: nothing more can come to confirm it (0 of the "
+        "search's {} bits)\n",
+        search_bits);
+    return;
+  }
+  const FeatureInfo& feature = feature_info(*by);
+  out_.print("              confirmed, {} bits of the search's {}: {}: {}\n", feature.bits,
+             search_bits, feature.name, feature.why);
 }
 
 // A kept frame's end against its runner-up, where it has one.

@@ -55,6 +55,7 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   void explain_noise(const Noise& noise);
   void explain(uint16_t channel, uint64_t offset, Mode mode);
   void print_reading(const FramingStep& step);
+  void print_confirmation(SpanEnd end);
   void print_end_margin(const Margin& margin);
   // A runner-up's lines: what ruled it out, or that it stands and the record says so.
   void print_runner_up(const Margin& margin, std::string_view finding);

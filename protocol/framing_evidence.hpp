@@ -35,6 +35,10 @@ enum class Feature : uint8_t {
   second_glitch,
   byte_ruled_out,
   late_as_a_retry,
+  pause_after,
+  frame_after,
+  copy_after,
+  glitch_then_frame,
 };
 
 struct FeatureInfo {
@@ -43,7 +47,7 @@ struct FeatureInfo {
   std::string_view why;
 };
 
-inline constexpr std::array<FeatureInfo, 17> feature_table{{
+inline constexpr std::array<FeatureInfo, 21> feature_table{{
     {"crc-holds", 16, "bytes that are no frame pass a CRC 1 time in 65,536"},
     {"another-crc", 16,
      "another span over these bytes passes its own length rules and CRC, as unlikely by "
@@ -80,8 +84,9 @@ inline constexpr std::array<FeatureInfo, 17> feature_table{{
      "a reserved address (248-255, most often a turnaround's 0xFF) or an answer nobody "
      "awaits: taken as 1 in 16"},
     {"silence-after", 8,
-     "the clock saw a silence of t3.5 and its slack right after the byte: a glitch comes "
-     "before the next frame, not before a silence; a clock's false silence taken as 1 in 256"},
+     "the clock saw a silence of t3.5 and its slack right after it: a frame ends there (and a "
+     "glitch comes before the next frame, not before a silence); a clock's false silence taken "
+     "as 1 in 256"},
     {"sent-straight-on", 8,
      "a clock per byte saw the byte sent right after the one before it: a glitch is a driver "
      "turning on after a quiet line; the clock's error taken as 1 in 256"},
@@ -95,6 +100,18 @@ inline constexpr std::array<FeatureInfo, 17> feature_table{{
      "it came as late as the master's retries do: past twice the slave's longest turnaround "
      "plus 20 ms and the clock's lag, or as late as the master's own retries have come; taken "
      "as 1 in 16, a slave that answered that late"},
+    {"pause-after", 8,
+     "a clock per byte saw a pause over t1.5 right after it: no frame goes on across one (the "
+     "standard ends a frame there); the clock's error taken as 1 in 256"},
+    {"frame-after", 16,
+     "a frame whose length rules and CRC agree starts right after it: by chance 1 time in "
+     "65,536"},
+    {"copy-after", 16,
+     "its exact copy right after it, as FC08's echo follows its query: four bytes or more the "
+     "same by chance, weighed as a CRC"},
+    {"glitch-then-frame", 8,
+     "a turnaround's 0x00 or 0xFF right after it, then a silence or a good frame: the weaker "
+     "of the two, the silence's"},
 }};
 
 inline const FeatureInfo& feature_info(Feature f) {
@@ -264,8 +281,8 @@ static_assert(every_tell_decides());
 
 // What says where a span ends. Its function code's length rules, mostly; for a code with no
 // length of its own (a vendor's, FC08 Return Query Data), a CRC search, whose hit is weak
-// evidence (a CRC holds at one of up to 256 ends, and a 0x00 after a frame keeps it holding)
-// until something confirms the end.
+// evidence until something confirms the end: a CRC holds at one of up to 256 ends tried, and a
+// 0x00 after a frame keeps it holding.
 enum class SpanEnd : uint8_t {
   length_rules,
   echo_length,
@@ -278,23 +295,36 @@ enum class SpanEnd : uint8_t {
   header_alone,
 };
 
+// A CRC search tries up to 256 ends (log2 256 = 8 bits): its hit is worth that much less than
+// an end the length rules give, and stands once what follows it is evidence of as much.
+inline constexpr int search_bits = 8;
+
 struct SpanEndInfo {
   std::string_view name;
   std::string_view why;
+  // The evidence that confirmed a searched end; none where no search was made, or where
+  // nothing more can come to confirm it and the hit stands on its own (input-end,
+  // header-alone).
+  std::optional<Feature> confirmed_by = std::nullopt;
 };
 
 inline constexpr std::array<SpanEndInfo, 9> span_end_table{{
     {"length-rules", "its function code's length rules"},
     {"echo-length", "the pending FC08 request's length: its echo is as long"},
-    {"silence-after", "a CRC search, its end confirmed by a silence of t3.5 right after it"},
+    {"silence-after", "a CRC search, its end confirmed by a silence of t3.5 right after it",
+     Feature::silence_after},
     {"pause-after",
      "a CRC search, its end confirmed by a pause over t1.5 right after it (a clock per byte): "
-     "no frame goes on across one"},
-    {"frame-after", "a CRC search, its end confirmed by a good frame starting right after it"},
-    {"copy-after",
-     "a CRC search, its end confirmed by its exact copy right after it (FC08's echo)"},
+     "no frame goes on across one",
+     Feature::pause_after},
+    {"frame-after", "a CRC search, its end confirmed by a good frame starting right after it",
+     Feature::frame_after},
+    {"copy-after", "a CRC search, its end confirmed by its exact copy right after it (FC08's echo)",
+     Feature::copy_after},
     {"glitch-then-frame",
-     "a CRC search, its end confirmed by a turnaround's glitch and a good frame after it"},
+     "a CRC search, its end confirmed by a turnaround's glitch right after it, then a silence "
+     "or a good frame",
+     Feature::glitch_then_frame},
     {"input-end", "a CRC search, its end where the input ends"},
     {"header-alone",
      "a CRC search with nothing to confirm its end: FC08 Return Query Data, standing on its "
@@ -304,6 +334,15 @@ inline constexpr std::array<SpanEndInfo, 9> span_end_table{{
 inline const SpanEndInfo& span_end_info(SpanEnd e) {
   return span_end_table[static_cast<size_t>(e)];
 }
+
+// Each confirmation alone makes up for the search: the first that holds confirms the end.
+constexpr bool every_confirmation_makes_up_for_the_search() {
+  for (const SpanEndInfo& end : span_end_table)
+    if (end.confirmed_by && feature_table[size_t(*end.confirmed_by)].bits < search_bits)
+      return false;
+  return true;
+}
+static_assert(every_confirmation_makes_up_for_the_search());
 
 // What became of one reading of the bytes at a frame's start.
 enum class ReadingOutcome : uint8_t { kept, refuted, waiting, no_frame };

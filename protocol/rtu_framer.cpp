@@ -619,6 +619,9 @@ bool RtuFramer::fits_role(Role role, uint64_t at, uint16_t length) const {
   return body.kind == BodyLength::Kind::variable && body.bytes + crc_size <= length;
 }
 
+// The first confirmation of a searched end that holds (span_end_table: each is a feature that
+// makes up for the search's tries alone, so the first is enough), the end of the input where
+// it is final, or none.
 std::optional<SpanEnd> RtuFramer::confirmed_end(uint64_t begin, uint64_t end, bool final,
                                                 int search, bool allow_glitch) {
   if (end == end_) return final ? std::optional(SpanEnd::input_end) : std::nullopt;

@@ -1175,10 +1175,12 @@ TEST(Cli, ExplainSaysWhatConfirmedAnEndACrcSearchFound) {
              {"00.000000", "01 41 02 03 10 AD", "00.100000", "01 03 00 00 00 01 84 0A"});
   const Outcome r = run("-r " + log + " --explain 1");
   ASSERT_EQ(r.status, 0);
-  ASSERT_GE(r.lines.size(), 4u) << ::testing::PrintToString(r.lines);
+  ASSERT_GE(r.lines.size(), 5u) << ::testing::PrintToString(r.lines);
   EXPECT_EQ(r.lines[2], "    request, 6 bytes: kept, +16 bits");
   EXPECT_THAT(r.lines[3],
               ::testing::StartsWith("            its end (silence-after): a CRC search"));
+  EXPECT_THAT(r.lines[4], ::testing::StartsWith("              confirmed, 8 bits of the search's "
+                                                "8: silence-after: "));
   const Outcome known = run("-r " + log + " --explain 2");
   EXPECT_THAT(known.lines, ::testing::Not(::testing::Contains(::testing::HasSubstr("its end ("))));
 }
@@ -1195,13 +1197,13 @@ TEST(Cli, ExplainWeighsAnEndsRunnerUpAndSaysWhenItStands) {
              {"00.000000", "01 41 02 03 10 AD 00", "00.100000", "01 03 00 00 00 01 84 0A"});
   const Outcome ruled_out = run("-r " + apart + " --explain 1");
   ASSERT_EQ(ruled_out.status, 0);
-  ASSERT_GE(ruled_out.lines.size(), 7u) << ::testing::PrintToString(ruled_out.lines);
+  ASSERT_GE(ruled_out.lines.size(), 8u) << ::testing::PrintToString(ruled_out.lines);
   EXPECT_THAT(ruled_out.lines[0], ::testing::Not(::testing::HasSubstr("ambiguous-end")));
   EXPECT_EQ(ruled_out.lines[2], "    request, 7 bytes: kept, +16 bits");
-  EXPECT_EQ(ruled_out.lines[5],
+  EXPECT_EQ(ruled_out.lines[6],
             "            its end's runner-up: the same frame one byte shorter, its last 0x00 the "
             "next driver's glitch");
-  EXPECT_THAT(ruled_out.lines[6],
+  EXPECT_THAT(ruled_out.lines[7],
               ::testing::StartsWith("              ruled out, 8 bits: silence-after: "));
 
   const std::string together =
@@ -1209,16 +1211,18 @@ TEST(Cli, ExplainWeighsAnEndsRunnerUpAndSaysWhenItStands) {
              {"00.000000", "01 41 02 03 10 AD 00 01 03 00 00 00 01 84 0A"});
   const Outcome stands = run("-r " + together + " --explain 1");
   ASSERT_EQ(stands.status, 0);
-  ASSERT_EQ(stands.lines.size(), 11u) << ::testing::PrintToString(stands.lines);
+  ASSERT_EQ(stands.lines.size(), 12u) << ::testing::PrintToString(stands.lines);
   EXPECT_THAT(stands.lines[0], ::testing::HasSubstr("crc ok [ambiguous-end]"));
   EXPECT_EQ(stands.lines[2], "    request, 6 bytes: kept, +16 bits");
-  EXPECT_EQ(stands.lines[5],
+  EXPECT_THAT(stands.lines[4], ::testing::StartsWith("              confirmed, 8 bits of the "
+                                                     "search's 8: glitch-then-frame: "));
+  EXPECT_EQ(stands.lines[6],
             "            its end's runner-up: the same frame one byte longer, the 0x00 after it "
             "its own");
-  EXPECT_EQ(stands.lines[6],
+  EXPECT_EQ(stands.lines[7],
             "              stands: nothing in the bytes or their times tells the two apart (0 of "
             "4 bits): ambiguous-end");
-  EXPECT_EQ(stands.lines[10], "    #2 bytes 6-6: noise (glitch), 1 byte");
+  EXPECT_EQ(stands.lines[11], "    #2 bytes 6-6: noise (glitch), 1 byte");
 }
 
 // A copy of the pending request is its slave's echo or the master's retry, and --explain says
