@@ -39,6 +39,7 @@ enum class Feature : uint8_t {
   frame_after,
   copy_after,
   glitch_then_frame,
+  junk_before,
 };
 
 struct FeatureInfo {
@@ -47,7 +48,7 @@ struct FeatureInfo {
   std::string_view why;
 };
 
-inline constexpr std::array<FeatureInfo, 21> feature_table{{
+inline constexpr std::array<FeatureInfo, 22> feature_table{{
     {"crc-holds", 16, "bytes that are no frame pass a CRC 1 time in 65,536"},
     {"another-crc", 16,
      "another span over these bytes passes its own length rules and CRC, as unlikely by "
@@ -112,6 +113,9 @@ inline constexpr std::array<FeatureInfo, 21> feature_table{{
     {"glitch-then-frame", 8,
      "a turnaround's 0x00 or 0xFF right after it, then a silence or a good frame: the weaker "
      "of the two, the silence's"},
+    {"junk-before", 4,
+     "the reading leaves the bytes before it, from where the last frame ended, to no frame: "
+     "junk, which a bus carries rarely; taken as 1 in 16"},
 }};
 
 inline const FeatureInfo& feature_info(Feature f) {
@@ -343,6 +347,31 @@ constexpr bool every_confirmation_makes_up_for_the_search() {
   return true;
 }
 static_assert(every_confirmation_makes_up_for_the_search());
+
+// A span against a frame a bus carries inside it (a public function code, a standard
+// exception, its length rules and CRC agreeing), which reads the span's bytes another way:
+// `another-crc` and `bus-frame-inside` for that reading. What the span has for itself: its
+// CRC, less the search's tries where a search found its end and `unexpected-sender` where it
+// starts at a reserved address or as an answer nobody awaits; plus `junk-before`, which the
+// other reading needs for the bytes before the frame inside, and `copy-after` where the span's
+// exact copy follows it, which no frame inside explains. A silence or a frame after the span
+// counts for neither: the frame inside and what follows it explain them as well. The frame
+// inside wins where it scores more.
+inline constexpr int frame_inside_bits = feature_table[size_t(Feature::another_crc)].bits +
+                                         feature_table[size_t(Feature::bus_frame_inside)].bits;
+constexpr int bits_against_frame_inside(bool searched, bool unexpected, bool copy) {
+  return span_bits - (searched ? search_bits : 0) -
+         (unexpected ? feature_table[size_t(Feature::unexpected_sender)].bits : 0) +
+         feature_table[size_t(Feature::junk_before)].bits +
+         (copy ? feature_table[size_t(Feature::copy_after)].bits : 0);
+}
+// A frame of known length from an expected sender keeps what is inside it; one at a reserved
+// address, one nobody awaits and one found by search do not; an exact copy after any of them
+// keeps it.
+static_assert(bits_against_frame_inside(false, false, false) >= frame_inside_bits);
+static_assert(bits_against_frame_inside(false, true, false) < frame_inside_bits);
+static_assert(bits_against_frame_inside(true, false, false) < frame_inside_bits);
+static_assert(bits_against_frame_inside(true, true, true) >= frame_inside_bits);
 
 // What became of one reading of the bytes at a frame's start.
 enum class ReadingOutcome : uint8_t { kept, refuted, waiting, no_frame };

@@ -327,16 +327,21 @@ RtuFramer::Say RtuFramer::answer_cut_before_request(const Reading& r) {
 
 // A reserved address is as often a turnaround's 0xFF, and an answer nobody awaits (another
 // slave's or function's while a request waits) a collision's junk that passed a CRC: such a
-// frame never swallows one whose length rules and CRC agree (a glitch, a response and the next
-// glitch can read as one; a talked-over exception's tail read as a 245-byte answer of a slave
-// nobody asked, across the next request and its answer).
+// frame gives way to one a bus carries inside it (a glitch, a response and the next glitch can
+// read as one; a talked-over exception's tail read as a 245-byte answer of a slave nobody
+// asked, across the next request and its answer). A frame from an expected sender keeps it.
 RtuFramer::Say RtuFramer::swallows_known_frame_reading(const Reading& r) {
-  const uint8_t* p = at_ptr(r.at);
-  const bool unawaited = r.role == Role::response && expected_.pending &&
-                         (expected_.slave != p[0] || expected_.function != (p[1] & 0x7F));
-  if ((p[0] > max_unicast_slave || unawaited) && swallows_known_frame(r.at, r.at + r.length))
-    return Say::refutes;
-  return Say::nothing;
+  const bool unexpected = unexpected_sender(r.at, r.role == Role::response);
+  return swallows_known_frame(r.at, r.at + r.length, false, unexpected) ? Say::refutes
+                                                                        : Say::nothing;
+}
+
+// A reserved address, or an answer while a request of another slave or function waits.
+bool RtuFramer::unexpected_sender(uint64_t at, bool answer) const {
+  const uint8_t* p = at_ptr(at);
+  return p[0] > max_unicast_slave ||
+         (answer && expected_.pending &&
+          (expected_.slave != p[0] || expected_.function != (p[1] & 0x7F)));
 }
 
 // Nor does any frame whose CRC holds by chance across a whole exchange: junk after it, and
@@ -471,6 +476,7 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
   const uint8_t* p = at_ptr(at);
   const uint64_t limit = std::min<uint64_t>(avail, max_rtu_adu);
   const bool in_junk = at >= crc_index_.begin() && at < crc_index_.end();
+  const bool unexpected = unexpected_sender(at, fit.response);
   if (!in_junk) {
     const Match m = first_confirmed_end(at, first, limit, fit, final, search);
     if (m.kind == Match::Kind::found) return m;
@@ -495,7 +501,7 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       // A reserved address is as often a turnaround's 0xFF: its frame needs confirming.
       const bool may_stand_alone = !unconfirmed && p[1] == 0x08 && p[0] <= max_unicast_slave;
       if (!confirmed && !at_end && !may_stand_alone) continue;
-      if (swallows_known_frame(at, at + n)) continue;
+      if (swallows_known_frame(at, at + n, true, unexpected)) continue;
       // Confirmed only by taking the next 0x00 for a glitch, where one byte more holds too; or
       // ending in a 0x00 that could be a glitch after a good frame one byte shorter.
       Margin doubt = allow_glitch ? longer_end(at, at + n) : Margin{};
@@ -557,7 +563,7 @@ RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_
     const Margin shorter = zero_appended ? shorter_end(at + n, final, search - 1) : Margin{};
     if (glitch_appended(at, at + n, shorter)) continue;
     const std::optional<SpanEnd> confirmed = confirmed_end(at, at + n, final, search - 1, false);
-    if (confirmed && !swallows_known_frame(at, at + n))
+    if (confirmed && !swallows_known_frame(at, at + n, true, unexpected_sender(at, fit.response)))
       return {Match::Kind::found, static_cast<uint16_t>(n), fit, shorter, *confirmed};
   }
   return {};
@@ -646,16 +652,19 @@ bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
          timeline_.first_gap_after(end) >= end + size;
 }
 
-// Only a frame a bus carries counts (a public function code, a standard exception): inside a
+// Whether a frame a bus carries starts inside [begin, end), wherever it ends, and outweighs the
+// span (bits_against_frame_inside, framing_evidence.hpp). Only such a frame counts: inside a
 // long frame, bytes pass a CRC as a vendor code or an unnamed exception now and then (FC08's
 // query `ba 08 00 00 58 a9 54 52 cd d5 45 1e` holds `52 cd d5 45 1e`). One that starts in the
-// last bytes and runs on past them is swallowed too: a collision's junk `c0 f1 a0`, then the
-// next request `34 14 0e ...`, passed a CRC as an answer of slave 192 ending in `34 14`. A frame
-// with its exact copy right behind it, FC08's query and echo, swallows none: the same chance twice
-// over is none (`2a 08 00 00 dd 47 07 aa 43 9a` holds an answer of slave 71 to FC07 in query and
-// echo).
-bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end) {
-  if (copy_follows(begin, end)) return false;
+// last bytes and runs on past them counts too: a collision's junk `c0 f1 a0`, then the next
+// request `34 14 0e ...`, passed a CRC as an answer of slave 192 ending in `34 14`. An exact copy
+// after the span outweighs it: FC08's query and echo (`2a 08 00 00 dd 47 07 aa 43 9a` holds an
+// answer of slave 71 to FC07 in query and echo).
+bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end, bool searched, bool unexpected) {
+  if (bits_against_frame_inside(searched, unexpected, false) >= frame_inside_bits) return false;
+  if (bits_against_frame_inside(searched, unexpected, true) >= frame_inside_bits &&
+      copy_follows(begin, end))
+    return false;
   for (uint64_t inner = begin + 1; inner < end && inner + 3 <= end_; ++inner)
     if (standard_frame(inner) && match_at(inner, false, 0).kind == Match::Kind::found) return true;
   return false;

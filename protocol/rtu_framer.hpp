@@ -161,8 +161,10 @@ class RtuFramer {
   bool blocked_by_gap(uint64_t at, bool final);
   bool copy_follows(uint64_t begin, uint64_t end) const;
   // Whether a frame a bus carries (public function code, standard exception), of known length
-  // and good CRC, starts inside [begin, end), wherever it ends.
-  bool swallows_known_frame(uint64_t begin, uint64_t end);
+  // and good CRC, starts inside [begin, end), wherever it ends, and outweighs the span: one
+  // whose end a CRC search found (`searched`), from an `unexpected` sender.
+  bool swallows_known_frame(uint64_t begin, uint64_t end, bool searched, bool unexpected);
+  bool unexpected_sender(uint64_t at, bool answer) const;
   bool swallows_exchange(uint64_t begin, uint64_t end, bool final);
   std::optional<bool> answer_follows(uint64_t at, uint64_t end, bool final) const;
   // First position >= from that starts a good frame; `decided` false if one is still open.
