@@ -491,6 +491,7 @@ class Weighed final : public FramingObserver, public RecordSink {
     if (decided) ++deciding[step.why];
   }
   void on_frame(const Frame& frame) override {
+    forget_before(frame.channel, frame.offset);
     const FramingStep* kept = kept_at(frame.offset, frame.adu.size());
     if (frame.check_ok && !kept) good_frames_not_kept.push_back(frame.offset);
     if (!frame.check_ok && kept) bad_frames_kept.push_back(frame.offset);
@@ -502,6 +503,7 @@ class Weighed final : public FramingObserver, public RecordSink {
     if (margin.told) ++ruling_out[*margin.told];
   }
   void on_noise(const Noise& noise) override {
+    forget_before(noise.channel, noise.offset);
     if (kept_at(noise.offset, 0)) noise_kept.push_back(noise.offset);
   }
   void on_timeout(const Timeout&) override {}
@@ -514,6 +516,13 @@ class Weighed final : public FramingObserver, public RecordSink {
   std::map<Feature, size_t> ruling_out;  // what ruled an end's runner-up out
 
  private:
+  // A channel's records come out in order: what was weighed before one is never asked again,
+  // and keeping it would make each lookup walk the whole capture.
+  void forget_before(uint16_t channel, uint64_t offset) {
+    std::erase_if(steps_, [&](const FramingStep& step) {
+      return step.channel == channel && step.offset < offset;
+    });
+  }
   const FramingStep* kept_at(uint64_t offset, size_t size) const {
     const auto step = std::find_if(steps_.begin(), steps_.end(), [&](const FramingStep& s) {
       return s.offset == offset && s.outcome == ReadingOutcome::kept &&
