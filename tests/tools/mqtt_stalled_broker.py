@@ -34,7 +34,7 @@ def stall():
     packet = conn.recv(2)  # CONNECT's first byte is 0x10
     connected.append(packet[:1] == b"\x10")
     conn.sendall(bytes([0x20, 2, 0, 0]))  # CONNACK: accepted
-    time.sleep(120)  # and never read again
+    time.sleep(MAX_SECONDS + 60)  # and never read again: a hang outlasts the bound
     conn.close()
 
 
