@@ -230,10 +230,13 @@ void ExplainSink::print_row(const EvidenceInfo& row, int sign) {
     return;
   }
   out_.print("      {:+4}  {}: {}\n", sign * row.bits(), row.name, row.why);
-  for (size_t i = 0; i < row.feature_count; ++i) {
-    const FeatureInfo& feature = feature_info(row.features[i]);
-    out_.print("              {:+4}  {}: {}\n", sign * feature.bits, feature.name, feature.why);
-  }
+  for (size_t i = 0; i < row.feature_count; ++i) print_feature(row.features[i], sign);
+  if (row.for_span) print_feature(*row.for_span, -sign);
+}
+
+void ExplainSink::print_feature(Feature f, int sign) {
+  const FeatureInfo& feature = feature_info(f);
+  out_.print("              {:+4}  {}: {}\n", sign * feature.bits, feature.name, feature.why);
 }
 
 // What won at the start, against the best of the rest; no frame at all scores 0 (the bytes

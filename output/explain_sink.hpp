@@ -61,6 +61,7 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   void print_runner_up(const Margin& margin, std::string_view finding);
   void print_copy(const Frame& frame);
   void print_row(const EvidenceInfo& row, int sign);
+  void print_feature(Feature feature, int sign);
   void print_margin(const std::vector<const FramingStep*>& weighed);
   // Every record moves the time column's clock; the one asked for is shown.
   template <typename Record>

@@ -143,9 +143,12 @@ struct EvidenceInfo {
   std::string_view why;
   std::array<Feature, 3> features{};
   size_t feature_count = 0;
+  // A feature the row's reading of the bytes needs and the span's does not: it counts for the
+  // span, and the row weighs that much less.
+  std::optional<Feature> for_span = std::nullopt;
 
   constexpr int bits() const {
-    int sum = 0;
+    int sum = for_span ? -feature_table[size_t(*for_span)].bits : 0;
     for (size_t i = 0; i < feature_count; ++i) sum += feature_table[size_t(features[i])].bits;
     return sum;
   }
@@ -203,9 +206,10 @@ inline constexpr std::array<EvidenceInfo, 13> evidence_table{{
      2},
     {"swallows-known-frame",
      "a reserved address or an answer nobody awaits would swallow a frame whose length rules "
-     "and CRC agree",
+     "and CRC agree, which leaves the bytes before it to junk",
      {Feature::another_crc, Feature::bus_frame_inside, Feature::unexpected_sender},
-     3},
+     3,
+     Feature::junk_before},
     {"swallows-exchange",
      "its CRC holds by chance across a whole exchange: a request and its answer inside it, junk "
      "after it",
@@ -349,29 +353,32 @@ constexpr bool every_confirmation_makes_up_for_the_search() {
 static_assert(every_confirmation_makes_up_for_the_search());
 
 // A span against a frame a bus carries inside it (a public function code, a standard
-// exception, its length rules and CRC agreeing), which reads the span's bytes another way:
-// `another-crc` and `bus-frame-inside` for that reading. What the span has for itself: its
-// CRC, less the search's tries where a search found its end and `unexpected-sender` where it
-// starts at a reserved address or as an answer nobody awaits; plus `junk-before`, which the
-// other reading needs for the bytes before the frame inside, and `copy-after` where the span's
-// exact copy follows it, which no frame inside explains. A silence or a frame after the span
-// counts for neither: the frame inside and what follows it explain them as well. The frame
-// inside wins where it scores more.
-inline constexpr int frame_inside_bits = feature_table[size_t(Feature::another_crc)].bits +
-                                         feature_table[size_t(Feature::bus_frame_inside)].bits;
-constexpr int bits_against_frame_inside(bool searched, bool unexpected, bool copy) {
-  return span_bits - (searched ? search_bits : 0) -
-         (unexpected ? feature_table[size_t(Feature::unexpected_sender)].bits : 0) +
-         feature_table[size_t(Feature::junk_before)].bits +
+// exception, its length rules and CRC agreeing), which reads the span's bytes another way. The
+// frame inside weighs what the row `swallows-known-frame` does: `another-crc` and
+// `bus-frame-inside` for it, `junk-before` for the span (that reading leaves the bytes before
+// the frame inside to junk), and `unexpected-sender` where the span starts at a reserved
+// address or as an answer nobody awaits. The span has its CRC, less the search's tries where a
+// search found its end, and `copy-after` where its exact copy follows it, which no frame inside
+// explains. A silence or a frame after the span counts for neither: the frame inside and what
+// follows it explain them as well. The span keeps its bytes where it scores at least as much.
+constexpr int frame_inside_bits(bool unexpected) {
+  return row_bits<Evidence::swallows_known_frame> -
+         (unexpected ? 0 : feature_table[size_t(Feature::unexpected_sender)].bits);
+}
+constexpr int span_bits_against_frame_inside(bool searched, bool copy) {
+  return span_bits - (searched ? search_bits : 0) +
          (copy ? feature_table[size_t(Feature::copy_after)].bits : 0);
+}
+constexpr bool keeps_frame_inside(bool searched, bool unexpected, bool copy) {
+  return span_bits_against_frame_inside(searched, copy) >= frame_inside_bits(unexpected);
 }
 // A frame of known length from an expected sender keeps what is inside it; one at a reserved
 // address, one nobody awaits and one found by search do not; an exact copy after any of them
 // keeps it.
-static_assert(bits_against_frame_inside(false, false, false) >= frame_inside_bits);
-static_assert(bits_against_frame_inside(false, true, false) < frame_inside_bits);
-static_assert(bits_against_frame_inside(true, false, false) < frame_inside_bits);
-static_assert(bits_against_frame_inside(true, true, true) >= frame_inside_bits);
+static_assert(keeps_frame_inside(false, false, false));
+static_assert(!keeps_frame_inside(false, true, false));
+static_assert(!keeps_frame_inside(true, false, false));
+static_assert(keeps_frame_inside(true, true, true));
 
 // What became of one reading of the bytes at a frame's start.
 enum class ReadingOutcome : uint8_t { kept, refuted, waiting, no_frame };

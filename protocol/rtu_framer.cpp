@@ -653,7 +653,7 @@ bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
 }
 
 // Whether a frame a bus carries starts inside [begin, end), wherever it ends, and outweighs the
-// span (bits_against_frame_inside, framing_evidence.hpp). Only such a frame counts: inside a
+// span (keeps_frame_inside, framing_evidence.hpp). Only such a frame counts: inside a
 // long frame, bytes pass a CRC as a vendor code or an unnamed exception now and then (FC08's
 // query `ba 08 00 00 58 a9 54 52 cd d5 45 1e` holds `52 cd d5 45 1e`). One that starts in the
 // last bytes and runs on past them counts too: a collision's junk `c0 f1 a0`, then the next
@@ -661,10 +661,8 @@ bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
 // after the span outweighs it: FC08's query and echo (`2a 08 00 00 dd 47 07 aa 43 9a` holds an
 // answer of slave 71 to FC07 in query and echo).
 bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end, bool searched, bool unexpected) {
-  if (bits_against_frame_inside(searched, unexpected, false) >= frame_inside_bits) return false;
-  if (bits_against_frame_inside(searched, unexpected, true) >= frame_inside_bits &&
-      copy_follows(begin, end))
-    return false;
+  if (keeps_frame_inside(searched, unexpected, false)) return false;
+  if (keeps_frame_inside(searched, unexpected, true) && copy_follows(begin, end)) return false;
   for (uint64_t inner = begin + 1; inner < end && inner + 3 <= end_; ++inner)
     if (standard_frame(inner) && match_at(inner, false, 0).kind == Match::Kind::found) return true;
   return false;

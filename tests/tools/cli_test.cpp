@@ -1284,6 +1284,35 @@ TEST(Cli, ExplainNamesTheReadingsWeighedAndTheEvidenceThatDecided) {
                                  ::testing::HasSubstr("--explain 9: " + log + " has no record 9")));
 }
 
+// A frame at a reserved address whose span holds a frame a bus carries: `F8 03 0C`, two bytes
+// of junk, slave 2's request, and its answer's first four bytes, which pass a CRC as the 17
+// bytes slave 248's answer claims (the junk chosen so). The frame inside outweighs it by 2 bits:
+// its CRC and public code (18) and the unexpected sender (4) against the span's CRC (16) and
+// the junk the frame inside leaves before it (4). --explain prints that sum, the row's features
+// with the junk counted for the span.
+TEST(Cli, ExplainWeighsAFrameInsideASpanAgainstTheJunkItLeaves) {
+  const std::string log = hexlog(
+      "modtap-explain-inside.log",
+      {"00.000000", "01 03 00 00 00 01 84 0A", "00.010000", "01 03 02 00 01 79 84", "00.300000",
+       "F8 03 0C DA B4 02 03 00 00 00 01 84 39", "00.310000", "02 03 02 00 05 3C 47"});
+  ASSERT_EQ(modtap::crc16(std::vector<uint8_t>{0xF8, 0x03, 0x0C, 0xDA, 0xB4, 0x02, 0x03, 0x00, 0x00,
+                                               0x00, 0x01, 0x84, 0x39, 0x02, 0x03}),
+            0x0002);
+  const Outcome r = run("-r " + log + " --explain 3");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_GE(r.lines.size(), 11u) << ::testing::PrintToString(r.lines);
+  EXPECT_THAT(r.lines[0], ::testing::HasSubstr("noise 5 bytes (truncated): F8 03 0C DA B4"));
+  EXPECT_EQ(r.lines[3], "    response, 17 bytes: refuted, -2 bits");
+  EXPECT_THAT(r.lines[5], ::testing::StartsWith("       -18  swallows-known-frame: "));
+  EXPECT_THAT(r.lines[6], ::testing::StartsWith("               -16  another-crc: "));
+  EXPECT_THAT(r.lines[7], ::testing::StartsWith("                -2  bus-frame-inside: "));
+  EXPECT_THAT(r.lines[8], ::testing::StartsWith("                -4  unexpected-sender: "));
+  EXPECT_THAT(r.lines[9], ::testing::StartsWith("                +4  junk-before: "));
+  EXPECT_EQ(r.lines[10],
+            "  no frame here (0 bits), by 2 bits over the runner-up: the response of "
+            "17 bytes");
+}
+
 namespace {
 
 // modtap top without a terminal (here a pipe) prints its screen as plain text, the last one
