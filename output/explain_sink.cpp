@@ -7,8 +7,11 @@
 namespace modtap::output {
 namespace {
 
-// Enough for every reading weighed at the starts whose records may still be on their way.
-constexpr size_t kept_steps = 64;
+// Enough for the readings weighed at every start of 8 KB of unframed bytes (a request and a
+// response at each), which leave as records only once the next good frame is found.
+constexpr size_t kept_steps = 16384;
+// A channel's judgements of copies of the pending request, kept until their records come.
+constexpr size_t kept_copies = 64;
 
 TextOptions with_clock(TextOptions options, const RecordClock& clock) {
   options.clock = &clock;
@@ -24,55 +27,76 @@ ExplainSink::ExplainSink(Output& out, const std::vector<ChannelInfo>& channels, 
       text_(out, channels, with_clock(options, clock_)),
       index_(index) {}
 
-// A start weighed again (more bytes came) makes what was weighed there and after it stale.
+// A start weighed again (more bytes came) makes what was weighed there stale; the starts after
+// it that the framer weighs again are told apart the same way.
 void ExplainSink::on_start(uint16_t channel, uint64_t offset) {
-  std::erase_if(steps_, [&](const FramingStep& step) {
-    return step.channel == channel && step.offset >= offset;
-  });
+  ChannelSteps& steps = steps_[channel];
+  if (const auto stale = steps.at.find(offset); stale != steps.at.end()) {
+    steps.count -= stale->second.size();
+    steps.at.erase(stale);
+  }
 }
 
 void ExplainSink::on_reading(const FramingStep& step) {
-  steps_.push_back(step);
-  if (steps_.size() > kept_steps) steps_.pop_front();
+  ChannelSteps& steps = steps_[step.channel];
+  steps.at[step.offset].push_back(step);
+  if (++steps.count <= kept_steps) return;
+  const auto oldest = steps.at.begin();
+  steps.lost_through = std::max(steps.lost_through.value_or(0), oldest->first);
+  steps.count -= oldest->second.size();
+  steps.at.erase(oldest);
 }
 
 void ExplainSink::on_copy(uint16_t channel, uint64_t offset, const Margin& margin) {
   copies_.push_back({channel, offset, margin});
-  if (copies_.size() > kept_steps) copies_.pop_front();
+  if (copies_.size() > kept_copies) copies_.pop_front();
+}
+
+// A channel's records come in the order of their bytes: what was weighed before a record's end
+// is of no record to come.
+void ExplainSink::forget_before(ChannelSteps& channel, uint64_t offset) {
+  const auto end = channel.at.lower_bound(offset);
+  for (auto it = channel.at.begin(); it != end; ++it) channel.count -= it->second.size();
+  channel.at.erase(channel.at.begin(), end);
 }
 
 void ExplainSink::on_frame(const Frame& frame) {
   const bool is_picked = picked(frame);
   if (is_picked) explain_frame(frame);
   place(segment_of(frame), is_picked);
+  forget_before(steps_[frame.channel], frame.offset + frame.raw.size());
 }
 
 void ExplainSink::explain_frame(const Frame& frame) {
   text_.on_frame(frame);
   explain(frame.channel, frame.offset, frame.mode);
   print_copy(frame);
-  if (frame.mode == Mode::rtu && frame.damage != Damage::none)
+  if (frame.mode == Mode::rtu && frame.damage != Damage::none) {
+    print_inside(frame.channel, frame.offset, frame.raw.size());
     out_.print(
         "  then, no reading holding, the bytes up to the next good frame or silence were "
         "one piece, which the awaited answer's structure or the header's length rules "
         "make a frame with a bad check: {}\n",
         to_string(frame.damage));
+  }
 }
 
 void ExplainSink::on_noise(const Noise& noise) {
   const bool is_picked = picked(noise);
   if (is_picked) explain_noise(noise);
   place(segment_of(noise), is_picked);
+  forget_before(steps_[noise.channel], noise.offset + noise.raw.size());
 }
 
 void ExplainSink::explain_noise(const Noise& noise) {
   text_.on_noise(noise);
   explain(noise.channel, noise.offset, noise.mode);
-  if (noise.mode == Mode::rtu)
-    out_.print(
-        "  then, no reading holding, the bytes up to the next good frame or silence were "
-        "noise: {}\n",
-        to_string(noise.reason));
+  if (noise.mode != Mode::rtu) return;
+  print_inside(noise.channel, noise.offset, noise.raw.size());
+  out_.print(
+      "  then, no reading holding, the bytes up to the next good frame or silence were "
+      "noise: {}\n",
+      to_string(noise.reason));
 }
 
 void ExplainSink::on_timeout(const Timeout& timeout) {
@@ -130,9 +154,42 @@ void ExplainSink::explain(uint16_t channel, uint64_t offset, Mode mode) {
     return;
   }
   out_.print("  at byte {} of {}, the framer weighed:\n", offset, name);
+  const ChannelSteps& steps = steps_[channel];
+  if (steps.lost_through && *steps.lost_through >= offset) {
+    out_.print(
+        "    the readings weighed here are no longer held: unframed bytes ran on past the {} "
+        "starts --explain holds\n",
+        kept_steps / 2);
+    return;
+  }
   std::vector<const FramingStep*> weighed;
-  for (const FramingStep& step : steps_)
-    if (step.channel == channel && step.offset == offset) weighed.push_back(&step);
+  if (const auto here = steps.at.find(offset); here != steps.at.end())
+    for (const FramingStep& step : here->second) weighed.push_back(&step);
+  if (weighed.empty())
+    out_.print(
+        "    no reading: the byte starts no frame a slave address and function code "
+        "allow\n");
+  else
+    print_weighed(weighed);
+}
+
+// Where a reading inside unframed bytes had its length rules and CRC agree, and the evidence
+// refuted it: why no frame was cut there.
+void ExplainSink::print_inside(uint16_t channel, uint64_t offset, size_t size) {
+  const ChannelSteps& steps = steps_[channel];
+  for (auto it = steps.at.upper_bound(offset); it != steps.at.end() && it->first < offset + size;
+       ++it) {
+    std::vector<const FramingStep*> refuted;
+    for (const FramingStep& step : it->second)
+      if (step.outcome == ReadingOutcome::refuted) refuted.push_back(&step);
+    if (refuted.empty()) continue;
+    out_.print("  at byte {}, inside it, a span whose length rules and CRC agree:\n", it->first);
+    print_weighed(refuted);
+  }
+}
+
+// The readings weighed at one start, then the winner's margin.
+void ExplainSink::print_weighed(const std::vector<const FramingStep*>& weighed) {
   for (size_t i = 0; i < weighed.size(); ++i) {
     const bool same_span = i > 0 && weighed[i]->outcome == ReadingOutcome::refuted &&
                            weighed[i - 1]->outcome == ReadingOutcome::refuted &&
@@ -145,12 +202,7 @@ void ExplainSink::explain(uint16_t channel, uint64_t offset, Mode mode) {
     else
       print_reading(*weighed[i]);
   }
-  if (weighed.empty())
-    out_.print(
-        "    no reading: the byte starts no frame a slave address and function code "
-        "allow\n");
-  else
-    print_margin(weighed);
+  print_margin(weighed);
 }
 
 void ExplainSink::print_reading(const FramingStep& step) {

@@ -1,7 +1,8 @@
 // --explain INDEX: one record as the text output prints it, then why the RTU framer cut there:
 // each reading it weighed at the record's first byte (request, response), what became of it, its
 // score in bits with the features of the row that refuted it (protocol/framing_evidence.hpp), and
-// the winner's margin over the runner-up.
+// the winner's margin over the runner-up; for unframed bytes, the spans inside them that the
+// evidence refuted.
 #pragma once
 
 #include <cstdint>
@@ -63,6 +64,7 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   void print_row(const EvidenceInfo& row, int sign);
   void print_feature(Feature feature, int sign);
   void print_margin(const std::vector<const FramingStep*>& weighed);
+  void print_weighed(const std::vector<const FramingStep*>& weighed);
   // Every record moves the time column's clock; the one asked for is shown.
   template <typename Record>
   bool picked(const Record& record) {
@@ -77,8 +79,17 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   TextSink text_;
   uint64_t index_;
   bool found_ = false;
-  // The readings weighed at the latest starts; a record is emitted right after its own.
-  std::deque<FramingStep> steps_;
+  // The readings weighed at the starts of a channel's records still to come and the bytes
+  // inside them, by start; a record is emitted right after its own. Bounded: where unframed
+  // bytes run on too long, the oldest go, and `lost_through` says up to where.
+  struct ChannelSteps {
+    std::map<uint64_t, std::vector<FramingStep>> at;
+    size_t count = 0;
+    std::optional<uint64_t> lost_through;
+  };
+  std::map<uint16_t, ChannelSteps> steps_;
+  void forget_before(ChannelSteps& channel, uint64_t offset);
+  void print_inside(uint16_t channel, uint64_t offset, size_t size);
   // The matcher's judgements of the latest copies of a pending request.
   struct Copy {
     uint16_t channel;

@@ -1313,6 +1313,52 @@ TEST(Cli, ExplainWeighsAFrameInsideASpanAgainstTheJunkItLeaves) {
             "17 bytes");
 }
 
+// For a damaged frame, --explain says why no frame was cut inside it: an exception talked over,
+// `32 81 03 14 5b`, whose bytes from the second on, the next request and part of its answer
+// pass a CRC as a 25-byte answer of slave 129 (the answer's data chosen so). Nobody asked slave
+// 129, and that span holds the request: the row swallows-known-frame refutes it by 2 bits.
+TEST(Cli, ExplainSaysWhyNoFrameWasCutInsideADamagedOne) {
+  const std::string log = hexlog(
+      "modtap-explain-damaged.log",
+      {"00.000000", "32 01 00 00 00 10 38 05", "00.030000",
+       "32 81 03 14 5B 07 03 00 00 00 0A C5 AB 07 03 14 11 11 11 11 11 11 11 11 34 9E 11 11 11 "
+       "11 11 11 11 11 11 11 78 2F",
+       "00.300000", "01 03 00 00 00 01 84 0A"});
+  const Outcome r = run("-r " + log + " --explain 2");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_GE(r.lines.size(), 12u) << ::testing::PrintToString(r.lines);
+  EXPECT_THAT(r.lines[0], ::testing::HasSubstr("crc BAD"));
+  EXPECT_EQ(r.lines[3], "  at byte 9, inside it, a span whose length rules and CRC agree:");
+  EXPECT_EQ(r.lines[4], "    response, 25 bytes: refuted, -2 bits");
+  EXPECT_THAT(r.lines[6], ::testing::StartsWith("       -18  swallows-known-frame: "));
+  EXPECT_EQ(r.lines[11],
+            "  no frame here (0 bits), by 2 bits over the runner-up: the response of "
+            "25 bytes");
+  EXPECT_THAT(r.lines[12], ::testing::StartsWith("  then, no reading holding, "));
+}
+
+// Unframed bytes leave as records only once the next good frame is found; --explain holds the
+// readings of a bounded number of starts, and says so where a record's are gone rather than
+// that its first byte started no frame.
+TEST(Cli, ExplainSaysWhereTheReadingsOfLongJunkAreNoLongerHeld) {
+  const auto junk = (std::filesystem::temp_directory_path() / "modtap-explain-junk.raw").string();
+  {
+    std::mt19937 random(1);  // its 40,000 bytes hold no frame
+    std::ofstream out(junk, std::ios::binary);
+    for (int i = 0; i < 40'000; ++i) out.put(static_cast<char>(random() & 0xFF));
+  }
+  const Outcome first = run("-r " + junk + " --format raw --mode rtu --explain 1");
+  ASSERT_EQ(first.status, 0);
+  ASSERT_GE(first.lines.size(), 3u) << ::testing::PrintToString(first.lines);
+  EXPECT_THAT(first.lines[0], ::testing::HasSubstr("noise 256 bytes"));
+  EXPECT_EQ(first.lines[2],
+            "    the readings weighed here are no longer held: unframed bytes ran on past the "
+            "8192 starts --explain holds");
+  const Outcome later = run("-r " + junk + " --format raw --mode rtu --explain 150");
+  ASSERT_EQ(later.status, 0);
+  EXPECT_THAT(later.lines, ::testing::Contains(::testing::HasSubstr(": no frame (no-good-end: ")));
+}
+
 namespace {
 
 // modtap top without a terminal (here a pipe) prints its screen as plain text, the last one
