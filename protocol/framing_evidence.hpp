@@ -27,7 +27,7 @@ enum class Feature : uint8_t {
   request_again,
   no_answer_after,
   answer_after,
-  nothing_after,
+  leaves_junk,
   bus_frame_inside,
   unexpected_sender,
   silence_after,
@@ -39,7 +39,6 @@ enum class Feature : uint8_t {
   frame_after,
   copy_after,
   glitch_then_frame,
-  junk_before,
 };
 
 struct FeatureInfo {
@@ -48,7 +47,7 @@ struct FeatureInfo {
   std::string_view why;
 };
 
-inline constexpr std::array<FeatureInfo, 22> feature_table{{
+inline constexpr std::array<FeatureInfo, 21> feature_table{{
     {"crc-holds", 16, "bytes that are no frame pass a CRC 1 time in 65,536"},
     {"another-crc", 16,
      "another span over these bytes passes its own length rules and CRC, as unlikely by "
@@ -75,9 +74,10 @@ inline constexpr std::array<FeatureInfo, 22> feature_table{{
     {"answer-after", 16,
      "its own answer's slave and function code right after it: 2 bytes, by chance 1 time in "
      "65,536"},
-    {"nothing-after", 4,
-     "nothing starts where this span ends, where a frame follows nearly every frame: taken as "
-     "1 in 16"},
+    {"leaves-junk", 4,
+     "the reading leaves bytes next to it to no frame: nothing starts where it ends, or no "
+     "frame holds the bytes before it, from where the last frame ended; a bus carries junk "
+     "rarely, and a frame follows nearly every frame: taken as 1 in 16"},
     {"bus-frame-inside", 2,
      "the frame inside has a public function code and, as an exception, a standard code: "
      "about 1 code in 6 by chance"},
@@ -113,9 +113,6 @@ inline constexpr std::array<FeatureInfo, 22> feature_table{{
     {"glitch-then-frame", 8,
      "a turnaround's 0x00 or 0xFF right after it, then a silence or a good frame: the weaker "
      "of the two, the silence's"},
-    {"junk-before", 4,
-     "the reading leaves the bytes before it, from where the last frame ended, to no frame: "
-     "junk, which a bus carries rarely; taken as 1 in 16"},
 }};
 
 inline const FeatureInfo& feature_info(Feature f) {
@@ -202,19 +199,19 @@ inline constexpr std::array<EvidenceInfo, 13> evidence_table{{
     {"answer-cut-before-request",
      "the awaited answer cut a byte short, whose missing CRC byte the next request's address "
      "repeats, with that request right behind it",
-     {Feature::another_crc, Feature::nothing_after},
+     {Feature::another_crc, Feature::leaves_junk},
      2},
     {"swallows-known-frame",
      "a reserved address or an answer nobody awaits would swallow a frame whose length rules "
      "and CRC agree, which leaves the bytes before it to junk",
      {Feature::another_crc, Feature::bus_frame_inside, Feature::unexpected_sender},
      3,
-     Feature::junk_before},
+     Feature::leaves_junk},
     {"swallows-exchange",
      "its CRC holds by chance across a whole exchange: a request and its answer inside it, junk "
      "after it",
-     {Feature::another_crc, Feature::answer_after},
-     2},
+     {Feature::another_crc, Feature::answer_after, Feature::leaves_junk},
+     3},
 }};
 
 inline const EvidenceInfo& evidence_info(Evidence e) {
@@ -355,7 +352,7 @@ static_assert(every_confirmation_makes_up_for_the_search());
 // A span against a frame a bus carries inside it (a public function code, a standard
 // exception, its length rules and CRC agreeing), which reads the span's bytes another way. The
 // frame inside weighs what the row `swallows-known-frame` does: `another-crc` and
-// `bus-frame-inside` for it, `junk-before` for the span (that reading leaves the bytes before
+// `bus-frame-inside` for it, `leaves-junk` for the span (that reading leaves the bytes before
 // the frame inside to junk), and `unexpected-sender` where the span starts at a reserved
 // address or as an answer nobody awaits. The span has its CRC, less the search's tries where a
 // search found its end, and `copy-after` where its exact copy follows it, which no frame inside

@@ -1307,7 +1307,7 @@ TEST(Cli, ExplainWeighsAFrameInsideASpanAgainstTheJunkItLeaves) {
   EXPECT_THAT(r.lines[6], ::testing::StartsWith("               -16  another-crc: "));
   EXPECT_THAT(r.lines[7], ::testing::StartsWith("                -2  bus-frame-inside: "));
   EXPECT_THAT(r.lines[8], ::testing::StartsWith("                -4  unexpected-sender: "));
-  EXPECT_THAT(r.lines[9], ::testing::StartsWith("                +4  junk-before: "));
+  EXPECT_THAT(r.lines[9], ::testing::StartsWith("                +4  leaves-junk: "));
   EXPECT_EQ(r.lines[10],
             "  no frame here (0 bits), by 2 bits over the runner-up: the response of "
             "17 bytes");
