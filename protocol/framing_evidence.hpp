@@ -171,9 +171,9 @@ inline constexpr std::array<EvidenceInfo, 13> evidence_table{{
      {Feature::another_crc, Feature::silence_inside},
      2},
     {"answer-read-as-request",
-     "these are the first bytes after the request, beginning as the awaited answer (or a 0xFF "
-     "glitch and that answer), read as a request the standard does not allow, too soon for the "
-     "master's next one",
+     "these are the first bytes after the request, beginning as the awaited answer, read as a "
+     "request the standard does not allow, or a driver's 0x00 or 0xFF glitch and that answer "
+     "read as a request; too soon for the master's next one",
      {Feature::awaited_header, Feature::too_soon_for_retry},
      2},
     {"request-inside-awaited-answer",

@@ -222,20 +222,23 @@ RtuFramer::Say RtuFramer::frame_after_silence(uint64_t gap, bool final) {
 // every byte its request predicts in place (a read's byte count), read as a request the
 // standard does not allow, too soon for the master's next one: a talked-over answer whose junk
 // passed a CRC by chance (`55 01 04 69 ff c9 69 16`, a read of 0xFFC9 coils, where 4 bytes of
-// coils were due). The answer, damaged, is the reading. So is a 0xFF glitch with the awaited
-// answer's slave and function code after it: `ff 03 0c 15 de 10 1a ec` passed a CRC as a read
-// for slave 255, where slave 3's answer to FC0C began after its driver's 0xFF. (A request the
+// coils were due). The answer, damaged, is the reading. So is a glitch, 0xFF or 0x00, with the
+// awaited answer's slave and function code after it, whichever request it reads as:
+// `ff 03 0c 15 de 10 1a ec` passed a CRC as a read for slave 255, where slave 3's answer to
+// FC0C began after its driver's 0xFF; a 0x00 and an answer of slave 21 to FC15, as a broadcast
+// of FC15, where a broadcast is no reading in the other role. (A request the
 // standard allows may be the master's, after a time-out shorter than the threshold: a write of
 // the same block with new values begins as its echo would.)
 RtuFramer::Say RtuFramer::answer_read_as_request(const Reading& r) {
-  if (r.role != Role::request || !r.other || !first_after_request(r.at) ||
-      !too_soon_for_retry(r.at) || awaited_.copies_request(from(r.at), r.length))
+  if (r.role != Role::request || !first_after_request(r.at) || !too_soon_for_retry(r.at) ||
+      awaited_.copies_request(from(r.at), r.length))
     return Say::nothing;
   const uint8_t* p = at_ptr(r.at);
   const bool junk_as_request =
-      awaited_.begins(from(r.at)) &&
+      r.other && awaited_.begins(from(r.at)) &&
       request_spec_findings({p + 1, static_cast<size_t>(r.length - 1 - crc_size)}) != 0;
-  const bool glitch_then_awaited = p[0] == 0xFF && awaited_.length(from(r.at + 1)).has_value();
+  const bool glitch_then_awaited =
+      is_glitch_byte(p[0]) && awaited_.length(from(r.at + 1)).has_value();
   if (junk_as_request || glitch_then_awaited) return Say::refutes;
   return Say::nothing;
 }

@@ -904,6 +904,30 @@ TEST_F(GapCollector, AGlitchBeforeTheAwaitedAnswerStartsNoRequest) {
   }
 }
 
+// The same with the driver's other glitch, 0x00: slave 6's answer to a read after it, whose
+// first bytes after the glitch pass a CRC as a broadcast write of a register (`00 06 03 04 ...`,
+// the data chosen so). A broadcast is no reading in the other role, and is refused all the same.
+TEST_F(GapCollector, AZeroGlitchBeforeTheAwaitedAnswerStartsNoBroadcast) {
+  const auto request = with_crc(hex("06 03 00 00 00 02"));
+  const auto broadcast = with_crc(hex("00 06 03 04 12 34"));
+  const auto answer = with_crc(
+      concat({hex("06 03 04 12 34"), std::vector<uint8_t>(broadcast.end() - 2, broadcast.end())}));
+  const auto bytes = concat({request, hex("00"), answer});
+  for (size_t split = 1; split < bytes.size(); ++split) {
+    const std::vector<Piece> pieces{
+        {20'000'000, std::vector<uint8_t>(bytes.begin(), bytes.begin() + split)},
+        {0, std::vector<uint8_t>(bytes.begin() + split, bytes.end())},
+        {20'000'000, read_request}};
+    const auto stream = run(pieces, ClockQuality::per_chunk).stream();
+    ASSERT_EQ(stream.size(), 4u) << split;
+    EXPECT_EQ(stream[1].reason, NoiseReason::glitch) << split;
+    EXPECT_EQ(stream[2].raw, answer) << split;
+    EXPECT_EQ(stream[2].role, Role::response) << split;
+    EXPECT_TRUE(stream[2].check_ok) << split;
+    EXPECT_EQ(stream[3].raw, read_request) << split;
+  }
+}
+
 // FC08 Return Query Data, whose end only its CRC tells, holds bytes that pass a CRC as a frame
 // of vendor code CDH with an exception no standard names: "52 cd d5 45 1e". A frame a bus
 // would not carry does not count against the query that holds it, nor against its echo.
