@@ -42,12 +42,12 @@ std::optional<bool> AwaitedAnswer::byte(std::span<const uint8_t> bytes, size_t p
   if (pos < 2 || pos >= bytes.size() || bytes[1] != expected_.function) return std::nullopt;
   const ResponsePrefix prefix = response_prefix(request);
   if (pos - 1 < prefix.size) return prefix.pdu[pos - 1] == bytes[pos];
-  // A whole echo repeats the request's CRC too.
+  if (!prefix.echoes_request) return std::nullopt;
+  // An echo repeats the whole request, its CRC too.
+  if (pos - 1 < request.size()) return request[pos - 1] == bytes[pos];
   const size_t crc_at = 1 + request.size();
-  if (!prefix.whole_echo || pos < crc_at || pos >= crc_at + crc_size) return std::nullopt;
-  std::array<uint8_t, 1 + 8> adu{expected_.slave};
-  std::copy(request.begin(), request.end(), adu.begin() + 1);
-  const uint16_t crc = crc16({adu.data(), crc_at});
+  if (pos >= crc_at + crc_size) return std::nullopt;
+  const uint16_t crc = crc16(request, crc16_step(0xFFFF, expected_.slave));
   return (pos == crc_at ? (crc & 0xFF) : (crc >> 8)) == bytes[pos];
 }
 

@@ -166,7 +166,6 @@ ResponsePrefix echo_prefix(Bytes req) {
 
 ResponsePrefix whole_echo_prefix(Bytes req) {
   ResponsePrefix prefix = prefix_of(req);
-  prefix.whole_echo = prefix.size == req.size();
   prefix.echoes_request = true;
   return prefix;
 }
@@ -663,7 +662,7 @@ constexpr std::array public_codes{
         .response_fields = echo<file_records<true>>,
         .request_accesses = no_access,
         .response_values = no_values,
-        .response_prefix = code_only},
+        .response_prefix = whole_echo_prefix},
     Row{.code = 0x16,
         .name = "Mask Write Register",
         .broadcast = true,

@@ -71,9 +71,9 @@ struct RegisterAccesses {
 struct ResponsePrefix {
   std::array<uint8_t, 8> pdu{};
   uint8_t size = 0;
-  bool whole_echo = false;  // the response repeats the whole request, CRC and all
-  // Every good response is the request again, whatever its length: where the response's own
-  // header does not tell its length (FC08 Return Query Data), the request's does.
+  // Every good response is the request again, CRC and all, whatever its length: each of its
+  // bytes is told, and where the response's own header does not tell its length (FC08 Return
+  // Query Data), the request's does.
   bool echoes_request = false;
 };
 

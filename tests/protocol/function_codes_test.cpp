@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "protocol/awaited_answer.hpp"
+#include "protocol/checksum.hpp"
 #include "tests/support/collector.hpp"
 
 namespace modtap {
@@ -114,13 +116,33 @@ TEST(ResponsePrefix, IsWhatTheRequestTellsOfItsAnswer) {
 // query's echo is more than the prefix keeps.
 TEST(ResponsePrefix, SaysWhenTheAnswerIsTheRequestAgain) {
   EXPECT_TRUE(response_prefix(hex("08 00 00 ab cd ef 01 02 03")).echoes_request);
-  EXPECT_FALSE(response_prefix(hex("08 00 00 ab cd ef 01 02 03")).whole_echo);
-  EXPECT_TRUE(response_prefix(hex("08 00 00 ab cd")).whole_echo);
+  // Write File Record's answer is its request again (Application Protocol 6.15).
+  EXPECT_TRUE(response_prefix(hex("15 0d 06 00 04 00 07 00 03 06 af 04 be 10 0d")).echoes_request);
   EXPECT_FALSE(response_prefix(hex("08 00 0b 00 00")).echoes_request);  // a counter
   EXPECT_TRUE(response_prefix(hex("05 00 05 ff 00")).echoes_request);
   EXPECT_TRUE(response_prefix(hex("06 00 05 12 34")).echoes_request);
   EXPECT_FALSE(response_prefix(hex("10 00 05 00 02 04 00 0a 01 02")).echoes_request);
   EXPECT_FALSE(response_prefix(hex("03 00 10 00 0a")).echoes_request);
+}
+
+// The awaited answer's bytes that its request tells: an echo's, each of them and its CRC,
+// however long the request (a query of FC08 Return Query Data past the prefix's 8 bytes).
+TEST(AwaitedAnswer, TellsEveryByteOfAnEcho) {
+  const auto pdu = hex("08 00 00 ab cd ef 01 02 03 04");
+  const Expectation expected{true, 0x11, 0x08, 0, false, pdu, 0};
+  const AwaitedAnswer awaited(expected, true);
+  auto echo = hex("11 08 00 00 ab cd ef 01 02 03 04");
+  const uint16_t crc = crc16(echo);
+  echo.insert(echo.end(), {static_cast<uint8_t>(crc & 0xFF), static_cast<uint8_t>(crc >> 8)});
+  for (size_t pos = 2; pos < echo.size(); ++pos) {
+    EXPECT_EQ(awaited.byte(echo, pos), true) << pos;
+    auto other = echo;
+    other[pos] ^= 0x01;
+    EXPECT_EQ(awaited.byte(other, pos), false) << pos;
+  }
+  const auto counter = hex("08 00 0b 00 00");  // a counter: its value is the slave's
+  const Expectation counted{true, 0x11, 0x08, 0, false, counter, 0};
+  EXPECT_EQ(AwaitedAnswer(counted, true).byte(hex("11 08 00 0b 00 07 00 00"), 5), std::nullopt);
 }
 
 TEST(FunctionTable, NamesThePublicCodesOnly) {
