@@ -39,6 +39,7 @@ enum class Feature : uint8_t {
   frame_after,
   copy_after,
   glitch_then_frame,
+  predicted_bytes,
 };
 
 struct FeatureInfo {
@@ -47,7 +48,7 @@ struct FeatureInfo {
   std::string_view why;
 };
 
-inline constexpr std::array<FeatureInfo, 21> feature_table{{
+inline constexpr std::array<FeatureInfo, 22> feature_table{{
     {"crc-holds", 16, "bytes that are no frame pass a CRC 1 time in 65,536"},
     {"another-crc", 16,
      "another span over these bytes passes its own length rules and CRC, as unlikely by "
@@ -113,6 +114,10 @@ inline constexpr std::array<FeatureInfo, 21> feature_table{{
     {"glitch-then-frame", 8,
      "a turnaround's 0x00 or 0xFF right after it, then a silence or a good frame: the weaker "
      "of the two, the silence's"},
+    {"predicted-bytes", 16,
+     "every byte of the span, its CRC's too, is the one the pending request tells its answer "
+     "has there (an echo repeats the request): four bytes or more, by chance 1 time in 65,536 "
+     "at least"},
 }};
 
 inline const FeatureInfo& feature_info(Feature f) {
@@ -127,6 +132,7 @@ enum class Evidence : uint8_t {
   broke_off_at_silence,
   answer_read_as_request,
   request_inside_awaited_answer,
+  predicted_inside_awaited_answer,
   retry_and_glitch,
   retry_ending_in_zero,
   answer_copying_request,
@@ -151,7 +157,7 @@ struct EvidenceInfo {
   }
 };
 
-inline constexpr std::array<EvidenceInfo, 13> evidence_table{{
+inline constexpr std::array<EvidenceInfo, 14> evidence_table{{
     {"length-and-crc",
      "its function code's length rules and its CRC agree on where it ends",
      {Feature::crc_holds},
@@ -180,6 +186,12 @@ inline constexpr std::array<EvidenceInfo, 13> evidence_table{{
      "a request inside the span the awaited answer's structure claims, with no answer of its "
      "own after it: a collision's junk whose CRC held by chance",
      {Feature::awaited_header, Feature::no_answer_after},
+     2},
+    {"predicted-inside-awaited-answer",
+     "inside the span the awaited answer claims, every byte of it is the one the pending "
+     "request tells the answer has there (an echo's): its CRC holds because the request's "
+     "bytes do; they are the answer's, not a frame of their own",
+     {Feature::awaited_header, Feature::predicted_bytes},
      2},
     {"retry-and-glitch",
      "on a bus of 0x00 glitches, a copy of the pending request and a glitch read as one byte "

@@ -162,18 +162,18 @@ void RtuFramer::observe(uint64_t at, Role role, const Match& match, ReadingOutco
 // the span is refuted, in either role, once the rows that hold outweigh its CRC, and waits where
 // a row whose bytes have not come could refute it and none has.
 RtuFramer::Verdict RtuFramer::weigh_span(const Reading& r, Evidence& why) {
-  return weigh_rows<Row{Evidence::good_frame_before_silence, &RtuFramer::good_frame_before_silence},
-                    Row{Evidence::broke_off_at_silence, &RtuFramer::broke_off_at_silence},
-                    Row{Evidence::answer_read_as_request, &RtuFramer::answer_read_as_request},
-                    Row{Evidence::request_inside_awaited_answer,
-                        &RtuFramer::request_inside_awaited_answer},
-                    Row{Evidence::retry_and_glitch, &RtuFramer::retry_and_glitch},
-                    Row{Evidence::retry_ending_in_zero, &RtuFramer::retry_ending_in_zero},
-                    Row{Evidence::answer_copying_request, &RtuFramer::answer_copying_request},
-                    Row{Evidence::answer_cut_before_request, &RtuFramer::answer_cut_before_request},
-                    Row{Evidence::swallows_known_frame, &RtuFramer::swallows_known_frame_reading},
-                    Row{Evidence::swallows_exchange, &RtuFramer::swallows_exchange_reading}>(r,
-                                                                                             why);
+  return weigh_rows<
+      Row{Evidence::good_frame_before_silence, &RtuFramer::good_frame_before_silence},
+      Row{Evidence::broke_off_at_silence, &RtuFramer::broke_off_at_silence},
+      Row{Evidence::answer_read_as_request, &RtuFramer::answer_read_as_request},
+      Row{Evidence::request_inside_awaited_answer, &RtuFramer::request_inside_awaited_answer},
+      Row{Evidence::predicted_inside_awaited_answer, &RtuFramer::predicted_inside_awaited_answer},
+      Row{Evidence::retry_and_glitch, &RtuFramer::retry_and_glitch},
+      Row{Evidence::retry_ending_in_zero, &RtuFramer::retry_ending_in_zero},
+      Row{Evidence::answer_copying_request, &RtuFramer::answer_copying_request},
+      Row{Evidence::answer_cut_before_request, &RtuFramer::answer_cut_before_request},
+      Row{Evidence::swallows_known_frame, &RtuFramer::swallows_known_frame_reading},
+      Row{Evidence::swallows_exchange, &RtuFramer::swallows_exchange_reading}>(r, why);
 }
 
 // The rows unrolled at compile time: weighing runs once a frame. The span starts with its CRC's
@@ -258,6 +258,22 @@ RtuFramer::Say RtuFramer::request_inside_awaited_answer(const Reading& r) {
   if (!answered) return Say::unknown;
   if (!*answered) return Say::refutes;
   return Say::nothing;
+}
+
+// Inside the span the awaited answer claims, a span whose every byte, its CRC's too, is the one
+// the request says the answer has there (an echo's) is the answer's bytes: its CRC holds because
+// the request's bytes do. FC15's echo, talked over at its end, held from its fifth byte on a
+// broadcast write of a coil whose CRC held, each byte as the echo has it. A frame that runs on
+// past the claimed span, or has a byte the request does not tell, is not explained so (a cut
+// answer of FC0F, then a broadcast whose slave and code are the quantity the answer echoes).
+RtuFramer::Say RtuFramer::predicted_inside_awaited_answer(const Reading& r) {
+  const std::optional<uint64_t> answer = awaited_start(head_);
+  const uint64_t end = r.at + r.length;
+  if (!answer || r.at <= *answer || end > awaited_end(head_)) return Say::nothing;
+  const std::span<const uint8_t> claimed = bytes(*answer, end);
+  for (uint64_t at = r.at; at < end; ++at)
+    if (awaited_.byte(claimed, at - *answer) != true) return Say::nothing;
+  return Say::refutes;
 }
 
 // A copy of the pending request with a glitch after it reads as a response of one more byte
@@ -702,14 +718,20 @@ uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
   return at;
 }
 
-// Where the awaited response that starts at `at` ends by its structure, after the glitch of its
-// driver turning on if there is one; 0 where no awaited response starts there.
+// Where the awaited response begins that starts at `at`, or after the glitch of its driver
+// turning on there; none where no awaited response starts there.
+std::optional<uint64_t> RtuFramer::awaited_start(uint64_t at) const {
+  if (at >= end_) return std::nullopt;
+  if (awaited_.length(from(at))) return at;
+  if (at + 1 < end_ && is_glitch_byte(*at_ptr(at)) && awaited_.length(from(at + 1))) return at + 1;
+  return std::nullopt;
+}
+
+// Where that response ends by its structure (its bytes may not all have come); 0 where none
+// starts at `at`.
 uint64_t RtuFramer::awaited_end(uint64_t at) const {
-  if (at >= end_) return 0;
-  if (const auto length = awaited_.length(from(at))) return at + *length;
-  if (at + 1 < end_ && is_glitch_byte(*at_ptr(at)))
-    if (const auto length = awaited_.length(from(at + 1))) return at + 1 + *length;
-  return 0;
+  const std::optional<uint64_t> start = awaited_start(at);
+  return start ? *start + *awaited_.length(from(*start)) : 0;
 }
 
 // Whether the frame at `at` has a public function code and, as an exception, a standard code.

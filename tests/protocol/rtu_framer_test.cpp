@@ -928,6 +928,26 @@ TEST_F(GapCollector, AZeroGlitchBeforeTheAwaitedAnswerStartsNoBroadcast) {
   }
 }
 
+// A write of a file record, whose echo is talked over at its end: from its fifth byte on, the
+// echo's bytes pass a CRC as a broadcast write of a coil (`00 05 05 d4 00 05 4c ec`, the
+// request's file, record, length and first data bytes, chosen so). Each of them is the byte
+// the request says its echo has there: they are the echo's, and the echo is one damaged frame.
+TEST_F(GapCollector, BytesTheRequestPredictsInsideItsAnswerAreTheAnswers) {
+  const auto request = with_crc(hex("da 15 11 06 00 05 05 d4 00 05 4c ec 11 22 33 44 55 66 77 88"));
+  ASSERT_EQ(crc16(hex("00 05 05 d4 00 05 4c ec")), 0);
+  auto echo = request;
+  for (size_t i = 14; i < echo.size(); ++i) echo[i] ^= 0x5a;  // talked over
+  const std::vector<Piece> pieces{
+      {20'000'000, request}, {3'000'000, echo}, {20'000'000, read_request}};
+  const auto stream = run(pieces, ClockQuality::per_chunk).stream();
+  ASSERT_EQ(stream.size(), 3u);
+  EXPECT_EQ(stream[1].raw, echo);
+  EXPECT_EQ(stream[1].role, Role::response);
+  EXPECT_FALSE(stream[1].check_ok);
+  EXPECT_EQ(stream[1].request, stream[0].index);
+  EXPECT_EQ(stream[2].raw, read_request);
+}
+
 // FC08 Return Query Data, whose end only its CRC tells, holds bytes that pass a CRC as a frame
 // of vendor code CDH with an exception no standard names: "52 cd d5 45 1e". A frame a bus
 // would not carry does not count against the query that holds it, nor against its echo.
