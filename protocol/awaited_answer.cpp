@@ -51,6 +51,12 @@ std::optional<bool> AwaitedAnswer::byte(std::span<const uint8_t> bytes, size_t p
   return (pos == crc_at ? (crc & 0xFF) : (crc >> 8)) == bytes[pos];
 }
 
+bool AwaitedAnswer::tells_every_byte(std::span<const uint8_t> bytes, size_t pos) const {
+  for (; pos < bytes.size(); ++pos)
+    if (byte(bytes, pos) != true) return false;
+  return true;
+}
+
 // Any good frame and a 0x00 pass a CRC, so FC07's answer whose status equals the request's CRC
 // low byte (1 in 256) is its request and a 0x00; a read's answer would need all its data to
 // repeat the request.

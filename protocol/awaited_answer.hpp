@@ -29,6 +29,8 @@ class AwaitedAnswer {
   // What the request says of byte `pos` of the awaited answer `bytes`: that it is this byte
   // (an echo, a byte count), that it cannot be, or nothing.
   std::optional<bool> byte(std::span<const uint8_t> bytes, size_t pos) const;
+  // Whether every byte of the awaited answer `bytes` from `pos` on is the one the request tells.
+  bool tells_every_byte(std::span<const uint8_t> bytes, size_t pos) const;
   // Whether an awaited answer of `length` bytes may begin with the request's copy `copy` by a
   // chance a slave's answer often meets: no byte the request predicts is otherwise, and the
   // answer has at most one byte of its own before its CRC.

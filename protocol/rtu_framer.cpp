@@ -218,17 +218,13 @@ RtuFramer::Say RtuFramer::frame_after_silence(uint64_t gap, bool final) {
   return after.kind == Match::Kind::need_more && !final ? Say::unknown : Say::nothing;
 }
 
-// The first bytes after the request (a glitch aside), beginning as the awaited answer with
-// every byte its request predicts in place (a read's byte count), read as a request the
-// standard does not allow, too soon for the master's next one: a talked-over answer whose junk
-// passed a CRC by chance (`55 01 04 69 ff c9 69 16`, a read of 0xFFC9 coils, where 4 bytes of
-// coils were due). The answer, damaged, is the reading. So is a glitch, 0xFF or 0x00, with the
-// awaited answer's slave and function code after it, whichever request it reads as:
-// `ff 03 0c 15 de 10 1a ec` passed a CRC as a read for slave 255, where slave 3's answer to
-// FC0C began after its driver's 0xFF; a 0x00 and an answer of slave 21 to FC15, as a broadcast
-// of FC15, where a broadcast is no reading in the other role. (A request the
-// standard allows may be the master's, after a time-out shorter than the threshold: a write of
-// the same block with new values begins as its echo would.)
+// The first bytes after the request, too soon for the master's next one, read as a request:
+// where they begin as the awaited answer with every byte its request predicts in place and the
+// standard does not allow that request, a talked-over answer whose junk passed a CRC; where a
+// glitch (0x00 or 0xFF) and the awaited answer's slave and function code begin them, that
+// answer after its driver's glitch, whichever request they read as (a broadcast from the 0x00).
+// A request the standard allows may be the master's, after a time-out shorter than the
+// threshold (a write of the same block with new values begins as its echo would).
 RtuFramer::Say RtuFramer::answer_read_as_request(const Reading& r) {
   if (r.role != Role::request || !first_after_request(r.at) || !too_soon_for_retry(r.at) ||
       awaited_.copies_request(from(r.at), r.length))
@@ -245,11 +241,8 @@ RtuFramer::Say RtuFramer::answer_read_as_request(const Reading& r) {
 
 // A request inside the span the awaited answer's structure claims is a collision's junk that
 // passed a CRC unless its own answer follows it (after a cut answer, the master's next request
-// and its answer): a FC0C poll of slave 113, then junk, inside a talked-over answer of 51 bytes;
-// a FC06 write of slave 3 from the last bytes of a talked-over FC14 answer on, then another
-// slave's request; a read of 10,773 inputs of slave 131 from the second byte of a cut
-// exception `ae 83 02` on. A silence after it may be its slave's; with no clock,
-// where the master's time-out after a silent slave cannot show, no rule.
+// and its answer). A silence after it may be its slave's; with no clock, where the master's
+// time-out after a silent slave cannot show, no rule.
 RtuFramer::Say RtuFramer::request_inside_awaited_answer(const Reading& r) {
   if (r.role != Role::request || *at_ptr(r.at) == 0 || options_.clock == ClockQuality::none ||
       r.at <= head_ || r.at >= awaited_end(head_))
@@ -261,19 +254,16 @@ RtuFramer::Say RtuFramer::request_inside_awaited_answer(const Reading& r) {
 }
 
 // Inside the span the awaited answer claims, a span whose every byte, its CRC's too, is the one
-// the request says the answer has there (an echo's) is the answer's bytes: its CRC holds because
-// the request's bytes do. FC15's echo, talked over at its end, held from its fifth byte on a
-// broadcast write of a coil whose CRC held, each byte as the echo has it. A frame that runs on
-// past the claimed span, or has a byte the request does not tell, is not explained so (a cut
-// answer of FC0F, then a broadcast whose slave and code are the quantity the answer echoes).
+// the request tells the answer has there (an echo's) holds its CRC because the request does:
+// FC15's echo, talked over at its end, held from its fifth byte on a broadcast write of a coil.
+// One that runs on past that span is not explained so (a cut FC0F answer, then a broadcast).
 RtuFramer::Say RtuFramer::predicted_inside_awaited_answer(const Reading& r) {
   const std::optional<uint64_t> answer = awaited_start(head_);
   const uint64_t end = r.at + r.length;
-  if (!answer || r.at <= *answer || end > awaited_end(head_)) return Say::nothing;
-  const std::span<const uint8_t> claimed = bytes(*answer, end);
-  for (uint64_t at = r.at; at < end; ++at)
-    if (awaited_.byte(claimed, at - *answer) != true) return Say::nothing;
-  return Say::refutes;
+  if (answer && r.at > *answer && end <= awaited_end(head_) &&
+      awaited_.tells_every_byte(bytes(*answer, end), r.at - *answer))
+    return Say::refutes;
+  return Say::nothing;
 }
 
 // A copy of the pending request with a glitch after it reads as a response of one more byte
@@ -301,14 +291,11 @@ RtuFramer::Say RtuFramer::retry_ending_in_zero(const Reading& r) {
 }
 
 // A copy of the pending request too soon for a retry, where the awaited answer is longer, is
-// that answer damaged. FC07's answer whose status equals the request's CRC low byte is the
-// request and a 0x00, so right where the answer begins, if the answer may begin so, the copy is
-// that answer cut or talked over (a quick retry of a read of 2 registers at 0400H also begins
-// as its answer would, but that answer's data would all have to repeat the request). Further
-// on, after a damaged answer, a master may repeat its request as soon: there only bytes no
-// frame explains after the copy make it the answer, unless they begin as the answer to it
-// would (a FC07 poll `c7 07 12 42` again after a talked-over answer, then its own answer
-// talked over, `c7 07 31 c1 cd`).
+// that answer damaged. Right where the answer begins, if it may begin so (FC07's answer whose
+// status equals the request's CRC low byte is the request and a 0x00), the copy is that answer
+// cut or talked over. Further on, after a damaged answer, a master may repeat its request as
+// soon: there only bytes no frame explains after the copy make it the answer, unless they begin
+// as the answer to it would (its own answer talked over).
 RtuFramer::Say RtuFramer::answer_copying_request(const Reading& r) {
   if (!r.other || *r.other != Role::response || !awaited_.copies_request(from(r.at), r.length) ||
       !too_soon_for_retry(r.at))
@@ -413,13 +400,10 @@ bool RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) {
 // Whether the response [at, at + length) is one cut a byte short with the next request right
 // behind it: a whole request starts at its last byte, and nothing starts after it (not even
 // after a glitch). Nothing when what follows is still to come. With no bytes after it yet, it
-// waits for them only where its last byte came in a read of its own after a read of several,
-// as the next frame's first byte does in modtap's own pcapng (its reader reads a packet's
-// first byte apart, to time it), or where the read that brought its first byte began before
-// it (a timer's reads end anywhere). Waiting behind every response that ends a read costs a
-// pcap, whose packets each end a frame, a wait at every frame; behind every last byte read
-// alone, a capture read a byte at a time would hold each response back until its channel's next
-// byte, behind the other channel's frames.
+// waits only where its last byte came in a read of its own after a read of several (modtap's
+// own pcapng reads a packet's first byte apart, to time it), or where the read that brought its
+// first byte began before it (a timer's reads end anywhere): waiting behind every read's end
+// would hold each frame of a pcap, or of a capture read a byte at a time, back.
 std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bool final) {
   const uint64_t end = at + length;
   if (end == end_) {
@@ -672,13 +656,10 @@ bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
 }
 
 // Whether a frame a bus carries starts inside [begin, end), wherever it ends, and outweighs the
-// span (keeps_frame_inside, framing_evidence.hpp). Only such a frame counts: inside a
-// long frame, bytes pass a CRC as a vendor code or an unnamed exception now and then (FC08's
-// query `ba 08 00 00 58 a9 54 52 cd d5 45 1e` holds `52 cd d5 45 1e`). One that starts in the
-// last bytes and runs on past them counts too: a collision's junk `c0 f1 a0`, then the next
-// request `34 14 0e ...`, passed a CRC as an answer of slave 192 ending in `34 14`. An exact copy
-// after the span outweighs it: FC08's query and echo (`2a 08 00 00 dd 47 07 aa 43 9a` holds an
-// answer of slave 71 to FC07 in query and echo).
+// span (keeps_frame_inside, framing_evidence.hpp). Only such a frame counts: inside a long
+// frame, bytes pass a CRC as a vendor code or an unnamed exception now and then. One that
+// starts in the last bytes and runs on past them counts too (a collision's junk, then the next
+// request). An exact copy after the span outweighs it (FC08's query and echo).
 bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end, bool searched, bool unexpected) {
   if (keeps_frame_inside(searched, unexpected, false)) return false;
   if (keeps_frame_inside(searched, unexpected, true) && copy_follows(begin, end)) return false;
@@ -718,8 +699,7 @@ uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
   return at;
 }
 
-// Where the awaited response begins that starts at `at`, or after the glitch of its driver
-// turning on there; none where no awaited response starts there.
+// Where the awaited response starting at `at` begins, after its driver's glitch if one is there.
 std::optional<uint64_t> RtuFramer::awaited_start(uint64_t at) const {
   if (at >= end_) return std::nullopt;
   if (awaited_.length(from(at))) return at;
@@ -727,8 +707,7 @@ std::optional<uint64_t> RtuFramer::awaited_start(uint64_t at) const {
   return std::nullopt;
 }
 
-// Where that response ends by its structure (its bytes may not all have come); 0 where none
-// starts at `at`.
+// Where that response ends by its structure (its bytes may be still to come); 0 where none.
 uint64_t RtuFramer::awaited_end(uint64_t at) const {
   const std::optional<uint64_t> start = awaited_start(at);
   return start ? *start + *awaited_.length(from(*start)) : 0;
