@@ -341,6 +341,31 @@ class GapCollector : public ::testing::Test {
     int64_t silence_ns;
     std::vector<uint8_t> bytes;
   };
+  // A request, its slave's driver's `glitch` and the awaited answer, split into two reads at
+  // every offset (a timer's reads end anywhere: no silence to tell by), then the next request:
+  // the glitch is noise and the answer good and paired, whatever the glitch and the answer's
+  // first bytes pass a CRC as.
+  void expect_glitch_then_answer(const std::vector<uint8_t>& request, uint8_t glitch,
+                                 const std::vector<uint8_t>& answer) {
+    std::vector<uint8_t> bytes = request;
+    bytes.push_back(glitch);
+    bytes.insert(bytes.end(), answer.begin(), answer.end());
+    for (size_t split = 1; split < bytes.size(); ++split) {
+      const std::vector<Piece> pieces{
+          {20'000'000, std::vector<uint8_t>(bytes.begin(), bytes.begin() + split)},
+          {0, std::vector<uint8_t>(bytes.begin() + split, bytes.end())},
+          {20'000'000, read_request}};
+      const auto stream = run(pieces, ClockQuality::per_chunk).stream();
+      ASSERT_EQ(stream.size(), 4u) << split;
+      EXPECT_EQ(stream[1].reason, NoiseReason::glitch) << split;
+      EXPECT_EQ(stream[2].raw, answer) << split;
+      EXPECT_EQ(stream[2].role, Role::response) << split;
+      EXPECT_TRUE(stream[2].check_ok) << split;
+      EXPECT_EQ(stream[2].request, stream[0].index) << split;
+      EXPECT_EQ(stream[3].raw, read_request) << split;
+    }
+  }
+
   // 16 transactions, each after a 0x00 glitch: a bus where 0x00 glitches are common.
   static std::vector<Piece> glitchy_history() {
     std::vector<Piece> pieces;
@@ -887,21 +912,7 @@ TEST_F(GapCollector, AGlitchBeforeTheAwaitedAnswerStartsNoRequest) {
   ASSERT_EQ(crc16(answer), 0);
   ASSERT_EQ(crc16(concat({hex("ff"), std::vector<uint8_t>(answer.begin(), answer.begin() + 7)})),
             0);
-  // With the request, in a timer's reads that end anywhere: no silence to tell by.
-  const auto bytes = concat({request, hex("ff"), answer});
-  for (size_t split = 1; split < bytes.size(); ++split) {
-    const std::vector<Piece> pieces{
-        {20'000'000, std::vector<uint8_t>(bytes.begin(), bytes.begin() + split)},
-        {0, std::vector<uint8_t>(bytes.begin() + split, bytes.end())},
-        {20'000'000, read_request}};
-    const auto frames = run(pieces, ClockQuality::per_chunk).frames();
-    ASSERT_EQ(frames.size(), 3u) << split;
-    EXPECT_EQ(frames[1].raw, answer) << split;
-    EXPECT_EQ(frames[1].role, Role::response) << split;
-    EXPECT_TRUE(frames[1].check_ok) << split;
-    EXPECT_EQ(frames[1].request, frames[0].index) << split;
-    EXPECT_EQ(frames[2].raw, read_request) << split;
-  }
+  expect_glitch_then_answer(request, 0xff, answer);
 }
 
 // The same with the driver's other glitch, 0x00: slave 6's answer to a read after it, whose
@@ -912,20 +923,7 @@ TEST_F(GapCollector, AZeroGlitchBeforeTheAwaitedAnswerStartsNoBroadcast) {
   const auto broadcast = with_crc(hex("00 06 03 04 12 34"));
   const auto answer = with_crc(
       concat({hex("06 03 04 12 34"), std::vector<uint8_t>(broadcast.end() - 2, broadcast.end())}));
-  const auto bytes = concat({request, hex("00"), answer});
-  for (size_t split = 1; split < bytes.size(); ++split) {
-    const std::vector<Piece> pieces{
-        {20'000'000, std::vector<uint8_t>(bytes.begin(), bytes.begin() + split)},
-        {0, std::vector<uint8_t>(bytes.begin() + split, bytes.end())},
-        {20'000'000, read_request}};
-    const auto stream = run(pieces, ClockQuality::per_chunk).stream();
-    ASSERT_EQ(stream.size(), 4u) << split;
-    EXPECT_EQ(stream[1].reason, NoiseReason::glitch) << split;
-    EXPECT_EQ(stream[2].raw, answer) << split;
-    EXPECT_EQ(stream[2].role, Role::response) << split;
-    EXPECT_TRUE(stream[2].check_ok) << split;
-    EXPECT_EQ(stream[3].raw, read_request) << split;
-  }
+  expect_glitch_then_answer(request, 0x00, answer);
 }
 
 // A write of a file record, whose echo is talked over at its end: from its fifth byte on, the
