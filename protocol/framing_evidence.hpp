@@ -209,8 +209,8 @@ inline constexpr std::array<EvidenceInfo, 14> evidence_table{{
      {Feature::awaited_header, Feature::too_soon_for_retry},
      2},
     {"answer-cut-before-request",
-     "the awaited answer cut a byte short, whose missing CRC byte the next request's address "
-     "repeats, with that request right behind it",
+     "the awaited answer cut a byte or two short, whose missing CRC the next request's first "
+     "bytes repeat, with that request right behind it",
      {Feature::another_crc, Feature::leaves_junk},
      2},
     {"swallows-known-frame",

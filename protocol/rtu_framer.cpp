@@ -315,8 +315,8 @@ RtuFramer::Say RtuFramer::answer_copying_request(const Reading& r) {
   return Say::nothing;
 }
 
-// The awaited response cut one byte short, whose missing CRC byte the next request's slave
-// address repeats, reads whole and good; the request, one byte short, then reads as junk. The
+// The awaited response cut one or two bytes short, whose missing CRC the next request's first
+// bytes repeat, reads whole and good; the rest of the request then reads as junk. The
 // bytes after it tell. Only on a bus channel (on a split tap the request is on the other), and
 // only for a reading that may search on (search 0: nested in another reading's judgement, or a
 // CRC search at its depth), so that it never nests.
@@ -397,9 +397,9 @@ bool RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) {
   return false;
 }
 
-// Whether the response [at, at + length) is one cut a byte short with the next request right
-// behind it: a whole request starts at its last byte, and nothing starts after it (not even
-// after a glitch). Nothing when what follows is still to come. With no bytes after it yet, it
+// Whether the response [at, at + length) is one cut a byte or two short with the next request
+// right behind it: a whole request starts in its CRC bytes, and nothing starts after it (not
+// even after a glitch). Nothing when what follows is still to come. With no bytes after it yet, it
 // waits only where its last byte came in a read of its own after a read of several (modtap's
 // own pcapng reads a packet's first byte apart, to time it), or where the read that brought its
 // first byte began before it (a timer's reads end anywhere): waiting behind every read's end
@@ -413,13 +413,18 @@ std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bo
     const ByteTimeline::Mark& before = timeline_.before_last();
     return before.end - before.first > 1 ? std::nullopt : std::optional<bool>(false);
   }
-  // The request's function code, where the longer reading has the next frame's slave address:
-  // a public one, or no request starts at the response's last byte (most responses end here).
-  const uint8_t fc = *at_ptr(end);
-  if ((fc & 0x80) || !is_public_function(fc) || timeline_.gap_at(end)) return false;
-  const Match next = match_at(end - 1, final, 0);
-  if (next.kind == Match::Kind::need_more && !final) return std::nullopt;
-  if (next.kind != Match::Kind::found || !next.fit.request) return false;
+  if (timeline_.gap_at(end)) return false;
+  // The request's function code must be public, or no request starts in the CRC bytes (most
+  // responses end here).
+  bool request_inside = false;
+  for (uint64_t start = end - crc_size; start < end && !request_inside; ++start) {
+    const uint8_t fc = *at_ptr(start + 1);
+    if ((fc & 0x80) || !is_public_function(fc)) continue;
+    const Match next = match_at(start, final, 0);
+    if (next.kind == Match::Kind::need_more && !final) return std::nullopt;
+    request_inside = next.kind == Match::Kind::found && next.fit.request;
+  }
+  if (!request_inside) return false;
   const Match after = match_at(end, final, 0);
   if (after.kind == Match::Kind::need_more && !final) return std::nullopt;
   return after.kind == Match::Kind::none && !glitch_then_frame(end, final, 0);

@@ -769,6 +769,29 @@ TEST_F(GapCollector, AResponseCutOneByteShortGivesTheNextRequestBackItsSlaveAddr
   EXPECT_EQ(whole[1].request, whole[0].index);
 }
 
+// An FC17 answer cut two bytes short, and the next request, Report Server ID of slave 132
+// (`84 11 a2 bc`), begins with its whole missing CRC: the bytes read as the whole answer and
+// junk. What follows tells as it does for one byte: nothing starts after the longer answer,
+// and a whole request starts in its CRC bytes, whose own answer follows after a glitch.
+TEST_F(GapCollector, AResponseCutTwoBytesShortGivesTheNextRequestBackItsFirstBytes) {
+  const auto request = hex("d8 17 00 94 00 01 00 45 00 03 06 a4 f8 f1 fa 25 68 08 b0");
+  const auto cut = hex("d8 17 02 8e 37");  // its answer, without its CRC, 84 11
+  const auto next = hex("84 11 a2 bc");
+  const auto answer = hex("84 11 0e 0f e9 6e bb 71 d8 28 92 21 3c 93 55 ab 24 6a 40");
+  ASSERT_EQ(crc16(cut), 0x1184);
+  ASSERT_EQ(crc16(request), 0);
+  ASSERT_EQ(crc16(answer), 0);
+  const std::vector<Piece> pieces{{20'000'000, request},
+                                  {2'000'000, concat({cut, next})},
+                                  {5'000'000, concat({hex("00"), answer})},
+                                  {20'000'000, read_request}};
+  const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+  ASSERT_EQ(frames.size(), 5u);
+  expect_cut_answer_then_request(frames, cut, next);
+  EXPECT_EQ(frames[3].raw, answer);
+  EXPECT_EQ(frames[3].request, frames[2].index);
+}
+
 // FC08 Return Query Data ends where its CRC says only if something confirms it. Here a glitch
 // and its exception, talked over, follow it, then the master's next request after its
 // time-out: that silence bounds the junk as the end of the input would, and the request's own
