@@ -473,11 +473,9 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
   return {};
 }
 
-// A bounded CRC search for the end of a frame of no fixed length, from `first` bytes on. A CRC
-// match alone is weak evidence (a trailing 0x00 keeps a zero residue zero), so the end must
-// also be confirmed by a gap or the next frame; only when nothing confirms that way may a
-// turnaround glitch stand in between. A frame found this way never swallows a standard frame
-// whose length rules and CRC agree.
+// A bounded CRC search for the end of a frame of no fixed length, from `first` bytes on. Its
+// hit stands once something confirms it (span_end_table), a turnaround glitch only where
+// nothing else does, and never where it swallows a frame a bus carries.
 RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, bool final,
                                        int search) {
   const uint64_t avail = end_ - at;
@@ -519,12 +517,9 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       if (may_stand_alone) unconfirmed = n;
     }
   }
-  // FC08 Return Query Data followed by junk: once nothing more can confirm it, its own
-  // header (slave, 08, sub-function 0000) and CRC have to do. A silence with a good frame after
-  // it bounds the junk as the end of the input does (a glitch, a cut answer and a glitch, then
-  // the master's next request after its time-out). Where a 0x00 after it makes one byte more
-  // good too, that reading stands as well (a query whose CRC ends in 0x00, answered by a cut
-  // exception).
+  // FC08 Return Query Data followed by junk: once nothing more can confirm it (the input's
+  // end, or a silence with a good frame after it), its own header and CRC have to do, and one
+  // byte more stands beside it where a 0x00 after it makes that good too.
   if (unconfirmed && p[1] == 0x08 &&
       (final || (avail >= max_rtu_adu && !open) || blocked_by_gap(at, final))) {
     return {Match::Kind::found, static_cast<uint16_t>(unconfirmed), fit,
@@ -837,11 +832,9 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
 // A damaged response ending in 0x00 or 0xFF right before the next frame, or one cut short with
 // that frame's glitch after it: where the bus's glitches make it the likelier, the glitch, unless
 // the request says whether the byte is the response's (then a silence after it does not matter).
-// Cut short, its length may be told only without the glitch (FC08 "68 08 00" and a 0x00 read as
-// Return Query Data). Among a capture's first frames, before the bus has shown whether it has
-// glitches, the byte is left to the frame unless the request rules it out, marked: both readings
-// stand (a cut answer and the next request's glitch among the first frames). Whether it emitted the
-// piece so.
+// Cut short, its length may be told only without the glitch. Before the bus has shown whether it
+// has glitches, the byte is left to the frame unless the request rules it out, marked: both
+// readings stand. Whether it emitted the piece so.
 bool RtuFramer::split_trailing_glitch(uint64_t begin, uint64_t end, uint32_t& findings,
                                       bool glitch_after) {
   const uint64_t size = end - begin;
