@@ -1,7 +1,6 @@
 #include "protocol/awaited_answer.hpp"
 
 #include <algorithm>
-#include <array>
 
 #include "protocol/checksum.hpp"
 #include "protocol/function_codes.hpp"

@@ -260,7 +260,7 @@ RtuFramer::Say RtuFramer::request_inside_awaited_answer(const Reading& r) {
 RtuFramer::Say RtuFramer::predicted_inside_awaited_answer(const Reading& r) {
   const std::optional<uint64_t> answer = awaited_start(head_);
   const uint64_t end = r.at + r.length;
-  if (answer && r.at > *answer && end <= awaited_end(head_) &&
+  if (answer && r.at > *answer && end <= *answer + *awaited_.length(from(*answer)) &&
       awaited_.tells_every_byte(bytes(*answer, end), r.at - *answer))
     return Say::refutes;
   return Say::nothing;
