@@ -119,7 +119,8 @@ Collector run(const BusCapture& capture, const Scenario& s, RecordSink* also = n
   Chunk chunk;
   while (source->next(chunk)) analyzer.push(chunk);
   analyzer.finish();
-  std::filesystem::remove(path);
+  // MODTAP_KEEP_CAPTURES keeps the file, to read a failing seed with `modtap --explain`.
+  if (!std::getenv("MODTAP_KEEP_CAPTURES")) std::filesystem::remove(path);
   return collected;
 }
 
@@ -178,7 +179,8 @@ TEST_P(BusScenario, WrittenAsPcapngReadsBackToTheSameRecords) {
   Chunk chunk;
   while (source->next(chunk)) analyzer.push(chunk);
   analyzer.finish();
-  std::filesystem::remove(path);
+  // MODTAP_KEEP_CAPTURES keeps the file, to read a failing seed with `modtap --explain`.
+  if (!std::getenv("MODTAP_KEEP_CAPTURES")) std::filesystem::remove(path);
 
   ASSERT_EQ(again.records.size(), first.records.size());
   for (size_t i = 0; i < first.records.size(); ++i) {
@@ -267,11 +269,17 @@ TEST_P(BusScenario, FindsExactlyTheFramesSentWithRolesAndPairs) {
     index_of[i] = got->index;
     // Where nothing can tell a retry from an echo, a frame that says so stands at either role.
     const bool said_ambiguous = got->findings & finding_ambiguous_echo;
-    wrong_role += got->role != truth.role && !said_ambiguous;
+    if (got->role != truth.role && !said_ambiguous && ++wrong_role > s.max_missing &&
+        wrong_role <= s.max_missing + 3)
+      ADD_FAILURE() << "frame " << i << " at offset " << truth.offset << " has the wrong role"
+                    << context(capture, out, truth.offset);
     // A response made whole carries a whole answer's damage and findings.
     const bool whole = made_whole(*got, truth);
     if (whole) made_whole_at.insert(truth.offset);
-    wrong_damage += !whole && got->damage != truth.damage;
+    if (!whole && got->damage != truth.damage && ++wrong_damage > s.max_missing &&
+        wrong_damage <= s.max_missing + 3)
+      ADD_FAILURE() << "frame " << i << " at offset " << truth.offset << " has the wrong damage"
+                    << context(capture, out, truth.offset);
     if (truth.request && got->request != index_of[*truth.request] && !said_ambiguous &&
         ++wrong_pair > missing + s.max_missing && wrong_pair <= missing + s.max_missing + 3)
       ADD_FAILURE() << "frame " << i << " at offset " << truth.offset << " paired wrongly"
