@@ -146,6 +146,23 @@ Finding diagnostics_fit(Bytes req, Bytes rsp) {
   return be16(req, 1) == 0 ? echoes_whole(req, rsp) : echoes_first<3>(req, rsp);
 }
 
+// FC14: one sub-response to each sub-request, in order, of the records it asked for
+// (Application Protocol 6.14): its length byte counts the reference type 6 and 2 bytes a
+// register. Another slave's or request's records are no answer to it.
+Finding file_read_fits(Bytes req, Bytes rsp) {
+  PduReader asked(req.subspan(std::min<size_t>(req.size(), 2)));
+  PduReader got(rsp.subspan(std::min<size_t>(rsp.size(), 2)));
+  if (rsp.size() < 2 || rsp[1] != rsp.size() - 2) return finding_length_mismatch;
+  while (asked.left() >= 7 && got.left() >= 2) {
+    asked.take(5);  // reference type, file, record
+    const unsigned registers = asked.u16();
+    if (got.u8() != 1 + 2 * registers || got.u8() != 6 ||
+        got.take(2 * registers).size() != 2 * registers)
+      return finding_length_mismatch;
+  }
+  return asked.left() == 0 && got.left() == 0 ? finding_none : finding_length_mismatch;
+}
+
 // ---- What a response starts with, told by its request --------------------------------------
 
 ResponsePrefix prefix_of(Bytes bytes) {
@@ -645,7 +662,7 @@ constexpr std::array public_codes{
         .request_length = counted_at<2, 7, 245>,
         .response_length = counted_at<2, 1>,
         .request_findings = within_spec,
-        .response_fit = fits_anything,
+        .response_fit = file_read_fits,
         .request_fields = file_records<false>,
         .response_fields = file_read,
         .request_accesses = no_access,

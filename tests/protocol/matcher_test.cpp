@@ -336,6 +336,17 @@ TEST(Matcher, AnotherWriteLongAfterAnAnswerWasDueIsTheMastersNextRequest) {
   EXPECT_EQ(files[3].role, Role::request);
   EXPECT_EQ(files[4].role, Role::response);
   EXPECT_EQ(files[4].request, files[3].index);
+  // The same with FC20, whose request and answer have one layout: a read of other records
+  // 220 ms on is the master's next request, the records it asked for its answer.
+  const auto reads = match_timed({{"01 03 00 00 00 01 84 0a", 0},
+                                  {"01 03 02 00 05 78 47", 10},
+                                  {"01 14 07 06 00 04 00 01 00 02 d8 e5", 100},
+                                  {"01 14 07 06 00 04 00 07 00 02 38 e4", 320},
+                                  {"01 14 06 05 06 12 34 56 78 92 fe", 330}},
+                                 timeouts, keep);
+  EXPECT_EQ(reads[3].role, Role::request);
+  EXPECT_EQ(reads[4].role, Role::response);
+  EXPECT_EQ(reads[4].request, reads[3].index);
   // Within the slave's time, a reply that does not echo is still its answer, unfit.
   const auto soon = match_timed({{"01 03 00 00 00 01 84 0a", 0},
                                  {"01 03 02 00 05 78 47", 10},
@@ -400,6 +411,23 @@ TEST(ResponseFit, AFileRecordWriteIsAnsweredByItsEcho) {
   EXPECT_EQ(check_response_fit(write, write), finding_none);
   EXPECT_EQ(check_response_fit(write, hex("15 09 06 00 04 00 01 00 01 56 79")),
             finding_echo_mismatch);
+}
+
+// FC20 answers each record asked with its length byte, the reference type 6 and its registers
+// (Modbus application protocol 6.14).
+TEST(ResponseFit, AFileRecordReadIsAnsweredByTheRecordsItAsked) {
+  const auto read = hex("14 0e 06 00 04 00 01 00 02 06 00 03 00 09 00 01");
+  EXPECT_EQ(check_response_fit(read, hex("14 0a 05 06 0d fe 00 20 03 06 33 cd")), finding_none);
+  // Another request of the same layout; records of other lengths; a reference type not 6; one
+  // record short; a byte count that is not the answer's.
+  EXPECT_EQ(check_response_fit(read, read), finding_length_mismatch);
+  EXPECT_EQ(check_response_fit(read, hex("14 0a 03 06 0d fe 05 06 33 cd 00 20")),
+            finding_length_mismatch);
+  EXPECT_EQ(check_response_fit(read, hex("14 0a 05 00 0d fe 00 20 03 06 33 cd")),
+            finding_length_mismatch);
+  EXPECT_EQ(check_response_fit(read, hex("14 06 05 06 0d fe 00 20")), finding_length_mismatch);
+  EXPECT_EQ(check_response_fit(read, hex("14 0b 05 06 0d fe 00 20 03 06 33 cd")),
+            finding_length_mismatch);
 }
 
 TEST(ResponseFit, CountersOfDiagnosticsNeedNotEcho) {
