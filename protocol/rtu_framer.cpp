@@ -295,7 +295,7 @@ RtuFramer::Say RtuFramer::retry_ending_in_zero(const Reading& r) {
 // status equals the request's CRC low byte is the request and a 0x00), the copy is that answer
 // cut or talked over. Further on, after a damaged answer, a master may repeat its request as
 // soon: there only bytes no frame explains after the copy make it the answer, unless they begin
-// as the answer to it would (its own answer talked over).
+// as the answer to it would, after its driver's glitch or not (its own answer talked over).
 RtuFramer::Say RtuFramer::answer_copying_request(const Reading& r) {
   if (!r.other || *r.other != Role::response || !awaited_.copies_request(from(r.at), r.length) ||
       !too_soon_for_retry(r.at))
@@ -308,9 +308,10 @@ RtuFramer::Say RtuFramer::answer_copying_request(const Reading& r) {
   if (end == end_) return r.final ? Say::nothing : Say::unknown;  // what follows
   if (timeline_.gap_at(end)) return Say::nothing;
   const Match next = match_at(end, r.final, 0);
-  if (next.kind == Match::Kind::need_more && !r.final) return Say::unknown;
+  const uint64_t answer = end + (is_glitch_byte(*at_ptr(end)) ? 1 : 0);
+  if ((next.kind == Match::Kind::need_more || answer + 3 > end_) && !r.final) return Say::unknown;
   if (next.kind == Match::Kind::none && !glitch_then_frame(end, r.final, 0) &&
-      !awaited_.starts(from(end)))
+      !awaited_.starts(from(answer)))
     return Say::refutes;
   return Say::nothing;
 }

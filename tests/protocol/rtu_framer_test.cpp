@@ -703,6 +703,33 @@ TEST_F(GapCollector, AnAnswerThatStartsAsACopyOfItsRequestIsNotARetry) {
   }
 }
 
+// A master may send its request again as soon as an answer comes damaged: FC0C's answer cut
+// after 11 of its 15 bytes, then the request again, then the slave's driver's 0xFF and its
+// answer, talked over. The copy is the retry and what follows it its answer, damaged, though
+// the copy came too soon for a time-out and no frame follows it.
+TEST_F(GapCollector, ARequestSentAgainAfterADamagedAnswerKeepsItsAnswerAfterAGlitch) {
+  const auto log = hex("52 0c 3c d5");  // Get Comm Event Log of slave 82
+  const auto cut = hex("52 0c 0a 9d 48 87 26 e4 1f 91 1a");
+  const auto talked_over = hex("52 0c 0a eb f3 9c af 2f 0f ed 7a b3 27 2e 85");
+  const std::vector<Piece> pieces{
+      {20'000'000, log},          {2'000'000, cut},
+      {3'000'000, log},           {2'000'000, concat({hex("ff"), talked_over})},
+      {20'000'000, read_request}, {2'000'000, read_response}};
+  const auto out = run(pieces, ClockQuality::per_chunk);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 6u);
+  EXPECT_EQ(frames[1].raw, cut);
+  EXPECT_EQ(frames[1].damage, Damage::cut);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[2].raw, log);
+  EXPECT_EQ(frames[2].role, Role::request);
+  EXPECT_TRUE(frames[2].check_ok);
+  EXPECT_EQ(frames[3].raw, talked_over);
+  EXPECT_EQ(frames[3].role, Role::response);
+  EXPECT_EQ(frames[3].request, frames[2].index);
+  EXPECT_EQ(frames[4].raw, read_request);
+}
+
 // Frames 1 and 2: the awaited answer cut a byte short, then the next request, whole.
 void expect_cut_answer_then_request(const std::vector<Record>& frames,
                                     const std::vector<uint8_t>& cut,
