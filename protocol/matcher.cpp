@@ -247,9 +247,14 @@ void Matcher::on_response(Frame& frame, Copy copy) {
     ambiguous_echo_ = AmbiguousEcho{pending_, frame.index, frame.end_ns, frame.end_read};
   }
   // An answer in its request's read has no latency to show, but its placed one still bounds
-  // the slave's turnaround for telling a retry from an echo.
-  if (options_.timed && frame.t_ns >= pending_->end_ns && copy == Copy::none && frame.check_ok)
-    learn_turnaround(pending_->slave, frame.t_ns - pending_->end_ns);
+  // the slave's turnaround for telling a retry from an echo. Only an answer no request could
+  // be teaches it: not a copy (a retry's), nor a frame that reads as a request too and came
+  // as late as the master's next one may (a FC08 counter 211 ms on would double every
+  // slave's time for a retry).
+  const int64_t waited = frame.t_ns - pending_->end_ns;
+  const bool may_be_request = frame.fit.request && waited >= retry_from_ns(pending_->slave);
+  if (options_.timed && waited >= 0 && copy == Copy::none && frame.check_ok && !may_be_request)
+    learn_turnaround(pending_->slave, waited);
   if (count_turnaround(frame, pending_->end_ns, pending_->end_read)) {
     frame.latency_ns = frame.t_ns - pending_->end_ns;
     if (options_.exact_clock && *frame.latency_ns < options_.t35_ns)

@@ -366,6 +366,24 @@ TEST(Matcher, AnotherWriteLongAfterAnAnswerWasDueIsTheMastersNextRequest) {
   EXPECT_EQ(counter[3].request, counter[2].index);
 }
 
+// A late answer that reads as a request too may be the master's next one: it teaches no
+// turnaround. Slave 1 answers in 5 ms, slave 2's FC08 counter comes 211 ms on; slave 3's
+// write, copied 120 ms on, is then past every answer's time: the master's retry.
+TEST(Matcher, ALateAnswerThatReadsAsARequestTooTeachesNoTurnaround) {
+  std::vector<Timeout> timeouts;
+  std::vector<std::vector<uint8_t>> keep;
+  const auto frames = match_timed({{"01 03 00 00 00 01 84 0a", 0},
+                                   {"01 03 02 00 05 78 47", 10},
+                                   {"02 08 00 0b 00 00 91 fa", 100},
+                                   {"02 08 00 0b 00 05 51 f9", 315},
+                                   {"03 06 00 01 00 03 99 e9", 400},
+                                   {"03 06 00 01 00 03 99 e9", 520}},
+                                  timeouts, keep);
+  EXPECT_EQ(frames[3].request, frames[2].index);
+  EXPECT_EQ(frames[5].role, Role::request);
+  EXPECT_TRUE(frames[5].findings & finding_retry);
+}
+
 TEST(Matcher, AnEchoCopyWithNothingToJudgeByIsAResponseMarkedAmbiguous) {
   std::vector<Timeout> timeouts;
   std::vector<std::vector<uint8_t>> keep;
