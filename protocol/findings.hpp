@@ -25,7 +25,7 @@ enum Finding : uint32_t {
   finding_retry = 1u << 7,                 // the request that just went unanswered, sent again
   finding_quantity_out_of_spec = 1u << 8,  // a quantity of 0 or over the standard's limit
   finding_byte_count_mismatch = 1u << 9,   // a byte count that disagrees with its quantity
-  finding_value_out_of_spec = 1u << 10,    // FC05 with a value other than FF00H or 0000H
+  finding_value_out_of_spec = 1u << 10,    // FC05 not FF00H/0000H, FC08 data its sub-function bars
   finding_ambiguous_echo = 1u << 11,       // an echo taken for the response that may be a retry
   // What the bus's history shows (analysis/bus_diagnostics):
   finding_short_gap = 1u << 12,        // a request less than t3.5 after the frame before it

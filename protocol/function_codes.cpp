@@ -102,6 +102,22 @@ uint32_t coil_value_limits(Bytes pdu) {
   return pdu.size() >= 5 && v != 0xFF00 && v != 0x0000 ? finding_value_out_of_spec : finding_none;
 }
 
+// FC08: each sub-function but Return Query Data says what its request's data is (Application
+// Protocol 6.8.1): 0000 for the counters and most others, FF00 too to restart, a character and
+// 00 to change the ASCII delimiter. A sub-function the standard does not name has no rule.
+uint32_t diagnostics_limits(Bytes pdu) {
+  if (pdu.size() != 5) return finding_none;
+  const uint16_t sub = be16(pdu, 1), data = be16(pdu, 3);
+  bool in_spec = true;
+  if (sub == 0x01)
+    in_spec = data == 0x0000 || data == 0xFF00;
+  else if (sub == 0x03)
+    in_spec = (data & 0xFF) == 0;
+  else if (sub == 0x02 || sub == 0x04 || (sub >= 0x0A && sub <= 0x14 && sub != 0x13))
+    in_spec = data == 0x0000;
+  return in_spec ? finding_none : finding_value_out_of_spec;
+}
+
 // FC17: the write quantity and its byte count, and the read quantity like FC03's.
 uint32_t read_write_limits(Bytes pdu) {
   uint32_t found = quantity_limits<7, 121, 9>(pdu);
@@ -589,7 +605,7 @@ constexpr std::array public_codes{
         .broadcast = true,
         .request_length = diagnostics_length,
         .response_length = diagnostics_length,
-        .request_findings = within_spec,
+        .request_findings = diagnostics_limits,
         .response_fit = diagnostics_fit,
         .request_fields = diagnostics,
         .response_fields = echo<diagnostics>,

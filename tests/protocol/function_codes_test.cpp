@@ -43,6 +43,21 @@ TEST(RequestSpec, QuantitiesOutsideTheStandardsLimitsAreFound) {
   EXPECT_EQ(found("05 00 01 ff 00"), finding_none);
 }
 
+// Application Protocol 6.8.1: what each diagnostic sub-function's request carries.
+TEST(RequestSpec, DiagnosticsCarryTheDataTheirSubFunctionSays) {
+  auto found = [](const char* pdu) { return request_spec_findings(hex(pdu)); };
+  EXPECT_EQ(found("08 00 0b 00 00"), finding_none);  // Return Bus Message Count
+  EXPECT_EQ(found("08 00 0b c4 6d"), finding_value_out_of_spec);
+  EXPECT_EQ(found("08 00 14 00 00"), finding_none);  // Clear Overrun Counter and Flag
+  EXPECT_EQ(found("08 00 01 ff 00"), finding_none);  // restart, clearing the event log
+  EXPECT_EQ(found("08 00 01 00 01"), finding_value_out_of_spec);
+  EXPECT_EQ(found("08 00 03 0d 00"), finding_none);  // CR as the ASCII delimiter
+  EXPECT_EQ(found("08 00 03 0d 0a"), finding_value_out_of_spec);
+  EXPECT_EQ(found("08 00 00 12 34"), finding_none);  // Return Query Data: any data
+  EXPECT_EQ(found("08 00 13 12 34"), finding_none);  // reserved: no rule
+  EXPECT_EQ(found("08 00 0b 00 00 00"), finding_none);
+}
+
 TEST(BodyLength, ResponsesCarryTheirByteCount) {
   EXPECT_EQ(response("01 03 04").bytes, 7);
   EXPECT_EQ(response("01 03 03").kind, K::invalid);  // registers come in pairs
