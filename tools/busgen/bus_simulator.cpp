@@ -551,6 +551,7 @@ class Simulator {
     const uint16_t sub = subs[pick(0, 6)];
     u16(req, sub);
     random_bytes(req, sub == 0 ? pick(1, 4) * 2 : 2);
+    if (sub != 0) std::fill(req.end() - 2, req.end(), 0);  // a counter's request carries 0000
     rsp.assign(req.begin(), req.end());
     if (sub != 0) {
       rsp.resize(rsp.size() - 2);
