@@ -95,7 +95,7 @@ Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role,
   if (frame.fit.response && !frame.fit.request) return Role::response;
   // Both or neither: an echo, or a frame too damaged to tell. What the bus waits for decides,
   // unless the frame is the pending request again, or another request of its kind that does
-  // not fit as the answer (a write of other values), sent long after an answer was due: the
+  // not fit as the answer (a write of other values), sent past the time for its answer: the
   // master's, after its time-out. A late answer that fits (a FC08 counter, a read of 3 bytes
   // of coils, as long as their requests) stays the answer.
   if (pending_matches(frame)) {
@@ -103,7 +103,7 @@ Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role,
     if (copy != Copy::none && options_.observer)  // --explain: what told echo and retry apart
       options_.observer->on_copy(frame.channel, frame.offset, judgement.margin);
     const bool another_request = copy == Copy::none && frame.check_ok && frame.fit.request &&
-                                 !fits_pending(frame) && long_after_answer_due(frame);
+                                 !fits_pending(frame) && past_answer_time(frame);
     return copy == Copy::retry || another_request ? Role::request : Role::response;
   }
   return frame.fit.request ? Role::request : Role::unknown;
@@ -119,6 +119,14 @@ bool Matcher::long_after_answer_due(const Frame& frame) const {
   const uint8_t slave = pending_->slave;
   return options_.timed && turnaround_learned(slave) &&
          frame.t_ns - pending_->end_ns >= retry_from_ns(slave);
+}
+
+// Past the time the pending request's answer comes in, and what the clock may add to a frame's
+// time; with nothing learned, past the shortest time-out masters use. An answer that late and
+// unfit would be two rare things, where a master's next request after a time-out is common.
+bool Matcher::past_answer_time(const Frame& frame) const {
+  return options_.timed && frame.t_ns - pending_->end_ns >=
+                               answered_within_ns(pending_->slave) + options_.clock_lag_ns;
 }
 
 // A copy of the request, or a frame that fits as its answer (a FC08 counter, an exception).
@@ -252,7 +260,7 @@ void Matcher::on_response(Frame& frame, Copy copy) {
   // as late as the master's next one may (a FC08 counter 211 ms on would double every
   // slave's time for a retry).
   const int64_t waited = frame.t_ns - pending_->end_ns;
-  const bool may_be_request = frame.fit.request && waited >= retry_from_ns(pending_->slave);
+  const bool may_be_request = frame.fit.request && past_answer_time(frame);
   if (options_.timed && waited >= 0 && copy == Copy::none && frame.check_ok && !may_be_request)
     learn_turnaround(pending_->slave, waited);
   if (count_turnaround(frame, pending_->end_ns, pending_->end_read)) {

@@ -105,6 +105,7 @@ class Matcher {
   static bool fits(const Frame& frame, const Pending& request);
   bool fits_pending(const Frame& frame) const { return fits(frame, *pending_); }
   bool long_after_answer_due(const Frame& frame) const;
+  bool past_answer_time(const Frame& frame) const;
   // Whether the clock saw the answer's turnaround; counts the answers timed, and the early ones.
   bool count_turnaround(const Frame& frame, int64_t request_end_ns, uint64_t request_end_read);
   void on_request(Frame& frame);

@@ -347,6 +347,15 @@ TEST(Matcher, AnotherWriteLongAfterAnAnswerWasDueIsTheMastersNextRequest) {
   EXPECT_EQ(reads[3].role, Role::request);
   EXPECT_EQ(reads[4].role, Role::response);
   EXPECT_EQ(reads[4].request, reads[3].index);
+  // With no answer seen yet, past the shortest time-out masters use (50 ms): the bus's first
+  // write, unanswered, then the next.
+  const auto first = match_timed({{"01 06 00 01 00 03 98 0b", 0},
+                                  {"01 06 00 01 00 04 d9 c9", 220},
+                                  {"01 06 00 01 00 04 d9 c9", 230}},
+                                 timeouts, keep);
+  EXPECT_EQ(first[1].role, Role::request);
+  EXPECT_EQ(first[2].role, Role::response);
+  EXPECT_EQ(first[2].request, first[1].index);
   // Within the slave's time, a reply that does not echo is still its answer, unfit.
   const auto soon = match_timed({{"01 03 00 00 00 01 84 0a", 0},
                                  {"01 03 02 00 05 78 47", 10},
