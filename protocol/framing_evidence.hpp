@@ -132,6 +132,7 @@ enum class Evidence : uint8_t {
   broke_off_at_silence,
   answer_read_as_request,
   request_inside_awaited_answer,
+  unawaited_answer_inside_awaited_answer,
   predicted_inside_awaited_answer,
   retry_and_glitch,
   retry_ending_in_zero,
@@ -157,7 +158,7 @@ struct EvidenceInfo {
   }
 };
 
-inline constexpr std::array<EvidenceInfo, 14> evidence_table{{
+inline constexpr std::array<EvidenceInfo, 15> evidence_table{{
     {"length-and-crc",
      "its function code's length rules and its CRC agree on where it ends",
      {Feature::crc_holds},
@@ -186,6 +187,11 @@ inline constexpr std::array<EvidenceInfo, 14> evidence_table{{
      "a request inside the span the awaited answer's structure claims, with no answer of its "
      "own after it: a collision's junk whose CRC held by chance",
      {Feature::awaited_header, Feature::no_answer_after},
+     2},
+    {"unawaited-answer-inside-awaited-answer",
+     "an answer nobody awaits inside the span the awaited answer's structure claims, with no "
+     "request of its own right before it: a collision's junk whose CRC held by chance",
+     {Feature::awaited_header, Feature::unexpected_sender},
      2},
     {"predicted-inside-awaited-answer",
      "inside the span the awaited answer claims, every byte of it is the one the pending "

@@ -158,15 +158,16 @@ void RtuFramer::observe(uint64_t at, Role role, const Match& match, ReadingOutco
 }
 
 // What the bus says against the span [at, at + length) being one frame, where a reading's length
-// rules and CRC agree on it. Each row is evidence, in bits, that it is not (framing_evidence.hpp):
-// the span is refuted, in either role, once the rows that hold outweigh its CRC, and waits where
-// a row whose bytes have not come could refute it and none has.
+// rules and CRC agree on it: refuted, in either role, once the rows that hold outweigh its CRC
+// (framing_evidence.hpp); waiting where a row whose bytes have not come could refute it.
 RtuFramer::Verdict RtuFramer::weigh_span(const Reading& r, Evidence& why) {
   return weigh_rows<
       Row{Evidence::good_frame_before_silence, &RtuFramer::good_frame_before_silence},
       Row{Evidence::broke_off_at_silence, &RtuFramer::broke_off_at_silence},
       Row{Evidence::answer_read_as_request, &RtuFramer::answer_read_as_request},
       Row{Evidence::request_inside_awaited_answer, &RtuFramer::request_inside_awaited_answer},
+      Row{Evidence::unawaited_answer_inside_awaited_answer,
+          &RtuFramer::unawaited_answer_inside_awaited_answer},
       Row{Evidence::predicted_inside_awaited_answer, &RtuFramer::predicted_inside_awaited_answer},
       Row{Evidence::retry_and_glitch, &RtuFramer::retry_and_glitch},
       Row{Evidence::retry_ending_in_zero, &RtuFramer::retry_ending_in_zero},
@@ -176,10 +177,8 @@ RtuFramer::Verdict RtuFramer::weigh_span(const Reading& r, Evidence& why) {
       Row{Evidence::swallows_exchange, &RtuFramer::swallows_exchange_reading}>(r, why);
 }
 
-// The rows unrolled at compile time: weighing runs once a frame. The span starts with its CRC's
-// bits; each row that holds takes its own off, and below nothing the span is refuted (the rows
-// after need not be weighed: they only take off). A row whose bytes have not come holds the
-// span back where its bits could refute it.
+// The rows unrolled at compile time: weighing runs once a frame. Below nothing the span is
+// refuted, and the rows after need not be weighed: they only take off.
 template <RtuFramer::Row... rows>
 RtuFramer::Verdict RtuFramer::weigh_rows(const Reading& r, Evidence& why) {
   Weight weight;
@@ -191,10 +190,8 @@ RtuFramer::Verdict RtuFramer::weigh_rows(const Reading& r, Evidence& why) {
   return weight.unknown ? Verdict::wait : Verdict::keep;
 }
 
-// A frame ends before a silence inside the reading, and what came after it kept the CRC good
-// (a trailing 0x00 keeps a zero residue zero: a retry of FC07, four bytes, and the 0x00 of a
-// broadcast after the silence read as its five-byte answer): the other reading, if any, is the
-// frame, whatever comes after the silence.
+// A frame ends before a silence inside the reading, and what came after it kept the CRC good (a
+// trailing 0x00 keeps a zero residue zero): the other reading, if any, is the frame.
 RtuFramer::Say RtuFramer::good_frame_before_silence(const Reading& r) {
   const uint64_t gap = timeline_.first_gap_after(r.at);
   if (gap < r.at + r.length && gap - r.at >= min_adu && rtu_crc_holds(bytes(r.at, gap)))
@@ -219,12 +216,10 @@ RtuFramer::Say RtuFramer::frame_after_silence(uint64_t gap, bool final) {
 }
 
 // The first bytes after the request, too soon for the master's next one, read as a request:
-// where they begin as the awaited answer with every byte its request predicts in place and the
-// standard does not allow that request, a talked-over answer whose junk passed a CRC; where a
-// glitch (0x00 or 0xFF) and the awaited answer's slave and function code begin them, that
-// answer after its driver's glitch, whichever request they read as (a broadcast from the 0x00).
-// A request the standard allows may be the master's, after a time-out shorter than the
-// threshold (a write of the same block with new values begins as its echo would).
+// beginning as the awaited answer, every byte its request predicts in place, as a request the
+// standard does not allow, a talked-over answer whose junk passed a CRC; a glitch and the
+// awaited answer's slave and function code, that answer after its driver's glitch, whatever
+// request they read as. A request the standard allows may be the master's (a short time-out).
 RtuFramer::Say RtuFramer::answer_read_as_request(const Reading& r) {
   if (r.role != Role::request || !first_after_request(r.at) || !too_soon_for_retry(r.at) ||
       awaited_.copies_request(from(r.at), r.length))
@@ -245,7 +240,7 @@ RtuFramer::Say RtuFramer::answer_read_as_request(const Reading& r) {
 // time-out after a silent slave cannot show, no rule.
 RtuFramer::Say RtuFramer::request_inside_awaited_answer(const Reading& r) {
   if (r.role != Role::request || *at_ptr(r.at) == 0 || options_.clock == ClockQuality::none ||
-      r.at <= head_ || r.at >= awaited_end(head_))
+      !inside_awaited_span(r.at))
     return Say::nothing;
   const auto answered = answer_follows(r.at, r.at + r.length, r.final);
   if (!answered) return Say::unknown;
@@ -253,10 +248,34 @@ RtuFramer::Say RtuFramer::request_inside_awaited_answer(const Reading& r) {
   return Say::nothing;
 }
 
+// An answer nobody awaits inside the span the awaited answer's structure claims is a
+// collision's junk that passed a CRC, unless its own request comes right before it (after a cut
+// answer, the master's next request and its answer).
+RtuFramer::Say RtuFramer::unawaited_answer_inside_awaited_answer(const Reading& r) {
+  const bool inside = r.role == Role::response && inside_awaited_span(r.at);
+  return inside && unexpected_sender(r.at, true) && !request_right_before(r.at, r.final)
+             ? Say::refutes
+             : Say::nothing;
+}
+
+// Whether a request of the slave and function of the answer at `at`, inside the awaited span,
+// ends right before it or before its driver's glitch.
+bool RtuFramer::request_right_before(uint64_t at, bool final) {
+  const uint8_t* p = at_ptr(at);
+  for (uint64_t start = head_ + 1; start + min_adu <= at; ++start) {
+    if (*at_ptr(start) != p[0] || at_ptr(start)[1] != (p[1] & 0x7F)) continue;
+    const Match request = match_at(start, final, 0);
+    const uint64_t end = start + request.length;
+    if (request.kind == Match::Kind::found && request.fit.request &&
+        (end == at || (end + 1 == at && is_glitch_byte(*at_ptr(end)))))
+      return true;
+  }
+  return false;
+}
+
 // Inside the span the awaited answer claims, a span whose every byte, its CRC's too, is the one
-// the request tells the answer has there (an echo's) holds its CRC because the request does:
-// FC15's echo, talked over at its end, held from its fifth byte on a broadcast write of a coil.
-// One that runs on past that span is not explained so (a cut FC0F answer, then a broadcast).
+// the request tells the answer has there (an echo's) holds its CRC because the request does.
+// One that runs on past that span is not explained so.
 RtuFramer::Say RtuFramer::predicted_inside_awaited_answer(const Reading& r) {
   const std::optional<uint64_t> answer = awaited_start(head_);
   const uint64_t end = r.at + r.length;
@@ -266,10 +285,8 @@ RtuFramer::Say RtuFramer::predicted_inside_awaited_answer(const Reading& r) {
   return Say::nothing;
 }
 
-// A copy of the pending request with a glitch after it reads as a response of one more byte
-// (FC07: a status equal to the request's CRC low byte); on a bus of glitches, the copy is the
-// likelier (a master's retry), unless it came too soon for a retry. (Any other frame whose CRC
-// ends in 0x00 holds a frame one byte shorter too: that is no reason to cut it.)
+// A copy of the pending request and a glitch read as a response of one more byte (FC07's): on a
+// bus of glitches the copy is the likelier (a master's retry), unless too soon for a retry.
 RtuFramer::Say RtuFramer::retry_and_glitch(const Reading& r) {
   if (r.other && *r.other == Role::request && glitch_odds_.zero_glitch_likelier() &&
       at_ptr(r.at)[r.length - 1] == 0x00 && timeline_.after_quiet_line(r.at + r.length - 1) &&
@@ -291,11 +308,10 @@ RtuFramer::Say RtuFramer::retry_ending_in_zero(const Reading& r) {
 }
 
 // A copy of the pending request too soon for a retry, where the awaited answer is longer, is
-// that answer damaged. Right where the answer begins, if it may begin so (FC07's answer whose
-// status equals the request's CRC low byte is the request and a 0x00), the copy is that answer
-// cut or talked over. Further on, after a damaged answer, a master may repeat its request as
-// soon: there only bytes no frame explains after the copy make it the answer, unless they begin
-// as the answer to it would, after its driver's glitch or not (its own answer talked over).
+// that answer damaged, right where the answer begins if it may begin so (FC07's whose status is
+// the request's CRC low byte). After a damaged answer a master may repeat its request as soon:
+// there only bytes no frame explains after the copy make it the answer, unless they begin as the
+// answer to it would, after its driver's glitch or not (its own answer talked over).
 RtuFramer::Say RtuFramer::answer_copying_request(const Reading& r) {
   if (!r.other || *r.other != Role::response || !awaited_.copies_request(from(r.at), r.length) ||
       !too_soon_for_retry(r.at))
@@ -317,10 +333,9 @@ RtuFramer::Say RtuFramer::answer_copying_request(const Reading& r) {
 }
 
 // The awaited response cut one or two bytes short, whose missing CRC the next request's first
-// bytes repeat, reads whole and good; the rest of the request then reads as junk. The
-// bytes after it tell. Only on a bus channel (on a split tap the request is on the other), and
-// only for a reading that may search on (search 0: nested in another reading's judgement, or a
-// CRC search at its depth), so that it never nests.
+// bytes repeat, reads whole and good, the rest of the request as junk. Only on a bus channel (on
+// a split tap the request is on the other), and for a reading that may search on (not nested
+// in another's judgement, nor a CRC search at its depth), so that it never nests.
 RtuFramer::Say RtuFramer::answer_cut_before_request(const Reading& r) {
   const uint8_t* p = at_ptr(r.at);
   if (r.role != Role::response || options_.role != ChannelRole::bus || r.search <= 0 ||
@@ -334,9 +349,7 @@ RtuFramer::Say RtuFramer::answer_cut_before_request(const Reading& r) {
 
 // A reserved address is as often a turnaround's 0xFF, and an answer nobody awaits (another
 // slave's or function's while a request waits) a collision's junk that passed a CRC: such a
-// frame gives way to one a bus carries inside it (a glitch, a response and the next glitch can
-// read as one; a talked-over exception's tail read as a 245-byte answer of a slave nobody
-// asked, across the next request and its answer). A frame from an expected sender keeps it.
+// frame gives way to one a bus carries inside it. A frame from an expected sender keeps it.
 RtuFramer::Say RtuFramer::swallows_known_frame_reading(const Reading& r) {
   const bool unexpected = unexpected_sender(r.at, r.role == Role::response);
   return swallows_known_frame(r.at, r.at + r.length, false, unexpected) ? Say::refutes
@@ -352,10 +365,7 @@ bool RtuFramer::unexpected_sender(uint64_t at, bool answer) const {
 }
 
 // Nor does any frame whose CRC holds by chance across a whole exchange: junk after it, and
-// inside it a request with its own answer's first bytes after it. A cut FC0C answer
-// `a5 0c 08 fb e1 58`, a glitch, the next request `10 0b 4d b7`, a glitch and its answer's
-// slave address passed a CRC as the 13 bytes the answer claimed; a FC0F request of
-// 255 bytes from inside a talked-over answer on, across the two exchanges after it.
+// inside it a request with its own answer's first bytes after it.
 RtuFramer::Say RtuFramer::swallows_exchange_reading(const Reading& r) {
   if (r.search > 0 && swallows_exchange(r.at, r.at + r.length, r.final)) return Say::refutes;
   return Say::nothing;
@@ -400,11 +410,10 @@ bool RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) {
 
 // Whether the response [at, at + length) is one cut a byte or two short with the next request
 // right behind it: a whole request starts in its CRC bytes, and nothing starts after it (not
-// even after a glitch). Nothing when what follows is still to come. With no bytes after it yet, it
-// waits only where its last byte came in a read of its own after a read of several (modtap's
-// own pcapng reads a packet's first byte apart, to time it), or where the read that brought its
-// first byte began before it (a timer's reads end anywhere): waiting behind every read's end
-// would hold each frame of a pcap, or of a capture read a byte at a time, back.
+// even after a glitch); nothing while what follows is to come. With no bytes after it, it waits
+// only where its last byte came in a read of its own after one of several (a pcapng packet's
+// first byte is read apart, to time it), or where the read of its first byte began before it
+// (a timer's reads end anywhere): waiting at every read's end would hold every frame back.
 std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bool final) {
   const uint64_t end = at + length;
   if (end == end_) {
@@ -585,9 +594,9 @@ bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end, const Margin& shor
 
 // The runner-up of a good frame's end (framing_evidence.hpp, Margin): the same frame one byte
 // longer, the 0x00 after it its own (a CRC that holds keeps holding with a 0x00 appended), or
-// one byte shorter, its last 0x00 the next driver's glitch. Both pass every check; the longer is
-// told apart by a silence before the byte, the shorter by a silence after it, a clock per byte
-// that saw it sent straight on, or a second glitch that reading would need at one turnaround.
+// one byte shorter, its last 0x00 the next driver's glitch. The longer is told apart by a
+// silence before the byte, the shorter by a silence after it, a clock per byte that saw it sent
+// straight on, or a second glitch that reading would need at one turnaround.
 Margin RtuFramer::longer_end(uint64_t at, uint64_t end) const {
   if (end >= end_ || end - at >= max_rtu_adu || *at_ptr(end) != 0x00) return {};
   Margin margin{RunnerUp::longer};
@@ -657,10 +666,8 @@ bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
 }
 
 // Whether a frame a bus carries starts inside [begin, end), wherever it ends, and outweighs the
-// span (keeps_frame_inside, framing_evidence.hpp). Only such a frame counts: inside a long
-// frame, bytes pass a CRC as a vendor code or an unnamed exception now and then. One that
-// starts in the last bytes and runs on past them counts too (a collision's junk, then the next
-// request). An exact copy after the span outweighs it (FC08's query and echo).
+// span (keeps_frame_inside, framing_evidence.hpp): inside a long frame, bytes pass a CRC as a
+// vendor code or an unnamed exception now and then. An exact copy after the span outweighs it.
 bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end, bool searched, bool unexpected) {
   if (keeps_frame_inside(searched, unexpected, false)) return false;
   if (keeps_frame_inside(searched, unexpected, true) && copy_follows(begin, end)) return false;
@@ -678,10 +685,8 @@ bool RtuFramer::blocked_by_gap(uint64_t at, bool final) {
 
 uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
   // Inside the span the awaited response's structure claims, a frame must be one a bus
-  // carries: a collision's junk has bytes that pass a CRC 1 start in 65,536, most often as a
-  // vendor code or an exception no standard names; and such a start, whose end only a CRC
-  // search could tell, does not keep the bytes before it waiting for that search (up to 256
-  // bytes on, however many frames came meanwhile).
+  // carries: a collision's junk passes a CRC 1 start in 65,536, most often as a vendor code or
+  // an unnamed exception, whose end only a CRC search 256 bytes on could tell.
   const uint64_t claimed_end = awaited_end(head_);
   uint64_t at = std::max(from, scanned_to_);
   for (; at < end_; ++at) {
@@ -767,10 +772,9 @@ bool RtuFramer::first_after_request(uint64_t at) const {
                                  answer_start_ < end_ && is_glitch_byte(*at_ptr(answer_start_)));
 }
 
-// A damaged response: reported as a frame with a bad check, so it stays in the slave's
-// picture. Cut short, it has no check to expect; run on, its end is where its structure says.
-// A response its structure says is damaged; one whose CRC holds over the length its structure
-// gives is not (an unnamed exception code and a glitch after it), whatever else came with it.
+// A damaged response: a frame with a bad check, so it stays in the slave's picture. Cut short,
+// it has no check to expect; run on, it ends where its structure says, and is not damaged where
+// its CRC holds over that length (an unnamed exception code and a glitch after it).
 void RtuFramer::emit_damaged(uint64_t begin, uint64_t end, Damage damage, uint32_t findings) {
   Frame frame = frame_of(begin, end, {false, true});
   if (damage != Damage::cut)
@@ -832,9 +836,8 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
 
 // A damaged response ending in 0x00 or 0xFF right before the next frame, or one cut short with
 // that frame's glitch after it: where the bus's glitches make it the likelier, the glitch, unless
-// the request says whether the byte is the response's (then a silence after it does not matter).
-// Cut short, its length may be told only without the glitch. Before the bus has shown whether it
-// has glitches, the byte is left to the frame unless the request rules it out, marked: both
+// the request says whether the byte is the response's. Before the bus has shown whether it has
+// glitches, the byte is left to the frame unless the request rules it out, marked: both
 // readings stand. Whether it emitted the piece so.
 bool RtuFramer::split_trailing_glitch(uint64_t begin, uint64_t end, uint32_t& findings,
                                       bool glitch_after) {
@@ -848,9 +851,8 @@ bool RtuFramer::split_trailing_glitch(uint64_t begin, uint64_t end, uint32_t& fi
       !(glitchy_bus || bus_unknown) || end >= end_ || !timeline_.after_quiet_line(end - 1))
     return false;
   // The clock has not ruled a glitch out. The request may rule the byte in or out; else the
-  // glitch reading is taken on a bus of glitches unless a silence after the byte says it ended
-  // a frame. The kept byte's reading is told apart only by the request ruling it out, the
-  // glitch's only by the silence: a glitch may repeat the very byte the request predicts.
+  // glitch is taken on a bus of glitches unless a silence after the byte says it ended a frame
+  // (a glitch may repeat the very byte the request predicts: only the silence tells it apart).
   const std::optional<bool> told = awaited_.byte(bytes(begin, end), size - 1);
   const bool gap = timeline_.gap_at(end);
   const bool glitch = told ? !*told : glitchy_bus && !gap;

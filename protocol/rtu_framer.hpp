@@ -125,6 +125,8 @@ class RtuFramer {
   Say frame_after_silence(uint64_t gap, bool final);
   Say answer_read_as_request(const Reading& r);
   Say request_inside_awaited_answer(const Reading& r);
+  Say unawaited_answer_inside_awaited_answer(const Reading& r);
+  bool request_right_before(uint64_t at, bool final);
   Say predicted_inside_awaited_answer(const Reading& r);
   Say retry_and_glitch(const Reading& r);
   Say retry_ending_in_zero(const Reading& r);
@@ -171,6 +173,7 @@ class RtuFramer {
   // First position >= from that starts a good frame; `decided` false if one is still open.
   uint64_t next_start(uint64_t from, bool final, bool& decided);
   std::optional<uint64_t> awaited_start(uint64_t at) const;
+  bool inside_awaited_span(uint64_t at) const { return at > head_ && at < awaited_end(head_); }
   uint64_t awaited_end(uint64_t at) const;
   bool standard_frame(uint64_t at) const;
   Frame frame_of(uint64_t begin, uint64_t end, RoleFit fit) const;

@@ -730,6 +730,43 @@ TEST_F(GapCollector, ARequestSentAgainAfterADamagedAnswerKeepsItsAnswerAfterAGli
   EXPECT_EQ(frames[4].raw, read_request);
 }
 
+// A read of 26 registers, whose answer is talked over: inside the 57 bytes it claims, eight
+// pass a CRC as slave 59's answer to a write nobody asked for. They are the answer's junk;
+// with slave 59's request right before them (the answer cut, then the master's next request)
+// they are that request's answer.
+TEST_F(GapCollector, AnAnswerNobodyAwaitsInsideTheAwaitedAnswerIsItsJunk) {
+  const auto read = with_crc(hex("b3 04 30 71 00 1a"));
+  const auto write = with_crc(hex("3b 10 ea 4c 00 02 04 00 01 00 02"));
+  const auto written = with_crc(hex("3b 10 ea 4c 00 02"));
+  std::vector<uint8_t> talked_over = concat(
+      {hex("b3 04 34"), std::vector<uint8_t>(25, 0x5a), written, std::vector<uint8_t>(21, 0xa5)});
+  ASSERT_EQ(talked_over.size(), 57u);
+  const auto out = run({{20'000'000, read},
+                        {2'000'000, talked_over},
+                        {60'000'000, read_request},
+                        {2'000'000, read_response}},
+                       ClockQuality::per_chunk);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 4u);
+  EXPECT_EQ(frames[1].raw, talked_over);
+  EXPECT_FALSE(frames[1].check_ok);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[2].raw, read_request);
+
+  const auto cut = hex("b3 04 34 5a 5a 5a 5a 5a");
+  const auto answered = run({{20'000'000, read},
+                             {2'000'000, concat({cut, write, written})},
+                             {60'000'000, read_request},
+                             {2'000'000, read_response}},
+                            ClockQuality::per_chunk)
+                            .frames();
+  ASSERT_EQ(answered.size(), 6u);
+  EXPECT_EQ(answered[1].raw, cut);
+  EXPECT_EQ(answered[2].raw, write);
+  EXPECT_EQ(answered[3].raw, written);
+  EXPECT_EQ(answered[3].request, answered[2].index);
+}
+
 // Frames 1 and 2: the awaited answer cut a byte short, then the next request, whole.
 void expect_cut_answer_then_request(const std::vector<Record>& frames,
                                     const std::vector<uint8_t>& cut,

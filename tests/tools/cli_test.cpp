@@ -1316,7 +1316,8 @@ TEST(Cli, ExplainWeighsAFrameInsideASpanAgainstTheJunkItLeaves) {
 // For a damaged frame, --explain says why no frame was cut inside it: an exception talked over,
 // `32 81 03 14 5b`, whose bytes from the second on, the next request and part of its answer
 // pass a CRC as a 25-byte answer of slave 129 (the answer's data chosen so). Nobody asked slave
-// 129, and that span holds the request: the row swallows-known-frame refutes it by 2 bits.
+// 129, and that span starts inside the span the exception claims, with no request of its own
+// before it: the row unawaited-answer-inside-awaited-answer refutes it by 4 bits.
 TEST(Cli, ExplainSaysWhyNoFrameWasCutInsideADamagedOne) {
   const std::string log = hexlog(
       "modtap-explain-damaged.log",
@@ -1329,12 +1330,15 @@ TEST(Cli, ExplainSaysWhyNoFrameWasCutInsideADamagedOne) {
   ASSERT_GE(r.lines.size(), 12u) << ::testing::PrintToString(r.lines);
   EXPECT_THAT(r.lines[0], ::testing::HasSubstr("crc BAD"));
   EXPECT_EQ(r.lines[3], "  at byte 9, inside it, a span whose length rules and CRC agree:");
-  EXPECT_EQ(r.lines[4], "    response, 25 bytes: refuted, -2 bits");
-  EXPECT_THAT(r.lines[6], ::testing::StartsWith("       -18  swallows-known-frame: "));
-  EXPECT_EQ(r.lines[11],
-            "  no frame here (0 bits), by 2 bits over the runner-up: the response of "
+  EXPECT_EQ(r.lines[4], "    response, 25 bytes: refuted, -4 bits");
+  EXPECT_THAT(r.lines[6],
+              ::testing::StartsWith("       -20  unawaited-answer-inside-awaited-answer: "));
+  EXPECT_THAT(r.lines[7], ::testing::StartsWith("               -16  awaited-header: "));
+  EXPECT_THAT(r.lines[8], ::testing::StartsWith("                -4  unexpected-sender: "));
+  EXPECT_EQ(r.lines[9],
+            "  no frame here (0 bits), by 4 bits over the runner-up: the response of "
             "25 bytes");
-  EXPECT_THAT(r.lines[12], ::testing::StartsWith("  then, no reading holding, "));
+  EXPECT_THAT(r.lines[10], ::testing::StartsWith("  then, no reading holding, "));
 }
 
 // Unframed bytes leave as records only once the next good frame is found; --explain holds the
