@@ -277,7 +277,7 @@ bool RtuFramer::request_right_before(uint64_t at, bool final) {
 // the request tells the answer has there (an echo's) holds its CRC because the request does.
 // One that runs on past that span is not explained so.
 RtuFramer::Say RtuFramer::predicted_inside_awaited_answer(const Reading& r) {
-  const std::optional<uint64_t> answer = awaited_start(head_);
+  const std::optional<uint64_t> answer = r.at > head_ ? awaited_start(head_) : std::nullopt;
   const uint64_t end = r.at + r.length;
   if (answer && r.at > *answer && end <= *answer + *awaited_.length(from(*answer)) &&
       awaited_.tells_every_byte(bytes(*answer, end), r.at - *answer))
