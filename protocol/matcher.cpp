@@ -100,7 +100,8 @@ Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role,
   // of coils, as long as their requests) stays the answer.
   if (pending_matches(frame)) {
     const Copy copy = judgement.copy;
-    if (copy != Copy::none && options_.observer)  // --explain: what told echo and retry apart
+    // --explain: what told echo and retry apart, where both could be.
+    if (judgement.margin.runner_up != RunnerUp::none && options_.observer)
       options_.observer->on_copy(frame.channel, frame.offset, judgement.margin);
     const bool another_request = copy == Copy::none && frame.check_ok && frame.fit.request &&
                                  !fits_pending(frame) && past_answer_time(frame);
@@ -152,6 +153,9 @@ bool Matcher::copies(const Frame& frame, const Pending& request) {
 // standing beside it.
 Matcher::CopyJudgement Matcher::judge_copy(const Frame& frame) const {
   if (!pending_ || !copies_pending(frame)) return {};
+  // Where no answer is its request again (FC20's carries records), the copy is a retry.
+  const auto pdu = std::span<const uint8_t>(pending_->pdu.data(), pending_->size);
+  if (check_response_fit(pdu, pdu) != finding_none) return {Copy::retry, {}};
   const int64_t waited = frame.t_ns - pending_->end_ns;
   const bool timed = options_.timed;
   Margin against_retry{RunnerUp::retry};

@@ -393,6 +393,23 @@ TEST(Matcher, ALateAnswerThatReadsAsARequestTooTeachesNoTurnaround) {
   EXPECT_TRUE(frames[5].findings & finding_retry);
 }
 
+// FC20's answer carries records, never its request again: a copy of the request, however soon,
+// is the master's retry, and the answer after it answers that.
+TEST(Matcher, ACopyOfARequestNoAnswerRepeatsIsARetry) {
+  std::vector<Timeout> timeouts;
+  std::vector<std::vector<uint8_t>> keep;
+  const auto frames = match_timed({{"01 14 07 06 00 04 00 01 00 02 d8 e5", 0},
+                                   {"01 14 07 06 00 04 00 01 00 02 d8 e5", 10},
+                                   {"01 14 06 05 06 0d fe 00 20 8b 4e", 20}},
+                                  timeouts, keep);
+  EXPECT_EQ(frames[1].role, Role::request);
+  EXPECT_TRUE(frames[1].findings & finding_retry);
+  EXPECT_FALSE(frames[1].findings & finding_ambiguous_echo);
+  EXPECT_EQ(frames[2].role, Role::response);
+  EXPECT_EQ(frames[2].request, frames[1].index);
+  EXPECT_EQ(frames[2].findings & finding_length_mismatch, 0u);
+}
+
 TEST(Matcher, AnEchoCopyWithNothingToJudgeByIsAResponseMarkedAmbiguous) {
   std::vector<Timeout> timeouts;
   std::vector<std::vector<uint8_t>> keep;
