@@ -732,8 +732,9 @@ TEST_F(GapCollector, ARequestSentAgainAfterADamagedAnswerKeepsItsAnswerAfterAGli
 
 // A read of 26 registers, whose answer is talked over: inside the 57 bytes it claims, eight
 // pass a CRC as slave 59's answer to a write nobody asked for. They are the answer's junk;
-// with slave 59's request right before them (the answer cut, then the master's next request)
-// they are that request's answer.
+// after the answer cut and the master's write to slave 59, they are that write's answer. (Here
+// the write is framed first; where an answer is weighed inside another span's judgement, its
+// own request right before it keeps it: seed 1073 of RealMasterSeeds.)
 TEST_F(GapCollector, AnAnswerNobodyAwaitsInsideTheAwaitedAnswerIsItsJunk) {
   const auto read = with_crc(hex("b3 04 30 71 00 1a"));
   const auto write = with_crc(hex("3b 10 ea 4c 00 02 04 00 01 00 02"));
