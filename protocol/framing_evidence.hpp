@@ -215,8 +215,8 @@ inline constexpr std::array<EvidenceInfo, 15> evidence_table{{
      {Feature::awaited_header, Feature::too_soon_for_retry},
      2},
     {"answer-cut-before-request",
-     "the awaited answer cut a byte or two short, whose missing CRC the next request's first "
-     "bytes repeat, with that request right behind it",
+     "the awaited answer cut short, the next request starting inside the span its structure "
+     "claims (most often repeating its missing CRC) and running past it, nothing after it",
      {Feature::another_crc, Feature::leaves_junk},
      2},
     {"swallows-known-frame",

@@ -341,7 +341,7 @@ RtuFramer::Say RtuFramer::answer_cut_before_request(const Reading& r) {
   if (r.role != Role::response || options_.role != ChannelRole::bus || r.search <= 0 ||
       !expected_.pending || expected_.slave != p[0] || expected_.function != (p[1] & 0x7F))
     return Say::nothing;
-  const auto cut = cut_before_frame(r.at, r.length, r.final);
+  const auto cut = cut_before_frame(r.at, r.length, r.final, r.search);
   if (!cut) return Say::unknown;
   if (*cut) return Say::refutes;
   return Say::nothing;
@@ -408,13 +408,15 @@ bool RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) {
   return false;
 }
 
-// Whether the response [at, at + length) is one cut a byte or two short with the next request
-// right behind it: a whole request starts in its CRC bytes, and nothing starts after it (not
-// even after a glitch); nothing while what follows is to come. With no bytes after it, it waits
-// only where its last byte came in a read of its own after one of several (a pcapng packet's
-// first byte is read apart, to time it), or where the read of its first byte began before it
-// (a timer's reads end anywhere): waiting at every read's end would hold every frame back.
-std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bool final) {
+// Whether the response [at, at + length) is one cut short with the next request right behind
+// it: nothing starts after it (not even after a glitch), and a whole request starts inside it
+// and runs past its end (its first bytes, most often, repeat the missing CRC); nothing while
+// what follows is to come. With no bytes after it, it waits only where its last byte came in a
+// read of its own after one of several (a pcapng packet's first byte is read apart, to time
+// it), or where the read of its first byte began before it (a timer's reads end anywhere):
+// waiting at every read's end would hold every frame back.
+std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bool final,
+                                                int search) {
   const uint64_t end = at + length;
   if (end == end_) {
     if (final || options_.clock != ClockQuality::per_chunk || timeline_.empty()) return false;
@@ -423,21 +425,50 @@ std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bo
     const ByteTimeline::Mark& before = timeline_.before_last();
     return before.end - before.first > 1 ? std::nullopt : std::optional<bool>(false);
   }
-  if (timeline_.gap_at(end)) return false;
-  // The request's function code must be public, or no request starts in the CRC bytes (most
-  // responses end here).
-  bool request_inside = false;
-  for (uint64_t start = end - crc_size; start < end && !request_inside; ++start) {
+  const bool glitch = is_glitch_byte(*at_ptr(end));
+  if (timeline_.gap_at(end) || checks_at(end) || (glitch && checks_at(end + 1))) return false;
+  const Match after = match_at(end, final, 0);
+  if (after.kind == Match::Kind::found || glitch_then_frame(end, final, 0)) return false;
+  // While what follows is still to come, only a request in the CRC bytes is looked for (their
+  // repeat is 1 cut in 256), and waits for it; any other once junk follows.
+  const bool open = after.kind == Match::Kind::need_more && !final;
+  const std::optional<bool> across =
+      request_across(open ? end - crc_size - 1 : at, end, final, search);
+  if (open && across != false) return std::nullopt;
+  return across;
+}
+
+// Whether a frame whose length rules and CRC agree, in either role, starts at `at`: what most
+// often follows a frame, told before anything costlier is asked.
+bool RtuFramer::checks_at(uint64_t at) const {
+  for (const Role role : {Role::request, Role::response}) {
+    const BodyLength body = body_length(role, bytes(at, end_));
+    const uint64_t end = at + body.bytes + crc_size;
+    if (body.kind == BodyLength::Kind::known && end <= end_ && rtu_crc_holds(bytes(at, end)))
+      return true;
+  }
+  return false;
+}
+
+// Whether a request starts inside [at, end) and runs past its end; nothing while one may. Only
+// a public function code starts one, and not where its header says it ends inside.
+std::optional<bool> RtuFramer::request_across(uint64_t at, uint64_t end, bool final, int search) {
+  bool open = false;
+  for (uint64_t start = at + 1; start < end; ++start) {
     const uint8_t fc = *at_ptr(start + 1);
     if ((fc & 0x80) || !is_public_function(fc)) continue;
-    const Match next = match_at(start, final, 0);
-    if (next.kind == Match::Kind::need_more && !final) return std::nullopt;
-    request_inside = next.kind == Match::Kind::found && next.fit.request;
+    const BodyLength body = body_length(Role::request, bytes(start, end_));
+    const uint64_t known_end = start + body.bytes + crc_size;
+    if (body.kind == BodyLength::Kind::invalid ||
+        (body.kind == BodyLength::Kind::known &&
+         (known_end <= end || (known_end <= end_ && !rtu_crc_holds(bytes(start, known_end))))))
+      continue;
+    const Match request = match_at(start, final, search - 1);
+    if (request.kind == Match::Kind::found && request.fit.request && start + request.length > end)
+      return true;
+    open |= request.kind == Match::Kind::need_more && !final;
   }
-  if (!request_inside) return false;
-  const Match after = match_at(end, final, 0);
-  if (after.kind == Match::Kind::need_more && !final) return std::nullopt;
-  return after.kind == Match::Kind::none && !glitch_then_frame(end, final, 0);
+  return open ? std::nullopt : std::optional<bool>(false);
 }
 
 RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int search) {

@@ -857,6 +857,45 @@ TEST_F(GapCollector, AResponseCutTwoBytesShortGivesTheNextRequestBackItsFirstByt
   EXPECT_EQ(frames[3].request, frames[2].index);
 }
 
+// An answer cut short reads whole where the bytes after its end pass its CRC, and a request
+// that starts inside it and runs past its end is what tells: nothing starts after the longer
+// answer. The request may be one whose end only a search finds: an FC23 exception cut before
+// its CRC's last byte, 33H, which the next request's slave address repeats, an FC08 Return
+// Query Data whose echo follows (fresh seed 3157). Or it may start further in, after its
+// driver's glitch: an FC0F answer cut after 3 bytes, a 0x00, and an FC17 request whose first
+// four bytes and the 0x00 pass the answer's CRC, to a slave that does not answer (3495).
+TEST_F(GapCollector, AnAnswerCutShortGivesBackTheRequestThatStartsInsideIt) {
+  const auto fc08 = hex("33 08 00 00 24 49 57 1b 47 af 2f e2");
+  const auto fc17 = hex("78 17 00 7d 00 01 03 a4 00 01 02 45 a4 7c 89");
+  struct Case {
+    std::vector<uint8_t> request, cut, between, next, after;
+    size_t read_whole;  // the length that reads as the whole answer
+  };
+  const std::vector<Case> cases{
+      {hex("0f 17 01 85 00 0f 01 17 00 04 08 bc 66 d0 02 06 c3 fe 87 bd 8c"),
+       hex("0f 97 01 ee"),
+       {},
+       fc08,
+       fc08,
+       5},
+      {hex("11 0f ee fd 00 15 03 cc a9 dd b1 1d"), hex("11 0f ee"), hex("00"), fc17, {}, 8}};
+  for (const Case& c : cases) {
+    ASSERT_TRUE(rtu_crc_holds(c.next));
+    const auto bytes = concat({c.cut, c.between, c.next, c.after});
+    ASSERT_TRUE(rtu_crc_holds(std::span(bytes).first(c.read_whole)));
+    const std::vector<Piece> pieces{
+        {20'000'000, c.request}, {2'000'000, bytes}, {200'000'000, read_request}};
+    const auto stream = run(pieces, ClockQuality::per_chunk).stream();
+    ASSERT_GE(stream.size(), 4u);
+    EXPECT_EQ(stream[1].raw, c.cut);
+    EXPECT_EQ(stream[1].damage, Damage::cut);
+    const size_t next = c.between.empty() ? 2 : 3;
+    EXPECT_EQ(stream[next].raw, c.next);
+    EXPECT_EQ(stream[next].role, Role::request);
+    EXPECT_TRUE(stream[next].check_ok);
+  }
+}
+
 // FC08 Return Query Data ends where its CRC says only if something confirms it. Here a glitch
 // and its exception, talked over, follow it, then the master's next request after its
 // time-out: that silence bounds the junk as the end of the input would, and the request's own
