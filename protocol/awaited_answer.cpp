@@ -79,4 +79,16 @@ bool AwaitedAnswer::starts_request_copy(std::span<const uint8_t> bytes, size_t s
          std::equal(request.begin(), request.end(), bytes.begin() + 1);
 }
 
+bool AwaitedAnswer::repeats_request(std::span<const uint8_t> bytes) const {
+  const size_t size = request_size();
+  if (size == 0 || bytes.empty() || bytes.size() > size || bytes[0] != expected_.slave)
+    return false;
+  const auto request = expected_.request_pdu;
+  const size_t pdu = std::min(bytes.size() - 1, request.size());
+  if (!std::equal(request.begin(), request.begin() + pdu, bytes.begin() + 1)) return false;
+  const uint16_t crc = crc16(request, crc16_step(0xFFFF, expected_.slave));
+  const uint8_t wire[crc_size] = {static_cast<uint8_t>(crc & 0xFF), static_cast<uint8_t>(crc >> 8)};
+  return std::equal(bytes.begin() + 1 + pdu, bytes.end(), wire);
+}
+
 }  // namespace modtap

@@ -40,6 +40,12 @@ class AwaitedAnswer {
   // slave, its PDU and a good CRC (the same PDU has the same CRC); or all but the last byte.
   bool copies_request(std::span<const uint8_t> bytes, size_t size) const;
   bool starts_request_copy(std::span<const uint8_t> bytes, size_t size) const;
+  // The pending request's size on the wire (0 where none is pending), and whether `bytes` are
+  // its first bytes, CRC included.
+  size_t request_size() const {
+    return expected_.pending ? 1 + expected_.request_pdu.size() + 2 : 0;  // slave, PDU, CRC
+  }
+  bool repeats_request(std::span<const uint8_t> bytes) const;
   // Whether a copy of the request starting at `start_ns` came before the master could have
   // timed out: the answer (an echo), not the master's retry.
   bool too_soon_for_retry(int64_t start_ns) const {

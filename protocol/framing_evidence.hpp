@@ -135,7 +135,7 @@ enum class Evidence : uint8_t {
   unawaited_answer_inside_awaited_answer,
   predicted_inside_awaited_answer,
   retry_and_glitch,
-  retry_ending_in_zero,
+  retry_read_as_answer,
   answer_copying_request,
   answer_cut_before_request,
   swallows_known_frame,
@@ -204,9 +204,10 @@ inline constexpr std::array<EvidenceInfo, 15> evidence_table{{
      "more, late enough for the master's retry",
      {Feature::another_crc, Feature::glitch_odds},
      2},
-    {"retry-ending-in-zero",
-     "the pending request again, whose CRC ends in 0x00, holds an answer one byte shorter that "
-     "its request did not ask for",
+    {"retry-read-as-answer",
+     "the pending request again, byte for byte and late enough for its retry, starts an answer "
+     "that ends elsewhere: shorter (the copy's CRC ends in 0x00s, which keep a CRC good) or "
+     "longer (its CRC holds by chance)",
      {Feature::another_crc, Feature::request_again},
      2},
     {"answer-copying-request",

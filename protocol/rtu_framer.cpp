@@ -170,7 +170,7 @@ RtuFramer::Verdict RtuFramer::weigh_span(const Reading& r, Evidence& why) {
           &RtuFramer::unawaited_answer_inside_awaited_answer},
       Row{Evidence::predicted_inside_awaited_answer, &RtuFramer::predicted_inside_awaited_answer},
       Row{Evidence::retry_and_glitch, &RtuFramer::retry_and_glitch},
-      Row{Evidence::retry_ending_in_zero, &RtuFramer::retry_ending_in_zero},
+      Row{Evidence::retry_read_as_answer, &RtuFramer::retry_read_as_answer},
       Row{Evidence::answer_copying_request, &RtuFramer::answer_copying_request},
       Row{Evidence::answer_cut_before_request, &RtuFramer::answer_cut_before_request},
       Row{Evidence::swallows_known_frame, &RtuFramer::swallows_known_frame_reading},
@@ -295,15 +295,19 @@ RtuFramer::Say RtuFramer::retry_and_glitch(const Reading& r) {
   return Say::nothing;
 }
 
-// The pending request again (a retry) whose CRC ends in 0x00 holds a response one byte shorter,
-// which its request would not have asked for: the copy is the reading, once its last byte is
-// there to say so.
-RtuFramer::Say RtuFramer::retry_ending_in_zero(const Reading& r) {
-  if (!r.other || *r.other != Role::request || !awaited_.starts_request_copy(from(r.at), r.length))
+// The pending request again (a retry) starts a response that ends elsewhere: shorter where the
+// copy's CRC ends in 0x00s (they keep a CRC good), longer where a byte count runs on and its
+// CRC holds by chance, not where the answer begins so by a chance its structure often meets
+// (FC07's, whose status is the copy's CRC low byte). The copy is the reading, once its bytes
+// are there to say so.
+RtuFramer::Say RtuFramer::retry_read_as_answer(const Reading& r) {
+  const size_t copy = awaited_.request_size();
+  if (!r.other || *r.other != Role::request || copy == r.length ||
+      !awaited_.repeats_request(bytes(r.at, r.at + std::min<size_t>(copy, r.length))) ||
+      (copy < r.length && awaited_.may_begin_with_copy(bytes(r.at, r.at + copy), r.length)))
     return Say::nothing;
-  if (r.at + r.length == end_) return r.final ? Say::nothing : Say::unknown;
-  if (awaited_.copies_request(from(r.at), r.length + 1) && !too_soon_for_retry(r.at))
-    return Say::refutes;
+  if (r.at + copy > end_) return r.final ? Say::nothing : Say::unknown;
+  if (awaited_.copies_request(from(r.at), copy) && !too_soon_for_retry(r.at)) return Say::refutes;
   return Say::nothing;
 }
 

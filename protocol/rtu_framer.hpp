@@ -129,7 +129,7 @@ class RtuFramer {
   bool request_right_before(uint64_t at, bool final);
   Say predicted_inside_awaited_answer(const Reading& r);
   Say retry_and_glitch(const Reading& r);
-  Say retry_ending_in_zero(const Reading& r);
+  Say retry_read_as_answer(const Reading& r);
   Say answer_copying_request(const Reading& r);
   Say answer_cut_before_request(const Reading& r);
   Say swallows_known_frame_reading(const Reading& r);

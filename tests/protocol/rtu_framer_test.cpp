@@ -857,6 +857,52 @@ TEST_F(GapCollector, AResponseCutTwoBytesShortGivesTheNextRequestBackItsFirstByt
   EXPECT_EQ(frames[3].request, frames[2].index);
 }
 
+// The pending request again, late enough for the master's retry, reads as the start of an
+// answer that ends elsewhere. Shorter: an FC0F write whose CRC is 0000H, its first eight bytes
+// the very answer it awaits (fresh seed 3524). Longer: an FC01 read whose third byte, 8EH,
+// counts 142 bytes of coils, and the frames after it pass that answer's CRC by chance (seed
+// 4088). Either way the copy is the retry, and the answer after it is its own.
+TEST_F(GapCollector, ARetryIsNoAnswerThatStartsAsItAndEndsElsewhere) {
+  const auto write = hex("db 0f 1d e8 00 01 01 69 00 00");
+  const auto written = hex("db 0f 1d e8 00 01 01 69");
+  ASSERT_TRUE(rtu_crc_holds(write));
+  ASSERT_TRUE(rtu_crc_holds(written));
+  const std::vector<Piece> short_pieces{
+      {20'000'000, write}, {222'000'000, write}, {5'000'000, written}, {20'000'000, read_request}};
+  const auto shorter = run(short_pieces, ClockQuality::per_chunk).frames();
+  ASSERT_EQ(shorter.size(), 4u);
+  EXPECT_EQ(shorter[1].raw, write);
+  EXPECT_EQ(shorter[1].role, Role::request);
+  EXPECT_EQ(shorter[2].raw, written);
+  EXPECT_EQ(shorter[2].request, shorter[1].index);
+
+  const auto read = hex("e4 01 8e 71 00 2d 91 11");
+  const auto coils = with_crc(hex("e4 01 06 01 02 03 04 05 06"));
+  const auto poll = with_crc(hex("0a 03 00 00 00 0a"));
+  const auto registers = concat({hex("0a 03 14"), std::vector<uint8_t>(20, 0x11)});
+  std::vector<uint8_t> bytes = concat({read, coils});
+  for (int i = 0; i < 4; ++i) bytes = concat({bytes, poll, with_crc(registers)});
+  // 151 bytes from the copy on: the last answer's data bytes 145 and 146 are made the CRC of the
+  // 145 before them, and its own CRC made again.
+  const uint16_t chance = crc16(std::span(bytes).first(145));
+  bytes[145] = chance & 0xFF;
+  bytes[146] = chance >> 8;
+  const uint16_t own = crc16(std::span(bytes).subspan(bytes.size() - 25, 23));
+  bytes[bytes.size() - 2] = own & 0xFF;
+  bytes.back() = own >> 8;
+  ASSERT_TRUE(rtu_crc_holds(std::span(bytes).first(147)));
+  ASSERT_TRUE(rtu_crc_holds(std::span(bytes).last(25)));
+  const std::vector<Piece> long_pieces{
+      {20'000'000, read}, {224'000'000, bytes}, {20'000'000, read_request}};
+  const auto longer = run(long_pieces, ClockQuality::per_chunk).frames();
+  ASSERT_EQ(longer.size(), 12u);
+  EXPECT_EQ(longer[1].raw, read);
+  EXPECT_EQ(longer[1].role, Role::request);
+  EXPECT_EQ(longer[2].raw, coils);
+  EXPECT_EQ(longer[2].request, longer[1].index);
+  for (const auto& frame : longer) EXPECT_TRUE(frame.check_ok);
+}
+
 // An answer cut short reads whole where the bytes after its end pass its CRC, and a request
 // that starts inside it and runs past its end is what tells: nothing starts after the longer
 // answer. The request may be one whose end only a search finds: an FC23 exception cut before
