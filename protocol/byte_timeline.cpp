@@ -96,4 +96,10 @@ bool ByteTimeline::read_starts_inside(uint64_t at) const {
   return false;
 }
 
+bool ByteTimeline::reads_several(uint64_t begin, uint64_t end) const {
+  for (auto mark = marks_.rbegin(); mark != marks_.rend() && mark->end > begin; ++mark)
+    if (mark->first < end && (mark->end - mark->first > 1 || mark->continues_read)) return true;
+  return false;
+}
+
 }  // namespace modtap

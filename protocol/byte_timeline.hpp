@@ -42,8 +42,6 @@ class ByteTimeline {
   // The last chunk, or whether there is none.
   bool empty() const { return marks_.empty(); }
   const Mark& last() const { return marks_.back(); }
-  const Mark& before_last() const { return marks_[marks_.size() - 2]; }
-  size_t mark_count() const { return marks_.size(); }
 
   int64_t end_time(uint64_t offset) const;
   int64_t start_time(uint64_t offset) const { return end_time(offset) - char_ns_; }
@@ -63,6 +61,9 @@ class ByteTimeline {
   bool after_quiet_line(uint64_t offset) const;
   // Whether the read that brought byte `at` began before it.
   bool read_starts_inside(uint64_t at) const;
+  // Whether a read that brought bytes of [begin, end) brought several, or went on with a read
+  // before it: not a source that reads a byte at a time.
+  bool reads_several(uint64_t begin, uint64_t end) const;
 
  private:
   const Mark* find(uint64_t offset) const;

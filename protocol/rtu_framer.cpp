@@ -416,18 +416,18 @@ bool RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) {
 // it: nothing starts after it (not even after a glitch), and a whole request starts inside it
 // and runs past its end (its first bytes, most often, repeat the missing CRC); nothing while
 // what follows is to come. With no bytes after it, it waits only where its last byte came in a
-// read of its own after one of several (a pcapng packet's first byte is read apart, to time
-// it), or where the read of its first byte began before it (a timer's reads end anywhere):
-// waiting at every read's end would hold every frame back.
+// read of its own and bytes before it in a read of several (a pcapng packet's first byte is
+// read apart, to time it; a glitch's packet may come between), or where the read of its first
+// byte began before it (a timer's reads end anywhere): waiting at every read's end would hold
+// every frame back.
 std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bool final,
                                                 int search) {
   const uint64_t end = at + length;
   if (end == end_) {
     if (final || options_.clock != ClockQuality::per_chunk || timeline_.empty()) return false;
     if (timeline_.read_starts_inside(at)) return std::nullopt;
-    if (timeline_.mark_count() < 2 || timeline_.last().first != end - 1) return false;
-    const ByteTimeline::Mark& before = timeline_.before_last();
-    return before.end - before.first > 1 ? std::nullopt : std::optional<bool>(false);
+    if (timeline_.last().first != end - 1 || !timeline_.reads_several(at, end - 1)) return false;
+    return std::nullopt;
   }
   const bool glitch = is_glitch_byte(*at_ptr(end));
   if (timeline_.gap_at(end) || checks_at(end) || (glitch && checks_at(end + 1))) return false;

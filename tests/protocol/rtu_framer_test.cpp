@@ -834,6 +834,30 @@ TEST_F(GapCollector, AResponseCutOneByteShortGivesTheNextRequestBackItsSlaveAddr
   EXPECT_EQ(whole[1].request, whole[0].index);
 }
 
+// An exception cut before its CRC, 0073H, and the next request's driver's 0x00 glitch and
+// slave address 73H complete it (fresh seed 3193): read packet by packet, as modtap reads its
+// own pcapng (the glitch a packet, each packet's first byte apart), the request's first byte
+// comes alone after the glitch's, and the answer waits for the bytes that tell: the request
+// is whole and its answer, its echo, paired with it.
+TEST_F(GapCollector, AnAnswerCutBeforeAGlitchWaitsForTheRequestReadPacketByPacket) {
+  const auto request = hex("a1 01 00 eb 0b 25 92 75");
+  const auto cut = hex("a1 81 03");
+  const auto next = hex("73 16 94 b5 5f 38 32 2c 66 91");
+  ASSERT_TRUE(rtu_crc_holds(hex("a1 81 03 00 73")));
+  const std::vector<uint8_t> rest(next.begin() + 1, next.end());
+  const std::vector<Piece> pieces{{20'000'000, request},  {2'000'000, hex("a1")},
+                                  {0, hex("81 03")},      {2'000'000, hex("00")},
+                                  {1'000'000, hex("73")}, {0, rest},
+                                  {5'000'000, next},      {20'000'000, read_request}};
+  const auto frames = run(pieces, ClockQuality::per_chunk).frames();
+  ASSERT_EQ(frames.size(), 5u);
+  EXPECT_FALSE(frames[1].check_ok);  // the glitch kept or not, as the bus's glitch odds say
+  EXPECT_TRUE(std::equal(cut.begin(), cut.end(), frames[1].raw.begin()));
+  EXPECT_EQ(frames[2].raw, next);
+  EXPECT_TRUE(frames[2].check_ok);
+  EXPECT_EQ(frames[3].request, frames[2].index);
+}
+
 // An FC17 answer cut two bytes short, and the next request, Report Server ID of slave 132
 // (`84 11 a2 bc`), begins with its whole missing CRC: the bytes read as the whole answer and
 // junk. What follows tells as it does for one byte: nothing starts after the longer answer,
