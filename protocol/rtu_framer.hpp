@@ -60,6 +60,12 @@ class RtuFramer {
     SpanEnd end = SpanEnd::length_rules;
   };
   static Match need_more() { return {Match::Kind::need_more, 0, {}}; }
+  static constexpr uint16_t crc_size = 2;
+  static constexpr uint16_t min_adu = 4;             // slave, function, CRC
+  static constexpr uint8_t max_unicast_slave = 247;  // 248-255 are reserved (Serial Line 2.2)
+  static bool plausible_start(uint8_t slave, uint8_t fc);
+  // What a driver turning on puts on the bus: one byte, the line's idle level or its opposite.
+  static bool is_glitch_byte(uint8_t byte) { return byte == 0x00 || byte == 0xFF; }
   struct CrcHits {
     uint64_t at = UINT64_MAX;
     size_t first = 0;
