@@ -68,15 +68,7 @@ bool AwaitedAnswer::may_begin_with_copy(std::span<const uint8_t> copy, uint16_t 
 }
 
 bool AwaitedAnswer::copies_request(std::span<const uint8_t> bytes, size_t size) const {
-  return size <= bytes.size() && starts_request_copy(bytes, size - 1) &&
-         rtu_crc_holds(bytes.first(size));
-}
-
-bool AwaitedAnswer::starts_request_copy(std::span<const uint8_t> bytes, size_t size) const {
-  const auto request = expected_.request_pdu;
-  return expected_.pending && size <= bytes.size() && size >= 2 && bytes[0] == expected_.slave &&
-         size + 1 == request.size() + 1 + crc_size &&
-         std::equal(request.begin(), request.end(), bytes.begin() + 1);
+  return size == request_size() && size <= bytes.size() && repeats_request(bytes.first(size));
 }
 
 bool AwaitedAnswer::repeats_request(std::span<const uint8_t> bytes) const {

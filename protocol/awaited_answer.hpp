@@ -37,9 +37,8 @@ class AwaitedAnswer {
   bool may_begin_with_copy(std::span<const uint8_t> copy, uint16_t length) const;
 
   // Whether the first `size` of `bytes` are the pending request again, byte for byte: its
-  // slave, its PDU and a good CRC (the same PDU has the same CRC); or all but the last byte.
+  // slave, its PDU and its CRC.
   bool copies_request(std::span<const uint8_t> bytes, size_t size) const;
-  bool starts_request_copy(std::span<const uint8_t> bytes, size_t size) const;
   // The pending request's size on the wire (0 where none is pending), and whether `bytes` are
   // its first bytes, CRC included.
   size_t request_size() const {
