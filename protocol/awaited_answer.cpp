@@ -1,6 +1,7 @@
 #include "protocol/awaited_answer.hpp"
 
 #include <algorithm>
+#include <array>
 
 #include "protocol/checksum.hpp"
 #include "protocol/function_codes.hpp"
@@ -46,8 +47,7 @@ std::optional<bool> AwaitedAnswer::byte(std::span<const uint8_t> bytes, size_t p
   if (pos - 1 < request.size()) return request[pos - 1] == bytes[pos];
   const size_t crc_at = 1 + request.size();
   if (pos >= crc_at + crc_size) return std::nullopt;
-  const uint16_t crc = crc16(request, crc16_step(0xFFFF, expected_.slave));
-  return (pos == crc_at ? (crc & 0xFF) : (crc >> 8)) == bytes[pos];
+  return request_crc()[pos - crc_at] == bytes[pos];
 }
 
 bool AwaitedAnswer::tells_every_byte(std::span<const uint8_t> bytes, size_t pos) const {
@@ -78,9 +78,13 @@ bool AwaitedAnswer::repeats_request(std::span<const uint8_t> bytes) const {
   const auto request = expected_.request_pdu;
   const size_t pdu = std::min(bytes.size() - 1, request.size());
   if (!std::equal(request.begin(), request.begin() + pdu, bytes.begin() + 1)) return false;
-  const uint16_t crc = crc16(request, crc16_step(0xFFFF, expected_.slave));
-  const uint8_t wire[crc_size] = {static_cast<uint8_t>(crc & 0xFF), static_cast<uint8_t>(crc >> 8)};
-  return std::equal(bytes.begin() + 1 + pdu, bytes.end(), wire);
+  const std::array<uint8_t, crc_size> crc = request_crc();
+  return std::equal(bytes.begin() + 1 + pdu, bytes.end(), crc.begin());
+}
+
+std::array<uint8_t, 2> AwaitedAnswer::request_crc() const {
+  const uint16_t crc = crc16(expected_.request_pdu, crc16_step(0xFFFF, expected_.slave));
+  return {static_cast<uint8_t>(crc & 0xFF), static_cast<uint8_t>(crc >> 8)};
 }
 
 }  // namespace modtap

@@ -4,6 +4,7 @@
 // the bytes from a candidate start on.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -52,6 +53,9 @@ class AwaitedAnswer {
   }
 
  private:
+  // The pending request's CRC as the wire carries it, low byte first.
+  std::array<uint8_t, 2> request_crc() const;
+
   const Expectation& expected_;
   bool carries_answers_;
 };

@@ -289,7 +289,7 @@ std::optional<bool> RtuFramer::cut_before_frame(uint64_t at, uint16_t length, bo
   // repeat is 1 cut in 256), and waits for it; any other once junk follows.
   const bool open = after.kind == Match::Kind::need_more && !final;
   const std::optional<bool> across =
-      request_across(open ? end - crc_size - 1 : at, end, final, search);
+      request_across(open ? end - crc_size : at + 1, end, final, search);
   if (open && across != false) return std::nullopt;
   return across;
 }
@@ -306,11 +306,12 @@ bool RtuFramer::checks_at(uint64_t at) const {
   return false;
 }
 
-// Whether a request starts inside [at, end) and runs past its end; nothing while one may. Only
-// a public function code starts one, and not where its header says it ends inside.
-std::optional<bool> RtuFramer::request_across(uint64_t at, uint64_t end, bool final, int search) {
+// Whether a request starts in [first, end) and runs past `end`; nothing while one may. Only a
+// public function code starts one, and not where its header says it ends before `end`.
+std::optional<bool> RtuFramer::request_across(uint64_t first, uint64_t end, bool final,
+                                              int search) {
   bool open = false;
-  for (uint64_t start = at + 1; start < end; ++start) {
+  for (uint64_t start = first; start < end; ++start) {
     const uint8_t fc = *at_ptr(start + 1);
     if ((fc & 0x80) || !is_public_function(fc)) continue;
     const BodyLength body = body_length(Role::request, bytes(start, end_));

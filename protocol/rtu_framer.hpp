@@ -144,7 +144,7 @@ class RtuFramer {
   void observe(uint64_t at, Role role, const Match& match, ReadingOutcome outcome,
                Evidence why) const;
   std::optional<bool> cut_before_frame(uint64_t at, uint16_t length, bool final, int search);
-  std::optional<bool> request_across(uint64_t at, uint64_t end, bool final, int search);
+  std::optional<bool> request_across(uint64_t first, uint64_t end, bool final, int search);
   bool checks_at(uint64_t at) const;
   bool first_after_request(uint64_t at) const;
   // A copy of the pending request starting at `at` came before the master could time out.
