@@ -174,17 +174,27 @@ void ExplainSink::explain(uint16_t channel, uint64_t offset, Mode mode) {
 }
 
 // Where a reading inside unframed bytes had its length rules and CRC agree, and the evidence
-// refuted it: why no frame was cut there.
+// refuted it: why no frame was cut there. Starts refuted whatever their end are many (most
+// bytes of a collision's junk), so each row that did is said once, with how many.
 void ExplainSink::print_inside(uint16_t channel, uint64_t offset, size_t size) {
   const ChannelSteps& steps = steps_[channel];
+  std::map<Evidence, size_t> at_start;
   for (auto it = steps.at.upper_bound(offset); it != steps.at.end() && it->first < offset + size;
        ++it) {
     std::vector<const FramingStep*> refuted;
-    for (const FramingStep& step : it->second)
+    for (const FramingStep& step : it->second) {
       if (step.outcome == ReadingOutcome::refuted) refuted.push_back(&step);
+      if (step.outcome == ReadingOutcome::refuted_at_start && step.role == it->second[0].role)
+        ++at_start[step.why];
+    }
     if (refuted.empty()) continue;
     out_.print("  at byte {}, inside it, a span whose length rules and CRC agree:\n", it->first);
     print_weighed(refuted);
+  }
+  for (const auto& [why, starts] : at_start) {
+    out_.print("  at {} inside it, every reading refuted whatever its end:\n",
+               counted(starts, "start", "starts"));
+    print_row(evidence_info(why), -1);
   }
 }
 
@@ -209,20 +219,20 @@ void ExplainSink::print_reading(const FramingStep& step) {
   const EvidenceInfo& why = evidence_info(step.why);
   out_.print("    {}", to_string(step.role));
   if (step.length) out_.print(", {} bytes", step.length);
-  const bool weighed =
-      step.outcome == ReadingOutcome::kept || step.outcome == ReadingOutcome::refuted;
-  if (!weighed) {
+  if (!scored(step)) {
     out_.print(": {} ({}: {})\n", to_string(step.outcome), why.name, why.why);
     return;
   }
-  out_.print(": {}, {:+} bits\n", to_string(step.outcome), step.score());
+  const bool at_start = step.outcome == ReadingOutcome::refuted_at_start;
+  out_.print(": {}, {}{:+} bits\n", to_string(step.outcome), at_start ? "at most " : "",
+             step.score());
   if (step.end != SpanEnd::length_rules) {
     const SpanEndInfo& end = span_end_info(step.end);
     out_.print("            its end ({}): {}\n", end.name, end.why);
     print_confirmation(step.end);
   }
   print_row(evidence_info(Evidence::length_and_crc), +1);
-  if (step.outcome == ReadingOutcome::refuted) print_row(why, -1);
+  if (step.outcome != ReadingOutcome::kept) print_row(why, -1);
   if (step.outcome == ReadingOutcome::kept) print_end_margin(step.end_margin);
 }
 
@@ -299,7 +309,7 @@ void ExplainSink::print_margin(const std::vector<const FramingStep*>& weighed) {
   });
   const FramingStep* runner_up = nullptr;
   for (const FramingStep* step : weighed)
-    if (step->outcome == ReadingOutcome::refuted &&
+    if (scored(*step) && step->outcome != ReadingOutcome::kept &&
         (!runner_up || step->score() > runner_up->score()))
       runner_up = step;
   if (kept != weighed.end()) {
@@ -308,12 +318,23 @@ void ExplainSink::print_margin(const std::vector<const FramingStep*>& weighed) {
                (*kept)->score() - (beats_nothing ? 0 : runner_up->score()),
                beats_nothing
                    ? std::string("no frame here (0 bits)")
-                   : fmt::format("the {} of {} bytes ({:+} bits)", to_string(runner_up->role),
-                                 runner_up->length, runner_up->score()));
+                   : fmt::format("{} ({:+} bits)", reading_name(*runner_up), runner_up->score()));
   } else if (runner_up) {
-    out_.print("  no frame here (0 bits), by {} bits over the runner-up: the {} of {} bytes\n",
-               -runner_up->score(), to_string(runner_up->role), runner_up->length);
+    out_.print("  no frame here (0 bits), by {} bits over the runner-up: {}\n", -runner_up->score(),
+               reading_name(*runner_up));
   }
+}
+
+// Whether the reading was scored: its span weighed, or refuted at its start.
+bool ExplainSink::scored(const FramingStep& step) {
+  return step.outcome == ReadingOutcome::kept || step.outcome == ReadingOutcome::refuted ||
+         step.outcome == ReadingOutcome::refuted_at_start;
+}
+
+std::string ExplainSink::reading_name(const FramingStep& step) {
+  if (step.outcome == ReadingOutcome::refuted_at_start)
+    return fmt::format("the {}, whatever its end", to_string(step.role));
+  return fmt::format("the {} of {} bytes", to_string(step.role), step.length);
 }
 
 }  // namespace modtap::output

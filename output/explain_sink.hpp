@@ -9,6 +9,7 @@
 #include <deque>
 #include <map>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "output/output.hpp"
@@ -64,6 +65,8 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   void print_row(const EvidenceInfo& row, int sign);
   void print_feature(Feature feature, int sign);
   void print_margin(const std::vector<const FramingStep*>& weighed);
+  static bool scored(const FramingStep& step);
+  static std::string reading_name(const FramingStep& step);
   void print_weighed(const std::vector<const FramingStep*>& weighed);
   // Every record moves the time column's clock; the one asked for is shown.
   template <typename Record>

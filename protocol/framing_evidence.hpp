@@ -40,6 +40,7 @@ enum class Feature : uint8_t {
   copy_after,
   glitch_then_frame,
   predicted_bytes,
+  vendor_code,
 };
 
 struct FeatureInfo {
@@ -48,7 +49,7 @@ struct FeatureInfo {
   std::string_view why;
 };
 
-inline constexpr std::array<FeatureInfo, 22> feature_table{{
+inline constexpr std::array<FeatureInfo, 23> feature_table{{
     {"crc-holds", 16, "bytes that are no frame pass a CRC 1 time in 65,536"},
     {"another-crc", 16,
      "another span over these bytes passes its own length rules and CRC, as unlikely by "
@@ -118,6 +119,10 @@ inline constexpr std::array<FeatureInfo, 22> feature_table{{
      "every byte of the span, its CRC's too, is the one the pending request tells its answer "
      "has there (an echo repeats the request): four bytes or more, by chance 1 time in 65,536 "
      "at least"},
+    {"vendor-code", 2,
+     "a function code no public function has, or an exception code the standard does not name: "
+     "junk's codes are such 5 times in 6, and a bus carries a device's own codes seldom: taken "
+     "as 1 in 4"},
 }};
 
 inline const FeatureInfo& feature_info(Feature f) {
@@ -134,6 +139,7 @@ enum class Evidence : uint8_t {
   request_inside_awaited_answer,
   unawaited_answer_inside_awaited_answer,
   predicted_inside_awaited_answer,
+  vendor_frame_inside_awaited_answer,
   retry_and_glitch,
   retry_read_as_answer,
   answer_copying_request,
@@ -158,7 +164,7 @@ struct EvidenceInfo {
   }
 };
 
-inline constexpr std::array<EvidenceInfo, 15> evidence_table{{
+inline constexpr std::array<EvidenceInfo, 16> evidence_table{{
     {"length-and-crc",
      "its function code's length rules and its CRC agree on where it ends",
      {Feature::crc_holds},
@@ -198,6 +204,11 @@ inline constexpr std::array<EvidenceInfo, 15> evidence_table{{
      "request tells the answer has there (an echo's): its CRC holds because the request's "
      "bytes do; they are the answer's, not a frame of their own",
      {Feature::awaited_header, Feature::predicted_bytes},
+     2},
+    {"vendor-frame-inside-awaited-answer",
+     "a start with a code a bus seldom carries inside the span the awaited answer's structure "
+     "claims: a collision's junk; it outweighs any CRC, so its end is not sought",
+     {Feature::awaited_header, Feature::vendor_code},
      2},
     {"retry-and-glitch",
      "on a bus of 0x00 glitches, a copy of the pending request and a glitch read as one byte "
@@ -397,10 +408,13 @@ static_assert(!keeps_frame_inside(true, false, false));
 static_assert(keeps_frame_inside(true, true, true));
 
 // What became of one reading of the bytes at a frame's start.
-enum class ReadingOutcome : uint8_t { kept, refuted, waiting, no_frame };
+// `refuted_at_start`: a row that holds whatever the span's end outweighs the most its CRC could
+// say, so the end is not sought.
+enum class ReadingOutcome : uint8_t { kept, refuted, refuted_at_start, waiting, no_frame };
 template <>
 struct EnumNames<ReadingOutcome> {
-  static constexpr std::array<std::string_view, 4> names{"kept", "refuted", "waiting", "no frame"};
+  static constexpr std::array<std::string_view, 5> names{
+      "kept", "refuted", "refuted whatever its end", "waiting", "no frame"};
 };
 
 struct FramingStep {
@@ -416,7 +430,9 @@ struct FramingStep {
   // Its score in bits against no frame at all (0): its CRC, less the row that refuted it.
   int score() const {
     if (outcome == ReadingOutcome::kept) return span_bits;
-    if (outcome == ReadingOutcome::refuted) return span_bits - evidence_info(why).bits();
+    // Refuted at its start: the most it could score, had its CRC held.
+    if (outcome == ReadingOutcome::refuted || outcome == ReadingOutcome::refuted_at_start)
+      return span_bits - evidence_info(why).bits();
     return 0;
   }
 };

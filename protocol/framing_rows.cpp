@@ -29,6 +29,21 @@ RtuFramer::Verdict RtuFramer::weigh_span(const Reading& r, Evidence& why) {
       Row{Evidence::swallows_exchange, &RtuFramer::swallows_exchange_reading}>(r, why);
 }
 
+// What the bus says against every span from `at`, whatever its end: a row that outweighs the
+// most a CRC could say, so no end is sought.
+std::optional<Evidence> RtuFramer::weigh_start(uint64_t at) const {
+  static_assert(row_bits<Evidence::vendor_frame_inside_awaited_answer> > span_bits);
+  if (vendor_frame_inside_awaited_answer(at)) return Evidence::vendor_frame_inside_awaited_answer;
+  return std::nullopt;
+}
+
+// Inside the span the awaited answer's structure claims, a collision's junk passes a CRC 1
+// start in 65,536, most often as a vendor code or an unnamed exception, whose end only a CRC
+// search 256 bytes on could tell. An exception's code not yet come may still be a standard one.
+bool RtuFramer::vendor_frame_inside_awaited_answer(uint64_t at) const {
+  return at > head_ && at + 3 <= end_ && !standard_frame(at) && inside_awaited_span(at);
+}
+
 // The rows unrolled at compile time: weighing runs once a frame. Below nothing the span is
 // refuted, and the rows after need not be weighed: they only take off.
 template <RtuFramer::Row... rows>

@@ -78,6 +78,11 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search, bool o
   if (options_.observer && observed) options_.observer->on_start(channel_, at);
   if (end_ - at < 2) return need_more();
   const Readings readings = readings_at(at);
+  if (const std::optional<Evidence> row = weigh_start(at); row && readings.count) {
+    for (size_t i = 0; observed && i < readings.count; ++i)
+      observe(at, readings.order[i], {}, ReadingOutcome::refuted_at_start, *row);
+    return {};
+  }
   bool waiting = false;
   std::optional<std::pair<uint16_t, Evidence>> refuted;  // a span refuted, in either role
   for (size_t i = 0; i < readings.count; ++i) {
@@ -393,14 +398,8 @@ bool RtuFramer::blocked_by_gap(uint64_t at, bool final) {
 }
 
 uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
-  // Inside the span the awaited response's structure claims, a frame must be one a bus
-  // carries: a collision's junk passes a CRC 1 start in 65,536, most often as a vendor code or
-  // an unnamed exception, whose end only a CRC search 256 bytes on could tell.
-  const uint64_t claimed_end = awaited_end(head_);
   uint64_t at = std::max(from, scanned_to_);
   for (; at < end_; ++at) {
-    // A start too short to tell yet (an exception's code) may still stand.
-    if (at < claimed_end && at + 3 <= end_ && !standard_frame(at)) continue;
     const Match m = match_start(at, final);
     if (m.kind == Match::Kind::found) break;
     if (m.kind == Match::Kind::need_more && !final && !blocked_by_gap(at, final)) {

@@ -102,6 +102,8 @@ class RtuFramer {
     bool final;
     int search;
   };
+  std::optional<Evidence> weigh_start(uint64_t at) const;
+  bool vendor_frame_inside_awaited_answer(uint64_t at) const;
   Verdict weigh_span(const Reading& reading, Evidence& why);
   struct Row {  // a row of weigh_span's table: its evidence, and what it says of a span
     Evidence evidence;

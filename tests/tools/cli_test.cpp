@@ -1154,17 +1154,19 @@ TEST(Cli, ExplainSaysASpanRefutedInOneRoleIsRefutedInTheOther) {
                                          "11 06 00 01 00 03 9A 9B 03 00 00 00 01 99 F0"});
   const Outcome r = run("-r " + log + " --explain 2");
   ASSERT_EQ(r.status, 0);
-  ASSERT_EQ(r.lines.size(), 14u) << ::testing::PrintToString(r.lines);
+  ASSERT_EQ(r.lines.size(), 18u) << ::testing::PrintToString(r.lines);
   EXPECT_THAT(r.lines[0], ::testing::HasSubstr("crc BAD (cut)"));
   EXPECT_EQ(r.lines[2], "    response, 8 bytes: refuted, -4 bits");
   EXPECT_THAT(r.lines[4], ::testing::StartsWith("       -20  answer-cut-before-request: "));
   EXPECT_THAT(r.lines[7], ::testing::StartsWith("    request, 8 bytes: refuted, the same span"));
   EXPECT_EQ(r.lines[8],
             "  no frame here (0 bits), by 4 bits over the runner-up: the response of 8 bytes");
-  EXPECT_THAT(r.lines[9], ::testing::EndsWith("a frame with a bad check: cut"));
-  EXPECT_EQ(r.lines[11], "    #1 bytes 0-7: request, 8 bytes, check ok");
-  EXPECT_EQ(r.lines[12], "    #2 bytes 8-14: this record");
-  EXPECT_EQ(r.lines[13], "    #3 bytes 15-22: request, 8 bytes, check ok");
+  // 03 9A and 9A 9B: exception and function codes of no public function.
+  EXPECT_EQ(r.lines[9], "  at 2 starts inside it, every reading refuted whatever its end:");
+  EXPECT_THAT(r.lines[13], ::testing::EndsWith("a frame with a bad check: cut"));
+  EXPECT_EQ(r.lines[15], "    #1 bytes 0-7: request, 8 bytes, check ok");
+  EXPECT_EQ(r.lines[16], "    #2 bytes 8-14: this record");
+  EXPECT_EQ(r.lines[17], "    #3 bytes 15-22: request, 8 bytes, check ok");
 }
 
 // A vendor's function code has no length of its own: its end is where a CRC search found one
@@ -1338,7 +1340,28 @@ TEST(Cli, ExplainSaysWhyNoFrameWasCutInsideADamagedOne) {
   EXPECT_EQ(r.lines[9],
             "  no frame here (0 bits), by 4 bits over the runner-up: the response of "
             "25 bytes");
-  EXPECT_THAT(r.lines[10], ::testing::StartsWith("  then, no reading holding, "));
+  EXPECT_EQ(r.lines[10], "  at 1 start inside it, every reading refuted whatever its end:");
+  EXPECT_THAT(r.lines[14], ::testing::StartsWith("  then, no reading holding, "));
+}
+
+// Inside a damaged answer, a start with a code a bus seldom carries is refuted before its end
+// is sought: `0d 06 00 01 30 44 07 03 0d`, a write's answer talked over, holds three (01 30 and
+// 30 44, vendor function codes; 03 0d, FC13, no public one), one of them the start of 30 44 07
+// and its good CRC. --explain says the row once, with the count.
+TEST(Cli, ExplainCountsTheStartsRefutedWhateverTheirEnd) {
+  const std::string log =
+      hexlog("modtap-explain-vendor.log",
+             {"00.000000", "0D 06 00 01 00 05 18 C5", "00.020000", "0D 06 00 01 30 44 07 03 0D",
+              "00.300000", "14 03 00 00 00 01 86 CF"});
+  const Outcome r = run("-r " + log + " --explain 2");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_GE(r.lines.size(), 8u) << ::testing::PrintToString(r.lines);
+  EXPECT_THAT(r.lines[0], ::testing::HasSubstr("crc BAD (expected CC F5, collision)"));
+  EXPECT_EQ(r.lines[4], "  at 3 starts inside it, every reading refuted whatever its end:");
+  EXPECT_THAT(r.lines[5],
+              ::testing::StartsWith("       -18  vendor-frame-inside-awaited-answer: "));
+  EXPECT_THAT(r.lines[6], ::testing::StartsWith("               -16  awaited-header: "));
+  EXPECT_THAT(r.lines[7], ::testing::StartsWith("                -2  vendor-code: "));
 }
 
 // Unframed bytes leave as records only once the next good frame is found; --explain holds the
