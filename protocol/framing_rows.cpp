@@ -223,8 +223,7 @@ RtuFramer::Say RtuFramer::answer_cut_before_request(const Reading& r) {
 // frame gives way to one a bus carries inside it. A frame from an expected sender keeps it.
 RtuFramer::Say RtuFramer::swallows_known_frame_reading(const Reading& r) {
   const bool unexpected = unexpected_sender(r.at, r.role == Role::response);
-  return swallows_known_frame(r.at, r.at + r.length, false, unexpected) ? Say::refutes
-                                                                        : Say::nothing;
+  return swallows_known_frame(r.at, r.at + r.length, false, unexpected, r.final);
 }
 
 // A reserved address, or an answer while a request of another slave or function waits.

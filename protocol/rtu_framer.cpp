@@ -231,7 +231,7 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       // A reserved address is as often a turnaround's 0xFF: its frame needs confirming.
       const bool may_stand_alone = !unconfirmed && p[1] == 0x08 && p[0] <= max_unicast_slave;
       if (!confirmed && !at_end && !may_stand_alone) continue;
-      if (swallows_known_frame(at, at + n, true, unexpected)) continue;
+      if (swallows_known_frame(at, at + n, true, unexpected, true) == Say::refutes) continue;
       // Confirmed only by taking the next 0x00 for a glitch, where one byte more holds too; or
       // ending in a 0x00 that could be a glitch after a good frame one byte shorter.
       Margin doubt = allow_glitch ? longer_end(at, at + n) : Margin{};
@@ -290,7 +290,8 @@ RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_
     const Margin shorter = zero_appended ? shorter_end(at + n, final, search - 1) : Margin{};
     if (glitch_appended(at, at + n, shorter)) continue;
     const std::optional<SpanEnd> confirmed = confirmed_end(at, at + n, final, search - 1, false);
-    if (confirmed && !swallows_known_frame(at, at + n, true, unexpected_sender(at, fit.response)))
+    if (confirmed && swallows_known_frame(at, at + n, true, unexpected_sender(at, fit.response),
+                                          true) != Say::refutes)
       return {Match::Kind::found, static_cast<uint16_t>(n), fit, shorter, *confirmed};
   }
   return {};
@@ -382,12 +383,21 @@ bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
 // Whether a frame a bus carries starts inside [begin, end), wherever it ends, and outweighs the
 // span (keeps_frame_inside, framing_evidence.hpp): inside a long frame, bytes pass a CRC as a
 // vendor code or an unnamed exception now and then. An exact copy after the span outweighs it.
-bool RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end, bool searched, bool unexpected) {
-  if (keeps_frame_inside(searched, unexpected, false)) return false;
-  if (keeps_frame_inside(searched, unexpected, true) && copy_follows(begin, end)) return false;
-  for (uint64_t inner = begin + 1; inner < end && inner + 3 <= end_; ++inner)
-    if (standard_frame(inner) && match_at(inner, false, 0).kind == Match::Kind::found) return true;
-  return false;
+// Unknown while such a frame's bytes are still to come, unless `final`.
+RtuFramer::Say RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end, bool searched,
+                                               bool unexpected, bool final) {
+  if (keeps_frame_inside(searched, unexpected, false)) return Say::nothing;
+  if (keeps_frame_inside(searched, unexpected, true) && copy_follows(begin, end))
+    return Say::nothing;
+  Say say = Say::nothing;
+  for (uint64_t inner = begin + 1; inner < end; ++inner) {
+    if (inner + 3 > end_) return final ? say : Say::unknown;
+    if (!standard_frame(inner)) continue;
+    const Match::Kind kind = match_at(inner, false, 0).kind;
+    if (kind == Match::Kind::found) return Say::refutes;
+    if (kind == Match::Kind::need_more && !final) say = Say::unknown;
+  }
+  return say;
 }
 
 // Where `broke-off-at-silence` refutes every span across the first silence after `at`, every

@@ -175,8 +175,10 @@ class RtuFramer {
   bool copy_follows(uint64_t begin, uint64_t end) const;
   // Whether a frame a bus carries (public function code, standard exception), of known length
   // and good CRC, starts inside [begin, end), wherever it ends, and outweighs the span: one
-  // whose end a CRC search found (`searched`), from an `unexpected` sender.
-  bool swallows_known_frame(uint64_t begin, uint64_t end, bool searched, bool unexpected);
+  // whose end a CRC search found (`searched`), from an `unexpected` sender; unknown while such a
+  // frame may still come, unless `final`.
+  Say swallows_known_frame(uint64_t begin, uint64_t end, bool searched, bool unexpected,
+                           bool final);
   bool unexpected_sender(uint64_t at, bool answer) const;
   bool swallows_exchange(uint64_t begin, uint64_t end, bool final);
   std::optional<bool> answer_follows(uint64_t at, uint64_t end, bool final) const;

@@ -1112,6 +1112,18 @@ TEST_F(GapCollector, AGlitchBeforeTheAwaitedAnswerStartsNoRequest) {
   expect_glitch_then_answer(request, 0xff, answer);
 }
 
+// Slave 144's answer to FC10 after its driver's 0xFF, whose first bytes after the glitch pass a
+// CRC as an exception from station 255 (`ff 90 10` and a CRC, the address chosen so): read
+// before the answer's last bytes have come, the exception waits for the frame it may swallow,
+// a reserved address's, which refutes it once they come (swallows-known-frame).
+TEST_F(GapCollector, AReservedAddressWaitsForTheFrameItMaySwallow) {
+  const auto exception = with_crc(hex("ff 90 10"));
+  const auto address = std::vector<uint8_t>(exception.end() - 2, exception.end());
+  const auto request = with_crc(concat({hex("90 10"), address, hex("00 02 04 00 01 00 02")}));
+  const auto answer = with_crc(concat({hex("90 10"), address, hex("00 02")}));
+  expect_glitch_then_answer(request, 0xff, answer);
+}
+
 // The same with the driver's other glitch, 0x00: slave 6's answer to a read after it, whose
 // first bytes after the glitch pass a CRC as a broadcast write of a register (`00 06 03 04 ...`,
 // the data chosen so). A broadcast is no reading in the other role, and is refused all the same.
