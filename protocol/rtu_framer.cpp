@@ -184,7 +184,7 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
             return {Match::Kind::found, n, fit, {}, SpanEnd::echo_length};
           if (avail == n && !final) return need_more();
           Margin doubt = longer_end(at, at + n);
-          if (!doubt.stands()) consider(doubt, shorter_end(at + n, final, search - 1));
+          if (!doubt.stands()) consider(doubt, shorter_end(at, at + n, final, search - 1));
           return {Match::Kind::found, n, fit, doubt, SpanEnd::echo_length};
         }
       }
@@ -214,12 +214,12 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
   std::array<uint16_t, max_rtu_adu> hits;  // lengths with a good CRC, ascending
   const size_t hit_count = good_lengths(at, first, limit, hits);
   bool open = false;
-  size_t unconfirmed = 0;  // the first plausible end nothing confirmed
+  Match alone;  // FC08's first plausible end nothing confirmed, to stand on its header
   for (bool allow_glitch : {false, true}) {
     for (size_t i = 0; i < hit_count; ++i) {
       const uint16_t n = hits[i];
       const bool zero_appended = i > 0 && hits[i - 1] == n - 1;
-      const Margin shorter = zero_appended ? shorter_end(at + n, final, search - 1) : Margin{};
+      const Margin shorter = zero_appended ? shorter_end(at, at + n, final, search - 1) : Margin{};
       if (glitch_appended(at, at + n, shorter)) {
         open |= at + n == end_;
         continue;
@@ -228,8 +228,10 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       const std::optional<SpanEnd> confirmed =
           confirmed_end(at, at + n, final, search - 1, allow_glitch);
       const bool at_end = at + n == end_;
-      // A reserved address is as often a turnaround's 0xFF: its frame needs confirming.
-      const bool may_stand_alone = !unconfirmed && p[1] == 0x08 && p[0] <= max_unicast_slave;
+      // A reserved address is as often a turnaround's 0xFF: its frame needs confirming. Of two
+      // ends a byte apart, the longer stands where the shorter's 0x00 is ruled out as a glitch.
+      const bool may_stand_alone = p[1] == 0x08 && p[0] <= max_unicast_slave &&
+                                   (!alone.length || (alone.length == n - 1u && shorter.decided()));
       if (!confirmed && !at_end && !may_stand_alone) continue;
       if (swallows_known_frame(at, at + n, true, unexpected, true) == Say::refutes) continue;
       // Confirmed only by taking the next 0x00 for a glitch, where one byte more holds too; or
@@ -238,16 +240,17 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       if (!doubt.stands()) consider(doubt, shorter);
       if (confirmed) return {Match::Kind::found, n, fit, doubt, *confirmed};
       open |= at_end;
-      if (may_stand_alone) unconfirmed = n;
+      if (may_stand_alone) alone = {Match::Kind::found, n, fit, shorter, SpanEnd::header_alone};
     }
   }
   // FC08 Return Query Data followed by junk: once nothing more can confirm it (the input's
   // end, or a silence with a good frame after it), its own header and CRC have to do, and one
   // byte more stands beside it where a 0x00 after it makes that good too.
-  if (unconfirmed && p[1] == 0x08 &&
-      (final || (avail >= max_rtu_adu && !open) || blocked_by_gap(at, final))) {
-    return {Match::Kind::found, static_cast<uint16_t>(unconfirmed), fit,
-            longer_end(at, at + unconfirmed), SpanEnd::header_alone};
+  if (alone.length && (final || (avail >= max_rtu_adu && !open) || blocked_by_gap(at, final))) {
+    Margin doubt = longer_end(at, at + alone.length);
+    if (!doubt.stands()) consider(doubt, alone.end_margin);
+    alone.end_margin = doubt;
+    return alone;
   }
   if (!final && (avail < max_rtu_adu || open)) return need_more();
   return {};
@@ -287,7 +290,7 @@ RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_
     previous_hit = hit;
     crc = crc16_step(crc, p[n - crc_size]);
     if (!hit) continue;
-    const Margin shorter = zero_appended ? shorter_end(at + n, final, search - 1) : Margin{};
+    const Margin shorter = zero_appended ? shorter_end(at, at + n, final, search - 1) : Margin{};
     if (glitch_appended(at, at + n, shorter)) continue;
     const std::optional<SpanEnd> confirmed = confirmed_end(at, at + n, final, search - 1, false);
     if (confirmed && swallows_known_frame(at, at + n, true, unexpected_sender(at, fit.response),
@@ -319,13 +322,24 @@ Margin RtuFramer::longer_end(uint64_t at, uint64_t end) const {
   return margin;
 }
 
-Margin RtuFramer::shorter_end(uint64_t end, bool final, int search) {
+Margin RtuFramer::shorter_end(uint64_t at, uint64_t end, bool final, int search) {
   if (*at_ptr(end - 1) != 0x00) return {};
   Margin margin{RunnerUp::shorter};
   margin.tell(Feature::silence_after, timeline_.gap_at(end)) ||
       margin.tell(Feature::sent_straight_on, !timeline_.after_quiet_line(end - 1)) ||
-      margin.tell(Feature::second_glitch, glitch_then_frame(end, final, search));
+      margin.tell(Feature::second_glitch,
+                  glitch_then_frame(end, final, search) || glitch_then_kin(at, end));
   return margin;
+}
+
+// A turnaround's glitch at `end`, then a frame of the slave and function code of the frame at
+// `at` (its answer, cut or talked over though it may be, or the master's next request to it):
+// two bytes that begin a frame, as likely by chance as a CRC.
+bool RtuFramer::glitch_then_kin(uint64_t at, uint64_t end) const {
+  if (end + 3 > end_ || !is_glitch_byte(*at_ptr(end))) return false;
+  const uint8_t* frame = at_ptr(at);
+  const uint8_t* next = at_ptr(end + 1);
+  return next[0] == frame[0] && (next[1] & 0x7F) == (frame[1] & 0x7F);
 }
 
 // Of two runner-ups, the one that stands, else the first there is (--explain names it).

@@ -165,7 +165,8 @@ class RtuFramer {
   bool glitch_appended(uint64_t begin, uint64_t end, const Margin& shorter) const;
   bool glitch_then_frame(uint64_t at, bool final, int search);
   Margin longer_end(uint64_t at, uint64_t end) const;
-  Margin shorter_end(uint64_t end, bool final, int search);
+  Margin shorter_end(uint64_t at, uint64_t end, bool final, int search);
+  bool glitch_then_kin(uint64_t at, uint64_t end) const;
   static void consider(Margin& margin, const Margin& other);
   bool fits_role(Role role, uint64_t at, uint16_t length) const;
   // What confirms a CRC search's hit at `end`, if anything does.

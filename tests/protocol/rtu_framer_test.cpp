@@ -647,6 +647,28 @@ TEST_F(GapCollector, AnEchoPairWhoseCrcEndsInZeroSaysItsEndIsInDoubt) {
   EXPECT_TRUE(frames[33].findings & finding_ambiguous_end);
 }
 
+// The same query on a bus of 0x00 glitches, then its slave's 0xFF and its exception talked
+// over (fresh seed 5514): one byte shorter, the query would need two glitches at one
+// turnaround, the 0x00 and the 0xFF before its answer's slave and function code. The query
+// keeps its 0x00, though nothing but its header confirms it, and its answer is paired.
+TEST_F(GapCollector, AQueryKeepsItsZeroWhereTakingItForAGlitchNeedsASecond) {
+  std::vector<Piece> pieces = glitchy_history();
+  const auto query = hex("11 08 00 00 00 da 63 00");
+  const auto talked_over = hex("11 88 01 5c 7a");
+  ASSERT_NE(crc16(talked_over), 0);
+  pieces.push_back({20'000'000, concat({query, hex("ff"), talked_over})});
+  pieces.push_back({20'000'000, read_request});
+  pieces.push_back({2'000'000, read_response});
+  const auto out = run(pieces, ClockQuality::per_chunk);
+  const auto stream = out.stream();
+  ASSERT_EQ(stream.size(), 53u) << ::testing::PrintToString(stream.size());
+  EXPECT_EQ(stream[48].raw, query);
+  EXPECT_FALSE(stream[48].findings & finding_ambiguous_end);
+  EXPECT_EQ(stream[49].reason, NoiseReason::glitch);
+  EXPECT_EQ(stream[50].raw, talked_over);
+  EXPECT_EQ(stream[50].request, stream[48].index);
+}
+
 // The runner-up of an end stands only where nothing refutes it. A FC08 query whose CRC ends in
 // 0x00, its echo right behind it in the same read: the query could be one byte shorter with a
 // glitch after it (no silence there), the echo could not, for a silence follows its 0x00: a
