@@ -233,6 +233,7 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       const bool may_stand_alone = p[1] == 0x08 && p[0] <= max_unicast_slave &&
                                    (!alone.length || (alone.length == n - 1u && shorter.decided()));
       if (!confirmed && !at_end && !may_stand_alone) continue;
+      // A hit does not wait for a frame inside still to come (final): the search's end waits.
       if (swallows_known_frame(at, at + n, true, unexpected, true) == Say::refutes) continue;
       // Confirmed only by taking the next 0x00 for a glitch, where one byte more holds too; or
       // ending in a 0x00 that could be a glitch after a good frame one byte shorter.
