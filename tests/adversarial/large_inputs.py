@@ -93,7 +93,7 @@ print(f"hex log with junk: {err.strip()}")
 
 # 4. Junk by the hundred megabytes (a few under the sanitizers), through a pipe in automatic
 # mode: every byte is in some record, in bounded time and memory.
-junk_mb = 100 if MEGABYTES >= 1024 else 4
+junk_mb = 100 if MEGABYTES >= 1024 else 2
 generator = random.Random(12)
 junk_inputs = {
     "random bytes": lambda: generator.randbytes(1 << 20),
