@@ -182,11 +182,11 @@ void ExplainSink::print_inside(uint16_t channel, uint64_t offset, size_t size) {
   for (auto it = steps.at.upper_bound(offset); it != steps.at.end() && it->first < offset + size;
        ++it) {
     std::vector<const FramingStep*> refuted;
-    for (const FramingStep& step : it->second) {
+    for (const FramingStep& step : it->second)
       if (step.outcome == ReadingOutcome::refuted) refuted.push_back(&step);
-      if (step.outcome == ReadingOutcome::refuted_at_start && step.role == it->second[0].role)
-        ++at_start[step.why];
-    }
+    // A start's readings are refuted at it together, by one row: the start counts once.
+    const FramingStep& first = it->second.front();
+    if (first.outcome == ReadingOutcome::refuted_at_start) ++at_start[first.why];
     if (refuted.empty()) continue;
     out_.print("  at byte {}, inside it, a span whose length rules and CRC agree:\n", it->first);
     print_weighed(refuted);

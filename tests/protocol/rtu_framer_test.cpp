@@ -661,7 +661,7 @@ TEST_F(GapCollector, AQueryKeepsItsZeroWhereTakingItForAGlitchNeedsASecond) {
   pieces.push_back({2'000'000, read_response});
   const auto out = run(pieces, ClockQuality::per_chunk);
   const auto stream = out.stream();
-  ASSERT_EQ(stream.size(), 53u) << ::testing::PrintToString(stream.size());
+  ASSERT_EQ(stream.size(), 53u);
   EXPECT_EQ(stream[48].raw, query);
   EXPECT_FALSE(stream[48].findings & finding_ambiguous_end);
   EXPECT_EQ(stream[49].reason, NoiseReason::glitch);
