@@ -72,17 +72,33 @@ uint16_t crc16(std::span<const uint8_t> bytes, uint16_t crc) {
   return crc;
 }
 
+// A frame's bytes come back to the start value 1 time in 65,536 a byte: the run looks for any
+// without a branch a byte, then for the first where it found one.
+[[gnu::noinline]] size_t crc16_back_to_start(std::span<const uint8_t> bytes, size_t first) {
+  uint16_t crc = 0xFFFF;
+  bool back = false;
+  for (size_t k = 0; k < bytes.size(); ++k) {
+    crc = static_cast<uint16_t>((crc >> 8) ^ crc_table[(crc ^ bytes[k]) & 0xFF]);
+    back |= crc == 0xFFFF && k + 1 >= first;
+  }
+  if (!back) return 0;
+  crc = 0xFFFF;
+  for (size_t k = 0; k < bytes.size();) {
+    crc = static_cast<uint16_t>((crc >> 8) ^ crc_table[(crc ^ bytes[k]) & 0xFF]);
+    if (++k >= first && crc == 0xFFFF) return k;
+  }
+  return 0;
+}
+
 CrcIndex::CrcIndex() : newest_(chain_mask + 1, none) {
   restart(0);
 }
 
 void CrcIndex::restart(uint64_t origin) {
-  // Chains stop at offsets below the origin; going back would let old ones run on.
-  if (origin < origin_) std::fill(newest_.begin(), newest_.end(), none);
-  base_ = origin_ = origin;
+  base_ = origin;
   ends_.assign(1, 0);
   starts_.clear();
-  same_before_.assign(1, newest_[0]);  // the value 0 is in chain 0
+  same_before_.assign(1, none);  // the value 0 is in chain 0
   newest_[0] = origin;
   for (unsigned bit = 0; bit < 8; ++bit) unshifted_bits_[bit] = static_cast<uint16_t>(1 << bit);
   unshifted_init_ = 0xFFFF;
@@ -98,10 +114,20 @@ void CrcIndex::append(std::span<const uint8_t> bytes) {
       unshifted_bits_[bit] = crc16_unshift(unshifted_bits_[bit]);
     }
     unshifted_init_ = crc16_unshift(unshifted_init_);
+    same_before_.push_back(newest(w & chain_mask));
     ends_.push_back(w);
-    same_before_.push_back(newest_[w & chain_mask]);
     newest_[w & chain_mask] = offset++;
   }
+}
+
+// A chain's newest end, if the index holds it: an end forgotten or not yet indexed, or one a
+// restart left behind, whose value here is in another chain, is none. A restart need not clear
+// the chains, so an index that goes back and forth over junk costs no more than its bytes.
+uint64_t CrcIndex::newest(uint16_t chain) const {
+  const uint64_t end = newest_[chain];
+  return end >= base_ && end - base_ < ends_.size() && (ends_[end - base_] & chain_mask) == chain
+             ? end
+             : none;
 }
 
 void CrcIndex::drop_before(uint64_t offset) {
@@ -118,7 +144,7 @@ void CrcIndex::drop_before(uint64_t offset) {
 
 bool CrcIndex::chained_ends(uint16_t key, uint64_t first, uint64_t last,
                             std::array<uint64_t, 256>& out, size_t& count) const {
-  uint64_t end = newest_[key & chain_mask];
+  uint64_t end = newest(key & chain_mask);
   for (int walked = 0; end != none && end > last; end = same_before_[end - base_])
     if (++walked > max_chain_walk) return false;
   // `first` is at least base_, so an end forgotten by drop_before stops the walk here.

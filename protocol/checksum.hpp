@@ -12,6 +12,9 @@ namespace modtap {
 // CRC-16/MODBUS (poly 0xA001 reflected, init 0xFFFF). On the wire the low byte goes first.
 uint16_t crc16(std::span<const uint8_t> bytes, uint16_t crc = 0xFFFF);
 uint16_t crc16_step(uint16_t crc, uint8_t byte);
+// The first k >= `first` where the CRC of the first k bytes is the start value again, or 0. Of a
+// span whose CRC holds, the tail from there holds too: its own CRC is the span's.
+size_t crc16_back_to_start(std::span<const uint8_t> bytes, size_t first);
 
 // The CRC carried in the last two bytes of an RTU ADU (low byte first).
 inline uint16_t wire_crc(std::span<const uint8_t> adu) {
@@ -64,11 +67,13 @@ class CrcIndex {
   std::vector<uint16_t> starts_;   // W_a ^ A^-a(0xFFFF) at the offsets base_ .. end - 1
   // Hash chains over ends_: the newest end offset in each chain, and for each end the one
   // before it in its chain. Offsets below base_ (forgotten, or from before a restart
-  // further on) end a walk; they are not unlinked.
+  // further on) end a walk; they are not unlinked. A restart that goes back starts a new
+  // generation: the ends written before it, past the new origin, hold values relative to the
+  // old one, and a chain's newest end stands only in the generation that wrote it.
   std::vector<uint64_t> newest_;
+  uint64_t newest(uint16_t chain) const;
   std::vector<uint64_t> same_before_;
   uint64_t base_ = 0;
-  uint64_t origin_ = 0;
   std::array<uint16_t, 8> unshifted_bits_{1, 2, 4, 8, 16, 32, 64, 128};  // A^-k of each bit
   uint16_t unshifted_init_ = 0xFFFF;                                     // A^-k(0xFFFF)
 };

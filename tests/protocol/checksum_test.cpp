@@ -54,6 +54,35 @@ TEST(Crc16, ResidueOfAGoodFrameStaysZeroWithATrailingZero) {
   EXPECT_EQ(crc16(frame), 0);
 }
 
+// The framer's test of a good span for a good frame at its end: the tail of a good span is good
+// exactly where the CRC of the bytes before it is back at its start value.
+TEST(Crc16, TheTailOfAGoodSpanIsGoodWhereTheCrcIsBackAtItsStart) {
+  std::vector<uint8_t> bytes;
+  uint32_t x = 11;
+  for (int i = 0; i < 200; ++i) {
+    x = x * 1664525 + 1013904223;
+    bytes.push_back(static_cast<uint8_t>(x >> 24));
+  }
+  const uint16_t crc = crc16(bytes);
+  bytes.push_back(static_cast<uint8_t>(crc & 0xFF));
+  bytes.push_back(static_cast<uint8_t>(crc >> 8));
+  size_t tails = 0;
+  for (size_t start = 1; start + 2 <= bytes.size(); ++start) {
+    const bool good = crc16({bytes.data() + start, bytes.size() - start}) == 0;
+    const bool back = crc16({bytes.data(), start}) == 0xFFFF;
+    ASSERT_EQ(good, back) << start;
+    EXPECT_EQ(crc16_back_to_start(bytes, start) == start, back) << start;
+    tails += good;
+  }
+  EXPECT_EQ(crc16_back_to_start(bytes, 1), 0u);  // none among these bytes, as 1 in 65,536
+  EXPECT_EQ(tails, 0u);
+  // A cut answer and a glitch whose bytes take the CRC back to its start, then a request.
+  const auto span = hex("11 03 0a 12 40 a2 00 22 03 00 10 00 01 82 9c");
+  EXPECT_EQ(crc16(span), 0);
+  EXPECT_EQ(crc16_back_to_start(span, 1), 7u);
+  EXPECT_EQ(crc16_back_to_start(span, 8), 0u);
+}
+
 // Random bytes with good frames planted at random places, and a run of zeros after one of them
 // (every zero keeps its residue zero: one value repeated, the index's longest chain).
 std::vector<uint8_t> bytes_with_planted_frames(size_t size, uint32_t seed) {
