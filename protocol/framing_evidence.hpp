@@ -74,8 +74,8 @@ inline constexpr std::array<FeatureInfo, 23> feature_table{{
      "no answer of its own (its slave and function code) after it, where a slave answers "
      "nearly every request: taken as 1 in 16"},
     {"answer-after", 16,
-     "its own answer's slave and function code right after it: 2 bytes, by chance 1 time in "
-     "65,536"},
+     "a frame of its own slave and function code next, its answer (or the master's retry): 2 "
+     "bytes, by chance 1 time in 65,536"},
     {"leaves-junk", 4,
      "the reading leaves bytes next to it to no frame: nothing starts where it ends, or no "
      "frame holds the bytes before it, from where the last frame ended; a bus carries junk "
@@ -146,6 +146,7 @@ enum class Evidence : uint8_t {
   answer_cut_before_request,
   swallows_known_frame,
   swallows_exchange,
+  swallows_request,
 };
 
 struct EvidenceInfo {
@@ -164,7 +165,7 @@ struct EvidenceInfo {
   }
 };
 
-inline constexpr std::array<EvidenceInfo, 16> evidence_table{{
+inline constexpr std::array<EvidenceInfo, 17> evidence_table{{
     {"length-and-crc",
      "its function code's length rules and its CRC agree on where it ends",
      {Feature::crc_holds},
@@ -242,6 +243,12 @@ inline constexpr std::array<EvidenceInfo, 16> evidence_table{{
      "after it",
      {Feature::another_crc, Feature::answer_after, Feature::leaves_junk},
      3},
+    {"swallows-request",
+     "its CRC holds across a frame cut short and a whole request after it (the cut frame's "
+     "bytes took the CRC back to its start value, the request's bytes did the rest), and a "
+     "frame of the request's slave and function code comes next: its answer, or its retry",
+     {Feature::another_crc, Feature::answer_after},
+     2},
 }};
 
 inline const EvidenceInfo& evidence_info(Evidence e) {

@@ -2,6 +2,7 @@
 // features and bits): what the bytes around a span whose length rules and CRC agree say against
 // it being one frame, and the questions of the bus each row asks.
 #include <algorithm>
+#include <cstring>
 
 #include "protocol/checksum.hpp"
 #include "protocol/function_codes.hpp"
@@ -26,12 +27,13 @@ RtuFramer::Verdict RtuFramer::weigh_span(const Reading& r, Evidence& why) {
       Row{Evidence::answer_copying_request, &RtuFramer::answer_copying_request},
       Row{Evidence::answer_cut_before_request, &RtuFramer::answer_cut_before_request},
       Row{Evidence::swallows_known_frame, &RtuFramer::swallows_known_frame_reading},
-      Row{Evidence::swallows_exchange, &RtuFramer::swallows_exchange_reading}>(r, why);
+      Row{Evidence::swallows_exchange, &RtuFramer::swallows_exchange_reading},
+      Row{Evidence::swallows_request, &RtuFramer::swallows_request_reading}>(r, why);
 }
 
 // What the bus says against every span from `at`, whatever its end: a row that outweighs the
 // most a CRC could say, so no end is sought.
-std::optional<Evidence> RtuFramer::weigh_start(uint64_t at) const {
+std::optional<Evidence> RtuFramer::weigh_start(uint64_t at) {
   static_assert(row_bits<Evidence::vendor_frame_inside_awaited_answer> > span_bits);
   if (vendor_frame_inside_awaited_answer(at)) return Evidence::vendor_frame_inside_awaited_answer;
   return std::nullopt;
@@ -40,7 +42,7 @@ std::optional<Evidence> RtuFramer::weigh_start(uint64_t at) const {
 // Inside the span the awaited answer's structure claims, a collision's junk passes a CRC 1
 // start in 65,536, most often as a vendor code or an unnamed exception, whose end only a CRC
 // search 256 bytes on could tell. An exception's code not yet come may still be a standard one.
-bool RtuFramer::vendor_frame_inside_awaited_answer(uint64_t at) const {
+bool RtuFramer::vendor_frame_inside_awaited_answer(uint64_t at) {
   return at > head_ && at + 3 <= end_ && !standard_frame(at) && inside_awaited_span(at);
 }
 
@@ -239,6 +241,72 @@ bool RtuFramer::unexpected_sender(uint64_t at, bool answer) const {
 RtuFramer::Say RtuFramer::swallows_exchange_reading(const Reading& r) {
   if (r.search > 0 && swallows_exchange(r.at, r.at + r.length, r.final)) return Say::refutes;
   return Say::nothing;
+}
+
+// A span whose CRC holds across a frame cut short and a whole request after it: the cut
+// frame's bytes took the CRC back to its start value (the tail of a good span is good exactly
+// where the CRC of the bytes before it is the register's start value), 1 time in 65,536, and
+// the request's bytes did the rest. A frame of the request's slave and function code next (its
+// answer, or the master's retry after a silence), after a glitch or not, says the request was
+// sent. Only the awaited answer is weighed so, as a cut answer is what the master's next
+// request follows; nothing while the bytes after it are still to come, unless no more can.
+RtuFramer::Say RtuFramer::swallows_request_reading(const Reading& r) {
+  const uint8_t* p = at_ptr(r.at);
+  if (r.role != Role::response || options_.role != ChannelRole::bus || r.search <= 0 ||
+      !expected_.pending || expected_.slave != p[0] || expected_.function != (p[1] & 0x7F))
+    return Say::nothing;
+  // No frame of a request's kin starts with a glitch's byte: no slave answers to 0 or 255, and
+  // a master does not repeat a broadcast.
+  const uint64_t end = r.at + r.length;
+  const uint64_t next = end + (end < end_ && is_glitch_byte(*at_ptr(end)) ? 1 : 0);
+  if (next + 2 <= end_) return request_before_kin(r.at, end, next) ? Say::refutes : Say::nothing;
+  return !r.final && request_ending(r.at, end) ? Say::unknown : Say::nothing;
+}
+
+// A request's length where its function code alone tells it, else 0: the function codes' own
+// length rules, asked once of a header alone and kept, as this is asked of every answer.
+uint16_t RtuFramer::request_length_of_code(uint8_t function) {
+  static const std::array<uint16_t, 128> lengths = [] {
+    std::array<uint16_t, 128> table{};
+    for (uint8_t code = 1; code < table.size(); ++code) {
+      const uint8_t header[] = {1, code};
+      const BodyLength body = body_length(Role::request, header);
+      if (body.kind == BodyLength::Kind::known) table[code] = body.bytes + crc_size;
+    }
+    return table;
+  }();
+  return lengths[function & 0x7F];
+}
+
+// Whether a request ends at `end` inside the good span [begin, end) whose slave and function
+// code the frame at `next` begins with. Where the code alone tells the request's length, it
+// can start at one place only; else its header is looked for, a byte at a time.
+bool RtuFramer::request_before_kin(uint64_t begin, uint64_t end, uint64_t next) const {
+  const uint8_t header[] = {*at_ptr(next), static_cast<uint8_t>(*at_ptr(next + 1) & 0x7F)};
+  if (const uint16_t length = request_length_of_code(header[1])) {
+    const uint64_t start = end - std::min<uint64_t>(end - begin, length);
+    return start > begin && std::equal(header, header + 2, at_ptr(start)) &&
+           crc16(bytes(begin, start)) == 0xFFFF && request_spans(start, end);
+  }
+  const uint8_t* first = at_ptr(begin);
+  const uint8_t* last = at_ptr(end - min_adu);
+  for (const uint8_t* p = first + 1; p <= last; ++p) {
+    p = static_cast<const uint8_t*>(std::memchr(p, header[0], static_cast<size_t>(last + 1 - p)));
+    if (!p) return false;
+    if (p[1] == header[1] && crc16({first, p}) == 0xFFFF &&
+        request_spans(begin + static_cast<uint64_t>(p - first), end))
+      return true;
+  }
+  return false;
+}
+
+// Where a request whose length rules and CRC agree ends at `end` inside the good span
+// [begin, end), if one does: where the CRC of the bytes before it is back at its start value.
+std::optional<uint64_t> RtuFramer::request_ending(uint64_t begin, uint64_t end) const {
+  const std::span<const uint8_t> heads = bytes(begin, end - min_adu);
+  for (size_t k = 1; (k = crc16_back_to_start(heads, k)) != 0; ++k)
+    if (request_spans(begin + k, end)) return begin + k;
+  return std::nullopt;
 }
 
 // Whether what follows the request [at, end), after a glitch if one comes, may be its answer:

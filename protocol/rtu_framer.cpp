@@ -24,6 +24,11 @@ bool RtuFramer::plausible_start(uint8_t slave, uint8_t fc) {
   return (fc & 0x7F) != 0 && (slave <= max_unicast_slave || is_public_function(fc));
 }
 
+// Reads are never broadcast, and only answers carry the exception bit.
+bool RtuFramer::may_start_request(uint8_t slave, uint8_t fc) {
+  return plausible_start(slave, fc) && !(fc & 0x80) && (slave != 0 || may_broadcast(fc));
+}
+
 RtuFramer::RtuFramer(uint16_t channel, const RtuFramerOptions& options, FrameSink& sink)
     : channel_(channel),
       options_(options),
@@ -57,6 +62,7 @@ void RtuFramer::finish() {
 
 void RtuFramer::resolve(bool final) {
   while (head_ < end_) {
+    head_awaited_end_.reset();  // a frame emitted, or a request's time-out, changes it
     const Match m = match_start(head_, final);
     if (m.kind == Match::Kind::found) {
       emit_frame(head_, m);
@@ -129,10 +135,8 @@ RtuFramer::Readings RtuFramer::readings_at(uint64_t at) const {
   const uint8_t fc = p[1];
   Readings readings;
   if (!plausible_start(p[0], fc)) return readings;
-  const bool broadcast = p[0] == 0;
-  readings.request =
-      options_.role != ChannelRole::slave && !(fc & 0x80) && (!broadcast || may_broadcast(fc));
-  readings.response = options_.role != ChannelRole::master && !broadcast;
+  readings.request = options_.role != ChannelRole::slave && may_start_request(p[0], fc);
+  readings.response = options_.role != ChannelRole::master && p[0] != 0;
   const bool response_first =
       expected_.pending && expected_.slave == p[0] && expected_.function == (fc & 0x7F);
   for (const Role role : response_first ? std::array{Role::response, Role::request}
@@ -368,6 +372,14 @@ bool RtuFramer::fits_role(Role role, uint64_t at, uint16_t length) const {
   return body.kind == BodyLength::Kind::variable && body.bytes + crc_size <= length;
 }
 
+// Whether a request may start at `start` and its length rules end it at `end`. Asked 1 time in
+// 65,536, so kept out of line: the hot paths inline the questions it asks.
+[[gnu::cold, gnu::noinline]] bool RtuFramer::request_spans(uint64_t start, uint64_t end) const {
+  const uint8_t* p = at_ptr(start);
+  return may_start_request(p[0], p[1]) &&
+         fits_role(Role::request, start, static_cast<uint16_t>(end - start));
+}
+
 // The first confirmation of a searched end that holds (span_end_table: each is a feature that
 // makes up for the search's tries alone, so the first is enough), the end of the input where
 // it is final, or none.
@@ -450,6 +462,12 @@ std::optional<uint64_t> RtuFramer::awaited_start(uint64_t at) const {
 uint64_t RtuFramer::awaited_end(uint64_t at) const {
   const std::optional<uint64_t> start = awaited_start(at);
   return start ? *start + *awaited_.length(from(*start)) : 0;
+}
+
+bool RtuFramer::inside_awaited_span(uint64_t at) {
+  if (at <= head_) return false;
+  if (!head_awaited_end_) head_awaited_end_ = awaited_end(head_);
+  return at < *head_awaited_end_;
 }
 
 // Whether the frame at `at` has a public function code and, as an exception, a standard code.

@@ -64,6 +64,7 @@ class RtuFramer {
   static constexpr uint16_t min_adu = 4;             // slave, function, CRC
   static constexpr uint8_t max_unicast_slave = 247;  // 248-255 are reserved (Serial Line 2.2)
   static bool plausible_start(uint8_t slave, uint8_t fc);
+  static bool may_start_request(uint8_t slave, uint8_t fc);
   // What a driver turning on puts on the bus: one byte, the line's idle level or its opposite.
   static bool is_glitch_byte(uint8_t byte) { return byte == 0x00 || byte == 0xFF; }
   struct CrcHits {
@@ -102,8 +103,8 @@ class RtuFramer {
     bool final;
     int search;
   };
-  std::optional<Evidence> weigh_start(uint64_t at) const;
-  bool vendor_frame_inside_awaited_answer(uint64_t at) const;
+  std::optional<Evidence> weigh_start(uint64_t at);
+  bool vendor_frame_inside_awaited_answer(uint64_t at);
   Verdict weigh_span(const Reading& reading, Evidence& why);
   struct Row {  // a row of weigh_span's table: its evidence, and what it says of a span
     Evidence evidence;
@@ -142,6 +143,11 @@ class RtuFramer {
   Say answer_cut_before_request(const Reading& r);
   Say swallows_known_frame_reading(const Reading& r);
   Say swallows_exchange_reading(const Reading& r);
+  Say swallows_request_reading(const Reading& r);
+  std::optional<uint64_t> request_ending(uint64_t begin, uint64_t end) const;
+  bool request_spans(uint64_t start, uint64_t end) const;
+  bool request_before_kin(uint64_t begin, uint64_t end, uint64_t next) const;
+  static uint16_t request_length_of_code(uint8_t function);
   static ReadingOutcome outcome_of(Verdict verdict);
   void observe(uint64_t at, Role role, const Match& match, ReadingOutcome outcome,
                Evidence why) const;
@@ -186,7 +192,7 @@ class RtuFramer {
   // First position >= from that starts a good frame; `decided` false if one is still open.
   uint64_t next_start(uint64_t from, bool final, bool& decided);
   std::optional<uint64_t> awaited_start(uint64_t at) const;
-  bool inside_awaited_span(uint64_t at) const { return at > head_ && at < awaited_end(head_); }
+  bool inside_awaited_span(uint64_t at);
   uint64_t awaited_end(uint64_t at) const;
   bool standard_frame(uint64_t at) const;
   Frame frame_of(uint64_t begin, uint64_t end, RoleFit fit) const;
@@ -220,7 +226,10 @@ class RtuFramer {
   uint64_t end_ = 0;           // stream offset one past the last byte
   uint64_t answer_start_ = 0;  // where the last frame (and a lone glitch after it) ended
   uint64_t scanned_to_ = 0;    // positions below this are known not to start a frame
-  CrcIndex crc_index_;         // over the searched part of buf_
+  // Where the answer awaited at head_ ends, asked at most once a step of resolve: junk asks it
+  // at every start it weighs.
+  std::optional<uint64_t> head_awaited_end_;
+  CrcIndex crc_index_;  // over the searched part of buf_
   CrcHits last_hits_;
   GlitchOdds glitch_odds_;  // the bus's glitches so far, against a frame's bytes by chance
 };

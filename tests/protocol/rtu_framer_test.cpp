@@ -1146,6 +1146,38 @@ TEST_F(GapCollector, AReservedAddressWaitsForTheFrameItMaySwallow) {
   expect_glitch_then_answer(request, 0xff, answer);
 }
 
+// Slave 0x11's answer to a read of five registers cut after seven bytes, then the master's
+// next request, to slave 0x22: the cut answer takes the CRC back to its start value (the data
+// chosen so), so the fifteen bytes the answer's byte count claims pass its CRC (fresh seeds
+// 5343 and 5899). The request's answer after it, or the master's retry after its time-out and
+// a glitch, says the request was sent: the answer is cut, and the request a frame of its own.
+// Read a frame a read, all in one read, and with the retry after a silence.
+TEST_F(GapCollector, ARequestWhoseAnswerOrRetryFollowsIsNoPartOfTheAnswerBefore) {
+  const auto read = with_crc(hex("11 03 00 00 00 05"));
+  const auto cut = hex("11 03 0a 12 34 a2 27");
+  ASSERT_EQ(crc16(cut), 0xFFFF);
+  const auto request = with_crc(hex("22 03 00 10 00 01"));
+  const auto answer = with_crc(hex("22 03 02 00 2a"));
+  const std::vector<std::vector<Piece>> buses{
+      {{20'000'000, read}, {3'000'000, cut}, {5'000'000, request}, {3'000'000, answer}},
+      {{20'000'000, read}, {3'000'000, concat({cut, request, answer})}},
+      {{20'000'000, read},
+       {3'000'000, cut},
+       {5'000'000, request},
+       {300'000'000, concat({hex("ff"), request})},
+       {3'000'000, answer}}};
+  for (size_t bus = 0; bus < buses.size(); ++bus) {
+    const auto stream = run(buses[bus], ClockQuality::per_chunk).stream();
+    ASSERT_EQ(stream.size(), bus == 2 ? 6u : 4u) << bus;
+    EXPECT_EQ(stream[1].raw, cut) << bus;
+    EXPECT_EQ(stream[1].damage, Damage::cut) << bus;
+    EXPECT_EQ(stream[1].request, stream[0].index) << bus;
+    EXPECT_EQ(stream[2].raw, request) << bus;
+    EXPECT_EQ(stream.back().raw, answer) << bus;
+    EXPECT_EQ(stream.back().request, stream[stream.size() - 2].index) << bus;
+  }
+}
+
 // The same with the driver's other glitch, 0x00: slave 6's answer to a read after it, whose
 // first bytes after the glitch pass a CRC as a broadcast write of a register (`00 06 03 04 ...`,
 // the data chosen so). A broadcast is no reading in the other role, and is refused all the same.
