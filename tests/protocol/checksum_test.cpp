@@ -32,13 +32,19 @@ TEST(Crc16, StepwiseEqualsWhole) {
   EXPECT_EQ(crc, 0xCDC5);
 }
 
-TEST(Crc16, SlicedFormEqualsBytewiseAtEveryLength) {
+// `size` bytes of a linear congruential generator from `seed`: the same on every run.
+std::vector<uint8_t> random_bytes(size_t size, uint32_t seed) {
   std::vector<uint8_t> bytes;
-  uint32_t x = 7;
-  for (int i = 0; i < 300; ++i) {
+  uint32_t x = seed;
+  for (size_t i = 0; i < size; ++i) {
     x = x * 1664525 + 1013904223;
     bytes.push_back(static_cast<uint8_t>(x >> 24));
   }
+  return bytes;
+}
+
+TEST(Crc16, SlicedFormEqualsBytewiseAtEveryLength) {
+  const std::vector<uint8_t> bytes = random_bytes(300, 7);
   for (size_t n = 0; n <= bytes.size(); ++n) {
     uint16_t bytewise = 0xFFFF;
     for (size_t i = 0; i < n; ++i) bytewise = crc16_step(bytewise, bytes[i]);
@@ -57,12 +63,7 @@ TEST(Crc16, ResidueOfAGoodFrameStaysZeroWithATrailingZero) {
 // The framer's test of a good span for a good frame at its end: the tail of a good span is good
 // exactly where the CRC of the bytes before it is back at its start value.
 TEST(Crc16, TheTailOfAGoodSpanIsGoodWhereTheCrcIsBackAtItsStart) {
-  std::vector<uint8_t> bytes;
-  uint32_t x = 11;
-  for (int i = 0; i < 200; ++i) {
-    x = x * 1664525 + 1013904223;
-    bytes.push_back(static_cast<uint8_t>(x >> 24));
-  }
+  std::vector<uint8_t> bytes = random_bytes(200, 11);
   const uint16_t crc = crc16(bytes);
   bytes.push_back(static_cast<uint8_t>(crc & 0xFF));
   bytes.push_back(static_cast<uint8_t>(crc >> 8));
