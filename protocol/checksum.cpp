@@ -72,19 +72,11 @@ uint16_t crc16(std::span<const uint8_t> bytes, uint16_t crc) {
   return crc;
 }
 
-// A frame's bytes come back to the start value 1 time in 65,536 a byte: the run looks for any
-// without a branch a byte, then for the first where it found one.
+// Kept out of line: inlined, it swells the framer's weighing of every frame.
 [[gnu::noinline]] size_t crc16_back_to_start(std::span<const uint8_t> bytes, size_t first) {
   uint16_t crc = 0xFFFF;
-  bool back = false;
-  for (size_t k = 0; k < bytes.size(); ++k) {
-    crc = static_cast<uint16_t>((crc >> 8) ^ crc_table[(crc ^ bytes[k]) & 0xFF]);
-    back |= crc == 0xFFFF && k + 1 >= first;
-  }
-  if (!back) return 0;
-  crc = 0xFFFF;
   for (size_t k = 0; k < bytes.size();) {
-    crc = static_cast<uint16_t>((crc >> 8) ^ crc_table[(crc ^ bytes[k]) & 0xFF]);
+    crc = crc16_step(crc, bytes[k]);
     if (++k >= first && crc == 0xFFFF) return k;
   }
   return 0;

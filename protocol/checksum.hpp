@@ -67,9 +67,9 @@ class CrcIndex {
   std::vector<uint16_t> starts_;   // W_a ^ A^-a(0xFFFF) at the offsets base_ .. end - 1
   // Hash chains over ends_: the newest end offset in each chain, and for each end the one
   // before it in its chain. Offsets below base_ (forgotten, or from before a restart
-  // further on) end a walk; they are not unlinked. A restart that goes back starts a new
-  // generation: the ends written before it, past the new origin, hold values relative to the
-  // old one, and a chain's newest end stands only in the generation that wrote it.
+  // further on) end a walk; they are not unlinked. A restart does not clear the chains: an end
+  // written before it may lie past the new origin with a value relative to the old one, so a
+  // chain's newest end stands only where its value here is in that chain (newest()).
   std::vector<uint64_t> newest_;
   uint64_t newest(uint16_t chain) const;
   std::vector<uint64_t> same_before_;

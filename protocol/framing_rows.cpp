@@ -284,8 +284,8 @@ uint16_t RtuFramer::request_length_of_code(uint8_t function) {
 bool RtuFramer::request_before_kin(uint64_t begin, uint64_t end, uint64_t next) const {
   const uint8_t header[] = {*at_ptr(next), static_cast<uint8_t>(*at_ptr(next + 1) & 0x7F)};
   if (const uint16_t length = request_length_of_code(header[1])) {
-    const uint64_t start = end - std::min<uint64_t>(end - begin, length);
-    return start > begin && std::equal(header, header + 2, at_ptr(start)) &&
+    const uint64_t start = end - length;
+    return end - begin > length && std::equal(header, header + 2, at_ptr(start)) &&
            crc16(bytes(begin, start)) == 0xFFFF && request_spans(start, end);
   }
   const uint8_t* first = at_ptr(begin);
