@@ -72,6 +72,11 @@ uint16_t crc16(std::span<const uint8_t> bytes, uint16_t crc) {
   return crc;
 }
 
+// Out of line, with crc16 inlined into it: the framer asks it at every start in junk.
+bool rtu_crc_holds(std::span<const uint8_t> adu) {
+  return crc16(adu.first(adu.size() - 2)) == wire_crc(adu);
+}
+
 // Kept out of line: inlined, it swells the framer's weighing of every frame.
 [[gnu::noinline]] size_t crc16_back_to_start(std::span<const uint8_t> bytes, size_t first) {
   uint16_t crc = 0xFFFF;
@@ -87,13 +92,23 @@ CrcIndex::CrcIndex() : newest_(chain_mask + 1, none) {
 }
 
 void CrcIndex::restart(uint64_t origin) {
+  unlink_from(origin);
   base_ = origin;
   ends_.assign(1, 0);
   starts_.clear();
-  same_before_.assign(1, none);  // the value 0 is in chain 0
+  same_before_.assign(1, newest_[0]);  // the value 0 is in chain 0
   newest_[0] = origin;
   for (unsigned bit = 0; bit < 8; ++bit) unshifted_bits_[bit] = static_cast<uint16_t>(1 << bit);
   unshifted_init_ = 0xFFFF;
+}
+
+// An end at `origin` or after, written before a restart there, would run on in the new index
+// with a value relative to the old one: its chain starts afresh. Ends below the origin stop any
+// walk. Each end is unlinked at most once after it was appended, so this costs no more than the
+// bytes indexed.
+void CrcIndex::unlink_from(uint64_t origin) {
+  for (uint64_t at = std::max(origin, base_); at - base_ < ends_.size(); ++at)
+    newest_[ends_[at - base_] & chain_mask] = none;
 }
 
 void CrcIndex::append(std::span<const uint8_t> bytes) {
@@ -106,20 +121,10 @@ void CrcIndex::append(std::span<const uint8_t> bytes) {
       unshifted_bits_[bit] = crc16_unshift(unshifted_bits_[bit]);
     }
     unshifted_init_ = crc16_unshift(unshifted_init_);
-    same_before_.push_back(newest(w & chain_mask));
     ends_.push_back(w);
+    same_before_.push_back(newest_[w & chain_mask]);
     newest_[w & chain_mask] = offset++;
   }
-}
-
-// A chain's newest end, if the index holds it: an end forgotten or not yet indexed, or one a
-// restart left behind, whose value here is in another chain, is none. A restart need not clear
-// the chains, so an index that goes back and forth over junk costs no more than its bytes.
-uint64_t CrcIndex::newest(uint16_t chain) const {
-  const uint64_t end = newest_[chain];
-  return end >= base_ && end - base_ < ends_.size() && (ends_[end - base_] & chain_mask) == chain
-             ? end
-             : none;
 }
 
 void CrcIndex::drop_before(uint64_t offset) {
@@ -136,7 +141,7 @@ void CrcIndex::drop_before(uint64_t offset) {
 
 bool CrcIndex::chained_ends(uint16_t key, uint64_t first, uint64_t last,
                             std::array<uint64_t, 256>& out, size_t& count) const {
-  uint64_t end = newest(key & chain_mask);
+  uint64_t end = newest_[key & chain_mask];
   for (int walked = 0; end != none && end > last; end = same_before_[end - base_])
     if (++walked > max_chain_walk) return false;
   // `first` is at least base_, so an end forgotten by drop_before stops the walk here.

@@ -22,9 +22,7 @@ inline uint16_t wire_crc(std::span<const uint8_t> adu) {
 }
 
 // Whether an RTU ADU (at least its two CRC bytes) carries the CRC of the bytes before it.
-inline bool rtu_crc_holds(std::span<const uint8_t> adu) {
-  return crc16(adu.first(adu.size() - 2)) == wire_crc(adu);
-}
+bool rtu_crc_holds(std::span<const uint8_t> adu);
 
 // Lists, in a step or two, where the bytes of a stream from a given start end in their own CRC,
 // so a framer can look for frame ends in junk without running the CRC from every offset.
@@ -67,11 +65,9 @@ class CrcIndex {
   std::vector<uint16_t> starts_;   // W_a ^ A^-a(0xFFFF) at the offsets base_ .. end - 1
   // Hash chains over ends_: the newest end offset in each chain, and for each end the one
   // before it in its chain. Offsets below base_ (forgotten, or from before a restart
-  // further on) end a walk; they are not unlinked. A restart does not clear the chains: an end
-  // written before it may lie past the new origin with a value relative to the old one, so a
-  // chain's newest end stands only where its value here is in that chain (newest()).
+  // further on) end a walk; they are not unlinked.
   std::vector<uint64_t> newest_;
-  uint64_t newest(uint16_t chain) const;
+  void unlink_from(uint64_t origin);
   std::vector<uint64_t> same_before_;
   uint64_t base_ = 0;
   std::array<uint16_t, 8> unshifted_bits_{1, 2, 4, 8, 16, 32, 64, 128};  // A^-k of each bit

@@ -43,7 +43,7 @@ std::optional<Evidence> RtuFramer::weigh_start(uint64_t at) {
 // start in 65,536, most often as a vendor code or an unnamed exception, whose end only a CRC
 // search 256 bytes on could tell. An exception's code not yet come may still be a standard one.
 bool RtuFramer::vendor_frame_inside_awaited_answer(uint64_t at) {
-  return at > head_ && at + 3 <= end_ && !standard_frame(at) && inside_awaited_span(at);
+  return at + 3 <= end_ && inside_awaited_span(at) && !standard_frame(at);
 }
 
 // The rows unrolled at compile time: weighing runs once a frame. Below nothing the span is

@@ -62,7 +62,7 @@ void RtuFramer::finish() {
 
 void RtuFramer::resolve(bool final) {
   while (head_ < end_) {
-    head_awaited_end_.reset();  // a frame emitted, or a request's time-out, changes it
+    head_awaited_end_ = end_unknown;  // a frame emitted, or a request's time-out, changes it
     const Match m = match_start(head_, final);
     if (m.kind == Match::Kind::found) {
       emit_frame(head_, m);
@@ -84,7 +84,7 @@ RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search, bool o
   if (options_.observer && observed) options_.observer->on_start(channel_, at);
   if (end_ - at < 2) return need_more();
   const Readings readings = readings_at(at);
-  if (const std::optional<Evidence> row = weigh_start(at); row && readings.count) {
+  if (const std::optional<Evidence> row = readings.count ? weigh_start(at) : std::nullopt) {
     for (size_t i = 0; observed && i < readings.count; ++i)
       observe(at, readings.order[i], {}, ReadingOutcome::refuted_at_start, *row);
     return {};
@@ -210,13 +210,15 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
   const uint8_t* p = at_ptr(at);
   const uint64_t limit = std::min<uint64_t>(avail, max_rtu_adu);
   const bool in_junk = at >= crc_index_.begin() && at < crc_index_.end();
-  const bool unexpected = unexpected_sender(at, fit.response);
   if (!in_junk) {
     const Match m = first_confirmed_end(at, first, limit, fit, final, search);
     if (m.kind == Match::Kind::found) return m;
   }
   std::array<uint16_t, max_rtu_adu> hits;  // lengths with a good CRC, ascending
   const size_t hit_count = good_lengths(at, first, limit, hits);
+  // Junk's usual case, at nearly every start: no end to weigh.
+  if (hit_count == 0) return !final && avail < max_rtu_adu ? need_more() : Match{};
+  const bool unexpected = unexpected_sender(at, fit.response);
   bool open = false;
   Match alone;  // FC08's first plausible end nothing confirmed, to stand on its header
   for (bool allow_glitch : {false, true}) {
@@ -462,12 +464,6 @@ std::optional<uint64_t> RtuFramer::awaited_start(uint64_t at) const {
 uint64_t RtuFramer::awaited_end(uint64_t at) const {
   const std::optional<uint64_t> start = awaited_start(at);
   return start ? *start + *awaited_.length(from(*start)) : 0;
-}
-
-bool RtuFramer::inside_awaited_span(uint64_t at) {
-  if (at <= head_) return false;
-  if (!head_awaited_end_) head_awaited_end_ = awaited_end(head_);
-  return at < *head_awaited_end_;
 }
 
 // Whether the frame at `at` has a public function code and, as an exception, a standard code.

@@ -192,7 +192,12 @@ class RtuFramer {
   // First position >= from that starts a good frame; `decided` false if one is still open.
   uint64_t next_start(uint64_t from, bool final, bool& decided);
   std::optional<uint64_t> awaited_start(uint64_t at) const;
-  bool inside_awaited_span(uint64_t at);
+  // Junk asks this at every start it weighs: the awaited end is worked out once a step.
+  bool inside_awaited_span(uint64_t at) {
+    if (at <= head_) return false;
+    if (head_awaited_end_ == end_unknown) head_awaited_end_ = awaited_end(head_);
+    return at < head_awaited_end_;
+  }
   uint64_t awaited_end(uint64_t at) const;
   bool standard_frame(uint64_t at) const;
   Frame frame_of(uint64_t begin, uint64_t end, RoleFit fit) const;
@@ -226,9 +231,9 @@ class RtuFramer {
   uint64_t end_ = 0;           // stream offset one past the last byte
   uint64_t answer_start_ = 0;  // where the last frame (and a lone glitch after it) ended
   uint64_t scanned_to_ = 0;    // positions below this are known not to start a frame
-  // Where the answer awaited at head_ ends, asked at most once a step of resolve: junk asks it
-  // at every start it weighs.
-  std::optional<uint64_t> head_awaited_end_;
+  // Where the answer awaited at head_ ends, asked at most once a step of resolve.
+  static constexpr uint64_t end_unknown = UINT64_MAX;
+  uint64_t head_awaited_end_ = end_unknown;
   CrcIndex crc_index_;  // over the searched part of buf_
   CrcHits last_hits_;
   GlitchOdds glitch_odds_;  // the bus's glitches so far, against a frame's bytes by chance
