@@ -31,7 +31,9 @@ void ByteTimeline::drop_before(uint64_t offset) {
   while (marks_.size() > 1 && marks_.front().end <= offset) marks_.pop_front();
 }
 
+// The framer asks most often of its first unplaced byte, in the oldest mark it keeps.
 const ByteTimeline::Mark* ByteTimeline::find(uint64_t offset) const {
+  if (!marks_.empty() && offset < marks_.front().end) return &marks_.front();
   const Mark* it = std::upper_bound(marks_.begin(), marks_.end(), offset,
                                     [](uint64_t o, const Mark& m) { return o < m.end; });
   return it == marks_.end() ? nullptr : it;
