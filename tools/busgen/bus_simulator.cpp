@@ -329,9 +329,13 @@ class Simulator {
     const size_t garbled = pick(1, 3);
     for (size_t i = wire.size() - garbled; i < wire.size(); ++i)
       wire[i] ^= static_cast<uint8_t>(pick(1, 255));
+    // Garbled into a good frame, or junk that is one by chance, no receiver could tell them
+    // from frames: the check is kept failing, as a corruption's is.
+    if (check_ok(wire)) wire.back() ^= 1;
     send_damaged(wire, gap_ns, req, Damage::collision, response[0]);
     Bytes other;
     random_bytes(other, pick(1, 6));
+    if (other.size() >= 4 && check_ok(other)) other.back() ^= 1;
     send(other, 0);
   }
 
