@@ -92,23 +92,24 @@ CrcIndex::CrcIndex() : newest_(chain_mask + 1, none) {
 }
 
 void CrcIndex::restart(uint64_t origin) {
-  unlink_from(origin);
+  unlink(0, ends_.size());
   base_ = origin;
   ends_.assign(1, 0);
   starts_.clear();
-  same_before_.assign(1, newest_[0]);  // the value 0 is in chain 0
+  same_before_.assign(1, none);  // the value 0 is in chain 0, now empty
   newest_[0] = origin;
   for (unsigned bit = 0; bit < 8; ++bit) unshifted_bits_[bit] = static_cast<uint16_t>(1 << bit);
   unshifted_init_ = 0xFFFF;
 }
 
-// An end at `origin` or after, written before a restart there, would run on in the new index
-// with a value relative to the old one: its chain starts afresh. Ends below the origin stop any
-// walk. Each end is unlinked at most once after it was appended, so this costs no more than the
-// bytes indexed.
-void CrcIndex::unlink_from(uint64_t origin) {
-  for (uint64_t at = std::max(origin, base_); at - base_ < ends_.size(); ++at)
-    newest_[ends_[at - base_] & chain_mask] = none;
+// A chain whose newest end is among ends_[first, last) starts afresh: the chains' newest ends
+// stay inside the index, so a restart anywhere, back or on, meets no chain of an index before
+// it. Each end is unlinked at most once after it was appended: this costs less than indexing.
+void CrcIndex::unlink(size_t first, size_t last) {
+  for (size_t i = first; i < last; ++i) {
+    uint64_t& newest = newest_[ends_[i] & chain_mask];
+    if (newest == base_ + i) newest = none;
+  }
 }
 
 void CrcIndex::append(std::span<const uint8_t> bytes) {
@@ -133,6 +134,7 @@ void CrcIndex::drop_before(uint64_t offset) {
   if (offset <= base_ || starts_.empty()) return;
   if (offset >= end()) return restart(offset);
   const auto count = static_cast<ptrdiff_t>(offset - base_);
+  unlink(0, static_cast<size_t>(count));
   ends_.erase(ends_.begin(), ends_.begin() + count);
   starts_.erase(starts_.begin(), starts_.begin() + count);
   same_before_.erase(same_before_.begin(), same_before_.begin() + count);

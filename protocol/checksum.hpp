@@ -63,11 +63,11 @@ class CrcIndex {
 
   std::vector<uint16_t> ends_{0};  // W at the offsets base_ .. end, the end included
   std::vector<uint16_t> starts_;   // W_a ^ A^-a(0xFFFF) at the offsets base_ .. end - 1
-  // Hash chains over ends_: the newest end offset in each chain, and for each end the one
-  // before it in its chain. Offsets below base_ (forgotten, or from before a restart
-  // further on) end a walk; they are not unlinked.
+  // Hash chains over ends_: the newest end offset in each chain (inside the index, or none),
+  // and for each end the one before it in its chain; an offset below base_ (forgotten, or from
+  // before a restart) ends a walk.
   std::vector<uint64_t> newest_;
-  void unlink_from(uint64_t origin);
+  void unlink(size_t first, size_t last);
   std::vector<uint64_t> same_before_;
   uint64_t base_ = 0;
   std::array<uint16_t, 8> unshifted_bits_{1, 2, 4, 8, 16, 32, 64, 128};  // A^-k of each bit

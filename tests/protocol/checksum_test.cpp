@@ -132,6 +132,31 @@ TEST(CrcIndex, TellsEveryGoodSpanAsTheCrcDoes) {
   EXPECT_GT(good_spans, 300u);  // the zero run alone gives one per zero
 }
 
+// A framer restarts the index where its next search begins: back before where the last one
+// went, or past it. Whatever the index held before, it tells the spans the CRC does.
+TEST(CrcIndex, ARestartAnywhereTellsWhatTheCrcDoes) {
+  const auto bytes = bytes_with_planted_frames(3000, 12);
+  CrcIndex index;
+  uint32_t x = 5;
+  auto next = [&x] { return x = x * 1664525 + 1013904223; };
+  size_t good_spans = 0;
+  for (int restart = 0; restart < 200; ++restart) {
+    const uint64_t origin = next() % (bytes.size() - 300);
+    const uint64_t fed = origin + 1 + next() % 299;
+    index.restart(origin);
+    index.append({bytes.data() + origin, static_cast<size_t>(fed - origin)});
+    for (uint64_t begin = origin; begin + 4 <= fed; ++begin) {
+      std::vector<uint64_t> expected, found;
+      for (uint64_t end = begin + 4; end <= fed; ++end)
+        if (crc16({bytes.data() + begin, end - begin}) == 0) expected.push_back(end);
+      index.good_ends(begin, begin + 4, fed, [&](uint64_t end) { found.push_back(end); });
+      ASSERT_EQ(found, expected) << "from " << begin << " after a restart at " << origin;
+      good_spans += expected.size();
+    }
+  }
+  EXPECT_GT(good_spans, 100u);
+}
+
 TEST(Lrc, MatchesTheManualsExample) {
   // NTA5000 manual 2.1: 01 03 01 00 00 0A gives LRC F1.
   EXPECT_EQ(lrc(hex("01 03 01 00 00 0a")), 0xF1);
