@@ -1,6 +1,7 @@
 #include "output/explain_sink.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 
 #include <fmt/format.h>
 
@@ -12,6 +13,8 @@ namespace {
 constexpr size_t kept_steps = 16384;
 // A channel's judgements of copies of the pending request, kept until their records come.
 constexpr size_t kept_copies = 64;
+// Edge bytes weighed, kept until their records come: a piece's two edges at most, a few times.
+constexpr size_t kept_edges = 64;
 
 TextOptions with_clock(TextOptions options, const RecordClock& clock) {
   options.clock = &clock;
@@ -52,6 +55,11 @@ void ExplainSink::on_copy(uint16_t channel, uint64_t offset, const Margin& margi
   if (copies_.size() > kept_copies) copies_.pop_front();
 }
 
+void ExplainSink::on_edge_byte(uint16_t channel, const EdgeByte& edge) {
+  edges_.push_back({channel, edge});
+  if (edges_.size() > kept_edges) edges_.pop_front();
+}
+
 // A channel's records come in the order of their bytes: what was weighed before a record's end
 // is of no record to come.
 void ExplainSink::forget_before(ChannelSteps& channel, uint64_t offset) {
@@ -78,6 +86,7 @@ void ExplainSink::explain_frame(const Frame& frame) {
         "one piece, which the awaited answer's structure or the header's length rules "
         "make a frame with a bad check: {}\n",
         to_string(frame.damage));
+    print_edges(frame.channel, frame.offset, frame.raw.size());
   }
 }
 
@@ -97,6 +106,7 @@ void ExplainSink::explain_noise(const Noise& noise) {
       "  then, no reading holding, the bytes up to the next good frame or silence were "
       "noise: {}\n",
       to_string(noise.reason));
+  print_edges(noise.channel, noise.offset, noise.raw.size());
 }
 
 void ExplainSink::on_timeout(const Timeout& timeout) {
@@ -282,6 +292,48 @@ void ExplainSink::print_copy(const Frame& frame) {
   out_.print("  a copy of the pending request, taken for {}; its runner-up: {}\n",
              to_string(echo ? RunnerUp::echo : RunnerUp::retry), to_string(copy->margin.runner_up));
   print_runner_up(copy->margin, "ambiguous-echo");
+}
+
+// Each 0x00 or 0xFF weighed at an edge of a piece that became this record, or right next to it
+// (the glitch taken from the record's edge).
+void ExplainSink::print_edges(uint16_t channel, uint64_t offset, size_t size) {
+  for (const Edge& e : edges_)
+    if (e.channel == channel && e.edge.offset + 1 >= offset && e.edge.offset <= offset + size)
+      print_edge(e.edge);
+}
+
+void ExplainSink::print_edge(const EdgeByte& edge) {
+  const bool first = edge.side == EdgeSide::first;
+  const std::string_view glitch = first ? "the answering driver's glitch, before its answer"
+                                        : "the next sender's glitch, after the answer";
+  const std::string_view own = first ? "the piece's own first byte" : "the answer's own last byte";
+  out_.print("  byte {} ({:02X}), the {} of the piece, read two ways:\n", edge.offset, edge.value,
+             first ? "first" : "last");
+  print_edge_reading(glitch, edge.for_glitch, edge.glitch_features);
+  print_edge_reading(own, edge.for_byte, edge.byte_features);
+  const int lead = std::abs(edge.glitch_bits() - edge.byte_bits());
+  out_.print("  taken for {}, ", edge.glitch() ? glitch : own);
+  if (lead == 0)
+    out_.print("the evidence tied, and {}", to_string(edge.habit));
+  else
+    out_.print("by {}", counted(lead, "bit", "bits"));
+  const Margin margin = edge.margin();
+  if (margin.runner_up == RunnerUp::none)
+    out_.print(": the glitch is no runner-up on a quiet bus\n");
+  else if (margin.stands())
+    out_.print(": the runner-up stands (a lead of {} rules it out): ambiguous-end\n",
+               counted(decisive_bits, "bit", "bits"));
+  else
+    out_.print(": the runner-up is ruled out\n");
+}
+
+void ExplainSink::print_edge_reading(std::string_view reading,
+                                     const std::array<Feature, 4>& features, uint8_t count) {
+  out_.print("    {}: {:+} bits\n", reading, EdgeByte::bits(features, count));
+  for (uint8_t i = 0; i < count; ++i) {
+    const FeatureInfo& feature = feature_info(features[i]);
+    out_.print("       {:+4}  {}: {}\n", feature.bits, feature.name, feature.why);
+  }
 }
 
 // A row's weight and why, then its features': the crc's row is its one feature.

@@ -27,6 +27,7 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   void on_start(uint16_t channel, uint64_t offset) override;
   void on_reading(const FramingStep& step) override;
   void on_copy(uint16_t channel, uint64_t offset, const Margin& margin) override;
+  void on_edge_byte(uint16_t channel, const EdgeByte& edge) override;
   void on_frame(const Frame& frame) override;
   void on_noise(const Noise& noise) override;
   void on_timeout(const Timeout& timeout) override;
@@ -62,6 +63,11 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   // A runner-up's lines: what ruled it out, or that it stands and the record says so.
   void print_runner_up(const Margin& margin, std::string_view finding);
   void print_copy(const Frame& frame);
+  // The 0x00s and 0xFFs at the edges of the record's bytes, each read as its own or a glitch.
+  void print_edges(uint16_t channel, uint64_t offset, size_t size);
+  void print_edge(const EdgeByte& edge);
+  void print_edge_reading(std::string_view reading, const std::array<Feature, 4>& features,
+                          uint8_t count);
   void print_row(const EvidenceInfo& row, int sign);
   void print_feature(Feature feature, int sign);
   void print_margin(const std::vector<const FramingStep*>& weighed);
@@ -100,6 +106,12 @@ class ExplainSink final : public RecordSink, public FramingObserver {
     Margin margin;
   };
   std::deque<Copy> copies_;
+  // The latest 0x00s and 0xFFs weighed at the edges of unframed bytes.
+  struct Edge {
+    uint16_t channel;
+    EdgeByte edge;
+  };
+  std::deque<Edge> edges_;
   std::map<uint16_t, Segment> last_on_channel_;
   std::optional<uint16_t> after_due_;  // the channel whose next record is still to show
 };

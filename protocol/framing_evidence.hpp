@@ -13,6 +13,7 @@
 #include <optional>
 #include <string_view>
 
+#include "protocol/glitch_odds.hpp"
 #include "protocol/records.hpp"
 
 namespace modtap {
@@ -41,6 +42,7 @@ enum class Feature : uint8_t {
   glitch_then_frame,
   predicted_bytes,
   vendor_code,
+  predicted_byte,
 };
 
 struct FeatureInfo {
@@ -49,7 +51,7 @@ struct FeatureInfo {
   std::string_view why;
 };
 
-inline constexpr std::array<FeatureInfo, 23> feature_table{{
+inline constexpr std::array<FeatureInfo, 24> feature_table{{
     {"crc-holds", 16, "bytes that are no frame pass a CRC 1 time in 65,536"},
     {"another-crc", 16,
      "another span over these bytes passes its own length rules and CRC, as unlikely by "
@@ -123,6 +125,9 @@ inline constexpr std::array<FeatureInfo, 23> feature_table{{
      "a function code no public function has, or an exception code the standard does not name: "
      "junk's codes are such 5 times in 6, and a bus carries a device's own codes seldom: taken "
      "as 1 in 4"},
+    {"predicted-byte", 1,
+     "the pending request tells the answer's byte here, and it is this one; a glitch is this "
+     "value too about 1 time in 2"},
 }};
 
 inline const FeatureInfo& feature_info(Feature f) {
@@ -321,6 +326,67 @@ constexpr bool every_tell_decides() {
 }
 static_assert(every_tell_decides());
 
+// A lone 0x00 or 0xFF at an edge of a piece (bytes no reading holds, up to the next good frame
+// or silence) reads two ways: the piece's own byte, or a driver's glitch apart from it, the
+// answering slave's right before its answer or the next sender's right after it (a driver
+// turning on puts one on the line). Each reading has the features that hold for it, and the one
+// with more bits wins. Where they tie, the bus's habit ranks them (GlitchOdds): a bus that shows
+// glitches more often than a byte is one by chance takes the glitch, any other the byte. The
+// habit is of the bus, not of these bytes, so it never counts in the margin: below
+// decisive_bits the runner-up stands (`ambiguous-end`). Only a bus known to be quiet (128 frames
+// or more, at most 1 glitch in 128) says a byte nothing speaks for is no glitch: there the glitch
+// is no runner-up.
+enum class EdgeSide : uint8_t { first, last };
+template <>
+struct EnumNames<GlitchHabit> {
+  static constexpr std::array<std::string_view, 3> names{
+      "the bus is quiet: 128 frames or more, with at most 1 glitch in 128",
+      "too few frames to know the bus's glitches: none yet, in fewer than 128",
+      "the bus's glitches are likelier than a byte by chance: more than 1 frame in 128 has one, "
+      "where a byte is a 0x00 or 0xFF 2 times in 256"};
+};
+
+struct EdgeByte {
+  EdgeSide side = EdgeSide::last;
+  uint64_t offset = 0;  // the byte's place in the channel's stream
+  uint8_t value = 0;
+  GlitchHabit habit = GlitchHabit::unknown;
+  std::array<Feature, 4> for_glitch{};
+  std::array<Feature, 4> for_byte{};
+  uint8_t glitch_features = 0;
+  uint8_t byte_features = 0;
+
+  // Counts `feature` for the glitch (`glitch`) or for the byte, where it holds.
+  void weigh(Feature feature, bool holds, bool glitch) {
+    if (!holds) return;
+    if (glitch)
+      for_glitch[glitch_features++] = feature;
+    else
+      for_byte[byte_features++] = feature;
+  }
+  static int bits(const std::array<Feature, 4>& features, uint8_t count) {
+    int sum = 0;
+    for (uint8_t i = 0; i < count; ++i) sum += feature_table[size_t(features[i])].bits;
+    return sum;
+  }
+  int glitch_bits() const { return bits(for_glitch, glitch_features); }
+  int byte_bits() const { return bits(for_byte, byte_features); }
+  // Whether the byte is the glitch, apart from the piece.
+  bool glitch() const {
+    const int lead = glitch_bits() - byte_bits();
+    return lead > 0 || (lead == 0 && habit == GlitchHabit::glitchy);
+  }
+  // The winner against the runner-up: by how many bits, and the first feature that tells.
+  Margin margin() const {
+    const bool glitch_won = glitch();
+    if (!glitch_won && habit == GlitchHabit::quiet) return {};
+    Margin margin{glitch_won ? RunnerUp::keeps_byte : RunnerUp::glitch_byte,
+                  glitch_won ? glitch_bits() - byte_bits() : byte_bits() - glitch_bits()};
+    if (margin.decided()) margin.told = glitch_won ? for_glitch[0] : for_byte[0];
+    return margin;
+  }
+};
+
 // What says where a span ends. Its function code's length rules, mostly; for a code with no
 // length of its own (a vendor's, FC08 Return Query Data), a CRC search, whose hit is weak
 // evidence until something confirms the end: a CRC holds at one of up to 256 ends tried, and a
@@ -455,6 +521,8 @@ class FramingObserver {
   // The matcher's judgement of a frame that copies the pending request, at `offset`: the
   // slave's echo or the master's retry, and what told the runner-up apart.
   virtual void on_copy(uint16_t /*channel*/, uint64_t /*offset*/, const Margin& /*margin*/) {}
+  // How a 0x00 or 0xFF at an edge of unframed bytes was read: their own, or a glitch.
+  virtual void on_edge_byte(uint16_t /*channel*/, const EdgeByte& /*edge*/) {}
 };
 
 }  // namespace modtap

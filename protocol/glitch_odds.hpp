@@ -8,6 +8,10 @@
 
 namespace modtap {
 
+// What the bus has shown of its glitches, against a damaged answer's last byte being a 0x00 or
+// 0xFF by chance: too few frames to tell, fewer, or more.
+enum class GlitchHabit : uint8_t { quiet, unknown, glitchy };
+
 class GlitchOdds {
  public:
   void frame() { ++frames_; }  // a frame with a good check
@@ -35,6 +39,10 @@ class GlitchOdds {
   // Too few frames to tell: no glitch yet, where 128 frames without one would put the bus's
   // rate below the chance above by the count alone.
   bool unknown() const { return glitches_ == 0 && frames_ < glitch_byte_by_chance; }
+  GlitchHabit habit() const {
+    if (trailing_glitch_likelier()) return GlitchHabit::glitchy;
+    return unknown() ? GlitchHabit::unknown : GlitchHabit::quiet;
+  }
 
  private:
   static constexpr uint64_t crc_ends_in_zero = 256;       // 1 in 256

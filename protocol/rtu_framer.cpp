@@ -540,12 +540,17 @@ void RtuFramer::emit_damaged(uint64_t begin, uint64_t end, Damage damage, uint32
 void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool glitch_after) {
   const uint64_t size = end - begin;
   const uint8_t* p = at_ptr(begin);
-  // The slave's driver turning on can put a glitch right before its damaged response.
-  if (size > 1 && is_glitch_byte(p[0]) && awaited_.starts(bytes(begin + 1, end))) {
+  if (const std::optional<EdgeByte> first = first_edge(begin, end); first && first->glitch()) {
     emit_piece(begin, begin + 1);
     return emit_piece(begin + 1, end, findings);
   }
-  if (split_trailing_glitch(begin, end, findings, glitch_after)) return;
+  if (const std::optional<EdgeByte> last = last_edge(begin, end, glitch_after)) {
+    if (last->margin().stands()) findings |= finding_ambiguous_end;
+    if (last->glitch()) {
+      emit_piece(begin, end - 1, findings, true);
+      return emit_piece(end - 1, end);
+    }
+  }
   const auto length = awaited_.length(bytes(begin, end));
   if (length && *length != size) {
     if (size < *length) return emit_damaged(begin, end, Damage::cut, findings);
@@ -581,38 +586,45 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
     emit_noise(at, std::min<uint64_t>(end, at + max_rtu_adu), reason);
 }
 
-// A damaged response ending in 0x00 or 0xFF right before the next frame, or one cut short with
-// that frame's glitch after it: where the bus's glitches make it the likelier, the glitch, unless
-// the request says whether the byte is the response's. Before the bus has shown whether it has
-// glitches, the byte is left to the frame unless the request rules it out, marked: both
-// readings stand. Whether it emitted the piece so.
-bool RtuFramer::split_trailing_glitch(uint64_t begin, uint64_t end, uint32_t& findings,
-                                      bool glitch_after) {
+// The first byte of a piece, a 0x00 or 0xFF, where the bytes after it begin as the awaited
+// answer: the answering driver's glitch, or the piece's own (EdgeByte). Elsewhere the byte and
+// what follows it are noise either way, and nothing is weighed.
+std::optional<EdgeByte> RtuFramer::first_edge(uint64_t begin, uint64_t end) const {
+  if (end - begin < 2 || !is_glitch_byte(*at_ptr(begin)) || !awaited_.starts(bytes(begin + 1, end)))
+    return std::nullopt;
+  EdgeByte edge{EdgeSide::first, begin, *at_ptr(begin), glitch_odds_.habit()};
+  edge.weigh(Feature::awaited_header, true, true);
+  edge.weigh(Feature::awaited_header, awaited_.starts(bytes(begin, end)), false);
+  observe_edge(edge);
+  return edge;
+}
+
+// The last byte of a damaged answer cut short, a 0x00 or 0xFF with bytes after it: the next
+// sender's glitch, or the answer's own (EdgeByte). What its request tells of the byte, a
+// silence after it, a clock per byte that saw it sent straight on, and a glitch already taken
+// right after it (one driver turning on puts one on the line) weigh; the bus's habit ranks the
+// two where they tie. `glitch_after`: the byte after the piece was just taken for a glitch.
+std::optional<EdgeByte> RtuFramer::last_edge(uint64_t begin, uint64_t end,
+                                             bool glitch_after) const {
   const uint64_t size = end - begin;
   const auto length = awaited_.length(bytes(begin, end));
   const bool cut_short =
       (length && size <= *length) || (!length && awaited_.length(bytes(begin, end - 1)));
-  const bool glitchy_bus = glitch_odds_.trailing_glitch_likelier();
-  const bool bus_unknown = glitch_odds_.unknown();
-  if (!cut_short || size <= 3 || !is_glitch_byte(*at_ptr(end - 1)) || glitch_after ||
-      !(glitchy_bus || bus_unknown) || end >= end_ || !timeline_.after_quiet_line(end - 1))
-    return false;
-  // The clock has not ruled a glitch out. The request may rule the byte in or out; else the
-  // glitch is taken on a bus of glitches unless a silence after the byte says it ended a frame
-  // (a glitch may repeat the very byte the request predicts: only the silence tells it apart).
+  if (!cut_short || size <= 3 || !is_glitch_byte(*at_ptr(end - 1)) || end >= end_)
+    return std::nullopt;
+  EdgeByte edge{EdgeSide::last, end - 1, *at_ptr(end - 1), glitch_odds_.habit()};
   const std::optional<bool> told = awaited_.byte(bytes(begin, end), size - 1);
-  const bool gap = timeline_.gap_at(end);
-  const bool glitch = told ? !*told : glitchy_bus && !gap;
-  Margin margin{glitch ? RunnerUp::keeps_byte : RunnerUp::glitch_byte};
-  if (glitch)
-    margin.tell(Feature::byte_ruled_out, told == false);
-  else
-    margin.tell(Feature::silence_after, gap);
-  if (margin.stands()) findings |= finding_ambiguous_end;
-  if (!glitch) return false;
-  emit_piece(begin, end - 1, findings, true);
-  emit_piece(end - 1, end);
-  return true;
+  edge.weigh(Feature::byte_ruled_out, told == false, true);
+  edge.weigh(Feature::predicted_byte, told == true, false);
+  edge.weigh(Feature::silence_after, timeline_.gap_at(end), false);
+  edge.weigh(Feature::sent_straight_on, !timeline_.after_quiet_line(end - 1), false);
+  edge.weigh(Feature::second_glitch, glitch_after, false);
+  observe_edge(edge);
+  return edge;
+}
+
+void RtuFramer::observe_edge(const EdgeByte& edge) const {
+  if (options_.observer) options_.observer->on_edge_byte(channel_, edge);
 }
 
 void RtuFramer::emit_noise(uint64_t begin, uint64_t end, NoiseReason reason) {

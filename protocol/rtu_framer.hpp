@@ -203,11 +203,13 @@ class RtuFramer {
   Frame frame_of(uint64_t begin, uint64_t end, RoleFit fit) const;
   void emit_frame(uint64_t at, const Match& match);
   void emit_unframed(uint64_t begin, uint64_t end);
-  // `glitch_after`: the byte after the piece was just taken for a turnaround's glitch, so the
-  // piece's own last byte is no glitch (one driver turning on puts one on the line).
+  // `glitch_after`: the byte after the piece was just taken for a turnaround's glitch, which
+  // weighs against its own last byte being a second (last_edge).
   void emit_piece(uint64_t begin, uint64_t end, uint32_t findings = finding_none,
                   bool glitch_after = false);
-  bool split_trailing_glitch(uint64_t begin, uint64_t end, uint32_t& findings, bool glitch_after);
+  std::optional<EdgeByte> first_edge(uint64_t begin, uint64_t end) const;
+  std::optional<EdgeByte> last_edge(uint64_t begin, uint64_t end, bool glitch_after) const;
+  void observe_edge(const EdgeByte& edge) const;
   void emit_damaged(uint64_t begin, uint64_t end, Damage damage, uint32_t findings);
   void emit_noise(uint64_t begin, uint64_t end, NoiseReason reason);
   void consume(uint64_t to);

@@ -141,6 +141,26 @@ TEST(RtuFramer, ACutResponsesLastByteThatItsRequestRulesOutIsAGlitch) {
   EXPECT_EQ(out.noise().back().reason, NoiseReason::glitch);
 }
 
+// On a bus whose drivers have put no glitch on the line in 128 frames and more, a byte nothing
+// speaks for is the answer's own; but where the request rules the byte out, the evidence is on
+// the bytes, not the bus's habit, and the byte is the next sender's glitch all the same.
+TEST(RtuFramer, OnAQuietBusACutResponsesLastByteItsRequestRulesOutIsAGlitch) {
+  std::vector<uint8_t> bytes;
+  for (int i = 0; i < 130; ++i) bytes = concat({bytes, read_request, read_response});
+  const auto write = with_crc(hex("01 10 00 05 00 02 04 00 0a 01 02"));
+  for (const auto& [cut, kept] : {std::pair{hex("01 10 00 05 ff"), hex("01 10 00 05")},
+                                  std::pair{hex("01 10 00 05 00"), hex("01 10 00 05 00")}}) {
+    const auto out = analyze_untimed(concat({bytes, write, cut, read_request, read_response}));
+    const auto frames = out.frames();
+    ASSERT_GE(frames.size(), 3u);
+    EXPECT_EQ(frames[frames.size() - 3].raw, kept);
+    EXPECT_EQ(frames[frames.size() - 3].damage, Damage::cut);
+    EXPECT_FALSE(frames[frames.size() - 3].findings & finding_ambiguous_end)
+        << "a quiet bus's glitch is no runner-up, and a ruled-out byte no answer's";
+    EXPECT_EQ(out.noise().size(), kept.size() < cut.size() ? 1u : 0u);
+  }
+}
+
 TEST(RtuFramer, ACutEchoKeepsTheRequestsCrcByte) {
   // Mask Write Register echoes its request whole, CRC and all: its CRC's first byte is 0xFF.
   const auto mask_write = hex("01 16 00 04 ff f2 60 07 ff e3");
@@ -1281,6 +1301,54 @@ TEST(GlitchOdds, EachReadingMustClearItsOwnMargin) {
   EXPECT_FALSE(trailing.trailing_glitch_likelier()) << "1 in 128: even, no more";
   trailing.glitch(0x00);
   EXPECT_TRUE(trailing.trailing_glitch_likelier()) << "2 in 128";
+}
+
+// A 0x00 or 0xFF at the edge of a piece: the reading with more bits wins, the bus's habit breaks
+// a tie, and the margin is the evidence's alone, a quiet bus's glitch no runner-up at all.
+TEST(EdgeByte, TheEvidenceDecidesAndTheBusHabitOnlyBreaksATie) {
+  struct Case {
+    GlitchHabit habit;
+    std::vector<std::pair<Feature, bool>> features;  // a feature, and whether for the glitch
+    bool glitch;
+    RunnerUp runner_up;
+    bool stands;
+  };
+  const std::vector<Case> cases = {
+      {GlitchHabit::glitchy, {}, true, RunnerUp::keeps_byte, true},
+      {GlitchHabit::unknown, {}, false, RunnerUp::glitch_byte, true},
+      {GlitchHabit::quiet, {}, false, RunnerUp::none, false},
+      {GlitchHabit::quiet, {{Feature::byte_ruled_out, true}}, true, RunnerUp::keeps_byte, false},
+      {GlitchHabit::glitchy,
+       {{Feature::predicted_byte, false}},
+       false,
+       RunnerUp::glitch_byte,
+       true},
+      {GlitchHabit::glitchy,
+       {{Feature::silence_after, false}},
+       false,
+       RunnerUp::glitch_byte,
+       false},
+      {GlitchHabit::unknown,
+       {{Feature::byte_ruled_out, true}, {Feature::sent_straight_on, false}},
+       true,
+       RunnerUp::keeps_byte,
+       false},
+      {GlitchHabit::glitchy,
+       {{Feature::awaited_header, true}, {Feature::awaited_header, false}},
+       true,
+       RunnerUp::keeps_byte,
+       true},
+  };
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const Case& c = cases[i];
+    EdgeByte edge{EdgeSide::last, 0, 0xFF, c.habit};
+    for (const auto& [feature, for_glitch] : c.features) edge.weigh(feature, true, for_glitch);
+    edge.weigh(Feature::second_glitch, false,
+               false);  // a feature that does not hold counts nothing
+    EXPECT_EQ(edge.glitch(), c.glitch) << i;
+    EXPECT_EQ(edge.margin().runner_up, c.runner_up) << i;
+    EXPECT_EQ(edge.margin().stands(), c.stands) << i;
+  }
 }
 
 }  // namespace

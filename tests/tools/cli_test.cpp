@@ -1344,6 +1344,35 @@ TEST(Cli, ExplainSaysWhyNoFrameWasCutInsideADamagedOne) {
   EXPECT_THAT(r.lines[14], ::testing::StartsWith("  then, no reading holding, "));
 }
 
+// A write's answer cut short between a 0x00 and a 0xFF, the next request right behind it: the
+// 0x00 is the answering driver's glitch, for the bytes after it begin as the awaited answer; the
+// 0xFF is the next sender's, for it cannot be the quantity's high byte of an answer to a write
+// of 2 registers. --explain says, for each, what weighed on either reading.
+TEST(Cli, ExplainSaysHowTheBytesAtAPiecesEdgesWereRead) {
+  const std::string log =
+      hexlog("modtap-explain-edges.log",
+             {"00.000000", "01 10 00 05 00 02 04 00 0A 01 02 93 C3", "00.030000",
+              "00 01 10 00 05 FF 01 03 00 00 00 01 84 0A", "00.040000", "01 03 02 00 2A 39 9B"});
+  const Outcome r = run("-r " + log + " --explain 3");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_FALSE(r.lines.empty());
+  EXPECT_THAT(r.lines[0], ::testing::HasSubstr("crc BAD (cut)"));
+  const auto has = [&](const std::string& line) {
+    EXPECT_THAT(r.lines, ::testing::Contains(line));
+  };
+  has("  byte 13 (00), the first of the piece, read two ways:");
+  has("    the answering driver's glitch, before its answer: +16 bits");
+  has("    the piece's own first byte: +0 bits");
+  has("  taken for the answering driver's glitch, before its answer, by 16 bits: the runner-up is "
+      "ruled out");
+  has("  byte 18 (FF), the last of the piece, read two ways:");
+  EXPECT_THAT(r.lines, ::testing::Contains(::testing::StartsWith("        +16  byte-ruled-out: ")));
+  has("  taken for the next sender's glitch, after the answer, by 16 bits: the runner-up is ruled "
+      "out");
+  has("    #2 bytes 13-13: noise (glitch), 1 byte");
+  has("    #4 bytes 18-18: noise (glitch), 1 byte");
+}
+
 // Inside a damaged answer, a start with a code a bus seldom carries is refuted before its end
 // is sought: `0d 06 00 01 30 44 07 03 0d`, a write's answer talked over, holds three (01 30 and
 // 30 44, vendor function codes; 03 0d, FC13, no public one), one of them the start of 30 44 07
