@@ -321,7 +321,7 @@ void file_records(PduReader& r, FieldWriter& out) {
   const uint8_t count = r.u8();
   out.number(F::byte_count, count);
   out.begin_list(F::sub_requests);
-  PduReader sub(r.take(count));
+  PduReader sub = r.sub(count);
   while (sub.left() >= 7) {
     out.begin_item();
     out.number(F::reference_type, sub.u8());
@@ -338,13 +338,13 @@ void file_read(PduReader& r, Bytes, FieldWriter& out) {
   const uint8_t count = r.u8();
   out.number(F::byte_count, count);
   out.begin_list(F::sub_responses);
-  PduReader sub(r.take(count));
+  PduReader sub = r.sub(count);
   while (sub.left() >= 2) {
     const uint8_t length = sub.u8();
     out.begin_item();
     out.number(F::length, length);
     out.number(F::reference_type, sub.u8());
-    PduReader data(sub.take(length > 0 ? length - 1u : 0u));
+    PduReader data = sub.sub(length > 0 ? length - 1u : 0u);
     out.registers(F::record_values, data, data.left() / 2);
   }
   out.end_list();
@@ -806,8 +806,9 @@ void decode_pdu(Role role, std::span<const uint8_t> pdu, std::span<const uint8_t
   out.fields.clear();
   out.truncated = false;
   if (pdu.empty()) return;
-  PduReader r(pdu.subspan(1));
-  FieldWriter fields(out);
+  bool overran = false;
+  PduReader r(pdu.subspan(1), &overran);
+  FieldWriter fields(out, overran);
   const uint8_t fc = pdu[0];
   if (fc & 0x80) {
     const uint8_t code = r.u8();
@@ -820,7 +821,7 @@ void decode_pdu(Role role, std::span<const uint8_t> pdu, std::span<const uint8_t
   } else {
     data_fields(r, fields);
   }
-  out.truncated = r.short_read();
+  out.truncated = r.short_read() || overran;
 }
 
 DecodedPdu decode_pdu(Role role, std::span<const uint8_t> pdu, std::span<const uint8_t> request) {

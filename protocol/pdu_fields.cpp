@@ -7,6 +7,7 @@ namespace modtap {
 uint8_t PduReader::u8() {
   if (at_ >= bytes_.size()) {
     short_ = true;
+    if (overran_) *overran_ = true;
     return 0;
   }
   return bytes_[at_++];

@@ -45,13 +45,18 @@ struct DecodedPdu {
   }
 };
 
-// Reads big-endian values off a PDU; past the end it yields zeros and remembers it did.
+// Reads big-endian values off a PDU; past the end it yields zeros and remembers it did. Bytes
+// taken past the end are as many as came; a value read past it is none the wire carried, and
+// `overran` (shared by the readers of one PDU's parts) says so.
 class PduReader {
  public:
-  explicit PduReader(std::span<const uint8_t> bytes) : bytes_(bytes) {}
+  explicit PduReader(std::span<const uint8_t> bytes, bool* overran = nullptr)
+      : bytes_(bytes), overran_(overran) {}
   uint8_t u8();
   uint16_t u16();
   std::span<const uint8_t> take(size_t n);
+  // A reader of the next `n` bytes (a part of the PDU with a length of its own).
+  PduReader sub(size_t n) { return PduReader(take(n), overran_); }
   std::span<const uint8_t> rest() { return take(left()); }
   size_t left() const { return bytes_.size() - at_; }
   bool short_read() const { return short_; }
@@ -60,14 +65,21 @@ class PduReader {
   std::span<const uint8_t> bytes_;
   size_t at_ = 0;
   bool short_ = false;
+  bool* overran_;
 };
 
-// Appends fields to a DecodedPdu; the function-code table's decoders write through it.
+// Appends fields to a DecodedPdu; the function-code table's decoders write through it. Once a
+// value was read past the PDU's end (a frame cut short), numbers and names are no fields: their
+// values would be the reader's zeros, not the wire's.
 class FieldWriter {
  public:
-  explicit FieldWriter(DecodedPdu& out) : out_(out) {}
-  void number(FieldId id, int64_t v) { add(id).number = v; }
-  void name(FieldId id, std::string_view text) { add(id).text = text; }
+  FieldWriter(DecodedPdu& out, const bool& overran) : out_(out), overran_(overran) {}
+  void number(FieldId id, int64_t v) {
+    if (!overran_) add(id).number = v;
+  }
+  void name(FieldId id, std::string_view text) {
+    if (!overran_) add(id).text = text;
+  }
   void bytes(FieldId id, std::span<const uint8_t> v) { add(id).bytes = v; }
   // Up to `count` 16-bit values, as many as the reader still holds.
   void registers(FieldId id, PduReader& r, size_t count);
@@ -86,6 +98,7 @@ class FieldWriter {
     return f;
   }
   DecodedPdu& out_;
+  const bool& overran_;
   size_t list_ = 0;
   uint8_t item_ = 0;
 };

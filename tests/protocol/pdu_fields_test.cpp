@@ -81,10 +81,19 @@ TEST(PduFields, ReadFileRecordSubRequests) {
   EXPECT_EQ(item(d, list, 2)[1].number, 3);  // the second sub-request's file
 }
 
-TEST(PduFields, ADamagedPduIsMarkedTruncatedNotReadPastItsEnd) {
-  const auto pdu = hex("10 00 01");
-  const auto d = decode_pdu(Role::request, pdu, {});
-  EXPECT_TRUE(d.truncated);
+// A write's answer cut after its address: the address came, the quantity did not, and a
+// quantity of 0 would be a number the wire never carried.
+TEST(PduFields, ADamagedPduIsMarkedTruncatedAndHasNoFieldPastItsEnd) {
+  const auto request = decode_pdu(Role::request, hex("10 00 01"), {});
+  EXPECT_TRUE(request.truncated);
+  const auto answer = decode_pdu(Role::response, hex("10 00 05 00"), hex("10 00 05 00 02 04"));
+  EXPECT_TRUE(answer.truncated);
+  ASSERT_NE(find(answer, FieldId::address), nullptr);
+  EXPECT_EQ(find(answer, FieldId::address)->number, 5);
+  EXPECT_EQ(find(answer, FieldId::quantity), nullptr);
+  const auto exception = decode_pdu(Role::response, hex("83"), hex("03 00 00 00 01"));
+  EXPECT_EQ(find(exception, FieldId::exception_code), nullptr);
+  EXPECT_EQ(find(exception, FieldId::exception_name), nullptr);
 }
 
 }  // namespace
