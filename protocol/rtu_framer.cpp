@@ -423,10 +423,23 @@ RtuFramer::Say RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end, boo
     if (inner + 3 > end_) return final ? say : Say::unknown;
     if (!standard_frame(inner)) continue;
     const Match::Kind kind = match_at(inner, false, 0).kind;
-    if (kind == Match::Kind::found) return Say::refutes;
+    if (kind == Match::Kind::found || copied_frame_at(inner)) return Say::refutes;
     if (kind == Match::Kind::need_more && !final) say = Say::unknown;
   }
   return say;
+}
+
+// A frame with no length of its own (FC08 Return Query Data) whose CRC holds where its exact
+// copy follows: a query and its echo. The copy makes up for the search's tries (copy-after).
+bool RtuFramer::copied_frame_at(uint64_t at) {
+  const BodyLength body = body_length(Role::request, from(at));
+  if (body.kind != BodyLength::Kind::variable) return false;
+  const size_t first = std::max<size_t>(body.bytes + crc_size, min_adu);
+  std::array<uint16_t, max_rtu_adu> hits;
+  const size_t count = good_lengths(at, first, std::min<uint64_t>(end_ - at, max_rtu_adu), hits);
+  for (size_t i = 0; i < count; ++i)
+    if (copy_follows(at, at + hits[i])) return true;
+  return false;
 }
 
 // Where `broke-off-at-silence` refutes every span across the first silence after `at`, every

@@ -186,6 +186,7 @@ class RtuFramer {
   // frame may still come, unless `final`.
   Say swallows_known_frame(uint64_t begin, uint64_t end, bool searched, bool unexpected,
                            bool final);
+  bool copied_frame_at(uint64_t at);
   bool unexpected_sender(uint64_t at, bool answer) const;
   bool swallows_exchange(uint64_t begin, uint64_t end, bool final);
   std::optional<bool> answer_follows(uint64_t at, uint64_t end, bool final) const;

@@ -1008,6 +1008,27 @@ TEST_F(GapCollector, AnAnswerCutShortGivesBackTheRequestThatStartsInsideIt) {
   }
 }
 
+// Two FC08 queries, each with its echo, a driver's glitch between (fresh seed 5524): the 58
+// bytes from the first query to the second echo pass a CRC too, and the next request confirms
+// that end. A query and its echo inside a span, its end told by the copy after it, are frames
+// a bus carries as much as a frame whose length rules tell its end: the span swallows them,
+// and gives way.
+TEST(RtuFramer, ASpanFoundBySearchGivesWayToAQueryAndItsEchoInsideIt) {
+  const auto first = hex("b6 08 00 00 3e 0a 32 01 4e a5 2f 80 0f 85");
+  const auto second = hex("4c 08 00 00 03 64 47 13 81 a1 5a 3a 73 47");
+  const auto write = hex("39 05 72 99 00 00 02 25");
+  const auto span = concat({first, hex("00"), first, hex("ff"), second, second});
+  ASSERT_TRUE(rtu_crc_holds(span));
+  const auto stream = analyze_untimed(concat({span, write})).stream();
+  ASSERT_EQ(stream.size(), 7u);
+  const std::vector<std::vector<uint8_t>> raws{first,  hex("00"), first, hex("ff"),
+                                               second, second,    write};
+  for (size_t i = 0; i < raws.size(); ++i) EXPECT_EQ(stream[i].raw, raws[i]) << i;
+  EXPECT_EQ(stream[0].role, Role::request);
+  EXPECT_EQ(stream[2].role, Role::response);
+  EXPECT_EQ(stream[5].role, Role::response);
+}
+
 // FC08 Return Query Data ends where its CRC says only if something confirms it. Here a glitch
 // and its exception, talked over, follow it, then the master's next request after its
 // time-out: that silence bounds the junk as the end of the input would, and the request's own
