@@ -28,8 +28,11 @@ std::span<const uint8_t> PduReader::take(size_t n) {
   return out;
 }
 
+// Values cut short are as many as came whole; where none did, there is no field, not an empty
+// list.
 void FieldWriter::registers(FieldId id, PduReader& r, size_t count) {
   const size_t words = std::min(count, r.left() / 2);
+  if (words == 0 && count > 0) return;
   Field& f = add(id);
   f.count = static_cast<uint16_t>(words);
   f.bytes = r.take(2 * words);
@@ -37,6 +40,7 @@ void FieldWriter::registers(FieldId id, PduReader& r, size_t count) {
 
 void FieldWriter::bits(FieldId id, std::span<const uint8_t> packed, size_t count) {
   const size_t n = std::min(count, packed.size() * 8);
+  if (n == 0 && count > 0) return;
   Field& f = add(id);
   f.count = static_cast<uint16_t>(n);
   f.bytes = packed;

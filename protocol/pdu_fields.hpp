@@ -81,7 +81,7 @@ class FieldWriter {
     if (!overran_) add(id).text = text;
   }
   void bytes(FieldId id, std::span<const uint8_t> v) { add(id).bytes = v; }
-  // Up to `count` 16-bit values, as many as the reader still holds.
+  // Up to `count` 16-bit values, as many as the reader still holds whole.
   void registers(FieldId id, PduReader& r, size_t count);
   // `count` bits packed LSB first, as many as `packed` holds.
   void bits(FieldId id, std::span<const uint8_t> packed, size_t count);

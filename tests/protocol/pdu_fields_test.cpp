@@ -82,7 +82,8 @@ TEST(PduFields, ReadFileRecordSubRequests) {
 }
 
 // A write's answer cut after its address: the address came, the quantity did not, and a
-// quantity of 0 would be a number the wire never carried.
+// quantity of 0 would be a number the wire never carried; a read's answer cut inside its first
+// value has no values, not an empty list.
 TEST(PduFields, ADamagedPduIsMarkedTruncatedAndHasNoFieldPastItsEnd) {
   const auto request = decode_pdu(Role::request, hex("10 00 01"), {});
   EXPECT_TRUE(request.truncated);
@@ -91,6 +92,8 @@ TEST(PduFields, ADamagedPduIsMarkedTruncatedAndHasNoFieldPastItsEnd) {
   ASSERT_NE(find(answer, FieldId::address), nullptr);
   EXPECT_EQ(find(answer, FieldId::address)->number, 5);
   EXPECT_EQ(find(answer, FieldId::quantity), nullptr);
+  const auto read = decode_pdu(Role::response, hex("03 04 12"), hex("03 00 00 00 02"));
+  EXPECT_EQ(find(read, FieldId::register_values), nullptr) << "no value came whole";
   const auto exception = decode_pdu(Role::response, hex("83"), hex("03 00 00 00 01"));
   EXPECT_EQ(find(exception, FieldId::exception_code), nullptr);
   EXPECT_EQ(find(exception, FieldId::exception_name), nullptr);
