@@ -326,6 +326,15 @@ constexpr bool every_tell_decides() {
 }
 static_assert(every_tell_decides());
 
+template <>
+struct EnumNames<GlitchHabit> {
+  static constexpr std::array<std::string_view, 3> names{
+      "the bus is quiet: 128 frames or more, with at most 1 glitch in 128",
+      "too few frames to know the bus's glitches: none yet, in fewer than 128",
+      "the bus's glitches are likelier than a byte by chance: more than 1 frame in 128 has one, "
+      "where a byte is a 0x00 or 0xFF 2 times in 256"};
+};
+
 // A lone 0x00 or 0xFF at an edge of a piece (bytes no reading holds, up to the next good frame
 // or silence) reads two ways: the piece's own byte, or a driver's glitch apart from it, the
 // answering slave's right before its answer or the next sender's right after it (a driver
@@ -337,21 +346,13 @@ static_assert(every_tell_decides());
 // or more, at most 1 glitch in 128) says a byte nothing speaks for is no glitch: there the glitch
 // is no runner-up.
 enum class EdgeSide : uint8_t { first, last };
-template <>
-struct EnumNames<GlitchHabit> {
-  static constexpr std::array<std::string_view, 3> names{
-      "the bus is quiet: 128 frames or more, with at most 1 glitch in 128",
-      "too few frames to know the bus's glitches: none yet, in fewer than 128",
-      "the bus's glitches are likelier than a byte by chance: more than 1 frame in 128 has one, "
-      "where a byte is a 0x00 or 0xFF 2 times in 256"};
-};
 
 struct EdgeByte {
   EdgeSide side = EdgeSide::last;
   uint64_t offset = 0;  // the byte's place in the channel's stream
   uint8_t value = 0;
   GlitchHabit habit = GlitchHabit::unknown;
-  std::array<Feature, 4> for_glitch{};
+  std::array<Feature, 4> for_glitch{};  // a reading has four features at most
   std::array<Feature, 4> for_byte{};
   uint8_t glitch_features = 0;
   uint8_t byte_features = 0;

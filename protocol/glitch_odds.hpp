@@ -9,7 +9,7 @@
 namespace modtap {
 
 // What the bus has shown of its glitches, against a damaged answer's last byte being a 0x00 or
-// 0xFF by chance: too few frames to tell, fewer, or more.
+// 0xFF by chance: fewer (quiet), too few frames to tell (unknown), or more (glitchy).
 enum class GlitchHabit : uint8_t { quiet, unknown, glitchy };
 
 class GlitchOdds {
