@@ -5,6 +5,8 @@
 
 #include <fmt/format.h>
 
+#include "protocol/function_codes.hpp"
+
 namespace modtap::output {
 namespace {
 
@@ -81,12 +83,38 @@ void ExplainSink::explain_frame(const Frame& frame) {
   print_copy(frame);
   if (frame.mode == Mode::rtu && frame.damage != Damage::none) {
     print_inside(frame.channel, frame.offset, frame.raw.size());
-    out_.print(
-        "  then, no reading holding, the bytes up to the next good frame or silence were "
-        "one piece, which the awaited answer's structure or the header's length rules "
-        "make a frame with a bad check: {}\n",
-        to_string(frame.damage));
+    print_damage(frame);
     print_edges(frame.channel, frame.offset, frame.raw.size());
+  }
+}
+
+// What made the piece a damaged frame: the length its structure says, against what came.
+void ExplainSink::print_damage(const Frame& frame) {
+  out_.print(
+      "  then, no reading holding, the bytes up to the next good frame or silence were one "
+      "piece: ");
+  const size_t size = frame.raw.size();
+  const BodyLength body = body_length(frame.role, frame.raw);
+  const bool told = body.kind == BodyLength::Kind::known;
+  const size_t claimed = body.bytes + 2u;  // its CRC
+  switch (frame.damage) {
+    case Damage::cut:
+      if (told)
+        out_.print("the awaited answer, whose structure says {}; {} came: {}\n",
+                   counted(claimed, "byte", "bytes"), size, to_string(frame.damage));
+      else
+        out_.print("the awaited answer's first {}, too few to tell its length: {}\n",
+                   counted(size, "byte", "bytes"), to_string(frame.damage));
+      return;
+    case Damage::collision:
+      out_.print(
+          "the awaited answer and more: its structure says {}, whose check fails, and the "
+          "bytes after them are records of their own: {}\n",
+          counted(size, "byte", "bytes"), to_string(frame.damage));
+      return;
+    default:
+      out_.print("a header whose length rules say these {} exactly, whose check fails: {}\n",
+                 counted(size, "byte", "bytes"), to_string(frame.damage));
   }
 }
 

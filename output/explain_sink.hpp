@@ -56,6 +56,7 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   void print_segment(const Segment& segment, bool is_picked);
   void explain_frame(const Frame& frame);
   void explain_noise(const Noise& noise);
+  void print_damage(const Frame& frame);
   void explain(uint16_t channel, uint64_t offset, Mode mode);
   void print_reading(const FramingStep& step);
   void print_confirmation(SpanEnd end);
