@@ -5,8 +5,9 @@ register changes and health summaries, 280 MB of messages) and must neither queu
 memory nor hang: it holds at most a few megabytes for the broker, waits for it once, then
 drops what it cannot send, says how many, and ends.
 
-usage: mqtt_stalled_broker.py MODTAP BUSGEN WORKDIR MAX_RSS_MB MAX_SECONDS
-(the sanitizers' shadow memory and quarantine need more of both)"""
+usage: mqtt_stalled_broker.py MODTAP BUSGEN WORKDIR MAX_RSS_MB MAX_SECONDS TRANSACTIONS
+(the sanitizers' shadow memory and quarantine need more of both, and their slower build reads
+fewer transactions)"""
 import os
 import socket
 import subprocess
@@ -15,10 +16,10 @@ import threading
 import time
 
 MODTAP, BUSGEN, WORK = map(os.path.abspath, sys.argv[1:4])
-MAX_RSS_MB, MAX_SECONDS = float(sys.argv[4]), float(sys.argv[5])
+MAX_RSS_MB, MAX_SECONDS, TRANSACTIONS = float(sys.argv[4]), float(sys.argv[5]), sys.argv[6]
 os.makedirs(WORK, exist_ok=True)
 capture = os.path.join(WORK, "bus.raw")
-subprocess.run([BUSGEN, "-n", "500000", "--back-to-back", "-o", capture], check=True,
+subprocess.run([BUSGEN, "-n", TRANSACTIONS, "--back-to-back", "-o", capture], check=True,
                capture_output=True)
 
 server = socket.socket()
