@@ -3,7 +3,7 @@
 # corpus (tests/fuzz/corpus/TARGET). New inputs go to build-fuzz/corpus/TARGET; an input that
 # fails is written to build-fuzz/findings/ and stops that fuzzer with a non-zero exit.
 #
-#   scripts/fuzz.sh                 every target for 30 s, one per core (what CI runs)
+#   scripts/fuzz.sh                 every target for 30 s, one per core (CI: 20 s)
 #   scripts/fuzz.sh 3600            every target for an hour
 #   scripts/fuzz.sh 0 10000000 rtu  the RTU framer for 10 million runs
 #
