@@ -22,6 +22,12 @@ class AwaitedAnswer {
   // When `bytes` start the awaited answer: how long its structure says it is, or at least one
   // byte longer than `bytes` where they end before its structure is complete.
   std::optional<uint16_t> length(std::span<const uint8_t> bytes) const;
+  // Whether `bytes` begin with the awaited answer's slave and function code (its exception's
+  // too): two bytes, by chance 1 time in 65,536 (awaited-header), whatever follows them.
+  bool has_header(std::span<const uint8_t> bytes) const {
+    return bytes.size() >= 2 && carries_answers_ && expected_.pending &&
+           expected_.slave == bytes[0] && expected_.function == (bytes[1] & 0x7F);
+  }
   // Whether `bytes` start the awaited answer, or do with a glitch after them.
   bool starts(std::span<const uint8_t> bytes) const;
   // Whether `bytes` begin with the awaited answer's slave, function code and what its request

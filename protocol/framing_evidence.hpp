@@ -202,7 +202,9 @@ inline constexpr std::array<EvidenceInfo, 17> evidence_table{{
      2},
     {"unawaited-answer-inside-awaited-answer",
      "an answer nobody awaits inside the span the awaited answer's structure claims, with no "
-     "request of its own right before it: a collision's junk whose CRC held by chance",
+     "request of its own right before it: a collision's junk whose CRC held by chance; or one "
+     "from the answering driver's glitch over the awaited answer's header (a 0xFF read as "
+     "station 255)",
      {Feature::awaited_header, Feature::unexpected_sender},
      2},
     {"predicted-inside-awaited-answer",

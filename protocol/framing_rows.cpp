@@ -97,9 +97,7 @@ RtuFramer::Say RtuFramer::answer_read_as_request(const Reading& r) {
   const bool junk_as_request =
       r.other && awaited_.begins(from(r.at)) &&
       request_spec_findings({p + 1, static_cast<size_t>(r.length - 1 - crc_size)}) != 0;
-  const bool glitch_then_awaited =
-      is_glitch_byte(p[0]) && awaited_.length(from(r.at + 1)).has_value();
-  if (junk_as_request || glitch_then_awaited) return Say::refutes;
+  if (junk_as_request || glitch_then_awaited(r.at)) return Say::refutes;
   return Say::nothing;
 }
 
@@ -119,9 +117,11 @@ RtuFramer::Say RtuFramer::request_inside_awaited_answer(const Reading& r) {
 
 // An answer nobody awaits inside the span the awaited answer's structure claims is a
 // collision's junk that passed a CRC, unless its own request comes right before it (after a cut
-// answer, the master's next request and its answer).
+// answer, the master's next request and its answer). So is one that starts at the answering
+// driver's glitch and runs over that answer (a 0xFF read as station 255).
 RtuFramer::Say RtuFramer::unawaited_answer_inside_awaited_answer(const Reading& r) {
-  const bool inside = r.role == Role::response && inside_awaited_span(r.at);
+  const bool inside =
+      r.role == Role::response && (inside_awaited_span(r.at) || glitch_then_awaited(r.at));
   return inside && unexpected_sender(r.at, true) && !request_right_before(r.at, r.final)
              ? Say::refutes
              : Say::nothing;
@@ -234,6 +234,13 @@ bool RtuFramer::unexpected_sender(uint64_t at, bool answer) const {
   return p[0] > max_unicast_slave ||
          (answer && expected_.pending &&
           (expected_.slave != p[0] || expected_.function != (p[1] & 0x7F)));
+}
+
+// A turnaround's glitch where the answer is due, then the awaited answer's slave and function
+// code: the answering driver turned on, whatever the answer's bytes after its header turn out.
+bool RtuFramer::glitch_then_awaited(uint64_t at) const {
+  return first_after_request(at) && is_glitch_byte(*at_ptr(at)) &&
+         awaited_.has_header(from(at + 1));
 }
 
 // Nor does any frame whose CRC holds by chance across a whole exchange: junk after it, and

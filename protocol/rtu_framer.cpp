@@ -18,15 +18,21 @@ constexpr int max_search = 8;
 
 }  // namespace
 
-// Reserved addresses still carry frames where a device uses them (N3 answers to 248-254), but
-// only with a public function code: a turnaround's 0xFF must not start a frame of any length.
-bool RtuFramer::plausible_start(uint8_t slave, uint8_t fc) {
-  return (fc & 0x7F) != 0 && (slave <= max_unicast_slave || is_public_function(fc));
+// Function code 0 is no function's: no frame starts there.
+bool RtuFramer::may_start(uint8_t fc) {
+  return (fc & 0x7F) != 0;
 }
 
 // Reads are never broadcast, and only answers carry the exception bit.
 bool RtuFramer::may_start_request(uint8_t slave, uint8_t fc) {
-  return plausible_start(slave, fc) && !(fc & 0x80) && (slave != 0 || may_broadcast(fc));
+  return may_start(fc) && !(fc & 0x80) && (slave != 0 || may_broadcast(fc));
+}
+
+// A piece whose check fails has neither a CRC nor, with a vendor's code, a length to say it is
+// a frame: only its header does. At a reserved address (248-255, most often a turnaround's
+// 0xFF) a vendor's code is junk's more often than a device's, so such a piece is noise.
+bool RtuFramer::damaged_header(uint8_t slave, uint8_t fc) {
+  return may_start(fc) && (slave <= max_unicast_slave || is_public_function(fc));
 }
 
 RtuFramer::RtuFramer(uint16_t channel, const RtuFramerOptions& options, FrameSink& sink)
@@ -134,7 +140,7 @@ RtuFramer::Readings RtuFramer::readings_at(uint64_t at) const {
   const uint8_t* p = at_ptr(at);
   const uint8_t fc = p[1];
   Readings readings;
-  if (!plausible_start(p[0], fc)) return readings;
+  if (!may_start(fc)) return readings;
   readings.request = options_.role != ChannelRole::slave && may_start_request(p[0], fc);
   readings.response = options_.role != ChannelRole::master && p[0] != 0;
   const bool response_first =
@@ -192,9 +198,7 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
           return {Match::Kind::found, n, fit, doubt, SpanEnd::echo_length};
         }
       }
-      // No station answers to 255 on a serial line (N3 counts to 254), and 0xFF is what a
-      // driver turning on puts on it: a frame of no fixed length from there is a glitch's.
-      if (search <= 0 || p[0] == 0xFF) return {};
+      if (search <= 0) return {};
       return search_end(at, std::max<size_t>(body.bytes + crc_size, min_adu), fit, final, search);
     }
   }
@@ -234,10 +238,10 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       const std::optional<SpanEnd> confirmed =
           confirmed_end(at, at + n, final, search - 1, allow_glitch);
       const bool at_end = at + n == end_;
-      // A reserved address is as often a turnaround's 0xFF: its frame needs confirming. Of two
-      // ends a byte apart, the longer stands where the shorter's 0x00 is ruled out as a glitch.
-      const bool may_stand_alone = p[1] == 0x08 && p[0] <= max_unicast_slave &&
-                                   (!alone.length || (alone.length == n - 1u && shorter.decided()));
+      // Of two ends a byte apart, the longer stands where the shorter's 0x00 is ruled out as a
+      // glitch.
+      const bool may_stand_alone =
+          p[1] == 0x08 && (!alone.length || (alone.length == n - 1u && shorter.decided()));
       if (!confirmed && !at_end && !may_stand_alone) continue;
       // A hit does not wait for a frame inside still to come (final): the search's end waits.
       if (swallows_known_frame(at, at + n, true, unexpected, true) == Say::refutes) continue;
@@ -403,10 +407,10 @@ std::optional<SpanEnd> RtuFramer::confirmed_end(uint64_t begin, uint64_t end, bo
 
 // An exact copy right behind is the echo of FC08 Return Query Data; a silence inside it says
 // its bytes were not one frame (a glitch after an echo can complete a false copy).
-bool RtuFramer::copy_follows(uint64_t begin, uint64_t end) const {
+bool RtuFramer::copy_follows(uint64_t begin, uint64_t end, uint64_t copy) const {
   const uint64_t size = end - begin;
-  return end + size <= end_ && std::equal(at_ptr(begin), at_ptr(end), at_ptr(end)) &&
-         timeline_.first_gap_after(end) >= end + size;
+  return copy + size <= end_ && std::equal(at_ptr(begin), at_ptr(end), at_ptr(copy)) &&
+         timeline_.first_gap_after(copy) >= copy + size;
 }
 
 // Whether a frame a bus carries starts inside [begin, end), wherever it ends, and outweighs the
@@ -430,15 +434,20 @@ RtuFramer::Say RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end, boo
 }
 
 // A frame with no length of its own (FC08 Return Query Data) whose CRC holds where its exact
-// copy follows: a query and its echo. The copy makes up for the search's tries (copy-after).
+// copy follows, right after it or after the answering driver's glitch: a query and its echo.
+// The copy makes up for the search's tries (copy-after).
 bool RtuFramer::copied_frame_at(uint64_t at) {
   const BodyLength body = body_length(Role::request, from(at));
   if (body.kind != BodyLength::Kind::variable) return false;
   const size_t first = std::max<size_t>(body.bytes + crc_size, min_adu);
   std::array<uint16_t, max_rtu_adu> hits;
   const size_t count = good_lengths(at, first, std::min<uint64_t>(end_ - at, max_rtu_adu), hits);
-  for (size_t i = 0; i < count; ++i)
-    if (copy_follows(at, at + hits[i])) return true;
+  for (size_t i = 0; i < count; ++i) {
+    const uint64_t end = at + hits[i];
+    if (copy_follows(at, end) ||
+        (end < end_ && is_glitch_byte(*at_ptr(end)) && copy_follows(at, end, end + 1)))
+      return true;
+  }
   return false;
 }
 
@@ -570,7 +579,7 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
     emit_damaged(begin, begin + *length, Damage::collision, findings);
     return emit_piece(begin + *length, end);
   }
-  if (size >= min_adu && size <= max_rtu_adu && plausible_start(p[0], p[1])) {
+  if (size >= min_adu && size <= max_rtu_adu && damaged_header(p[0], p[1])) {
     RoleFit fit{options_.role != ChannelRole::slave && fits_role(Role::request, begin, size),
                 options_.role != ChannelRole::master && fits_role(Role::response, begin, size)};
     if (fit.request || fit.response) {

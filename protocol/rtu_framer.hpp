@@ -63,8 +63,9 @@ class RtuFramer {
   static constexpr uint16_t crc_size = 2;
   static constexpr uint16_t min_adu = 4;             // slave, function, CRC
   static constexpr uint8_t max_unicast_slave = 247;  // 248-255 are reserved (Serial Line 2.2)
-  static bool plausible_start(uint8_t slave, uint8_t fc);
+  static bool may_start(uint8_t fc);
   static bool may_start_request(uint8_t slave, uint8_t fc);
+  static bool damaged_header(uint8_t slave, uint8_t fc);
   // What a driver turning on puts on the bus: one byte, the line's idle level or its opposite.
   static bool is_glitch_byte(uint8_t byte) { return byte == 0x00 || byte == 0xFF; }
   struct CrcHits {
@@ -179,7 +180,9 @@ class RtuFramer {
   std::optional<SpanEnd> confirmed_end(uint64_t begin, uint64_t end, bool final, int search,
                                        bool allow_glitch);
   bool blocked_by_gap(uint64_t at, bool final);
-  bool copy_follows(uint64_t begin, uint64_t end) const;
+  bool copy_follows(uint64_t begin, uint64_t end) const { return copy_follows(begin, end, end); }
+  // Whether the bytes [begin, end) come again from `copy` on, with no silence inside.
+  bool copy_follows(uint64_t begin, uint64_t end, uint64_t copy) const;
   // Whether a frame a bus carries (public function code, standard exception), of known length
   // and good CRC, starts inside [begin, end), wherever it ends, and outweighs the span: one
   // whose end a CRC search found (`searched`), from an `unexpected` sender; unknown while such a
@@ -188,6 +191,7 @@ class RtuFramer {
                            bool final);
   bool copied_frame_at(uint64_t at);
   bool unexpected_sender(uint64_t at, bool answer) const;
+  bool glitch_then_awaited(uint64_t at) const;
   bool swallows_exchange(uint64_t begin, uint64_t end, bool final);
   std::optional<bool> answer_follows(uint64_t at, uint64_t end, bool final) const;
   // First position >= from that starts a good frame; `decided` false if one is still open.

@@ -578,13 +578,14 @@ TEST(BusSimulator, ACollisionLeavesNoGoodFrame) {
 // kept, and noise or a damaged frame where none was. Every row of the evidence table decides
 // somewhere in the real masters' seeds (a row none needed would be dead weight): these seeds
 // hold, at 16 ms bursts, the first case of each of the 1,026 seeds' sweep (docs/framing.md),
-// 1073 for swallows-exchange (answer-cut-before-request refutes its first case before it), and
-// fresh seeds 2139 and 3038 for the two rows none of those needs (unawaited- and
-// predicted-inside-awaited-answer).
+// 1073 for swallows-exchange (answer-cut-before-request refutes its first case before it), 710
+// for swallows-known-frame (unawaited-answer-inside-awaited-answer refutes its earlier cases, a
+// 0xFF read as station 255 before the awaited answer), and fresh seeds 2139 and 3038 for the two
+// rows none of those needs (unawaited- and predicted-inside-awaited-answer).
 TEST(FramingEvidence, WhatWasWeighedAtEachStartIsWhatCameOut) {
   Weighed weighed;
   for (const uint64_t seed :
-       {100u, 103u, 122u, 133u, 197u, 290u, 316u, 346u, 379u, 547u, 1073u, 2139u, 3038u}) {
+       {100u, 103u, 122u, 133u, 197u, 290u, 316u, 346u, 379u, 547u, 710u, 1073u, 2139u, 3038u}) {
     for (const Delivery delivery : {Delivery::per_byte, Delivery::bursts}) {
       const Scenario s{"evidence", delivery, real_masters(seed)};
       run(busgen::simulate(s.bus), s, &weighed, &weighed);
