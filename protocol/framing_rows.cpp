@@ -117,12 +117,12 @@ RtuFramer::Say RtuFramer::request_inside_awaited_answer(const Reading& r) {
 
 // An answer nobody awaits inside the span the awaited answer's structure claims is a
 // collision's junk that passed a CRC, unless its own request comes right before it (after a cut
-// answer, the master's next request and its answer). So is one that starts at the answering
-// driver's glitch and runs over that answer (a 0xFF read as station 255).
+// answer, the master's next request and its answer). So is a reading, in either role, that
+// starts at the answering driver's glitch and runs over that answer (a 0xFF read as station 255).
 RtuFramer::Say RtuFramer::unawaited_answer_inside_awaited_answer(const Reading& r) {
-  const bool inside =
-      r.role == Role::response && (inside_awaited_span(r.at) || glitch_then_awaited(r.at));
-  return inside && unexpected_sender(r.at, true) && !request_right_before(r.at, r.final)
+  const bool answer = r.role == Role::response;
+  const bool inside = (answer && inside_awaited_span(r.at)) || glitch_then_awaited(r.at);
+  return inside && unexpected_sender(r.at, answer) && !request_right_before(r.at, r.final)
              ? Say::refutes
              : Say::nothing;
 }

@@ -310,6 +310,28 @@ TEST(RtuFramer, AQueryAndItsEchoAfterAGlitchAreNoFrameOfTheGlitchBeforeThem) {
   for (const auto& glitch : out.noise()) EXPECT_EQ(glitch.reason, NoiseReason::glitch);
 }
 
+// A turnaround's 0xFF before an answer cut short, whose station's number reads as a vendor's
+// code (station 18, 12H): its bytes pass a CRC from the 0xFF, and the glitch and request after
+// them confirm that end. Read as an answer or as a request to station 255, it starts at the
+// answering driver's glitch and runs over the awaited answer's header, and no clock is needed to
+// say so: a glitch, the answer (cut), a glitch, the next request.
+TEST(RtuFramer, A0xFFBeforeTheAwaitedAnswerIsNoFrameOfStation255InEitherRole) {
+  const auto request = hex("12 2b 0e 01 00 f5 b4");
+  const auto cut_answer = hex("12 2b 0e 01 81 00 00 03 00");
+  const auto next = hex("10 06 ab 63 bc 31 eb a5");
+  ASSERT_TRUE(rtu_crc_holds(concat({hex("ff"), cut_answer})));
+  const auto out = analyze_untimed(concat({request, hex("ff"), cut_answer, hex("ff"), next}));
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[0].raw, request);
+  EXPECT_EQ(frames[1].raw, cut_answer);
+  EXPECT_EQ(frames[1].damage, Damage::cut);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_EQ(frames[2].raw, next);
+  ASSERT_EQ(out.noise().size(), 2u);
+  for (const auto& glitch : out.noise()) EXPECT_EQ(glitch.reason, NoiseReason::glitch);
+}
+
 // N3 answers to stations up to 254. Its loop test to station 250 that nobody answers, with junk
 // after it, stands on its header and CRC at the input's end, as station 17's does.
 TEST(RtuFramer, ALoopTestToAReservedStationStandsOnItsHeaderAsAnyStationsDoes) {
