@@ -287,6 +287,17 @@ TEST(RtuFramer, AVendorCodeAtAReservedAddressIsJunkNotADamagedFrame) {
   EXPECT_EQ(out.bytes_of(0), concat({junk, read_request}));
 }
 
+// The frames `out` holds are `expected`, in order, and its noise `glitches` lone glitches.
+void expect_frames_and_glitches(const Collector& out,
+                                const std::vector<std::vector<uint8_t>>& expected,
+                                size_t glitches) {
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), expected.size());
+  for (size_t i = 0; i < expected.size(); ++i) EXPECT_EQ(frames[i].raw, expected[i]) << i;
+  ASSERT_EQ(out.noise().size(), glitches);
+  for (const auto& glitch : out.noise()) EXPECT_EQ(glitch.reason, NoiseReason::glitch);
+}
+
 // A turnaround's 0xFF, a loop test to station 43 (FC08 Return Query Data, no fixed length), the
 // answering driver's 0x00 and the echo pass one CRC as a frame from station 255, which the next
 // request confirms (fresh seed 472). The query whose exact copy follows after a glitch is a frame
@@ -298,16 +309,11 @@ TEST(RtuFramer, AQueryAndItsEchoAfterAGlitchAreNoFrameOfTheGlitchBeforeThem) {
   const auto bytes = concat({hex("ff"), query, hex("00"), query, next});
   ASSERT_TRUE(rtu_crc_holds(std::span(bytes).first(2 * query.size() + 2)));
   const auto out = analyze_untimed(bytes);
+  ASSERT_NO_FATAL_FAILURE(expect_frames_and_glitches(out, {query, query, next}, 2));
   const auto frames = out.frames();
-  ASSERT_EQ(frames.size(), 3u);
-  EXPECT_EQ(frames[0].raw, query);
   EXPECT_EQ(frames[0].role, Role::request);
-  EXPECT_EQ(frames[1].raw, query);
   EXPECT_EQ(frames[1].role, Role::response);
   EXPECT_EQ(frames[1].request, frames[0].index);
-  EXPECT_EQ(frames[2].raw, next);
-  ASSERT_EQ(out.noise().size(), 2u);
-  for (const auto& glitch : out.noise()) EXPECT_EQ(glitch.reason, NoiseReason::glitch);
 }
 
 // A turnaround's 0xFF before an answer cut short, whose station's number reads as a vendor's
@@ -321,15 +327,10 @@ TEST(RtuFramer, A0xFFBeforeTheAwaitedAnswerIsNoFrameOfStation255InEitherRole) {
   const auto next = hex("10 06 ab 63 bc 31 eb a5");
   ASSERT_TRUE(rtu_crc_holds(concat({hex("ff"), cut_answer})));
   const auto out = analyze_untimed(concat({request, hex("ff"), cut_answer, hex("ff"), next}));
+  ASSERT_NO_FATAL_FAILURE(expect_frames_and_glitches(out, {request, cut_answer, next}, 2));
   const auto frames = out.frames();
-  ASSERT_EQ(frames.size(), 3u);
-  EXPECT_EQ(frames[0].raw, request);
-  EXPECT_EQ(frames[1].raw, cut_answer);
   EXPECT_EQ(frames[1].damage, Damage::cut);
   EXPECT_EQ(frames[1].request, frames[0].index);
-  EXPECT_EQ(frames[2].raw, next);
-  ASSERT_EQ(out.noise().size(), 2u);
-  for (const auto& glitch : out.noise()) EXPECT_EQ(glitch.reason, NoiseReason::glitch);
 }
 
 // N3 answers to stations up to 254. Its loop test to station 250 that nobody answers, with junk
