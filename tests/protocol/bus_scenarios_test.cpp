@@ -440,7 +440,7 @@ std::vector<uint64_t> seeds_to_run() {
   return seeds;
 }
 
-// 1,026 more seeds of the real-master scenario (60 under the sanitizers) and the seven of
+// 1,026 more seeds of the real-master scenario (20 under the sanitizers) and the seven of
 // sweeps, each with its own turnarounds to mistake: at 16 ms bursts and per-frame reads with
 // jitter, no frame missed and none false (docs/framing.md).
 std::vector<Scenario> real_master_seeds() {
