@@ -128,11 +128,12 @@ std::string context(const BusCapture& capture, const Collector& out, uint64_t of
   std::string text;
   for (const auto& r : out.stream()) {
     if (r.offset + r.raw.size() + 40 < offset || r.offset > offset + 60) continue;
-    text += "\n  " +
-            std::string(r.type == testing::Record::Type::frame ? (r.check_ok ? "frame" : "BAD")
-                                                               : "noise") +
-            " @" + std::to_string(r.offset) + ":";
-    for (uint8_t b : r.raw) text += " " + std::to_string(b);
+    text += "\n  ";
+    text += r.type == testing::Record::Type::frame ? (r.check_ok ? "frame" : "BAD") : "noise";
+    text += " @";
+    text += std::to_string(r.offset);
+    text += ":";
+    for (uint8_t b : r.raw) text.append(" ").append(std::to_string(b));
   }
   text += "\n  sent:";
   for (const auto& f : capture.frames) {

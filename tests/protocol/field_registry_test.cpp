@@ -37,7 +37,8 @@ TEST(FieldRegistry, TheOutputDocsNameEveryField) {
   std::stringstream docs;
   docs << file.rdbuf();
   for (const FieldInfo& f : field_registry())
-    EXPECT_NE(docs.str().find("`" + std::string(f.name) + "`"), std::string::npos) << f.name;
+    EXPECT_NE(docs.str().find(std::string("`").append(f.name).append("`")), std::string::npos)
+        << f.name;
 }
 
 }  // namespace

@@ -36,7 +36,8 @@ TEST(Findings, TheOutputDocsNameEveryFinding) {
   std::stringstream docs;
   docs << file.rdbuf();
   for (const FindingInfo& f : finding_registry())
-    EXPECT_NE(docs.str().find("`" + std::string(f.name) + "`"), std::string::npos) << f.name;
+    EXPECT_NE(docs.str().find(std::string("`").append(f.name).append("`")), std::string::npos)
+        << f.name;
 }
 
 }  // namespace

@@ -32,7 +32,8 @@ ProgressBar::ProgressBar(std::FILE* terminal, uint64_t total_bytes)
 std::string ProgressBar::line(uint64_t done, uint64_t total, double seconds, int width) {
   const double share = std::clamp(static_cast<double>(done) / static_cast<double>(total), 0.0, 1.0);
   const int filled = static_cast<int>(share * width);
-  std::string text = "[" + std::string(filled, '#') + std::string(width - filled, '-') + "]";
+  std::string text =
+      fmt::format("[{}{}]", std::string(filled, '#'), std::string(width - filled, '-'));
   text += fmt::format(" {:3.0f}% of {}", 100 * share, bytes_text(static_cast<double>(total)));
   if (seconds > 0.2 && done > 0) {
     const double rate = static_cast<double>(done) / seconds;
