@@ -27,5 +27,5 @@ if [ "$type" = Release ] && [ "${PGO:-off}" != off ]; then
   pgo=(-DMODTAP_PGO=use -DMODTAP_PGO_DIR="$PWD/build-pgo/profile")
 fi
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE="$type" -DMODTAP_TESTS=OFF -DMODTAP_BENCHMARKS=OFF \
-  "${pgo[@]}" ${CMAKE_ARGS:-} >/dev/null
+  -DMODTAP_IPO=ON "${pgo[@]}" ${CMAKE_ARGS:-} >/dev/null
 cmake --build "$build" -j"$(nproc)"
