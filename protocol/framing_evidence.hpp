@@ -438,8 +438,9 @@ inline constexpr std::array<SpanEndInfo, 9> span_end_table{{
      Feature::glitch_then_frame},
     {"input-end", "a CRC search, its end where the input ends"},
     {"header-alone",
-     "a CRC search with nothing to confirm its end: FC08 Return Query Data, standing on its "
-     "header (slave, 08, sub-function 0000) and CRC once nothing more can"},
+     "a CRC search with nothing to confirm its end: a public function of any length (FC08 "
+     "Return Query Data, FC2B/0D CANopen reference), standing on its header and CRC once "
+     "nothing more can"},
 }};
 
 inline const SpanEndInfo& span_end_info(SpanEnd e) {

@@ -50,7 +50,7 @@ L register_count(Bytes p) {
 // FC08: Return Query Data echoes data of any length; every other sub-function carries 2 bytes.
 L diagnostics_length(Bytes p) {
   if (p.size() < 4) return L::need_more();
-  return be16(p, 2) == 0x0000 ? L::variable(4) : L::known(6);
+  return be16(p, 2) == 0x0000 ? L::public_variable(4) : L::known(6);
 }
 
 L fifo_length(Bytes p) {
@@ -60,16 +60,21 @@ L fifo_length(Bytes p) {
   return L::known(4 + count);
 }
 
-// FC2B: Read Device Identification (MEI 0E) has a structure; other MEI types do not.
+// FC2B: Read Device Identification (MEI 0E) has a structure; CANopen General Reference (MEI
+// 0D) carries data of any length, and other MEI types are reserved.
+L mei_other_length(Bytes p) {
+  return p[2] == 0x0D ? L::public_variable(3) : L::variable(3);
+}
+
 L mei_request_length(Bytes p) {
   if (p.size() < 3) return L::need_more();
-  return p[2] == 0x0E ? L::known(5) : L::variable(3);
+  return p[2] == 0x0E ? L::known(5) : mei_other_length(p);
 }
 
 // FC2B/0E response: a header of 8 bytes, then objects {id, length, value}.
 L mei_response_length(Bytes p) {
   if (p.size() < 3) return L::need_more();
-  if (p[2] != 0x0E) return L::variable(3);
+  if (p[2] != 0x0E) return mei_other_length(p);
   if (p.size() < 8) return L::need_more();
   size_t at = 8;
   for (unsigned objects = p[7]; objects > 0; --objects) {

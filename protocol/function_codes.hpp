@@ -26,11 +26,17 @@ struct BodyLength {
   };
   Kind kind = Kind::invalid;
   uint16_t bytes = 0;
+  // A variable length of a public function (FC08/0000 Return Query Data, FC2B/0D CANopen
+  // reference), not of a code nobody publishes: its header is a frame a bus carries.
+  bool public_header = false;
 
   static constexpr BodyLength need_more() { return {Kind::need_more, 0}; }
   static constexpr BodyLength known(unsigned n) { return {Kind::known, static_cast<uint16_t>(n)}; }
   static constexpr BodyLength variable(unsigned min) {
     return {Kind::variable, static_cast<uint16_t>(min)};
+  }
+  static constexpr BodyLength public_variable(unsigned min) {
+    return {Kind::variable, static_cast<uint16_t>(min), true};
   }
   static constexpr BodyLength invalid() { return {Kind::invalid, 0}; }
 };

@@ -199,7 +199,8 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
         }
       }
       if (search <= 0) return {};
-      return search_end(at, std::max<size_t>(body.bytes + crc_size, min_adu), fit, final, search);
+      return search_end(at, std::max<size_t>(body.bytes + crc_size, min_adu), fit, final, search,
+                        body.public_header);
     }
   }
   return {};
@@ -207,11 +208,11 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
 
 // A bounded CRC search for the end of a frame of no fixed length, from `first` bytes on. Its
 // hit stands once something confirms it (span_end_table), a turnaround glitch only where
-// nothing else does, and never where it swallows a frame a bus carries.
+// nothing else does, and never where it swallows a frame a bus carries; a public function's
+// (`public_header`) stands on its header once nothing can.
 RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, bool final,
-                                       int search) {
+                                       int search, bool public_header) {
   const uint64_t avail = end_ - at;
-  const uint8_t* p = at_ptr(at);
   const uint64_t limit = std::min<uint64_t>(avail, max_rtu_adu);
   const bool in_junk = at >= crc_index_.begin() && at < crc_index_.end();
   if (!in_junk) {
@@ -224,7 +225,7 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
   if (hit_count == 0) return !final && avail < max_rtu_adu ? need_more() : Match{};
   const bool unexpected = unexpected_sender(at, fit.response);
   bool open = false;
-  Match alone;  // FC08's first plausible end nothing confirmed, to stand on its header
+  Match alone;  // a public function's first plausible end nothing confirmed
   for (bool allow_glitch : {false, true}) {
     for (size_t i = 0; i < hit_count; ++i) {
       const uint16_t n = hits[i];
@@ -241,7 +242,7 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       // Of two ends a byte apart, the longer stands where the shorter's 0x00 is ruled out as a
       // glitch.
       const bool may_stand_alone =
-          p[1] == 0x08 && (!alone.length || (alone.length == n - 1u && shorter.decided()));
+          public_header && (!alone.length || (alone.length == n - 1u && shorter.decided()));
       if (!confirmed && !at_end && !may_stand_alone) continue;
       // A hit does not wait for a frame inside still to come (final): the search's end waits.
       if (swallows_known_frame(at, at + n, true, unexpected, true) == Say::refutes) continue;
@@ -254,7 +255,7 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       if (may_stand_alone) alone = {Match::Kind::found, n, fit, shorter, SpanEnd::header_alone};
     }
   }
-  // FC08 Return Query Data followed by junk: once nothing more can confirm it (the input's
+  // A public function followed by junk: once nothing more can confirm it (the input's
   // end, or a silence with a good frame after it), its own header and CRC have to do, and one
   // byte more stands beside it where a 0x00 after it makes that good too.
   if (alone.length && (final || (avail >= max_rtu_adu && !open) || blocked_by_gap(at, final))) {

@@ -165,7 +165,8 @@ class RtuFramer {
   size_t good_lengths(uint64_t at, size_t first, size_t limit,
                       std::array<uint16_t, max_rtu_adu>& lengths);
   void index_span(uint64_t begin, uint64_t end);
-  Match search_end(uint64_t at, size_t first, RoleFit fit, bool final, int search);
+  Match search_end(uint64_t at, size_t first, RoleFit fit, bool final, int search,
+                   bool public_header);
   Match first_confirmed_end(uint64_t at, size_t first, size_t limit, RoleFit fit, bool final,
                             int search);
   // `shorter`: the margin against the frame one byte shorter (shorter_end), if it is one.

@@ -345,6 +345,23 @@ TEST(RtuFramer, ALoopTestToAReservedStationStandsOnItsHeaderAsAnyStationsDoes) {
   }
 }
 
+// A public function whose header does not tell its length (FC08 Return Query Data, FC2B/0D
+// CANopen General Reference) stands on its header and CRC with junk after it, once nothing
+// can confirm its end; a vendor's code, junk's code 5 times in 6, does not.
+TEST(RtuFramer, APublicFunctionOfAnyLengthStandsOnItsHeaderAndAVendorCodeDoesNot) {
+  const auto junk = hex("a5 5a 3c");
+  for (const auto& query : {with_crc({17, 0x08, 0x00, 0x00, 0x12, 0x34}),
+                            with_crc({17, 0x2B, 0x0D, 0x00, 0x01, 0x12, 0x34})}) {
+    const auto frames = analyze_untimed(concat({query, junk})).frames();
+    ASSERT_EQ(frames.size(), 1u) << "function " << int{query[1]};
+    EXPECT_EQ(frames[0].raw, query);
+    EXPECT_TRUE(frames[0].check_ok);
+  }
+  const auto vendor = with_crc({17, 0x41, 0x00, 0x00, 0x12, 0x34});
+  for (const auto& frame : analyze_untimed(concat({vendor, junk})).frames())
+    EXPECT_FALSE(frame.check_ok) << "a vendor's code stood on its header";
+}
+
 TEST(RtuFramer, FindsAnUnknownFunctionCodeByCrcWhenTheNextFrameConfirmsIt) {
   const auto vendor = hex("05 41 01 02 03");
   std::vector<uint8_t> frame = vendor;
