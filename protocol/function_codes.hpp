@@ -25,21 +25,25 @@ struct BodyLength {
     invalid,    // this cannot be a frame of this role (bad byte count, illegal quantity)
   };
   Kind kind = Kind::invalid;
-  uint16_t bytes = 0;
   // A variable length of a public function (FC08/0000 Return Query Data, FC2B/0D CANopen
-  // reference), not of a code nobody publishes: its header is a frame a bus carries.
+  // reference), not of a code nobody publishes: its header is a frame a bus carries. It sits
+  // in `kind`'s padding: a length rule's answer, asked at every start, stays four bytes.
   bool public_header = false;
+  uint16_t bytes = 0;
 
-  static constexpr BodyLength need_more() { return {Kind::need_more, 0}; }
-  static constexpr BodyLength known(unsigned n) { return {Kind::known, static_cast<uint16_t>(n)}; }
+  static constexpr BodyLength need_more() { return {Kind::need_more, false, 0}; }
+  static constexpr BodyLength known(unsigned n) {
+    return {Kind::known, false, static_cast<uint16_t>(n)};
+  }
   static constexpr BodyLength variable(unsigned min) {
-    return {Kind::variable, static_cast<uint16_t>(min)};
+    return {Kind::variable, false, static_cast<uint16_t>(min)};
   }
   static constexpr BodyLength public_variable(unsigned min) {
-    return {Kind::variable, static_cast<uint16_t>(min), true};
+    return {Kind::variable, true, static_cast<uint16_t>(min)};
   }
-  static constexpr BodyLength invalid() { return {Kind::invalid, 0}; }
+  static constexpr BodyLength invalid() { return {Kind::invalid, false, 0}; }
 };
+static_assert(sizeof(BodyLength) == 4);
 
 // The four tables of the Modbus data model.
 enum class Table : uint8_t { coil, discrete, holding, input };
