@@ -48,6 +48,51 @@ static_assert(high_bytes_distinct());
 
 constexpr Table entry_of_high_byte = make_unshift_table();
 
+// One bit through the register with nothing shifted in: S, of which a byte's step through 0x00
+// (A, protocol/checksum.hpp) is S^8.
+constexpr uint16_t crc16_bit_step(uint16_t crc) {
+  return static_cast<uint16_t>((crc >> 1) ^ ((crc & 1) ? 0xA001 : 0));
+}
+
+// The index adds A^-k(b) at the k-th byte. S takes a byte's bit j + 1 to its bit j, and commutes
+// with A^-k, so the image of bit j is S^(7-j) of the top bit's image y = A^-k(0x80): the byte's
+// high nibble adds the sum of S^(3-i) y over its bits i, and its low nibble the same of S^4 y.
+// `nibble_images[half][nibble][byte]` is that sum for one byte of y (it is linear in y): four
+// look-ups a byte where eight images each took a step back.
+using NibbleImages = std::array<std::array<Table, 16>, 2>;
+constexpr NibbleImages make_nibble_images() {
+  NibbleImages images{};
+  for (unsigned half = 0; half < 2; ++half)
+    for (unsigned nibble = 0; nibble < 16; ++nibble)
+      for (unsigned byte = 0; byte < 256; ++byte) {
+        uint16_t power = static_cast<uint16_t>(byte << (8 * half));  // S^j y, j from 0
+        uint16_t sum = 0;
+        for (unsigned j = 0; j < 4; ++j) {
+          if (nibble >> (3 - j) & 1) sum ^= power;
+          power = crc16_bit_step(power);
+        }
+        images[half][nibble][byte] = sum;
+      }
+  return images;
+}
+constexpr NibbleImages nibble_images = make_nibble_images();
+
+// S^4 of a register: its low nibble's feedback, the rest shifted.
+constexpr std::array<uint16_t, 16> make_four_bit_feedback() {
+  std::array<uint16_t, 16> table{};
+  for (uint16_t low = 0; low < 16; ++low) {
+    uint16_t crc = low;
+    for (int bit = 0; bit < 4; ++bit) crc = crc16_bit_step(crc);
+    table[low] = crc;
+  }
+  return table;
+}
+constexpr std::array<uint16_t, 16> four_bit_feedback = make_four_bit_feedback();
+
+inline uint16_t nibble_image(unsigned nibble, uint16_t y) {
+  return nibble_images[0][nibble][y & 0xFF] ^ nibble_images[1][nibble][y >> 8];
+}
+
 // A^-1: the state that a step through 0x00 takes to `crc`.
 uint16_t crc16_unshift(uint16_t crc) {
   const uint16_t low = entry_of_high_byte[crc >> 8];
@@ -105,7 +150,7 @@ void CrcIndex::restart(uint64_t origin) {
   starts_.clear();
   same_before_.assign(1, none);  // the value 0 is in chain 0, now empty
   newest_[0] = origin;
-  for (unsigned bit = 0; bit < 8; ++bit) unshifted_bits_[bit] = static_cast<uint16_t>(1 << bit);
+  top_bit_image_ = 0x80;
   unshifted_init_ = 0xFFFF;
 }
 
@@ -122,17 +167,18 @@ void CrcIndex::unlink(size_t first, size_t last) {
 void CrcIndex::append(std::span<const uint8_t> bytes) {
   uint16_t w = ends_.back();
   uint64_t offset = base_ + ends_.size();  // of the end being added
+  uint16_t top = top_bit_image_;
   for (uint8_t byte : bytes) {
     starts_.push_back(static_cast<uint16_t>(w ^ unshifted_init_));
-    for (unsigned bit = 0; bit < 8; ++bit) {
-      w ^= static_cast<uint16_t>(-((byte >> bit) & 1) & unshifted_bits_[bit]);
-      unshifted_bits_[bit] = crc16_unshift(unshifted_bits_[bit]);
-    }
+    const uint16_t top4 = static_cast<uint16_t>((top >> 4) ^ four_bit_feedback[top & 0xF]);
+    w ^= static_cast<uint16_t>(nibble_image(byte >> 4, top) ^ nibble_image(byte & 0xF, top4));
+    top = crc16_unshift(top);
     unshifted_init_ = crc16_unshift(unshifted_init_);
     ends_.push_back(w);
     same_before_.push_back(newest_[w & chain_mask]);
     newest_[w & chain_mask] = offset++;
   }
+  top_bit_image_ = top;
 }
 
 void CrcIndex::drop_before(uint64_t offset) {

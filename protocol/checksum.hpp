@@ -70,8 +70,8 @@ class CrcIndex {
   void unlink(size_t first, size_t last);
   std::vector<uint64_t> same_before_;
   uint64_t base_ = 0;
-  std::array<uint16_t, 8> unshifted_bits_{1, 2, 4, 8, 16, 32, 64, 128};  // A^-k of each bit
-  uint16_t unshifted_init_ = 0xFFFF;                                     // A^-k(0xFFFF)
+  uint16_t top_bit_image_ = 0x80;     // A^-k(0x80): the images of a byte's bits follow from it
+  uint16_t unshifted_init_ = 0xFFFF;  // A^-k(0xFFFF)
 };
 
 template <class Found>
