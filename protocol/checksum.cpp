@@ -8,13 +8,19 @@ namespace {
 
 using Table = std::array<uint16_t, 256>;
 
+// One bit through the register with nothing shifted in: S, of which a byte's step through 0x00
+// (A, protocol/checksum.hpp) is S^8.
+constexpr uint16_t crc16_bit_step(uint16_t crc) {
+  return static_cast<uint16_t>((crc >> 1) ^ ((crc & 1) ? 0xA001 : 0));
+}
+
 // tables[0] is the usual byte table; tables[k] advances a byte k positions further, so four
 // bytes take four look-ups and no dependency chain between them (slicing-by-4).
 constexpr std::array<Table, 4> make_crc_tables() {
   std::array<Table, 4> tables{};
   for (unsigned i = 0; i < 256; ++i) {
     uint16_t crc = static_cast<uint16_t>(i);
-    for (int bit = 0; bit < 8; ++bit) crc = (crc & 1) ? (crc >> 1) ^ 0xA001 : crc >> 1;
+    for (int bit = 0; bit < 8; ++bit) crc = crc16_bit_step(crc);
     tables[0][i] = crc;
   }
   for (size_t k = 1; k < 4; ++k)
@@ -47,12 +53,6 @@ constexpr bool high_bytes_distinct() {
 static_assert(high_bytes_distinct());
 
 constexpr Table entry_of_high_byte = make_unshift_table();
-
-// One bit through the register with nothing shifted in: S, of which a byte's step through 0x00
-// (A, protocol/checksum.hpp) is S^8.
-constexpr uint16_t crc16_bit_step(uint16_t crc) {
-  return static_cast<uint16_t>((crc >> 1) ^ ((crc & 1) ? 0xA001 : 0));
-}
 
 // The index adds A^-k(b) at the k-th byte. S takes a byte's bit j + 1 to its bit j, and commutes
 // with A^-k, so the image of bit j is S^(7-j) of the top bit's image y = A^-k(0x80): the byte's
