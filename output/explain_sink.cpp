@@ -62,6 +62,11 @@ void ExplainSink::on_edge_byte(uint16_t channel, const EdgeByte& edge) {
   if (edges_.size() > kept_edges) edges_.pop_front();
 }
 
+void ExplainSink::on_piece_header(uint16_t channel, const PieceHeader& header) {
+  headers_.push_back({channel, header});
+  if (headers_.size() > kept_edges) headers_.pop_front();
+}
+
 // A channel's records come in the order of their bytes: what was weighed before a record's end
 // is of no record to come.
 void ExplainSink::forget_before(ChannelSteps& channel, uint64_t offset) {
@@ -84,6 +89,7 @@ void ExplainSink::explain_frame(const Frame& frame) {
   if (frame.mode == Mode::rtu && frame.damage != Damage::none) {
     print_inside(frame.channel, frame.offset, frame.raw.size());
     print_damage(frame);
+    print_piece_header(frame.channel, frame.offset);
     print_edges(frame.channel, frame.offset, frame.raw.size());
   }
 }
@@ -134,6 +140,7 @@ void ExplainSink::explain_noise(const Noise& noise) {
       "  then, no reading holding, the bytes up to the next good frame or silence were "
       "noise: {}\n",
       to_string(noise.reason));
+  print_piece_header(noise.channel, noise.offset);
   print_edges(noise.channel, noise.offset, noise.raw.size());
 }
 
@@ -337,8 +344,8 @@ void ExplainSink::print_edge(const EdgeByte& edge) {
   const std::string_view own = first ? "the piece's own first byte" : "the answer's own last byte";
   out_.print("  byte {} ({:02X}), the {} of the piece, read two ways:\n", edge.offset, edge.value,
              first ? "first" : "last");
-  print_edge_reading(glitch, edge.for_glitch, edge.glitch_features);
-  print_edge_reading(own, edge.for_byte, edge.byte_features);
+  print_two_way_reading(glitch, std::span(edge.for_glitch).first(edge.glitch_features));
+  print_two_way_reading(own, std::span(edge.for_byte).first(edge.byte_features));
   const int lead = std::abs(edge.glitch_bits() - edge.byte_bits());
   out_.print("  taken for {}, ", edge.glitch() ? glitch : own);
   if (lead == 0)
@@ -355,12 +362,32 @@ void ExplainSink::print_edge(const EdgeByte& edge) {
     out_.print(": the runner-up is ruled out\n");
 }
 
-void ExplainSink::print_edge_reading(std::string_view reading,
-                                     const std::array<Feature, 4>& features, uint8_t count) {
-  out_.print("    {}: {:+} bits\n", reading, EdgeByte::bits(features, count));
-  for (uint8_t i = 0; i < count; ++i) {
-    const FeatureInfo& feature = feature_info(features[i]);
+void ExplainSink::print_two_way_reading(std::string_view reading,
+                                        std::span<const Feature> features) {
+  int sum = 0;
+  for (const Feature f : features) sum += feature_info(f).bits;
+  out_.print("    {}: {:+} bits\n", reading, sum);
+  for (const Feature f : features) {
+    const FeatureInfo& feature = feature_info(f);
     out_.print("       {:+4}  {}: {}\n", feature.bits, feature.name, feature.why);
+  }
+}
+
+void ExplainSink::print_piece_header(uint16_t channel, uint64_t offset) {
+  for (const Header& h : headers_) {
+    if (h.channel != channel || h.header.offset != offset) continue;
+    const PieceHeader& header = h.header;
+    out_.print("  its header, which allows a frame of the piece's length, read two ways:\n");
+    print_two_way_reading("a damaged frame",
+                          std::span(header.for_frame).first(header.frame_features));
+    print_two_way_reading("noise", std::span(header.for_noise).first(header.noise_features));
+    const int lead = header.noise_bits() - header.frame_bits();
+    if (header.noise())
+      out_.print("  taken for noise, by {}\n", counted(lead, "bit", "bits"));
+    else
+      out_.print("  taken for a damaged frame: noise needs a lead of {} (it has {})\n",
+                 counted(decisive_bits, "bit", "bits"), lead);
+    return;
   }
 }
 

@@ -9,6 +9,7 @@
 #include <deque>
 #include <map>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,7 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   void on_reading(const FramingStep& step) override;
   void on_copy(uint16_t channel, uint64_t offset, const Margin& margin) override;
   void on_edge_byte(uint16_t channel, const EdgeByte& edge) override;
+  void on_piece_header(uint16_t channel, const PieceHeader& header) override;
   void on_frame(const Frame& frame) override;
   void on_noise(const Noise& noise) override;
   void on_timeout(const Timeout& timeout) override;
@@ -67,8 +69,9 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   // The 0x00s and 0xFFs at the edges of the record's bytes, each read as its own or a glitch.
   void print_edges(uint16_t channel, uint64_t offset, size_t size);
   void print_edge(const EdgeByte& edge);
-  void print_edge_reading(std::string_view reading, const std::array<Feature, 4>& features,
-                          uint8_t count);
+  void print_two_way_reading(std::string_view reading, std::span<const Feature> features);
+  // The header of the record's piece, where it spoke for noise: a damaged frame's, or noise's.
+  void print_piece_header(uint16_t channel, uint64_t offset);
   void print_row(const EvidenceInfo& row, int sign);
   void print_feature(Feature feature, int sign);
   void print_margin(const std::vector<const FramingStep*>& weighed);
@@ -113,6 +116,12 @@ class ExplainSink final : public RecordSink, public FramingObserver {
     EdgeByte edge;
   };
   std::deque<Edge> edges_;
+  // The latest headers of pieces weighed as a damaged frame or noise.
+  struct Header {
+    uint16_t channel;
+    PieceHeader header;
+  };
+  std::deque<Header> headers_;
   std::map<uint16_t, Segment> last_on_channel_;
   std::optional<uint16_t> after_due_;  // the channel whose next record is still to show
 };

@@ -29,7 +29,7 @@ enum class Feature : uint8_t {
   no_answer_after,
   answer_after,
   leaves_junk,
-  bus_frame_inside,
+  bus_code,
   unexpected_sender,
   silence_after,
   sent_straight_on,
@@ -82,9 +82,9 @@ inline constexpr std::array<FeatureInfo, 24> feature_table{{
      "the reading leaves bytes next to it to no frame: nothing starts where it ends, or no "
      "frame holds the bytes before it, from where the last frame ended; a bus carries junk "
      "rarely, and a frame follows nearly every frame: taken as 1 in 16"},
-    {"bus-frame-inside", 2,
-     "the frame inside has a public function code and, as an exception, a standard code: "
-     "about 1 code in 6 by chance"},
+    {"bus-code", 2,
+     "a public function code and, as an exception, a standard code, as a bus carries: junk's "
+     "codes are such about 1 time in 6"},
     {"unexpected-sender", 4,
      "a reserved address (248-255, most often a turnaround's 0xFF) or an answer nobody "
      "awaits: taken as 1 in 16"},
@@ -242,7 +242,7 @@ inline constexpr std::array<EvidenceInfo, 17> evidence_table{{
     {"swallows-known-frame",
      "a reserved address or an answer nobody awaits would swallow a frame whose length rules "
      "and CRC agree, which leaves the bytes before it to junk",
-     {Feature::another_crc, Feature::bus_frame_inside, Feature::unexpected_sender},
+     {Feature::another_crc, Feature::bus_code, Feature::unexpected_sender},
      3,
      Feature::leaves_junk},
     {"swallows-exchange",
@@ -390,6 +390,40 @@ struct EdgeByte {
   }
 };
 
+// A piece of unframed bytes whose header says a frame of exactly its length reads two ways: a
+// damaged frame whose check failed, or noise. Neither has a check to go by, so only the header
+// speaks: a code a bus carries for the frame (`bus-code`), a code a bus seldom carries
+// (`vendor-code`) and a reserved address (`unexpected-sender`, most often a turnaround's 0xFF)
+// for noise. A damaged frame keeps the bytes in its slave's picture, where a technician looks
+// for them, so it stands unless noise leads by decisive_bits.
+struct PieceHeader {
+  uint64_t offset = 0;  // the piece's first byte in the channel's stream
+  std::array<Feature, 2> for_frame{};
+  std::array<Feature, 2> for_noise{};
+  uint8_t frame_features = 0;
+  uint8_t noise_features = 0;
+
+  constexpr PieceHeader(uint64_t at, bool bus_code, bool reserved) : offset(at) {
+    if (bus_code) for_frame[frame_features++] = Feature::bus_code;
+    if (!bus_code) for_noise[noise_features++] = Feature::vendor_code;
+    if (reserved) for_noise[noise_features++] = Feature::unexpected_sender;
+  }
+  static constexpr int bits(const std::array<Feature, 2>& features, uint8_t count) {
+    int sum = 0;
+    for (uint8_t i = 0; i < count; ++i) sum += feature_table[size_t(features[i])].bits;
+    return sum;
+  }
+  constexpr int frame_bits() const { return bits(for_frame, frame_features); }
+  constexpr int noise_bits() const { return bits(for_noise, noise_features); }
+  constexpr bool noise() const { return noise_bits() - frame_bits() >= decisive_bits; }
+};
+// A damaged frame at any address with a code a bus carries, or with a vendor's code at a
+// station's address (NTA5000 and N3 answer with such codes); noise where both speak against it.
+static_assert(!PieceHeader(0, true, false).noise());
+static_assert(!PieceHeader(0, true, true).noise());
+static_assert(!PieceHeader(0, false, false).noise());
+static_assert(PieceHeader(0, false, true).noise());
+
 // What says where a span ends. Its function code's length rules, mostly; for a code with no
 // length of its own (a vendor's, FC08 Return Query Data), a CRC search, whose hit is weak
 // evidence until something confirms the end: a CRC holds at one of up to 256 ends tried, and a
@@ -459,7 +493,7 @@ static_assert(every_confirmation_makes_up_for_the_search());
 // A span against a frame a bus carries inside it (a public function code, a standard
 // exception, its length rules and CRC agreeing), which reads the span's bytes another way. The
 // frame inside weighs what the row `swallows-known-frame` does: `another-crc` and
-// `bus-frame-inside` for it, `leaves-junk` for the span (that reading leaves the bytes before
+// `bus-code` for it, `leaves-junk` for the span (that reading leaves the bytes before
 // the frame inside to junk), and `unexpected-sender` where the span starts at a reserved
 // address or as an answer nobody awaits. The span has its CRC, less the search's tries where a
 // search found its end, and `copy-after` where its exact copy follows it, which no frame inside
@@ -527,6 +561,8 @@ class FramingObserver {
   virtual void on_copy(uint16_t /*channel*/, uint64_t /*offset*/, const Margin& /*margin*/) {}
   // How a 0x00 or 0xFF at an edge of unframed bytes was read: their own, or a glitch.
   virtual void on_edge_byte(uint16_t /*channel*/, const EdgeByte& /*edge*/) {}
+  // How a piece whose header says a frame of its length was read: a damaged frame, or noise.
+  virtual void on_piece_header(uint16_t /*channel*/, const PieceHeader& /*header*/) {}
 };
 
 }  // namespace modtap

@@ -28,13 +28,6 @@ bool RtuFramer::may_start_request(uint8_t slave, uint8_t fc) {
   return may_start(fc) && !(fc & 0x80) && (slave != 0 || may_broadcast(fc));
 }
 
-// A piece whose check fails has neither a CRC nor, with a vendor's code, a length to say it is
-// a frame: only its header does. At a reserved address (248-255, most often a turnaround's
-// 0xFF) a vendor's code is junk's more often than a device's, so such a piece is noise.
-bool RtuFramer::damaged_header(uint8_t slave, uint8_t fc) {
-  return may_start(fc) && (slave <= max_unicast_slave || is_public_function(fc));
-}
-
 RtuFramer::RtuFramer(uint16_t channel, const RtuFramerOptions& options, FrameSink& sink)
     : channel_(channel),
       options_(options),
@@ -580,10 +573,10 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
     emit_damaged(begin, begin + *length, Damage::collision, findings);
     return emit_piece(begin + *length, end);
   }
-  if (size >= min_adu && size <= max_rtu_adu && damaged_header(p[0], p[1])) {
+  if (size >= min_adu && size <= max_rtu_adu && may_start(p[1])) {
     RoleFit fit{options_.role != ChannelRole::slave && fits_role(Role::request, begin, size),
                 options_.role != ChannelRole::master && fits_role(Role::response, begin, size)};
-    if (fit.request || fit.response) {
+    if ((fit.request || fit.response) && !piece_header(begin).noise()) {
       Frame frame = frame_of(begin, end, fit);
       frame.expected_check = crc16({p, static_cast<size_t>(size - crc_size)});
       frame.check_ok = frame.expected_check == wire_crc(frame.adu);
@@ -607,6 +600,17 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
   // Long runs of junk leave as several records so each stays printable and memory stays flat.
   for (uint64_t at = begin; at < end; at += max_rtu_adu)
     emit_noise(at, std::min<uint64_t>(end, at + max_rtu_adu), reason);
+}
+
+// The header of a piece that may be a damaged frame: a frame's, or noise's (PieceHeader). A
+// piece whose check fails has neither a CRC nor, with a vendor's code, a length to say it is a
+// frame: only its header does.
+PieceHeader RtuFramer::piece_header(uint64_t at) const {
+  const uint8_t* p = at_ptr(at);
+  const PieceHeader header{at, is_public_function(p[1]), p[0] > max_unicast_slave};
+  if (options_.observer && header.noise_features)
+    options_.observer->on_piece_header(channel_, header);
+  return header;
 }
 
 // The first byte of a piece, a 0x00 or 0xFF, where the bytes after it begin as the awaited

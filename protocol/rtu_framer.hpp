@@ -65,7 +65,6 @@ class RtuFramer {
   static constexpr uint8_t max_unicast_slave = 247;  // 248-255 are reserved (Serial Line 2.2)
   static bool may_start(uint8_t fc);
   static bool may_start_request(uint8_t slave, uint8_t fc);
-  static bool damaged_header(uint8_t slave, uint8_t fc);
   // What a driver turning on puts on the bus: one byte, the line's idle level or its opposite.
   static bool is_glitch_byte(uint8_t byte) { return byte == 0x00 || byte == 0xFF; }
   struct CrcHits {
@@ -213,6 +212,7 @@ class RtuFramer {
   // weighs against its own last byte being a second (last_edge).
   void emit_piece(uint64_t begin, uint64_t end, uint32_t findings = finding_none,
                   bool glitch_after = false);
+  PieceHeader piece_header(uint64_t at) const;
   std::optional<EdgeByte> first_edge(uint64_t begin, uint64_t end) const;
   std::optional<EdgeByte> last_edge(uint64_t begin, uint64_t end, bool glitch_after) const;
   void observe_edge(const EdgeByte& edge) const;

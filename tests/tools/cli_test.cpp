@@ -1309,7 +1309,7 @@ TEST(Cli, ExplainWeighsAFrameInsideASpanAgainstTheJunkItLeaves) {
   EXPECT_EQ(r.lines[3], "    response, 17 bytes: refuted, -2 bits");
   EXPECT_THAT(r.lines[5], ::testing::StartsWith("       -18  swallows-known-frame: "));
   EXPECT_THAT(r.lines[6], ::testing::StartsWith("               -16  another-crc: "));
-  EXPECT_THAT(r.lines[7], ::testing::StartsWith("                -2  bus-frame-inside: "));
+  EXPECT_THAT(r.lines[7], ::testing::StartsWith("                -2  bus-code: "));
   EXPECT_THAT(r.lines[8], ::testing::StartsWith("                -4  unexpected-sender: "));
   EXPECT_THAT(r.lines[9], ::testing::StartsWith("                +4  leaves-junk: "));
   EXPECT_EQ(r.lines[10],
@@ -1376,6 +1376,35 @@ TEST(Cli, ExplainSaysHowTheBytesAtAPiecesEdgesWereRead) {
       "out");
   has("    #2 bytes 13-13: noise (glitch), 1 byte");
   has("    #4 bytes 18-18: noise (glitch), 1 byte");
+}
+
+// Two pieces whose checks fail, each a frame's length by its header: `F8 41 ...`, a vendor's
+// code at a reserved address, and `F9 03 ...`, a read to a reserved address. Only the header
+// speaks, and noise needs a lead of 4 bits: the first has 6 (vendor-code, unexpected-sender), the
+// second 2 (unexpected-sender against bus-code), so it stays a damaged frame. --explain says so.
+TEST(Cli, ExplainSaysWhyAPieceIsNoiseOrADamagedFrame) {
+  const std::string log =
+      hexlog("modtap-explain-header.log",
+             {"00.000000", "01 03 00 00 00 01 84 0A", "00.010000", "01 03 02 00 01 79 84",
+              "00.300000", "F8 41 00 00 00 00", "00.400000", "F9 03 00 00 00 01 00 00", "00.500000",
+              "01 03 00 00 00 01 84 0A"});
+  const Outcome noise = run("-r " + log + " --explain 3");
+  ASSERT_EQ(noise.status, 0);
+  ASSERT_FALSE(noise.lines.empty());
+  EXPECT_THAT(noise.lines[0], ::testing::HasSubstr("noise 6 bytes (junk): F8 41 00 00 00 00"));
+  EXPECT_THAT(noise.lines, ::testing::Contains("    a damaged frame: +0 bits"));
+  EXPECT_THAT(noise.lines, ::testing::Contains("    noise: +6 bits"));
+  EXPECT_THAT(noise.lines, ::testing::Contains("  taken for noise, by 6 bits"));
+  const Outcome damaged = run("-r " + log + " --explain 4");
+  ASSERT_EQ(damaged.status, 0);
+  ASSERT_FALSE(damaged.lines.empty());
+  EXPECT_THAT(damaged.lines[0], ::testing::HasSubstr("req slave 249 Read Holding Registers"));
+  EXPECT_THAT(damaged.lines[0], ::testing::HasSubstr("crc BAD"));
+  EXPECT_THAT(damaged.lines, ::testing::Contains("    a damaged frame: +2 bits"));
+  EXPECT_THAT(damaged.lines, ::testing::Contains(::testing::StartsWith("         +2  bus-code: ")));
+  EXPECT_THAT(damaged.lines, ::testing::Contains("    noise: +4 bits"));
+  EXPECT_THAT(damaged.lines, ::testing::Contains("  taken for a damaged frame: noise needs a lead "
+                                                 "of 4 bits (it has 2)"));
 }
 
 // Inside a damaged answer, a start with a code a bus seldom carries is refuted before its end
