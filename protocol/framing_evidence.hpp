@@ -43,6 +43,7 @@ enum class Feature : uint8_t {
   predicted_bytes,
   vendor_code,
   predicted_byte,
+  public_header,
 };
 
 struct FeatureInfo {
@@ -51,7 +52,7 @@ struct FeatureInfo {
   std::string_view why;
 };
 
-inline constexpr std::array<FeatureInfo, 24> feature_table{{
+inline constexpr std::array<FeatureInfo, 25> feature_table{{
     {"crc-holds", 16, "bytes that are no frame pass a CRC 1 time in 65,536"},
     {"another-crc", 16,
      "another span over these bytes passes its own length rules and CRC, as unlikely by "
@@ -128,6 +129,10 @@ inline constexpr std::array<FeatureInfo, 24> feature_table{{
     {"predicted-byte", 1,
      "the pending request tells the answer's byte here, and it is this one; a glitch is this "
      "value too about 1 time in 2"},
+    {"public-header", 16,
+     "it starts with the header of a public function whose length only its CRC tells (FC08 "
+     "Return Query Data, FC2B/0D CANopen General Reference): junk begins so 1 time in 65,536 at "
+     "most; it says where a frame starts, not where it ends"},
 }};
 
 inline const FeatureInfo& feature_info(Feature f) {
@@ -448,8 +453,7 @@ struct SpanEndInfo {
   std::string_view name;
   std::string_view why;
   // The evidence that confirmed a searched end; none where no search was made, or where
-  // nothing more can come to confirm it and the hit stands on its own (input-end,
-  // header-alone).
+  // nothing more can come to confirm it and the hit stands on its own (input-end).
   std::optional<Feature> confirmed_by = std::nullopt;
 };
 
@@ -472,16 +476,18 @@ inline constexpr std::array<SpanEndInfo, 9> span_end_table{{
      Feature::glitch_then_frame},
     {"input-end", "a CRC search, its end where the input ends"},
     {"header-alone",
-     "a CRC search with nothing to confirm its end: a public function of any length (FC08 "
-     "Return Query Data, FC2B/0D CANopen reference), standing on its header and CRC once "
-     "nothing more can"},
+     "a CRC search, nothing after its end to confirm it: a public function whose length only "
+     "its CRC tells, standing on its header at its first end once nothing more can confirm one",
+     Feature::public_header},
 }};
 
 inline const SpanEndInfo& span_end_info(SpanEnd e) {
   return span_end_table[static_cast<size_t>(e)];
 }
 
-// Each confirmation alone makes up for the search: the first that holds confirms the end.
+// Each confirmation alone makes up for the search: the first that holds confirms the end. The
+// header's is about the start, where every end shares it: an end something after it confirms
+// is taken first, and the header confirms the first end only once nothing more can.
 constexpr bool every_confirmation_makes_up_for_the_search() {
   for (const SpanEndInfo& end : span_end_table)
     if (end.confirmed_by && feature_table[size_t(*end.confirmed_by)].bits < search_bits)

@@ -201,8 +201,9 @@ RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int s
 
 // A bounded CRC search for the end of a frame of no fixed length, from `first` bytes on. Its
 // hit stands once something confirms it (span_end_table), a turnaround glitch only where
-// nothing else does, and never where it swallows a frame a bus carries; a public function's
-// (`public_header`) stands on its header once nothing can.
+// nothing else does, and never where it swallows a frame a bus carries; the header of a public
+// function whose length only its CRC tells (`public_header`, the feature public-header) confirms
+// its first end once nothing more can.
 RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, bool final,
                                        int search, bool public_header) {
   const uint64_t avail = end_ - at;
@@ -248,8 +249,8 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
       if (may_stand_alone) alone = {Match::Kind::found, n, fit, shorter, SpanEnd::header_alone};
     }
   }
-  // A public function followed by junk: once nothing more can confirm it (the input's
-  // end, or a silence with a good frame after it), its own header and CRC have to do, and one
+  // A public function followed by junk: once nothing more can confirm an end (the input's
+  // end, or a silence with a good frame after it), its header confirms the first, and one
   // byte more stands beside it where a 0x00 after it makes that good too.
   if (alone.length && (final || (avail >= max_rtu_adu && !open) || blocked_by_gap(at, final))) {
     Margin doubt = longer_end(at, at + alone.length);

@@ -1189,6 +1189,22 @@ TEST(Cli, ExplainSaysWhatConfirmedAnEndACrcSearchFound) {
   EXPECT_THAT(known.lines, ::testing::Not(::testing::Contains(::testing::HasSubstr("its end ("))));
 }
 
+// FC08 Return Query Data has no length of its own either; with junk after it, nothing after its
+// end confirms it, and its header does, once nothing more can: --explain names the feature.
+TEST(Cli, ExplainSaysAPublicHeaderConfirmedAnEndNothingAfterItDid) {
+  const std::string log =
+      hexlog("modtap-explain-header-alone.log", {"00.000000", "11 08 00 00 12 34 EF EC A5 5A 3C"});
+  ASSERT_EQ(modtap::crc16(std::vector<uint8_t>{0x11, 0x08, 0x00, 0x00, 0x12, 0x34}), 0xECEF);
+  const Outcome r = run("-r " + log + " --explain 1");
+  ASSERT_EQ(r.status, 0);
+  ASSERT_GE(r.lines.size(), 5u) << ::testing::PrintToString(r.lines);
+  EXPECT_EQ(r.lines[2], "    request, 8 bytes: kept, +16 bits");
+  EXPECT_THAT(r.lines[3],
+              ::testing::StartsWith("            its end (header-alone): a CRC search"));
+  EXPECT_THAT(r.lines[4], ::testing::StartsWith("              confirmed, 16 bits of the search's "
+                                                "8: public-header: "));
+}
+
 // A frame found by CRC search whose end has a 0x00 beside it has a runner-up end, and --explain
 // weighs it. A vendor frame ending in 0x00 before a silence: one byte shorter would make the
 // 0x00 the next driver's glitch, but a glitch comes before a frame, not before a silence, and 8
