@@ -364,9 +364,7 @@ void ExplainSink::print_edge(const EdgeByte& edge) {
 
 void ExplainSink::print_two_way_reading(std::string_view reading,
                                         std::span<const Feature> features) {
-  int sum = 0;
-  for (const Feature f : features) sum += feature_info(f).bits;
-  out_.print("    {}: {:+} bits\n", reading, sum);
+  out_.print("    {}: {:+} bits\n", reading, feature_bits(features));
   for (const Feature f : features) {
     const FeatureInfo& feature = feature_info(f);
     out_.print("       {:+4}  {}: {}\n", feature.bits, feature.name, feature.why);

@@ -11,6 +11,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string_view>
 
 #include "protocol/glitch_odds.hpp"
@@ -137,6 +138,13 @@ inline constexpr std::array<FeatureInfo, 25> feature_table{{
 
 inline const FeatureInfo& feature_info(Feature f) {
   return feature_table[static_cast<size_t>(f)];
+}
+
+// What a reading's features weigh together.
+constexpr int feature_bits(std::span<const Feature> features) {
+  int sum = 0;
+  for (const Feature f : features) sum += feature_table[static_cast<size_t>(f)].bits;
+  return sum;
 }
 
 enum class Evidence : uint8_t {
@@ -373,9 +381,7 @@ struct EdgeByte {
       for_byte[byte_features++] = feature;
   }
   static int bits(const std::array<Feature, 4>& features, uint8_t count) {
-    int sum = 0;
-    for (uint8_t i = 0; i < count; ++i) sum += feature_table[size_t(features[i])].bits;
-    return sum;
+    return feature_bits(std::span(features).first(count));
   }
   int glitch_bits() const { return bits(for_glitch, glitch_features); }
   int byte_bits() const { return bits(for_byte, byte_features); }
@@ -414,9 +420,7 @@ struct PieceHeader {
     if (reserved) for_noise[noise_features++] = Feature::unexpected_sender;
   }
   static constexpr int bits(const std::array<Feature, 2>& features, uint8_t count) {
-    int sum = 0;
-    for (uint8_t i = 0; i < count; ++i) sum += feature_table[size_t(features[i])].bits;
-    return sum;
+    return feature_bits(std::span(features).first(count));
   }
   constexpr int frame_bits() const { return bits(for_frame, frame_features); }
   constexpr int noise_bits() const { return bits(for_noise, noise_features); }
