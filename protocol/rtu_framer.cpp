@@ -608,7 +608,7 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
 // frame: only its header does.
 PieceHeader RtuFramer::piece_header(uint64_t at) const {
   const uint8_t* p = at_ptr(at);
-  const PieceHeader header{at, is_public_function(p[1]), p[0] > max_unicast_slave};
+  const PieceHeader header{at, standard_frame(at), p[0] > max_unicast_slave};
   if (options_.observer && header.noise_features)
     options_.observer->on_piece_header(channel_, header);
   return header;

@@ -287,6 +287,26 @@ TEST(RtuFramer, AVendorCodeAtAReservedAddressIsJunkNotADamagedFrame) {
   EXPECT_EQ(out.bytes_of(0), concat({junk, read_request}));
 }
 
+// An exception whose code the standard does not name is a vendor's code as much as a vendor's
+// function is (bus-code is a public function and, as an exception, a standard code): at a
+// reserved address, with no CRC holding, junk; the same header with a standard code stays a
+// damaged answer.
+TEST(RtuFramer, AnUnnamedExceptionCodeAtAReservedAddressIsJunkNotADamagedFrame) {
+  const auto unnamed = hex("f8 83 19 00 00");
+  const auto junk = analyze_untimed(concat({unnamed, read_request}));
+  ASSERT_EQ(junk.frames().size(), 1u);
+  EXPECT_EQ(junk.frames()[0].raw, read_request);
+  ASSERT_EQ(junk.noise().size(), 1u);
+  EXPECT_EQ(junk.noise()[0].raw, unnamed);
+
+  const auto named = hex("f8 83 02 00 00");
+  const auto damaged = analyze_untimed(concat({named, read_request})).frames();
+  ASSERT_EQ(damaged.size(), 2u);
+  EXPECT_EQ(damaged[0].raw, named);
+  EXPECT_FALSE(damaged[0].check_ok);
+  EXPECT_EQ(damaged[1].raw, read_request);
+}
+
 // The frames `out` holds are `expected`, in order, and its noise `glitches` lone glitches.
 void expect_frames_and_glitches(const Collector& out,
                                 const std::vector<std::vector<uint8_t>>& expected,
