@@ -364,6 +364,10 @@ void ExplainSink::print_edge(const EdgeByte& edge) {
 
 void ExplainSink::print_two_way_reading(std::string_view reading,
                                         std::span<const Feature> features) {
+  if (features.empty()) {
+    out_.print("    {}: +0 bits, no feature speaks for it\n", reading);
+    return;
+  }
   out_.print("    {}: {:+} bits\n", reading, feature_bits(features));
   for (const Feature f : features) {
     const FeatureInfo& feature = feature_info(f);

@@ -44,7 +44,7 @@ enum class Feature : uint8_t {
   predicted_bytes,
   vendor_code,
   predicted_byte,
-  public_header,
+  public_header,  // last: feature_table asserts a row for each
 };
 
 struct FeatureInfo {
@@ -53,7 +53,7 @@ struct FeatureInfo {
   std::string_view why;
 };
 
-inline constexpr std::array<FeatureInfo, 25> feature_table{{
+inline constexpr auto feature_table = std::to_array<FeatureInfo>({
     {"crc-holds", 16, "bytes that are no frame pass a CRC 1 time in 65,536"},
     {"another-crc", 16,
      "another span over these bytes passes its own length rules and CRC, as unlikely by "
@@ -134,7 +134,9 @@ inline constexpr std::array<FeatureInfo, 25> feature_table{{
      "it starts with the header of a public function whose length only its CRC tells (FC08 "
      "Return Query Data, FC2B/0D CANopen General Reference): junk begins so 1 time in 65,536 at "
      "most; it says where a frame starts, not where it ends"},
-}};
+});
+
+static_assert(feature_table.size() == size_t(Feature::public_header) + 1, "a row for each feature");
 
 inline const FeatureInfo& feature_info(Feature f) {
   return feature_table[static_cast<size_t>(f)];
@@ -164,7 +166,7 @@ enum class Evidence : uint8_t {
   answer_cut_before_request,
   swallows_known_frame,
   swallows_exchange,
-  swallows_request,
+  swallows_request,  // last: evidence_table asserts a row for each
 };
 
 struct EvidenceInfo {
@@ -183,7 +185,7 @@ struct EvidenceInfo {
   }
 };
 
-inline constexpr std::array<EvidenceInfo, 17> evidence_table{{
+inline constexpr auto evidence_table = std::to_array<EvidenceInfo>({
     {"length-and-crc",
      "its function code's length rules and its CRC agree on where it ends",
      {Feature::crc_holds},
@@ -269,7 +271,10 @@ inline constexpr std::array<EvidenceInfo, 17> evidence_table{{
      "frame of the request's slave and function code comes next: its answer, or its retry",
      {Feature::another_crc, Feature::answer_after},
      2},
-}};
+});
+
+static_assert(evidence_table.size() == size_t(Evidence::swallows_request) + 1,
+              "a row for each piece of evidence");
 
 inline const EvidenceInfo& evidence_info(Evidence e) {
   return evidence_table[static_cast<size_t>(e)];
@@ -446,7 +451,7 @@ enum class SpanEnd : uint8_t {
   copy_after,
   glitch_then_frame,
   input_end,
-  header_alone,
+  header_alone,  // last: span_end_table asserts a row for each
 };
 
 // A CRC search tries up to 256 ends (log2 256 = 8 bits): its hit is worth that much less than
@@ -461,7 +466,7 @@ struct SpanEndInfo {
   std::optional<Feature> confirmed_by = std::nullopt;
 };
 
-inline constexpr std::array<SpanEndInfo, 9> span_end_table{{
+inline constexpr auto span_end_table = std::to_array<SpanEndInfo>({
     {"length-rules", "its function code's length rules"},
     {"echo-length", "the pending FC08 request's length: its echo is as long"},
     {"silence-after", "a CRC search, its end confirmed by a silence of t3.5 right after it",
@@ -483,7 +488,9 @@ inline constexpr std::array<SpanEndInfo, 9> span_end_table{{
      "a CRC search, nothing after its end to confirm it: a public function whose length only "
      "its CRC tells, standing on its header at its first end once nothing more can confirm one",
      Feature::public_header},
-}};
+});
+
+static_assert(span_end_table.size() == size_t(SpanEnd::header_alone) + 1, "a row for each end");
 
 inline const SpanEndInfo& span_end_info(SpanEnd e) {
   return span_end_table[static_cast<size_t>(e)];

@@ -1383,7 +1383,7 @@ TEST(Cli, ExplainSaysHowTheBytesAtAPiecesEdgesWereRead) {
   };
   has("  byte 13 (00), the first of the piece, read two ways:");
   has("    the answering driver's glitch, before its answer: +16 bits");
-  has("    the piece's own first byte: +0 bits");
+  has("    the piece's own first byte: +0 bits, no feature speaks for it");
   has("  taken for the answering driver's glitch, before its answer, by 16 bits: the runner-up is "
       "ruled out");
   has("  byte 18 (FF), the last of the piece, read two ways:");
@@ -1408,7 +1408,8 @@ TEST(Cli, ExplainSaysWhyAPieceIsNoiseOrADamagedFrame) {
   ASSERT_EQ(noise.status, 0);
   ASSERT_FALSE(noise.lines.empty());
   EXPECT_THAT(noise.lines[0], ::testing::HasSubstr("noise 6 bytes (junk): F8 41 00 00 00 00"));
-  EXPECT_THAT(noise.lines, ::testing::Contains("    a damaged frame: +0 bits"));
+  EXPECT_THAT(noise.lines,
+              ::testing::Contains("    a damaged frame: +0 bits, no feature speaks for it"));
   EXPECT_THAT(noise.lines, ::testing::Contains("    noise: +6 bits"));
   EXPECT_THAT(noise.lines, ::testing::Contains("  taken for noise, by 6 bits"));
   const Outcome damaged = run("-r " + log + " --explain 4");
