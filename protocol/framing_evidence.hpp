@@ -85,8 +85,8 @@ inline constexpr auto feature_table = std::to_array<FeatureInfo>({
      "frame holds the bytes before it, from where the last frame ended; a bus carries junk "
      "rarely, and a frame follows nearly every frame: taken as 1 in 16"},
     {"bus-code", 2,
-     "a public function code and, as an exception, a standard code, as a bus carries: junk's "
-     "codes are such about 1 time in 6"},
+     "a public function code, and for an exception a code the standard names: the codes a bus "
+     "carries; junk's codes are such about 1 time in 6"},
     {"unexpected-sender", 4,
      "a reserved address (248-255, most often a turnaround's 0xFF) or an answer nobody "
      "awaits: taken as 1 in 16"},
@@ -131,9 +131,9 @@ inline constexpr auto feature_table = std::to_array<FeatureInfo>({
      "the pending request tells the answer's byte here, and it is this one; a glitch is this "
      "value too about 1 time in 2"},
     {"public-header", 16,
-     "it starts with the header of a public function whose length only its CRC tells (FC08 "
-     "Return Query Data, FC2B/0D CANopen General Reference): junk begins so 1 time in 65,536 at "
-     "most; it says where a frame starts, not where it ends"},
+     "it begins as FC08 Return Query Data (sub-function 0000) or FC2B/0D CANopen General "
+     "Reference, public functions whose length only their CRC tells: junk begins so 1 time in "
+     "65,536 at most; it says where a frame starts, not where it ends"},
 });
 
 static_assert(feature_table.size() == size_t(Feature::public_header) + 1, "a row for each feature");
@@ -485,8 +485,9 @@ inline constexpr auto span_end_table = std::to_array<SpanEndInfo>({
      Feature::glitch_then_frame},
     {"input-end", "a CRC search, its end where the input ends"},
     {"header-alone",
-     "a CRC search, nothing after its end to confirm it: a public function whose length only "
-     "its CRC tells, standing on its header at its first end once nothing more can confirm one",
+     "a CRC search with nothing after its end to confirm it: a public function whose length only "
+     "its CRC tells stands on its header at the first end its CRC holds (one byte on, where a "
+     "0x00 there is ruled out as a glitch), once nothing more can confirm an end",
      Feature::public_header},
 });
 
