@@ -427,17 +427,23 @@ INSTANTIATE_TEST_SUITE_P(
 #ifndef MODTAP_LAST_SEED
 #define MODTAP_LAST_SEED 1125
 #endif
-std::vector<uint64_t> seeds_to_run() {
-  uint64_t first = 100, last = MODTAP_LAST_SEED;
-  std::vector<uint64_t> seeds;
-  if (const char* range = std::getenv("MODTAP_SEEDS")) {
-    if (std::sscanf(range, "%" SCNu64 "-%" SCNu64, &first, &last) != 2 || last < first)
-      throw std::invalid_argument("MODTAP_SEEDS: FIRST-LAST, as 1126-1325");
-  } else {
-    // docs/framing.md: the sweeps of 1126-2125 and of 5126-6125 (swallows-request)
-    seeds = {1215, 1233, 1297, 1390, 1690, 5343, 5899};
-  }
+// The seeds FIRST-LAST the variable `name` asks for, appended to `seeds`; false where it is unset.
+bool seeds_asked(const char* name, std::vector<uint64_t>& seeds) {
+  const char* range = std::getenv(name);
+  if (!range) return false;
+  uint64_t first = 0, last = 0;
+  if (std::sscanf(range, "%" SCNu64 "-%" SCNu64, &first, &last) != 2 || last < first)
+    throw std::invalid_argument(std::string(name) + ": FIRST-LAST, as 1126-1325");
   for (uint64_t seed = first; seed <= last; ++seed) seeds.push_back(seed);
+  return true;
+}
+
+std::vector<uint64_t> seeds_to_run() {
+  std::vector<uint64_t> seeds;
+  if (seeds_asked("MODTAP_SEEDS", seeds)) return seeds;
+  // docs/framing.md: the sweeps of 1126-2125 and of 5126-6125 (swallows-request)
+  seeds = {1215, 1233, 1297, 1390, 1690, 5343, 5899};
+  for (uint64_t seed = 100; seed <= MODTAP_LAST_SEED; ++seed) seeds.push_back(seed);
   return seeds;
 }
 
@@ -458,6 +464,32 @@ std::vector<Scenario> real_master_seeds() {
 }
 
 INSTANTIATE_TEST_SUITE_P(RealMasterSeeds, BusScenario, ::testing::ValuesIn(real_master_seeds()),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+// The rough scenario's seeds (5% glitches, 3% junk bursts, 3% truncated requests) at every
+// delivery, with no allowance: 100-125 (100-104 under the sanitizers), or MODTAP_ROUGH_SEEDS
+// (docs/framing.md, "Limits").
+#ifndef MODTAP_LAST_ROUGH_SEED
+#define MODTAP_LAST_ROUGH_SEED 125
+#endif
+std::vector<Scenario> rough_seeds() {
+  static std::deque<std::string> names;  // the scenarios point at their names
+  std::vector<uint64_t> seeds;
+  if (!seeds_asked("MODTAP_ROUGH_SEEDS", seeds))
+    for (uint64_t seed = 100; seed <= MODTAP_LAST_ROUGH_SEED; ++seed) seeds.push_back(seed);
+  std::vector<Scenario> out;
+  for (const uint64_t seed : seeds) {
+    for (const auto& [name, delivery] :
+         {std::pair{"per_byte_", Delivery::per_byte}, std::pair{"bursts_", Delivery::bursts},
+          std::pair{"per_frame_", Delivery::per_frame}, std::pair{"untimed_", Delivery::untimed}}) {
+      names.push_back(name + std::to_string(seed));
+      out.push_back(Scenario{names.back().c_str(), delivery, rough(seed)});
+    }
+  }
+  return out;
+}
+
+INSTANTIATE_TEST_SUITE_P(RoughSeeds, BusScenario, ::testing::ValuesIn(rough_seeds()),
                          [](const auto& info) { return std::string(info.param.name); });
 
 INSTANTIATE_TEST_SUITE_P(
