@@ -243,8 +243,11 @@ bool PcapngReader::packet(uint32_t type, Chunk& chunk) {
                                  ? std::strtoll(comment.c_str() + duration_at + 13, nullptr, 10)
                                  : static_cast<int64_t>(bytes_.size()) * char_ns;
     first_end_ns_ = t_ns + char_ns;
+    // With a clock per read the first run judged the packet's bytes together; with one per byte,
+    // each byte alone, as the rest's come.
     chunk = {i.channel, first_end_ns_, std::span<const uint8_t>(bytes_).first(1),
-             comment.find(" untimed_start=1") != std::string::npos};
+             comment.find(" untimed_start=1") != std::string::npos,
+             bytes_.size() > 1 && clock_ != ClockQuality::per_byte};
     if (bytes_.size() > 1) {
       rest_at_ = 1;
       rest_end_ns_ = t_ns + duration;

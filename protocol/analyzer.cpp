@@ -13,11 +13,14 @@ class Analyzer::ModeProbe {
   // True once the evidence is in.
   bool push(const Chunk& chunk, ChannelRole role) {
     last_ns_ = std::max(last_ns_, chunk.t_ns);
-    auto& kept = chunks_.emplace_back(Kept{
-        chunk.channel, chunk.t_ns, {chunk.bytes.begin(), chunk.bytes.end()}, chunk.continues_read});
+    auto& kept = chunks_.emplace_back(Kept{chunk.channel,
+                                           chunk.t_ns,
+                                           {chunk.bytes.begin(), chunk.bytes.end()},
+                                           chunk.continues_read,
+                                           chunk.read_goes_on});
     buffered_ += kept.bytes.size();
     Trial& trial = trial_for(chunk.channel, role);
-    const Chunk copy{chunk.channel, kept.t_ns, kept.bytes, kept.continues_read};
+    const Chunk copy{chunk.channel, kept.t_ns, kept.bytes, kept.continues_read, kept.read_goes_on};
     trial.rtu.push(copy);
     trial.ascii.push(copy);
     return rtu_count_.good >= enough || ascii_count_.good >= enough || buffered_ >= max_buffered;
@@ -42,7 +45,7 @@ class Analyzer::ModeProbe {
   template <typename Fn>
   void replay(Fn&& push) const {
     for (const auto& kept : chunks_)
-      push(Chunk{kept.channel, kept.t_ns, kept.bytes, kept.continues_read});
+      push(Chunk{kept.channel, kept.t_ns, kept.bytes, kept.continues_read, kept.read_goes_on});
   }
 
  private:
@@ -64,6 +67,7 @@ class Analyzer::ModeProbe {
     int64_t t_ns;
     std::vector<uint8_t> bytes;
     bool continues_read;
+    bool read_goes_on;
   };
 
   Trial& trial_for(uint16_t channel, ChannelRole role) {

@@ -246,8 +246,7 @@ bool RtuFramer::glitch_then_awaited(uint64_t at) const {
 // Nor does any frame whose CRC holds by chance across a whole exchange: junk after it, and
 // inside it a request with its own answer's first bytes after it.
 RtuFramer::Say RtuFramer::swallows_exchange_reading(const Reading& r) {
-  if (r.search > 0 && swallows_exchange(r.at, r.at + r.length, r.final)) return Say::refutes;
-  return Say::nothing;
+  return r.search > 0 ? swallows_exchange(r.at, r.at + r.length, r.final) : Say::nothing;
 }
 
 // A span whose CRC holds across a frame cut short and a whole request after it: the cut
@@ -331,26 +330,33 @@ std::optional<bool> RtuFramer::answer_follows(uint64_t at, uint64_t end, bool fi
 // Whether junk follows [begin, end) and a request starts inside it with a frame of its slave
 // and function code (its answer) right after it, or after a glitch. Junk first, and a public
 // function code right after (or after a glitch) is taken to begin a frame without looking
-// further: a frame follows almost every frame, and the search inside is rare.
-bool RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) {
-  if (end + 3 > end_) return false;
+// further: a frame follows almost every frame, and the search inside is rare. Unknown while such
+// a request's answer has yet to come, so that where a read ends does not decide.
+RtuFramer::Say RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) {
+  if (end + 3 > end_) return Say::nothing;
   const uint8_t* after = at_ptr(end);
   if (is_public_function(after[1] & 0x7F) ||
       (is_glitch_byte(after[0]) && is_public_function(after[2] & 0x7F)) || timeline_.gap_at(end) ||
       match_at(end, final, 0).kind != Match::Kind::none || glitch_then_frame(end, final, 0))
-    return false;
+    return Say::nothing;
+  Say say = Say::nothing;
   for (uint64_t inner = begin + 1; inner < end && inner + 3 <= end_; ++inner) {
     if (!standard_frame(inner)) continue;
     const Match request = match_at(inner, final, 0);
     if (request.kind != Match::Kind::found || !request.fit.request) continue;
     const uint64_t after = inner + request.length;
     const bool glitch = after < end_ && is_glitch_byte(*at_ptr(after));
-    for (uint64_t answer = after; answer <= after + (glitch ? 1 : 0); ++answer)
-      if (answer + 2 <= end_ && std::equal(at_ptr(inner), at_ptr(inner + 2), at_ptr(answer)) &&
+    for (uint64_t answer = after; answer <= after + (glitch ? 1 : 0); ++answer) {
+      if (answer + 2 > end_) {
+        if (!final) say = Say::unknown;  // the answer's first bytes are still to come
+        continue;
+      }
+      if (std::equal(at_ptr(inner), at_ptr(inner + 2), at_ptr(answer)) &&
           match_at(answer, final, 0).kind != Match::Kind::none)
-        return true;
+        return Say::refutes;
+    }
   }
-  return false;
+  return say;
 }
 
 // Whether the response [at, at + length) is one cut short with the next request right behind

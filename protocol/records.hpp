@@ -48,6 +48,10 @@ struct Chunk {
   // Its first byte came in the read before's, so the silence before it is unknown: a frame
   // whose start a first run's clock did not see (Frame::untimed_start), read back from pcapng.
   bool continues_read = false;
+  // The rest of its read comes in the next chunk at once (a modtap pcapng packet's bytes after
+  // its first, which is apart to be timed): nothing is judged between the two, as the first run
+  // judged the read whole.
+  bool read_goes_on = false;
 };
 
 enum class Mode : uint8_t { rtu, ascii };

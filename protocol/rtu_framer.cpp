@@ -43,7 +43,7 @@ void RtuFramer::push(const Chunk& chunk) {
   timeline_.add(chunk.bytes.size(), chunk.t_ns, chunk.continues_read);
   buf_.insert(buf_.end(), chunk.bytes.begin(), chunk.bytes.end());
   end_ += chunk.bytes.size();
-  resolve(false);
+  if (!chunk.read_goes_on) resolve(false);
 }
 
 void RtuFramer::flush(int64_t now_ns) {

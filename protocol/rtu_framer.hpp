@@ -192,7 +192,7 @@ class RtuFramer {
   bool copied_frame_at(uint64_t at);
   bool unexpected_sender(uint64_t at, bool answer) const;
   bool glitch_then_awaited(uint64_t at) const;
-  bool swallows_exchange(uint64_t begin, uint64_t end, bool final);
+  Say swallows_exchange(uint64_t begin, uint64_t end, bool final);
   std::optional<bool> answer_follows(uint64_t at, uint64_t end, bool final) const;
   // First position >= from that starts a good frame; `decided` false if one is still open.
   uint64_t next_start(uint64_t from, bool final, bool& decided);
