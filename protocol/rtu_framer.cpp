@@ -483,7 +483,8 @@ uint64_t RtuFramer::awaited_end(uint64_t at) const {
   return start ? *start + *awaited_.length(from(*start)) : 0;
 }
 
-// Whether the frame at `at` has a public function code and, as an exception, a standard code.
+// Whether the frame at `at` has a code a bus carries (`bus-code`): a public function code, and
+// for an exception a code the standard names.
 bool RtuFramer::standard_frame(uint64_t at) const {
   const uint8_t* p = at_ptr(at);
   const uint8_t fc = p[1];

@@ -288,9 +288,9 @@ TEST(RtuFramer, AVendorCodeAtAReservedAddressIsJunkNotADamagedFrame) {
 }
 
 // An exception whose code the standard does not name is a vendor's code as much as a vendor's
-// function is (bus-code is a public function and, as an exception, a standard code): at a
-// reserved address, with no CRC holding, junk; the same header with a standard code stays a
-// damaged answer.
+// function is (`bus-code`: a public function code, and for an exception a code the standard
+// names): at a reserved address, with no CRC holding, junk; the same header with a standard code
+// stays a damaged answer.
 TEST(RtuFramer, AnUnnamedExceptionCodeAtAReservedAddressIsJunkNotADamagedFrame) {
   const auto unnamed = hex("f8 83 19 00 00");
   const auto junk = analyze_untimed(concat({unnamed, read_request}));
