@@ -482,11 +482,12 @@ std::vector<Scenario> rough_seeds() {
     seeds = {172};
     for (uint64_t seed = 100; seed <= MODTAP_LAST_ROUGH_SEED; ++seed) seeds.push_back(seed);
   }
-  std::vector<Scenario> out;
+  std::vector<Scenario> out;  // named apart from RealMasterSeeds': a name is a file's too
   for (const uint64_t seed : seeds) {
-    for (const auto& [name, delivery] :
-         {std::pair{"per_byte_", Delivery::per_byte}, std::pair{"bursts_", Delivery::bursts},
-          std::pair{"per_frame_", Delivery::per_frame}, std::pair{"untimed_", Delivery::untimed}}) {
+    for (const auto& [name, delivery] : {std::pair{"rough_per_byte_", Delivery::per_byte},
+                                         std::pair{"rough_bursts_", Delivery::bursts},
+                                         std::pair{"rough_per_frame_", Delivery::per_frame},
+                                         std::pair{"rough_untimed_", Delivery::untimed}}) {
       names.push_back(name + std::to_string(seed));
       out.push_back(Scenario{names.back().c_str(), delivery, rough(seed)});
     }
