@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "protocol/records.hpp"
+#include "decoder/protocol/records.hpp"
 
 namespace modtap::captures {
 

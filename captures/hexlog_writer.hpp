@@ -7,7 +7,7 @@
 #include <fmt/format.h>
 
 #include "captures/output_file.hpp"
-#include "protocol/records.hpp"
+#include "decoder/protocol/records.hpp"
 
 namespace modtap::captures {
 

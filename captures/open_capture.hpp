@@ -8,7 +8,7 @@
 
 #include "captures/chunk_source.hpp"
 #include "captures/sigrok_reader.hpp"
-#include "protocol/serial_format.hpp"
+#include "decoder/protocol/serial_format.hpp"
 
 namespace modtap::captures {
 

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "protocol/records.hpp"
+#include "decoder/protocol/records.hpp"
 
 struct pcap;
 struct pcap_dumper;

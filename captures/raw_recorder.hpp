@@ -12,7 +12,7 @@
 #include "captures/file_ring.hpp"
 #include "captures/hexlog_writer.hpp"
 #include "captures/pcapng_writer.hpp"
-#include "protocol/records.hpp"
+#include "decoder/protocol/records.hpp"
 
 namespace modtap::captures {
 

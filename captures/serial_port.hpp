@@ -8,7 +8,7 @@
 #include <span>
 #include <string>
 
-#include "protocol/serial_format.hpp"
+#include "decoder/protocol/serial_format.hpp"
 
 namespace modtap::captures {
 

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "captures/chunk_source.hpp"
-#include "protocol/serial_format.hpp"
+#include "decoder/protocol/serial_format.hpp"
 
 namespace modtap::captures {
 

@@ -11,11 +11,11 @@
 #include <string>
 #include <vector>
 
-#include "analysis/bus_problems.hpp"
+#include "decoder/analysis/bus_problems.hpp"
+#include "decoder/protocol/record_sink.hpp"
+#include "decoder/protocol/register_numbering.hpp"
 #include "output/output.hpp"
 #include "output/text_sink.hpp"
-#include "protocol/record_sink.hpp"
-#include "protocol/register_numbering.hpp"
 
 namespace modtap::output {
 

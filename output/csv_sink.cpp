@@ -5,7 +5,7 @@
 
 #include <fmt/chrono.h>
 
-#include "models/record_fields.hpp"
+#include "decoder/models/record_fields.hpp"
 #include "output/render.hpp"
 
 namespace modtap::output {

@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
-#include "models/register_meaning.hpp"
+#include "decoder/models/register_meaning.hpp"
+#include "decoder/protocol/record_sink.hpp"
+#include "decoder/protocol/register_numbering.hpp"
 #include "output/output.hpp"
 #include "output/text_sink.hpp"
-#include "protocol/record_sink.hpp"
-#include "protocol/register_numbering.hpp"
 
 namespace modtap::output {
 

@@ -5,7 +5,7 @@
 
 #include <fmt/format.h>
 
-#include "protocol/function_codes.hpp"
+#include "decoder/protocol/function_codes.hpp"
 
 namespace modtap::output {
 namespace {

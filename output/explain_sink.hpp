@@ -1,8 +1,8 @@
 // --explain INDEX: one record as the text output prints it, then why the RTU framer cut there:
 // each reading it weighed at the record's first byte (request, response), what became of it, its
-// score in bits with the features of the row that refuted it (protocol/framing_evidence.hpp), and
-// the winner's margin over the runner-up; for unframed bytes, the spans inside them that the
-// evidence refuted.
+// score in bits with the features of the row that refuted it
+// (decoder/protocol/framing_evidence.hpp), and the winner's margin over the runner-up; for unframed
+// bytes, the spans inside them that the evidence refuted.
 #pragma once
 
 #include <cstdint>
@@ -13,10 +13,10 @@
 #include <string>
 #include <vector>
 
+#include "decoder/protocol/framing_evidence.hpp"
+#include "decoder/protocol/record_sink.hpp"
 #include "output/output.hpp"
 #include "output/text_sink.hpp"
-#include "protocol/framing_evidence.hpp"
-#include "protocol/record_sink.hpp"
 
 namespace modtap::output {
 

@@ -4,9 +4,9 @@
 #include <array>
 #include <string>
 
-#include "models/record_fields.hpp"
+#include "decoder/models/record_fields.hpp"
+#include "decoder/protocol/pdu_fields.hpp"
 #include "output/render.hpp"
-#include "protocol/pdu_fields.hpp"
 
 namespace modtap::output {
 
@@ -102,7 +102,7 @@ std::string_view function_code_piece(uint8_t byte) {
 
 }  // namespace
 
-// Renders the walk over a record's fields (models/record_fields.hpp) as one JSON object.
+// Renders the walk over a record's fields (decoder/models/record_fields.hpp) as one JSON object.
 class JsonSink::Fields {
  public:
   explicit Fields(JsonSink& sink) : sink_(sink), buf_(sink.out_.buffer()) {}

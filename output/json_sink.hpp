@@ -6,11 +6,11 @@
 
 #include <fmt/format.h>
 
-#include "models/register_meaning.hpp"
+#include "decoder/models/register_meaning.hpp"
+#include "decoder/protocol/buffer_put.hpp"
+#include "decoder/protocol/pdu_fields.hpp"
+#include "decoder/protocol/record_sink.hpp"
 #include "output/output.hpp"
-#include "protocol/buffer_put.hpp"
-#include "protocol/pdu_fields.hpp"
-#include "protocol/record_sink.hpp"
 
 namespace modtap::output {
 

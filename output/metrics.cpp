@@ -10,9 +10,9 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "decoder/protocol/records.hpp"
 #include "output/shared_library.hpp"
 #include "output/web_config.hpp"
-#include "protocol/records.hpp"
 
 namespace modtap::output {
 

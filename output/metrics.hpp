@@ -14,8 +14,8 @@
 
 #include <fmt/format.h>
 
-#include "analysis/bus_problems.hpp"
-#include "analysis/bus_statistics.hpp"
+#include "decoder/analysis/bus_problems.hpp"
+#include "decoder/analysis/bus_statistics.hpp"
 #include "output/web_config.hpp"
 
 struct MHD_Connection;

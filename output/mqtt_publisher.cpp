@@ -5,7 +5,7 @@
 
 #include <fmt/chrono.h>
 
-#include "models/device_model.hpp"
+#include "decoder/models/device_model.hpp"
 #include "output/render.hpp"
 #include "output/statistics_output.hpp"
 

@@ -18,11 +18,11 @@
 
 #include <fmt/format.h>
 
-#include "analysis/bus_problems.hpp"
-#include "analysis/bus_statistics.hpp"
+#include "decoder/analysis/bus_problems.hpp"
+#include "decoder/analysis/bus_statistics.hpp"
+#include "decoder/protocol/record_sink.hpp"
+#include "decoder/protocol/register_numbering.hpp"
 #include "output/csv_sink.hpp"
-#include "protocol/record_sink.hpp"
-#include "protocol/register_numbering.hpp"
 
 namespace modtap::output {
 

@@ -8,9 +8,9 @@
 #include <fmt/format.h>
 
 #include "captures/pcapng_format.hpp"
-#include "models/record_fields.hpp"
-#include "models/register_meaning.hpp"
-#include "protocol/buffer_put.hpp"
+#include "decoder/models/record_fields.hpp"
+#include "decoder/models/register_meaning.hpp"
+#include "decoder/protocol/buffer_put.hpp"
 
 namespace modtap::output {
 
@@ -104,7 +104,7 @@ struct CommentExtras {
   std::string_view exception_meaning;
 };
 
-// A record's comment rendered from its field walk (models/record_fields.hpp): each key is a
+// A record's comment rendered from its field walk (decoder/models/record_fields.hpp): each key is a
 // field's registry name, written only where its value differs from what the reader assumes
 // (docs/pcapng.md); the walk says which fields the record has. Where the walk has a field the
 // reader can tell from the packet itself (its bytes, the slave, the function), no key.

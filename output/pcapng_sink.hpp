@@ -11,7 +11,7 @@
 
 #include "captures/file_ring.hpp"
 #include "captures/pcapng_writer.hpp"
-#include "protocol/record_sink.hpp"
+#include "decoder/protocol/record_sink.hpp"
 
 namespace modtap {
 struct DeviceModel;

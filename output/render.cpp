@@ -8,7 +8,7 @@
 
 #include <fmt/compile.h>
 
-#include "protocol/function_codes.hpp"
+#include "decoder/protocol/function_codes.hpp"
 
 namespace modtap::output {
 

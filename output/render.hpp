@@ -10,12 +10,12 @@
 #include <fmt/compile.h>
 #include <fmt/format.h>
 
-#include "models/register_meaning.hpp"
-#include "protocol/buffer_put.hpp"
-#include "protocol/clock_time.hpp"
-#include "protocol/pdu_fields.hpp"
-#include "protocol/records.hpp"
-#include "protocol/register_numbering.hpp"
+#include "decoder/models/register_meaning.hpp"
+#include "decoder/protocol/buffer_put.hpp"
+#include "decoder/protocol/clock_time.hpp"
+#include "decoder/protocol/pdu_fields.hpp"
+#include "decoder/protocol/records.hpp"
+#include "decoder/protocol/register_numbering.hpp"
 
 namespace modtap::output {
 

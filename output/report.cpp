@@ -8,10 +8,10 @@
 
 #include <fmt/chrono.h>
 
+#include "decoder/protocol/format_probe.hpp"
 #include "output/render.hpp"
 #include "output/svg_plot.hpp"
 #include "output/text_sink.hpp"
-#include "protocol/format_probe.hpp"
 
 namespace modtap::output {
 

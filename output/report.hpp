@@ -14,11 +14,11 @@
 
 #include <fmt/format.h>
 
-#include "analysis/bus_diagnostics.hpp"
-#include "analysis/bus_problems.hpp"
-#include "analysis/bus_statistics.hpp"
-#include "analysis/bus_timeline.hpp"
-#include "protocol/register_numbering.hpp"
+#include "decoder/analysis/bus_diagnostics.hpp"
+#include "decoder/analysis/bus_problems.hpp"
+#include "decoder/analysis/bus_statistics.hpp"
+#include "decoder/analysis/bus_timeline.hpp"
+#include "decoder/protocol/register_numbering.hpp"
 
 namespace modtap::output {
 

@@ -5,9 +5,9 @@
 
 #include <fmt/chrono.h>
 
-#include "models/register_meaning.hpp"
+#include "decoder/models/register_meaning.hpp"
+#include "decoder/protocol/format_probe.hpp"
 #include "output/render.hpp"
-#include "protocol/format_probe.hpp"
 
 namespace modtap::output {
 

@@ -6,11 +6,11 @@
 
 #include <span>
 
-#include "analysis/bus_diagnostics.hpp"
-#include "analysis/bus_problems.hpp"
-#include "analysis/bus_statistics.hpp"
+#include "decoder/analysis/bus_diagnostics.hpp"
+#include "decoder/analysis/bus_problems.hpp"
+#include "decoder/analysis/bus_statistics.hpp"
+#include "decoder/protocol/register_numbering.hpp"
 #include "output/output.hpp"
-#include "protocol/register_numbering.hpp"
 
 namespace modtap::output {
 

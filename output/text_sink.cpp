@@ -5,10 +5,10 @@
 
 #include <fmt/chrono.h>
 
-#include "models/record_fields.hpp"
-#include "models/register_meaning.hpp"
+#include "decoder/models/record_fields.hpp"
+#include "decoder/models/register_meaning.hpp"
+#include "decoder/protocol/pdu_fields.hpp"
 #include "output/render.hpp"
-#include "protocol/pdu_fields.hpp"
 
 namespace modtap::output {
 

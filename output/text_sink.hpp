@@ -5,12 +5,12 @@
 #include <string_view>
 #include <vector>
 
-#include "models/register_meaning.hpp"
+#include "decoder/models/register_meaning.hpp"
+#include "decoder/protocol/pdu_fields.hpp"
+#include "decoder/protocol/record_sink.hpp"
+#include "decoder/protocol/register_numbering.hpp"
 #include "output/output.hpp"
 #include "output/render.hpp"
-#include "protocol/pdu_fields.hpp"
-#include "protocol/record_sink.hpp"
-#include "protocol/register_numbering.hpp"
 
 namespace modtap {
 struct RecordFields;

@@ -9,7 +9,7 @@
 
 #include <fmt/format.h>
 
-#include "models/yaml_tree.hpp"
+#include "decoder/models/yaml_tree.hpp"
 
 namespace modtap::output {
 namespace {

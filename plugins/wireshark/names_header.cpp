@@ -8,8 +8,8 @@
 #include <string>
 #include <string_view>
 
-#include "protocol/field_registry.hpp"
-#include "protocol/function_codes.hpp"
+#include "decoder/protocol/field_registry.hpp"
+#include "decoder/protocol/function_codes.hpp"
 
 namespace {
 

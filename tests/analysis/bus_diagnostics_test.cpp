@@ -1,13 +1,13 @@
-#include "analysis/bus_diagnostics.hpp"
+#include "decoder/analysis/bus_diagnostics.hpp"
 
 #include <gtest/gtest.h>
 
 #include <map>
 #include <set>
 
-#include "models/model_interpreter.hpp"
-#include "protocol/analyzer.hpp"
-#include "protocol/checksum.hpp"
+#include "decoder/models/model_interpreter.hpp"
+#include "decoder/protocol/analyzer.hpp"
+#include "decoder/protocol/checksum.hpp"
 #include "tests/support/collector.hpp"
 #include "tools/busgen/bus_simulator.hpp"
 #include "tools/modtap/model_catalog.hpp"

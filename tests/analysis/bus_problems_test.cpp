@@ -1,6 +1,6 @@
 // The diagnosis on the simulator's buses: each fault of one slave is found as its problem, with
 // that slave, and nothing else of severity warning or error; a healthy bus shows no problem.
-#include "analysis/bus_problems.hpp"
+#include "decoder/analysis/bus_problems.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,8 +8,8 @@
 #include <string>
 #include <utility>
 
-#include "analysis/bus_diagnostics.hpp"
-#include "protocol/analyzer.hpp"
+#include "decoder/analysis/bus_diagnostics.hpp"
+#include "decoder/protocol/analyzer.hpp"
 #include "tools/busgen/bus_simulator.hpp"
 
 namespace modtap {

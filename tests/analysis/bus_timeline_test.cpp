@@ -1,4 +1,4 @@
-#include "analysis/bus_timeline.hpp"
+#include "decoder/analysis/bus_timeline.hpp"
 
 #include <iterator>
 #include <map>
@@ -10,7 +10,7 @@
 
 #include <gtest/gtest.h>
 
-#include "models/register_meaning.hpp"
+#include "decoder/models/register_meaning.hpp"
 
 namespace modtap {
 namespace {

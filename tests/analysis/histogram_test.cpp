@@ -1,4 +1,4 @@
-#include "analysis/histogram.hpp"
+#include "decoder/analysis/histogram.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -7,13 +7,13 @@
 #include <cstdlib>
 #include <new>
 
-#include "analysis/bus_statistics.hpp"
-#include "models/model_interpreter.hpp"
+#include "decoder/analysis/bus_statistics.hpp"
+#include "decoder/models/model_interpreter.hpp"
+#include "decoder/protocol/analyzer.hpp"
 #include "output/csv_sink.hpp"
 #include "output/json_sink.hpp"
 #include "output/pcapng_sink.hpp"
 #include "output/text_sink.hpp"
-#include "protocol/analyzer.hpp"
 #include "tools/busgen/bus_simulator.hpp"
 #include "tools/modtap/model_catalog.hpp"
 

@@ -7,11 +7,11 @@
 #include <vector>
 
 #include "captures/pcapng_writer.hpp"
-#include "models/model_interpreter.hpp"
-#include "protocol/ascii_framer.hpp"
-#include "protocol/checksum.hpp"
-#include "protocol/matcher.hpp"
-#include "protocol/rtu_framer.hpp"
+#include "decoder/models/model_interpreter.hpp"
+#include "decoder/protocol/ascii_framer.hpp"
+#include "decoder/protocol/checksum.hpp"
+#include "decoder/protocol/matcher.hpp"
+#include "decoder/protocol/rtu_framer.hpp"
 #include "tools/busgen/bus_simulator.hpp"
 #include "tools/modtap/model_catalog.hpp"
 

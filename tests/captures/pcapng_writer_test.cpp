@@ -8,8 +8,8 @@
 #include <iterator>
 #include <set>
 
-#include "models/device_model.hpp"
-#include "models/register_meaning.hpp"
+#include "decoder/models/device_model.hpp"
+#include "decoder/models/register_meaning.hpp"
 #include "output/pcapng_sink.hpp"
 #include "tests/support/collector.hpp"
 

@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "protocol/analyzer.hpp"
+#include "decoder/protocol/analyzer.hpp"
 #include "tests/support/collector.hpp"
 
 namespace modtap::captures {

@@ -1,10 +1,10 @@
-#include "filter/display_filter.hpp"
+#include "decoder/filter/display_filter.hpp"
 
 #include <random>
 
 #include <gtest/gtest.h>
 
-#include "models/register_meaning.hpp"
+#include "decoder/models/register_meaning.hpp"
 
 namespace modtap {
 namespace {

@@ -4,8 +4,8 @@
 // (for texts without a ')' of their own, which could close the wrapping parenthesis early).
 #include <string>
 
-#include "filter/display_filter.hpp"
-#include "models/register_meaning.hpp"
+#include "decoder/filter/display_filter.hpp"
+#include "decoder/models/register_meaning.hpp"
 #include "tests/fuzz/fuzz_input.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

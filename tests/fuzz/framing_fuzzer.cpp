@@ -9,12 +9,12 @@
 #include <nlohmann/json.hpp>
 
 #include "captures/output_file.hpp"
-#include "models/model_interpreter.hpp"
+#include "decoder/models/model_interpreter.hpp"
+#include "decoder/protocol/analyzer.hpp"
+#include "decoder/protocol/checksum.hpp"
 #include "output/json_sink.hpp"
 #include "output/output.hpp"
 #include "output/text_sink.hpp"
-#include "protocol/analyzer.hpp"
-#include "protocol/checksum.hpp"
 #include "tests/fuzz/fuzz_input.hpp"
 #include "tools/modtap/model_catalog.hpp"
 

@@ -3,7 +3,7 @@
 #include <string>
 #include <string_view>
 
-#include "models/model_yaml.hpp"
+#include "decoder/models/model_yaml.hpp"
 #include "tests/fuzz/fuzz_input.hpp"
 #include "tools/modtap/model_catalog.hpp"
 

@@ -2,8 +2,8 @@
 // response to any request. Properties: no crash, and a register's value text renders.
 #include <fmt/format.h>
 
-#include "models/register_meaning.hpp"
-#include "protocol/pdu_fields.hpp"
+#include "decoder/models/register_meaning.hpp"
+#include "decoder/protocol/pdu_fields.hpp"
 #include "tests/fuzz/fuzz_input.hpp"
 #include "tools/modtap/model_catalog.hpp"
 

@@ -8,11 +8,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "models/model_interpreter.hpp"
-#include "models/model_yaml.hpp"
-#include "models/register_meaning.hpp"
+#include "decoder/models/model_interpreter.hpp"
+#include "decoder/models/model_yaml.hpp"
+#include "decoder/models/register_meaning.hpp"
+#include "decoder/protocol/checksum.hpp"
 #include "plugins/models/builtin_models.hpp"
-#include "protocol/checksum.hpp"
 #include "tools/modtap/model_catalog.hpp"
 
 namespace modtap {

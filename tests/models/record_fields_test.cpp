@@ -1,11 +1,11 @@
-#include "models/record_fields.hpp"
+#include "decoder/models/record_fields.hpp"
 
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
-#include "models/device_model.hpp"
+#include "decoder/models/device_model.hpp"
 
 namespace modtap {
 namespace {

@@ -1,4 +1,4 @@
-#include "models/yaml_tree.hpp"
+#include "decoder/models/yaml_tree.hpp"
 
 #include <fmt/format.h>
 #include <gmock/gmock.h>

@@ -1,4 +1,4 @@
-#include "protocol/ascii_framer.hpp"
+#include "decoder/protocol/ascii_framer.hpp"
 
 #include <gtest/gtest.h>
 

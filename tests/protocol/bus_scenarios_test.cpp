@@ -18,8 +18,8 @@
 #include "captures/open_capture.hpp"
 #include "captures/pcap_chunk_writer.hpp"
 #include "captures/pcapng_writer.hpp"
+#include "decoder/protocol/analyzer.hpp"
 #include "output/pcapng_sink.hpp"
-#include "protocol/analyzer.hpp"
 #include "tests/support/collector.hpp"
 #include "tools/busgen/bus_simulator.hpp"
 

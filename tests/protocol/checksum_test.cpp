@@ -1,4 +1,4 @@
-#include "protocol/checksum.hpp"
+#include "decoder/protocol/checksum.hpp"
 
 #include <gtest/gtest.h>
 

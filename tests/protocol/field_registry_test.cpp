@@ -1,4 +1,4 @@
-#include "protocol/field_registry.hpp"
+#include "decoder/protocol/field_registry.hpp"
 
 #include <fstream>
 #include <map>

@@ -1,4 +1,4 @@
-#include "protocol/findings.hpp"
+#include "decoder/protocol/findings.hpp"
 
 #include <fstream>
 #include <set>

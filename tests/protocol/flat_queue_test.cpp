@@ -1,4 +1,4 @@
-#include "protocol/flat_queue.hpp"
+#include "decoder/protocol/flat_queue.hpp"
 
 #include <gtest/gtest.h>
 

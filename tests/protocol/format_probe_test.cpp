@@ -1,5 +1,5 @@
 // Telling a line's settings from its traffic: the candidates, the pace check, the health count.
-#include "protocol/format_probe.hpp"
+#include "decoder/protocol/format_probe.hpp"
 
 #include <gtest/gtest.h>
 

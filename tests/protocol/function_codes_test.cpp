@@ -1,9 +1,9 @@
-#include "protocol/function_codes.hpp"
+#include "decoder/protocol/function_codes.hpp"
 
 #include <gtest/gtest.h>
 
-#include "protocol/awaited_answer.hpp"
-#include "protocol/checksum.hpp"
+#include "decoder/protocol/awaited_answer.hpp"
+#include "decoder/protocol/checksum.hpp"
 #include "tests/support/collector.hpp"
 
 namespace modtap {

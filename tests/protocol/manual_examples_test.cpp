@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "protocol/function_codes.hpp"
+#include "decoder/protocol/function_codes.hpp"
 #include "tests/support/collector.hpp"
 
 namespace modtap {

@@ -1,4 +1,4 @@
-#include "protocol/matcher.hpp"
+#include "decoder/protocol/matcher.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "protocol/pdu_fields.hpp"
+#include "decoder/protocol/pdu_fields.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "protocol/record_sink.hpp"
+#include "decoder/protocol/record_sink.hpp"
 
 #include <string>
 #include <vector>

@@ -1,4 +1,4 @@
-#include "protocol/register_numbering.hpp"
+#include "decoder/protocol/register_numbering.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,9 +1,9 @@
-#include "protocol/rtu_framer.hpp"
+#include "decoder/protocol/rtu_framer.hpp"
 
 #include <gtest/gtest.h>
 
-#include "protocol/analyzer.hpp"
-#include "protocol/checksum.hpp"
+#include "decoder/protocol/analyzer.hpp"
+#include "decoder/protocol/checksum.hpp"
 #include "tests/support/collector.hpp"
 
 namespace modtap {

@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "protocol/analyzer.hpp"
+#include "decoder/protocol/analyzer.hpp"
 
 namespace modtap::testing {
 

@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "protocol/analyzer.hpp"
-#include "protocol/checksum.hpp"
+#include "decoder/protocol/analyzer.hpp"
+#include "decoder/protocol/checksum.hpp"
 #include "tests/support/collector.hpp"
 
 namespace modtap::busgen {

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "captures/pcap_chunk_writer.hpp"
-#include "protocol/checksum.hpp"
+#include "decoder/protocol/checksum.hpp"
 #include "tools/busgen/bus_simulator.hpp"
 #include "tools/modtap/model_catalog.hpp"
 

@@ -8,8 +8,8 @@
 #include <string>
 #include <utility>
 
-#include "protocol/checksum.hpp"
-#include "protocol/function_codes.hpp"
+#include "decoder/protocol/checksum.hpp"
+#include "decoder/protocol/function_codes.hpp"
 
 namespace modtap::busgen {
 using Bytes = std::vector<uint8_t>;

@@ -10,8 +10,8 @@
 #include <string_view>
 #include <vector>
 
-#include "protocol/records.hpp"
-#include "protocol/serial_format.hpp"
+#include "decoder/protocol/records.hpp"
+#include "decoder/protocol/serial_format.hpp"
 
 namespace modtap::busgen {
 

@@ -13,7 +13,7 @@
 
 #include "captures/chunk_source.hpp"
 #include "captures/serial_port.hpp"
-#include "protocol/format_probe.hpp"
+#include "decoder/protocol/format_probe.hpp"
 
 namespace modtap::live {
 namespace {

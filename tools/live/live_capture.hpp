@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "protocol/analyzer.hpp"
+#include "decoder/protocol/analyzer.hpp"
 
 namespace modtap::live {
 

@@ -2,7 +2,7 @@
 
 #include <fmt/format.h>
 
-#include "protocol/format_probe.hpp"
+#include "decoder/protocol/format_probe.hpp"
 
 namespace modtap::tools {
 

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "captures/open_capture.hpp"
-#include "protocol/analyzer.hpp"
+#include "decoder/protocol/analyzer.hpp"
 
 namespace modtap::tools {
 

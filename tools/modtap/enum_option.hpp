@@ -10,7 +10,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "protocol/enum_names.hpp"
+#include "decoder/protocol/enum_names.hpp"
 
 namespace modtap::tools {
 

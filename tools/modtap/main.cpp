@@ -14,10 +14,10 @@
 #include <CLI/CLI.hpp>
 
 #include "captures/output_file.hpp"
-#include "filter/display_filter.hpp"
+#include "decoder/filter/display_filter.hpp"
+#include "decoder/protocol/field_registry.hpp"
+#include "decoder/protocol/nearest_name.hpp"
 #include "output/csv_sink.hpp"
-#include "protocol/field_registry.hpp"
-#include "protocol/nearest_name.hpp"
 #include "tools/modtap/capture_conditions.hpp"
 #include "tools/modtap/enum_option.hpp"
 #include "tools/modtap/model_catalog.hpp"

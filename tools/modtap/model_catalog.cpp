@@ -8,9 +8,9 @@
 
 #include <fmt/format.h>
 
-#include "models/model_yaml.hpp"
+#include "decoder/models/model_yaml.hpp"
+#include "decoder/protocol/nearest_name.hpp"
 #include "plugins/models/builtin_models.hpp"
-#include "protocol/nearest_name.hpp"
 
 namespace modtap::tools {
 

@@ -6,9 +6,9 @@
 #include <string_view>
 #include <vector>
 
-#include "models/device_model.hpp"
-#include "models/model_interpreter.hpp"
-#include "models/model_yaml.hpp"
+#include "decoder/models/device_model.hpp"
+#include "decoder/models/model_interpreter.hpp"
+#include "decoder/models/model_yaml.hpp"
 
 namespace modtap::tools {
 

@@ -11,14 +11,16 @@
 #include <string>
 #include <vector>
 
-#include "analysis/bus_diagnostics.hpp"
-#include "analysis/bus_problems.hpp"
-#include "analysis/bus_statistics.hpp"
-#include "analysis/bus_timeline.hpp"
 #include "captures/file_ring.hpp"
 #include "captures/open_capture.hpp"
-#include "filter/display_filter.hpp"
-#include "models/model_interpreter.hpp"
+#include "decoder/analysis/bus_diagnostics.hpp"
+#include "decoder/analysis/bus_problems.hpp"
+#include "decoder/analysis/bus_statistics.hpp"
+#include "decoder/analysis/bus_timeline.hpp"
+#include "decoder/filter/display_filter.hpp"
+#include "decoder/models/model_interpreter.hpp"
+#include "decoder/protocol/analyzer.hpp"
+#include "decoder/protocol/record_sink.hpp"
 #include "output/cited_records.hpp"
 #include "output/csv_sink.hpp"
 #include "output/explain_sink.hpp"
@@ -28,8 +30,6 @@
 #include "output/output.hpp"
 #include "output/pcapng_sink.hpp"
 #include "output/text_sink.hpp"
-#include "protocol/analyzer.hpp"
-#include "protocol/record_sink.hpp"
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/top/top_feed.hpp"
 

@@ -11,7 +11,7 @@
 #include "captures/open_capture.hpp"
 #include "captures/piped_input.hpp"
 #include "captures/sigrok_reader.hpp"
-#include "protocol/format_probe.hpp"
+#include "decoder/protocol/format_probe.hpp"
 #include "tools/live/live_capture.hpp"
 #include "tools/modtap/auto_format.hpp"
 #include "tools/modtap/enum_option.hpp"

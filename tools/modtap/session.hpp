@@ -13,10 +13,10 @@
 #include "captures/file_ring.hpp"
 #include "captures/output_file.hpp"
 #include "captures/raw_recorder.hpp"
+#include "decoder/protocol/records.hpp"
+#include "decoder/protocol/serial_format.hpp"
 #include "output/metrics.hpp"
 #include "output/output.hpp"
-#include "protocol/records.hpp"
-#include "protocol/serial_format.hpp"
 #include "tools/modtap/pipeline.hpp"
 
 namespace modtap::tools {

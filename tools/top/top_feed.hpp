@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "filter/display_filter.hpp"
+#include "decoder/filter/display_filter.hpp"
+#include "decoder/protocol/record_sink.hpp"
 #include "output/output.hpp"
 #include "output/pcapng_sink.hpp"
 #include "output/text_sink.hpp"
-#include "protocol/record_sink.hpp"
 
 namespace modtap::top {
 

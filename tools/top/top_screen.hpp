@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "protocol/findings.hpp"
+#include "decoder/protocol/findings.hpp"
 
 namespace modtap::top {
 

@@ -17,8 +17,8 @@
 #include <thread>
 #include <vector>
 
-#include "analysis/bus_problems.hpp"
-#include "analysis/bus_statistics.hpp"
+#include "decoder/analysis/bus_problems.hpp"
+#include "decoder/analysis/bus_statistics.hpp"
 #include "output/csv_sink.hpp"
 #include "output/metrics.hpp"
 #include "tools/top/top_feed.hpp"

@@ -1,0 +1,543 @@
+#include "decoder/analysis/bus_problems.hpp"
+
+#include <algorithm>
+#include <array>
+
+#include <fmt/format.h>
+
+#include "decoder/models/device_model.hpp"
+#include "decoder/models/register_meaning.hpp"
+#include "decoder/protocol/bytes.hpp"
+#include "decoder/protocol/function_codes.hpp"
+
+namespace modtap {
+
+namespace {
+
+constexpr std::array<ProblemInfo, problem_kind_count> problem_infos{{
+    {"no-response",
+     "check that a device with this address is on the bus and powered, and that its address, "
+     "baud rate and parity are the bus's; or take the address off the master's poll list"},
+    {"stopped-responding",
+     "check the device's power and its wiring at the terminals, and whether it is in a fault "
+     "or was reset to other communication settings"},
+    {"intermittent-response",
+     "check the device's power supply and its wiring (a loose terminal, a long stub), and that "
+     "the master's time-out leaves room for its answer time"},
+    {"slow-response",
+     "check the device's response-delay parameter and its load; make sure the master's "
+     "time-out leaves room for its answer time"},
+    {"late-responses",
+     "lengthen the master's time-out beyond this device's answer time, or shorten the "
+     "device's response delay: its answers come after the master gave up and are lost"},
+    {"corrupted-responses",
+     "check this device's transceiver and its wiring: the A/B wires and shield at its "
+     "terminals, its stub, its segment; a device at another baud rate or parity answers in "
+     "garbage too"},
+    {"bus-noise",
+     "check the termination (120 ohm at both ends of the trunk only), the biasing, the "
+     "grounding and shield, and the cable's route past power wiring and drives"},
+    {"rejected-requests",
+     "check the master's configuration for this device against its manual: the function, "
+     "the register addresses (and their numbering base) and the values it asks for"},
+    {"collisions",
+     "give every device its own address (two answer to this one), and make sure only one "
+     "master drives the bus"},
+    {"turnaround-glitches",
+     "check the bus biasing (fail-safe resistors) and termination, and the driver-enable "
+     "timing of the device that releases or takes the bus"},
+}};
+
+// Thresholds: a handful of events is chance, not a problem (docs/output.md, "problems").
+constexpr uint64_t few = 3;                     // fewer events than this never make a problem
+constexpr uint64_t some = 5;                    // nor fewer than this for a share of requests
+constexpr double missed_share = 0.05;           // intermittent-response from here
+constexpr double missed_share_error = 0.25;     // and an error from here
+constexpr double damaged_share = 0.02;          // corrupted-responses, collisions from here
+constexpr double damaged_share_error = 0.10;    // and an error from here
+constexpr double concentrated = 3.0;            // times the other slaves' share: one slave's
+constexpr double slow_factor = 3.0;             // slow-response: times the others' median...
+constexpr int64_t slow_margin_ns = 20'000'000;  // ...and this much more
+constexpr double near_timeout = 0.5;            // or its p95 past this share of the time-out
+constexpr double rejected_share = 0.8;          // rejected-requests: this share of a request
+constexpr double glitch_share = 0.2;            // turnaround-glitches: of the turnarounds
+constexpr double noise_share = 0.01;            // bus-noise: of all frames
+constexpr double noise_share_error = 0.05;
+
+double share(uint64_t part, uint64_t whole) {
+  return whole ? static_cast<double>(part) / static_cast<double>(whole) : 0.0;
+}
+
+// The answer's length on the wire, where the request tells it (a read's byte count, an echo).
+uint16_t expected_answer_size(const Frame& request) {
+  const ResponsePrefix prefix = response_prefix(request.pdu());
+  std::array<uint8_t, 9> head{request.slave()};
+  std::copy_n(prefix.pdu.begin(), prefix.size, head.begin() + 1);
+  const BodyLength body = body_length(Role::response, {head.data(), prefix.size + 1u});
+  if (body.kind != BodyLength::Kind::known) return 0;
+  if (request.mode == Mode::rtu) return static_cast<uint16_t>(body.bytes + 2);
+  return static_cast<uint16_t>(1 + 2 * (body.bytes + 1) + 2);  // ':' hex LRC CR LF
+}
+
+// Slave, function, start and quantity of a request that reads or writes registers or coils.
+std::optional<ProblemEvidence::RequestKey> request_key(const Frame& request) {
+  const auto pdu = request.pdu();
+  const uint8_t fc = request.function();
+  if (pdu.size() < 5 || !(fc <= 0x06 || fc == 0x0F || fc == 0x10 || fc == 0x17)) return {};
+  const bool single = fc == 0x05 || fc == 0x06;
+  return ProblemEvidence::RequestKey{request.slave(), fc, be16(pdu, 1),
+                                     single ? uint16_t{1} : be16(pdu, 3)};
+}
+
+}  // namespace
+
+const ProblemInfo& problem_info(ProblemKind kind) {
+  return problem_infos[static_cast<size_t>(kind)];
+}
+
+bool ProblemEvidence::Events::add(int64_t t_ns, uint64_t index) {
+  if (!first_ns) first_ns = t_ns;
+  ++count;
+  if (first.size() == kept_records) return false;
+  first.push_back(index);
+  return true;
+}
+
+void ProblemEvidence::note(Events& events, int64_t t_ns, uint64_t index) {
+  if (events.add(t_ns, index)) cited_ = index;
+}
+
+void ProblemEvidence::on_frame(const Frame& frame) {
+  cited_.reset();
+  after_request_ = false;
+  if (frame.adu.empty()) return;
+  if (frame.role == Role::request && frame.check_ok) return on_request(frame);
+  const bool awaited = frame.role == Role::response && frame.request;
+  if (!frame.check_ok && !awaited) return note(bad_requests_, frame.t_ns, frame.index);
+  if (frame.role != Role::response) return;
+  if (!awaited) {  // an answer after its request timed out: late, if the history says so
+    if (frame.findings & finding_late_response)
+      note(slaves_[frame.slave()].late, frame.t_ns, frame.index);
+    return;
+  }
+  Slave& slave = slaves_[frame.device()];
+  if (frame.check_ok) return on_answer(frame, slave);
+  if (frame.damage == Damage::collision) return note(slave.overlapping, frame.t_ns, frame.index);
+  note(slave.damaged, frame.t_ns, frame.index);
+  slave.silent_timeouts = 0;
+}
+
+void ProblemEvidence::on_request(const Frame& frame) {
+  ++requests_seen_;
+  after_request_ = true;
+  awaited_.reset();
+  awaited_slave_.reset();
+  if (frame.slave() == 0) return;  // a broadcast: no answer comes
+  Slave& slave = slaves_[frame.slave()];
+  ++slave.requests;
+  if (!slave.first_request_ns) slave.first_request_ns = frame.t_ns;
+  if (frame.meaning && frame.meaning->model) slave.model = frame.meaning->model;
+  slave.expected_answer_size = expected_answer_size(frame);
+  awaited_slave_ = frame.slave();
+  const auto key = request_key(frame);
+  if (!key || (requests_.size() >= kept_requests && !requests_.count(*key))) return;
+  ++requests_[*key].requests;
+  awaited_ = key;
+}
+
+void ProblemEvidence::on_answer(const Frame& frame, Slave& slave) {
+  ++slave.answers;
+  slave.silent_timeouts = 0;
+  if (frame.meaning && frame.meaning->model) slave.model = frame.meaning->model;
+  if (frame.is_exception() && awaited_ && std::get<0>(*awaited_) == frame.device())
+    note(requests_[*awaited_].by_exception[frame.adu[2]], frame.t_ns, frame.index);
+  awaited_.reset();
+}
+
+// An answer past reading: a character or two longer than the awaited answer, it is two answers
+// begun a little apart (another device of the same address); otherwise it is damaged. Begun
+// within a bit, they read as one frame of the answer's length, with a bad check: damaged.
+void ProblemEvidence::on_damaged_answer(uint64_t index, int64_t t_ns, size_t size, Slave& slave) {
+  const uint16_t expected = slave.expected_answer_size;
+  if (expected && size > expected && size <= expected + 2u) {
+    note(slave.overlapping, t_ns, index);
+  } else {
+    note(slave.damaged, t_ns, index);
+  }
+  slave.silent_timeouts = 0;
+}
+
+void ProblemEvidence::on_noise(const Noise& noise) {
+  cited_.reset();
+  const bool after_request = std::exchange(after_request_, false);
+  if (noise.reason == NoiseReason::glitch) {
+    // Right after a request, the slave's driver turning on to answer; else the master's.
+    if (after_request && awaited_slave_) {
+      note(slaves_[*awaited_slave_].glitches, noise.t_ns, noise.index);
+    } else {
+      note(master_glitches_, noise.t_ns, noise.index);
+    }
+    return;
+  }
+  if (noise.damaged_answer)
+    on_damaged_answer(noise.index, noise.t_ns, noise.raw.size(), slaves_[noise.request_slave]);
+}
+
+void ProblemEvidence::on_timeout(const Timeout& timeout) {
+  cited_.reset();
+  after_request_ = false;
+  awaited_.reset();
+  if (!timeout.timed_out() || timeout.slave == 0) return;
+  Slave& slave = slaves_[timeout.slave];
+  note(slave.timeouts, timeout.t_ns, timeout.request);
+  if (slave.silent_timeouts++ == 0) {
+    slave.silent_since_ns = timeout.t_ns - timeout.waited_ns;
+    slave.silent_since_request = timeout.request;
+  }
+}
+
+namespace {
+
+using Slave = ProblemEvidence::Slave;
+
+// A value's median over every slave but one, for each slave: the values sorted once and each
+// slave's own left out by its place, so a bus of 247 slaves costs no more than a sort. Fixed
+// room, no allocation: MQTT's health summary asks for the problems every interval.
+class MedianOfOthers {
+ public:
+  void add(uint8_t slave, double value) { sorted_[size_++] = {value, slave}; }
+  void sort() { std::sort(sorted_.begin(), sorted_.begin() + static_cast<ptrdiff_t>(size_)); }
+  // The upper median of the others' values; none when no other slave has one.
+  std::optional<double> without(uint8_t slave) const {
+    const auto end = sorted_.begin() + static_cast<ptrdiff_t>(size_);
+    const auto own = std::find_if(sorted_.begin(), end,
+                                  [&](const auto& entry) { return entry.second == slave; });
+    const size_t others = size_ - (own != end);
+    if (others == 0) return std::nullopt;
+    const size_t at = others / 2;
+    const auto skipped = static_cast<size_t>(own - sorted_.begin());
+    return sorted_[at < skipped ? at : at + 1].first;
+  }
+
+ private:
+  std::array<std::pair<double, uint8_t>, 256> sorted_;  // one an address at most
+  size_t size_ = 0;
+};
+
+// Reads the statistics and the evidence into problems, one rule a kind.
+class Diagnosis {
+ public:
+  Diagnosis(const BusStatistics& statistics, const ProblemEvidence& evidence,
+            const ProblemOptions& options)
+      : statistics_(statistics), evidence_(evidence), options_(options) {
+    statistics_.for_each_slave([&](uint8_t address, const SlaveStatistics& s) {
+      if (s.latency_ns.count() >= some)
+        latency_medians_.add(address, static_cast<double>(s.latency_ns.percentile(50)));
+    });
+    latency_medians_.sort();
+    for (const auto& [address, s] : evidence_.slaves()) {
+      if (s.requests < some) continue;
+      damaged_rates_.add(address, damaged_rate(s));
+      missed_rates_.add(address, share(s.timeouts.count, s.requests));
+    }
+    damaged_rates_.sort();
+    missed_rates_.sort();
+  }
+
+  std::vector<Problem> run() {
+    for (const auto& [address, slave] : evidence_.slaves()) {
+      if (no_response(address, slave)) continue;  // nothing else to say of a silent address
+      stopped_or_intermittent(address, slave);
+      slow_response(address, slave);
+      late_responses(address, slave);
+      damaged_answers(address, slave);
+      glitches(address, slave);
+    }
+    bus_noise();
+    master_glitches();
+    rejected_requests();
+    std::stable_sort(problems_.begin(), problems_.end(),
+                     [](const Problem& a, const Problem& b) { return a.severity > b.severity; });
+    return std::move(problems_);
+  }
+
+ private:
+  Problem& add(ProblemKind kind, std::optional<uint8_t> slave, Severity severity, int64_t since_ns,
+               std::vector<uint64_t> first) {
+    Problem& p = problems_.emplace_back();
+    p.kind = kind;
+    p.slave = slave;
+    p.severity = severity;
+    p.since_ns = since_ns;
+    p.advice = problem_info(kind).advice;
+    p.first_records = std::move(first);
+    return p;
+  }
+
+  // "Slave 3 (gd20)": the model named where one was set or found, not the generic one.
+  static std::string who(uint8_t address, const Slave& slave) {
+    if (!slave.model || maps_no_register(*slave.model)) return fmt::format("Slave {}", address);
+    return fmt::format("Slave {} ({})", address, slave.model->name);
+  }
+
+  static double percent(uint64_t part, uint64_t whole) { return 100 * share(part, whole); }
+
+  bool no_response(uint8_t address, const Slave& s) {
+    if (s.requests < few || s.answers || s.damaged.count || s.overlapping.count || s.late.count ||
+        s.timeouts.count < few)
+      return false;
+    Problem& p = add(ProblemKind::no_response, address, Severity::error,
+                     s.first_request_ns.value_or(0), s.timeouts.first);
+    p.evidence = {{"requests", s.requests}, {"timeouts", s.timeouts.count}};
+    p.text =
+        fmt::format("{} never answers: {} requests, all timed out", who(address, s), s.requests);
+    return true;
+  }
+
+  // A slave silent from a time to the end stopped; one that misses a share throughout drops.
+  void stopped_or_intermittent(uint8_t address, const Slave& s) {
+    const bool stopped = s.answers >= few && s.silent_timeouts >= some;
+    if (stopped) {
+      Problem& p = add(ProblemKind::stopped_responding, address, Severity::error, s.silent_since_ns,
+                       {s.silent_since_request});
+      p.evidence = {{"answered_before", s.answers}, {"timeouts_since", s.silent_timeouts}};
+      p.text =
+          fmt::format("{} stopped answering at {}: its last {} requests timed out", who(address, s),
+                      moment_text(statistics_, s.silent_since_ns), s.silent_timeouts);
+    }
+    // Time-outs its late answers explain are late-responses; those after it stopped, stopped.
+    const uint64_t explained =
+        std::min(s.timeouts.count, s.late.count + (stopped ? s.silent_timeouts : 0));
+    const uint64_t missed = s.timeouts.count - explained;
+    const uint64_t asked = s.requests - (stopped ? s.silent_timeouts : 0);
+    const double missed_rate = share(missed, asked);
+    if (missed < some || missed_rate < missed_share ||
+        missed_rate < concentrated * others_missed_rate(address))
+      return;
+    Problem& p = add(ProblemKind::intermittent_response, address,
+                     missed_rate >= missed_share_error ? Severity::error : Severity::warning,
+                     *s.timeouts.first_ns, s.timeouts.first);
+    p.evidence = {{"requests", asked}, {"timeouts", missed}, {"share", missed_rate}};
+    p.text = fmt::format("{} fails to answer {:.0f}% of requests ({} of {}) since {}",
+                         who(address, s), 100 * missed_rate, missed, asked,
+                         moment_text(statistics_, *s.timeouts.first_ns));
+  }
+
+  // The median of the other slaves' shares of time-outs: a master whose time-out is too short
+  // for all of them is no one slave's fault.
+  double others_missed_rate(uint8_t address) const {
+    return missed_rates_.without(address).value_or(0);
+  }
+
+  // The median of the other slaves' median latencies: what this bus's slaves take.
+  std::optional<uint64_t> others_latency(uint8_t address) const {
+    const auto others = latency_medians_.without(address);
+    if (!others) return std::nullopt;
+    return static_cast<uint64_t>(*others);
+  }
+
+  const SlaveStatistics* statistics_of(uint8_t address) const {
+    const auto it = statistics_.addresses().find(address);
+    return it == statistics_.addresses().end() ? nullptr : it->second.get();
+  }
+
+  void slow_response(uint8_t address, const Slave& s) {
+    const SlaveStatistics* stats = statistics_of(address);
+    if (!stats || stats->latency_ns.count() < some) return;
+    const auto median = static_cast<int64_t>(stats->latency_ns.percentile(50));
+    const auto p95 = static_cast<int64_t>(stats->latency_ns.percentile(95));
+    const auto others = others_latency(address);
+    const bool slower = others && median >= slow_factor * static_cast<double>(*others) &&
+                        median - static_cast<int64_t>(*others) >= slow_margin_ns;
+    const bool near = p95 >= near_timeout * static_cast<double>(options_.timeout_ns);
+    if (!slower && !near) return;
+    Problem& p = add(ProblemKind::slow_response, address, Severity::warning,
+                     s.first_request_ns.value_or(0), {});
+    p.evidence = {{"latency_p50_ms", median / 1e6}, {"latency_p95_ms", p95 / 1e6}};
+    if (others) p.evidence.emplace_back("others_p50_ms", static_cast<double>(*others) / 1e6);
+    p.text = slower ? fmt::format("{} answers in {:.0f} ms where the others take {:.0f} ms",
+                                  who(address, s), median / 1e6, *others / 1e6)
+                    : fmt::format(
+                          "{} answers in {:.0f} ms (95% within {:.0f} ms), close to the "
+                          "{:.0f} ms time-out",
+                          who(address, s), median / 1e6, p95 / 1e6, options_.timeout_ns / 1e6);
+  }
+
+  void late_responses(uint8_t address, const Slave& s) {
+    if (s.late.count < few) return;
+    Problem& p =
+        add(ProblemKind::late_responses, address, Severity::error, *s.late.first_ns, s.late.first);
+    p.evidence = {{"late_answers", s.late.count}, {"requests", s.requests}};
+    p.text = fmt::format("{} answers after the master has given up: {} answers came too late",
+                         who(address, s), s.late.count);
+  }
+
+  // Each slave's share of damaged answers, for telling one bad device from a bad line.
+  double damaged_rate(const Slave& s) const { return share(s.damaged.count, s.requests); }
+  double others_damaged_rate(uint8_t address) const {
+    return damaged_rates_.without(address).value_or(0);
+  }
+
+  // Two devices answering at once also make frames with bad checks (begun within a bit of each
+  // other): where they collide, those are part of it, not a damaged device of their own.
+  void damaged_answers(uint8_t address, const Slave& s) {
+    const double overlap_rate = share(s.overlapping.count, s.requests);
+    if (s.overlapping.count >= few && overlap_rate >= damaged_share) {
+      Problem& p = add(ProblemKind::collisions, address, Severity::error, *s.overlapping.first_ns,
+                       s.overlapping.first);
+      p.evidence = {{"overlapping_answers", s.overlapping.count}, {"requests", s.requests}};
+      p.text = fmt::format(
+          "Two devices answer as slave {}: {} of {} answers ({:.0f}%) came as two at once", address,
+          s.overlapping.count, s.requests, 100 * overlap_rate);
+      return;
+    }
+    const double rate = damaged_rate(s);
+    if (s.damaged.count < some || rate < damaged_share) return;
+    const double others = others_damaged_rate(address);
+    if (rate < concentrated * others) return;
+    Problem& p = add(ProblemKind::corrupted_responses, address,
+                     rate >= damaged_share_error ? Severity::error : Severity::warning,
+                     *s.damaged.first_ns, s.damaged.first);
+    p.evidence = {
+        {"damaged_answers", s.damaged.count}, {"requests", s.requests}, {"others_share", others}};
+    p.text = fmt::format(
+        "{}'s answers arrive damaged: {:.0f}% ({} of {}) fail their check, the other slaves' "
+        "{:.1f}%",
+        who(address, s), 100 * rate, s.damaged.count, s.requests, 100 * others);
+  }
+
+  void glitches(uint8_t address, const Slave& s) {
+    const uint64_t turnarounds = s.answers + s.damaged.count;
+    if (s.glitches.count < some || share(s.glitches.count, turnarounds) < glitch_share) return;
+    Problem& p = add(ProblemKind::turnaround_glitches, address, Severity::warning,
+                     *s.glitches.first_ns, s.glitches.first);
+    p.evidence = {{"glitches", s.glitches.count}, {"answers", turnarounds}};
+    p.text = fmt::format(
+        "A stray byte on the line each time {} starts to answer: {:.0f}% of its "
+        "answers ({} of {})",
+        who(address, s), percent(s.glitches.count, turnarounds), s.glitches.count, turnarounds);
+  }
+
+  void master_glitches() {
+    const auto& g = evidence_.master_glitches();
+    const uint64_t turnarounds = evidence_.requests_seen();
+    if (g.count < some || share(g.count, turnarounds) < glitch_share) return;
+    Problem& p = add(ProblemKind::turnaround_glitches, std::nullopt, Severity::warning, *g.first_ns,
+                     g.first);
+    p.evidence = {{"glitches", g.count}, {"requests", turnarounds}};
+    p.text = fmt::format(
+        "A stray byte on the line each time the master starts a request: "
+        "{:.0f}% of its requests ({} of {})",
+        percent(g.count, turnarounds), g.count, turnarounds);
+  }
+
+  // Bad checks on requests, or on the answers of several slaves alike: the line, not a device.
+  void bus_noise() {
+    const auto& bad = evidence_.bad_requests();
+    uint64_t damaged = bad.count;
+    size_t slaves_hit = 0;
+    std::optional<int64_t> since = bad.first_ns;
+    for (const auto& [address, s] : evidence_.slaves()) {
+      damaged += s.damaged.count;
+      slaves_hit += s.damaged.count >= few;
+      if (s.damaged.first_ns) since = std::min(since.value_or(INT64_MAX), *s.damaged.first_ns);
+    }
+    const double rate = share(damaged, statistics_.frames);
+    if (damaged < 2 * some || rate < noise_share || (bad.count < few && slaves_hit < 2)) return;
+    Problem& p = add(ProblemKind::bus_noise, std::nullopt,
+                     rate >= noise_share_error ? Severity::error : Severity::warning,
+                     since.value_or(0), bad.first);
+    p.evidence = {{"damaged_frames", damaged},
+                  {"frames", statistics_.frames},
+                  {"damaged_requests", bad.count},
+                  {"slaves_with_damaged_answers", slaves_hit}};
+    p.text = fmt::format(
+        "Bad checks all over the bus: {:.1f}% of frames ({} of {}), on {} "
+        "requests and on the answers of {} slaves",
+        100 * rate, damaged, statistics_.frames, bad.count, slaves_hit);
+  }
+
+  void rejected_requests() {
+    for (const auto& [key, rejections] : evidence_.requests())
+      for (const auto& [code, events] : rejections.by_exception)
+        if (events.count >= some && share(events.count, rejections.requests) >= rejected_share)
+          rejected(key, rejections.requests, code, events);
+  }
+
+  void rejected(const ProblemEvidence::RequestKey& key, uint64_t requests, uint8_t code,
+                const ProblemEvidence::Events& events) {
+    const auto [address, fc, start, quantity] = key;
+    const auto it = evidence_.slaves().find(address);
+    const Slave none;
+    const Slave& slave = it == evidence_.slaves().end() ? none : it->second;
+    Problem& p = add(ProblemKind::rejected_requests, address, Severity::warning, *events.first_ns,
+                     events.first);
+    p.evidence = {{"function", fc},    {"address", start},         {"quantity", quantity},
+                  {"exception", code}, {"answered", events.count}, {"requests", requests}};
+    // The model's meaning of the code, where it gives one, is its name and says why.
+    const std::string_view meaning = slave.model ? exception_meaning(*slave.model, code) : "";
+    const std::string_view name = meaning.empty() ? exception_name(code) : meaning;
+    std::vector<std::string> what;
+    if (const std::string reg = register_name(slave, fc, start); !reg.empty()) what.push_back(reg);
+    if (quantity > 1) what.push_back(fmt::format("{} registers", quantity));
+    const std::string detail = what.empty() ? "" : fmt::format(" ({})", fmt::join(what, ", "));
+    p.text = fmt::format("{} answers {} {} of {:04X}H{} with exception {:02X}H{}{}{}: {} of {}",
+                         who(address, slave), events.count == requests ? "every" : "nearly every",
+                         verb(fc), start, detail, code, name.empty() ? "" : " (", name,
+                         name.empty() ? "" : ")", events.count, requests);
+    const std::string_view why =
+        meaning.empty() ? exception_advice(code)
+                        : "the device gives its own reason (above): its manual says what to change";
+    p.advice = fmt::format("{}; {}", why, problem_info(p.kind).advice);
+  }
+
+  static std::string_view verb(uint8_t fc) {
+    if (fc <= 0x04) return "read";
+    return fc == 0x17 ? "read/write" : "write";
+  }
+
+  // "P04.00": the model's name for the first register asked for, where it has one.
+  static std::string register_name(const Slave& slave, uint8_t fc, uint16_t start) {
+    if (!slave.model) return "";
+    constexpr std::array tables{Table::coil,  Table::discrete, Table::holding,
+                                Table::input, Table::coil,     Table::holding};
+    const Table table = fc <= 0x06 ? tables[fc - 1] : fc == 0x0F ? Table::coil : Table::holding;
+    // The lookup holds a parameter the group rule made: it lives as long as the lookup.
+    const RegisterLookup lookup = find_register(*slave.model, table, start);
+    const RegisterDef* def = lookup.def();
+    return def ? def->name : "";
+  }
+
+  // What an exception code says the master did wrong, in the standard's terms.
+  static std::string_view exception_advice(uint8_t code) {
+    switch (code) {
+      case 0x01:
+        return "the device does not support this function";
+      case 0x02:
+        return "the master asks for registers this device does not have";
+      case 0x03:
+        return "the device refuses the quantity or value asked for";
+      case 0x04:
+        return "the device failed to carry it out: read its fault code";
+      case 0x06:
+        return "the device is busy with a long command: the master asks again too soon";
+      default:
+        return "the device refuses it with its own code: see its manual's exception table";
+    }
+  }
+
+  MedianOfOthers latency_medians_, damaged_rates_, missed_rates_;
+  const BusStatistics& statistics_;
+  const ProblemEvidence& evidence_;
+  const ProblemOptions& options_;
+  std::vector<Problem> problems_;
+};
+
+}  // namespace
+
+std::vector<Problem> find_problems(const BusStatistics& statistics, const ProblemEvidence& evidence,
+                                   const ProblemOptions& options) {
+  return Diagnosis(statistics, evidence, options).run();
+}
+
+}  // namespace modtap

@@ -1,0 +1,123 @@
+// Conclusions a technician can act on: each faulty device named, with what it does wrong, since
+// when, the counts behind it and what to check. The statistics give numbers; this reads them,
+// and the evidence only the stream of records shows (which slave an answer was awaited from,
+// what came in its place, a glitch at whose turnaround), into problems of the kinds below.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "decoder/analysis/bus_statistics.hpp"
+#include "decoder/models/device_model.hpp"
+#include "decoder/protocol/findings.hpp"
+#include "decoder/protocol/record_sink.hpp"
+
+namespace modtap {
+
+enum class ProblemKind : uint8_t {
+  no_response,            // a polled slave never answers
+  stopped_responding,     // answered, then never again from a time on
+  intermittent_response,  // misses a share of requests, answers the rest
+  slow_response,          // far slower than the bus's other slaves, or near the time-out
+  late_responses,         // answers after the master has given up
+  corrupted_responses,    // bad checks concentrated on one slave's answers
+  bus_noise,              // bad checks spread over requests and several slaves
+  rejected_requests,      // the same request answered with the same exception, again and again
+  collisions,             // two devices answering at once as one address
+  turnaround_glitches,    // a stray byte each time a driver takes the bus
+};
+inline constexpr size_t problem_kind_count = 10;
+
+// The one place a kind is named and advised on: JSON, text, the report and metrics spell it so.
+struct ProblemInfo {
+  std::string_view name;
+  std::string_view advice;  // what to check, in a technician's words
+};
+const ProblemInfo& problem_info(ProblemKind kind);
+
+struct Problem {
+  ProblemKind kind = ProblemKind::no_response;
+  std::optional<uint8_t> slave;  // none: the whole bus
+  Severity severity = Severity::warning;
+  int64_t since_ns = 0;
+  std::vector<std::pair<std::string, double>> evidence;  // the counts and times behind it
+  std::string text;                                      // one plain sentence naming the device
+  std::string advice;                                    // what to check
+  std::vector<uint64_t> first_records;                   // where it shows, for the report's links
+};
+
+// What the records show beyond the statistics' counts, per slave. A sink beside the statistics.
+class ProblemEvidence final : public RecordSink {
+ public:
+  static constexpr size_t kept_records = 5;
+  static constexpr size_t kept_requests = 4096;  // distinct requests watched for rejection
+
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override;
+  void on_timeout(const Timeout& timeout) override;
+
+  // Records of one kind of trouble: how many, when the first came, and the first few.
+  struct Events {
+    uint64_t count = 0;
+    std::optional<int64_t> first_ns;
+    std::vector<uint64_t> first;
+    bool add(int64_t t_ns, uint64_t index);  // true: the record is one of the first
+  };
+  struct Slave {
+    const DeviceModel* model = nullptr;  // the one its frames were read with
+    uint64_t requests = 0, answers = 0;
+    std::optional<int64_t> first_request_ns;
+    Events timeouts, damaged, overlapping, late, glitches;
+    // The time-outs since its last answer: a slave that stopped answering.
+    uint64_t silent_timeouts = 0;
+    int64_t silent_since_ns = 0;
+    uint64_t silent_since_request = 0;
+    uint16_t expected_answer_size = 0;  // of the request it was last asked, 0 if unknown
+  };
+  // A request as the master repeats it: slave, function, start address and quantity.
+  using RequestKey = std::tuple<uint8_t, uint8_t, uint16_t, uint16_t>;
+  struct Rejections {
+    uint64_t requests = 0;
+    std::map<uint8_t, Events> by_exception;
+  };
+
+  const std::map<uint8_t, Slave>& slaves() const { return slaves_; }
+  const std::map<RequestKey, Rejections>& requests() const { return requests_; }
+  const Events& bad_requests() const { return bad_requests_; }  // bad checks no answer explains
+  const Events& master_glitches() const { return master_glitches_; }
+  uint64_t requests_seen() const { return requests_seen_; }
+  // The record just given is one of the first of some trouble, which a problem may cite under
+  // this index (a time-out's under its request's): a report keeps its line.
+  std::optional<uint64_t> cited() const { return cited_; }
+
+ private:
+  void on_request(const Frame& frame);
+  void on_answer(const Frame& frame, Slave& slave);
+  void on_damaged_answer(uint64_t index, int64_t t_ns, size_t size, Slave& slave);
+  void note(Events& events, int64_t t_ns, uint64_t index);
+
+  std::map<uint8_t, Slave> slaves_;
+  std::map<RequestKey, Rejections> requests_;
+  Events bad_requests_, master_glitches_;
+  uint64_t requests_seen_ = 0;
+  std::optional<RequestKey> awaited_;  // the request whose answer is awaited, if watched
+  std::optional<uint8_t> awaited_slave_;
+  bool after_request_ = false;  // the last record was a request: a glitch now is the slave's
+  std::optional<uint64_t> cited_;
+};
+
+struct ProblemOptions {
+  int64_t timeout_ns = 1'000'000'000;  // the time-out the analyzer waits for an answer
+};
+
+// The problems the statistics and the evidence show, errors first, then by slave.
+std::vector<Problem> find_problems(const BusStatistics& statistics, const ProblemEvidence& evidence,
+                                   const ProblemOptions& options = {});
+
+}  // namespace modtap

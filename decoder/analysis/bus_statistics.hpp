@@ -1,0 +1,150 @@
+// What a capture adds up to, for a technician: per slave, how often it was asked, answered,
+// late, silent, refusing; per function code the same; latency and poll-interval percentiles in
+// fixed memory; every finding counted with where it first showed. The one place these
+// counters are kept: -T stats, --stats and the metrics all read them from here.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "decoder/analysis/histogram.hpp"
+#include "decoder/models/register_meaning.hpp"
+#include "decoder/protocol/findings.hpp"
+#include "decoder/protocol/function_codes.hpp"
+#include "decoder/protocol/record_sink.hpp"
+#include "decoder/protocol/serial_format.hpp"
+
+namespace modtap {
+
+// Counted per slave and per function code.
+struct ExchangeCounts {
+  uint64_t requests = 0;
+  uint64_t responses = 0;
+  uint64_t timeouts = 0;
+  uint64_t exceptions = 0;
+  uint64_t bad_checks = 0;
+  uint64_t retries = 0;
+  uint64_t garbled = 0;  // answers that came as noise, past reading (Noise::damaged_answer)
+
+  double timeout_rate() const {
+    return requests ? static_cast<double>(timeouts) / static_cast<double>(requests) : 0.0;
+  }
+};
+
+struct SlaveStatistics {
+  ExchangeCounts counts;
+  std::map<uint8_t, uint64_t> exceptions_by_code;
+  std::map<uint8_t, ExchangeCounts> by_function;  // function code without the exception bit
+  Histogram latency_ns;                           // end of request to start of response
+  Histogram poll_interval_ns;                     // start of one request to the next's
+  int64_t last_frame_ns = 0;
+  std::optional<int64_t> last_answer_ns;  // the end of its last good answer: when it last spoke
+  bool good = false;  // a frame with a good check came from or went to this address
+};
+
+// The last value the bus carried for one register: the bus's state, as a data logger shows it.
+// Texts are copied: a frame's own composed texts do not outlive it.
+struct LastValue {
+  std::string name, unit, text;
+  double value = 0;
+  int decimals = 0;
+  uint32_t raw = 0;
+  int64_t t_ns = 0;
+
+  void keep(const RegisterValue& reg, int64_t when);
+  // As the register it was, its texts pointing here.
+  RegisterValue as_register(Table table, uint16_t address) const;
+};
+struct RegisterKey {
+  uint8_t slave;
+  Table table;
+  uint16_t address;
+  auto operator<=>(const RegisterKey&) const = default;
+};
+
+// A finding's count and the indexes of the first records that show it.
+struct FindingCount {
+  static constexpr size_t kept = 5;
+  uint64_t count = 0;
+  std::array<uint64_t, kept> first{};
+};
+
+class BusStatistics final : public RecordSink {
+ public:
+  // `data_bits_from_mode`: nobody gave the line's data bits, so the first frame's mode says
+  // them (ASCII 7, RTU 8), for the bus load and for what the statistics say of the line.
+  BusStatistics(SerialFormat format, ClockQuality clock, bool data_bits_from_mode = false)
+      : format_(format), clock_(clock), data_bits_from_mode_(data_bits_from_mode) {}
+
+  void on_frame(const Frame& frame) override;
+  void on_noise(const Noise& noise) override;
+  void on_timeout(const Timeout& timeout) override;
+
+  // Bus-wide counts. A broadcast is a request; unknown-role frames are neither.
+  uint64_t frames = 0, requests = 0, responses = 0, unknown_roles = 0;
+  uint64_t bad_checks = 0, exceptions = 0, broadcasts = 0, retries = 0, unsolicited = 0;
+  uint64_t timeouts = 0;
+  uint64_t unanswered = 0;  // still waiting when the capture ended: no time-out
+  uint64_t frame_bytes = 0, noise_bytes = 0, noise_records = 0;
+  std::array<uint64_t, 5> noise_by_reason{};  // NoiseReason order
+  std::array<uint64_t, 4> damaged{};          // Damage order; [0] unused
+  std::optional<int64_t> first_t_ns, last_t_ns;
+  Histogram latency_ns;
+  std::array<FindingCount, frame_finding_count + rule_kind_count> findings;
+  // The last value of each register read or written, up to kept_registers of them; values of
+  // registers beyond those are counted, not kept (random traffic touches every address).
+  static constexpr size_t kept_registers = 20000;
+  std::map<RegisterKey, LastValue> registers;
+  uint64_t register_values_not_kept = 0;
+
+  // Every address a frame named, slave 0 (broadcast) aside. Only those `good` are slaves: a
+  // corrupted address byte does not make one. Bad checks on the others are counted apart.
+  const std::map<uint8_t, std::unique_ptr<SlaveStatistics>>& addresses() const {
+    return addresses_;
+  }
+  // Calls visit(address, statistics) for each slave (an address `good`), in address order.
+  template <typename Visit>
+  void for_each_slave(Visit&& visit) const {
+    for (const auto& [address, slave] : addresses_)
+      if (slave->good) visit(address, *slave);
+  }
+  uint64_t stray_bad_checks() const;
+  size_t stray_addresses() const;
+
+  double duration_s() const;
+  // Whether the times are dates (since the Unix epoch), as a pcap's are, rather than counted from
+  // the capture's start, as a raw file's nominal times and a logic analyzer's are.
+  bool dated() const {
+    constexpr int64_t year_2000_ns = 946'684'800'000'000'000;
+    return first_t_ns && *first_t_ns >= year_2000_ns;
+  }
+  // The share of the capture's time the wire carried characters, from the character format.
+  // Unknown (nullopt) when the source has no clock: its times are nominal.
+  std::optional<double> bus_load() const;
+  const SerialFormat& format() const { return format_; }
+  ClockQuality clock() const { return clock_; }
+
+ private:
+  SlaveStatistics& slave(uint8_t address);
+  void see_time(int64_t start_ns, int64_t end_ns);
+  void count_finding(size_t slot, uint64_t index);
+  void count_exchange(const Frame& frame, SlaveStatistics& slave);
+  void keep_values(const Frame& frame);
+
+  SerialFormat format_;
+  ClockQuality clock_;
+  bool data_bits_from_mode_;
+  std::map<uint8_t, std::unique_ptr<SlaveStatistics>> addresses_;
+  std::array<std::optional<int64_t>, 256> last_request_ns_{};
+};
+
+// When `t_ns` was, as a person reads it of this capture: the time of day (UTC) in a dated
+// capture of one day, with the date in one of more, else seconds into the capture. The
+// problems' sentences and the report say times so.
+std::string moment_text(const BusStatistics& statistics, int64_t t_ns);
+
+}  // namespace modtap

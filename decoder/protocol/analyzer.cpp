@@ -1,0 +1,220 @@
+#include "decoder/protocol/analyzer.hpp"
+
+#include <algorithm>
+
+namespace modtap {
+
+// Automatic mode: both framers read the first bytes of every channel; the mode that finds
+// good frames wins, and the buffered chunks are replayed through it in their order.
+class Analyzer::ModeProbe {
+ public:
+  ModeProbe(const AnalyzerOptions& options) : options_(options) {}
+
+  // True once the evidence is in.
+  bool push(const Chunk& chunk, ChannelRole role) {
+    last_ns_ = std::max(last_ns_, chunk.t_ns);
+    auto& kept = chunks_.emplace_back(Kept{chunk.channel,
+                                           chunk.t_ns,
+                                           {chunk.bytes.begin(), chunk.bytes.end()},
+                                           chunk.continues_read,
+                                           chunk.read_goes_on});
+    buffered_ += kept.bytes.size();
+    Trial& trial = trial_for(chunk.channel, role);
+    const Chunk copy{chunk.channel, kept.t_ns, kept.bytes, kept.continues_read, kept.read_goes_on};
+    trial.rtu.push(copy);
+    trial.ascii.push(copy);
+    return rtu_count_.good >= enough || ascii_count_.good >= enough || buffered_ >= max_buffered;
+  }
+  Mode verdict() const { return ascii_count_.good > rtu_count_.good ? Mode::ascii : Mode::rtu; }
+
+  // A live port's idle moment: once the line has been quiet a while (no ASCII frame pauses
+  // that long between characters in practice) and the RTU trial holds nothing, a good frame in
+  // one mode and none in the other is evidence enough (a quiet bus may not send three soon).
+  bool flush(int64_t now_ns) {
+    bool holding = false;
+    for (auto& trial : trials_) {
+      if (!trial) continue;
+      trial->rtu.flush(now_ns);
+      trial->ascii.flush(now_ns);
+      holding |= trial->rtu.held_since_ns() != INT64_MAX;
+    }
+    return !chunks_.empty() && !holding && now_ns - last_ns_ >= quiet_ns &&
+           (rtu_count_.good > 0) != (ascii_count_.good > 0);
+  }
+
+  template <typename Fn>
+  void replay(Fn&& push) const {
+    for (const auto& kept : chunks_)
+      push(Chunk{kept.channel, kept.t_ns, kept.bytes, kept.continues_read, kept.read_goes_on});
+  }
+
+ private:
+  static constexpr int enough = 3;
+  static constexpr int64_t quiet_ns = 100'000'000;  // longer than any t3.5 or master's pause
+  static constexpr size_t max_buffered = 4096;
+
+  struct Counter final : FrameSink {
+    int good = 0;
+    void on_frame(Frame& frame) override { good += frame.check_ok; }
+    void on_noise(Noise&) override {}
+  };
+  struct Trial {
+    RtuFramer rtu;
+    AsciiFramer ascii;
+  };
+  struct Kept {
+    uint16_t channel;
+    int64_t t_ns;
+    std::vector<uint8_t> bytes;
+    bool continues_read;
+    bool read_goes_on;
+  };
+
+  Trial& trial_for(uint16_t channel, ChannelRole role) {
+    while (trials_.size() <= channel) trials_.emplace_back();
+    auto& trial = trials_[channel];
+    if (!trial) {
+      RtuFramerOptions rtu{options_.format, options_.clock, role, options_.chunk_jitter_ns};
+      AsciiFramerOptions ascii{options_.format, options_.clock, role,
+                               options_.ascii_char_timeout_ns};
+      trial.reset(new Trial{{channel, rtu, rtu_count_}, {channel, ascii, ascii_count_}});
+    }
+    return *trial;
+  }
+
+  AnalyzerOptions options_;
+  Counter rtu_count_, ascii_count_;
+  std::vector<std::unique_ptr<Trial>> trials_;
+  std::vector<Kept> chunks_;
+  size_t buffered_ = 0;
+  int64_t last_ns_ = INT64_MIN;  // when the last chunk came
+};
+
+namespace {
+
+MatcherOptions matcher_options(const AnalyzerOptions& o) {
+  MatcherOptions m;
+  m.timeout_ns = o.timeout_ns;
+  for (const auto& [slave, timeout] : o.slave_timeout_ns) m.slave_timeout_ns[slave] = timeout;
+  m.t35_ns = o.format.t35_ns();
+  m.timed = o.clock != ClockQuality::none;
+  m.exact_clock = o.clock == ClockQuality::per_byte;
+  m.clock_lag_ns = o.clock == ClockQuality::per_chunk ? o.chunk_jitter_ns : 0;
+  m.observer = o.framing_observer;
+  return m;
+}
+
+}  // namespace
+
+Analyzer::Analyzer(const AnalyzerOptions& options, std::vector<ChannelInfo> channels,
+                   RecordSink& out)
+    : options_(options),
+      out_(out),
+      matcher_(matcher_options(options), [this](const Timeout& t) { on_timeout(t); }) {
+  for (auto& info : channels) channels_.push_back({std::move(info), std::monostate{}});
+  if (options.mode == ModeChoice::automatic) {
+    probe_ = std::make_unique<ModeProbe>(options);
+  } else {
+    mode_ = options.mode == ModeChoice::ascii ? Mode::ascii : Mode::rtu;
+  }
+}
+
+Analyzer::~Analyzer() = default;
+
+Analyzer::Channel& Analyzer::channel(uint16_t id) {
+  while (channels_.size() <= id) channels_.push_back({ChannelInfo{}, std::monostate{}});
+  Channel& c = channels_[id];
+  if (std::holds_alternative<std::monostate>(c.framer) && mode_) start_framer(id, *mode_);
+  return c;
+}
+
+void Analyzer::start_framer(uint16_t id, Mode mode) {
+  Channel& c = channels_[id];
+  if (mode == Mode::rtu) {
+    RtuFramerOptions o{options_.format, options_.clock, c.info.role, options_.chunk_jitter_ns,
+                       options_.framing_observer};
+    c.framer = std::make_unique<RtuFramer>(id, o, static_cast<FrameSink&>(*this));
+  } else {
+    AsciiFramerOptions o{options_.format, options_.clock, c.info.role,
+                         options_.ascii_char_timeout_ns};
+    c.framer = std::make_unique<AsciiFramer>(id, o, static_cast<FrameSink&>(*this));
+  }
+}
+
+void Analyzer::push(const Chunk& chunk) {
+  if (options_.clock != ClockQuality::none) {
+    clock_steps_back_ += chunk.t_ns < last_ns_;
+    last_ns_ = std::max(last_ns_, chunk.t_ns);
+  }
+  feed(chunk);
+}
+
+// Pushed chunks, and those the mode probe kept and replays once the mode is known.
+void Analyzer::feed(const Chunk& chunk) {
+  Channel& c = channel(chunk.channel);
+  if (options_.clock != ClockQuality::none) matcher_.advance(settled_ns(chunk.t_ns));
+  if (probe_) {
+    if (probe_->push(chunk, c.info.role)) settle_mode();
+    return;
+  }
+  if (auto* rtu = std::get_if<std::unique_ptr<RtuFramer>>(&c.framer)) {
+    (*rtu)->push(chunk);
+  } else if (auto* ascii = std::get_if<std::unique_ptr<AsciiFramer>>(&c.framer)) {
+    (*ascii)->push(chunk);
+  }
+}
+
+void Analyzer::flush(int64_t now_ns) {
+  if (probe_ && probe_->flush(now_ns)) settle_mode();
+  for (auto& c : channels_) {
+    if (auto* rtu = std::get_if<std::unique_ptr<RtuFramer>>(&c.framer)) (*rtu)->flush(now_ns);
+    if (auto* ascii = std::get_if<std::unique_ptr<AsciiFramer>>(&c.framer)) (*ascii)->flush(now_ns);
+  }
+  if (options_.clock != ClockQuality::none) matcher_.advance(settled_ns(now_ns));
+}
+
+int64_t Analyzer::settled_ns(int64_t now_ns) const {
+  int64_t settled = now_ns;
+  for (const auto& c : channels_) {
+    if (auto* rtu = std::get_if<std::unique_ptr<RtuFramer>>(&c.framer))
+      settled = std::min(settled, (*rtu)->held_since_ns());
+    if (auto* ascii = std::get_if<std::unique_ptr<AsciiFramer>>(&c.framer))
+      settled = std::min(settled, (*ascii)->held_since_ns());
+  }
+  return settled;
+}
+
+void Analyzer::settle_mode() {
+  const auto probe = std::move(probe_);
+  mode_ = probe->verdict();
+  for (uint16_t id = 0; id < channels_.size(); ++id) start_framer(id, *mode_);
+  probe->replay([this](const Chunk& kept) { feed(kept); });
+}
+
+void Analyzer::finish() {
+  if (probe_) settle_mode();
+  for (auto& c : channels_) {
+    if (auto* rtu = std::get_if<std::unique_ptr<RtuFramer>>(&c.framer)) (*rtu)->finish();
+    if (auto* ascii = std::get_if<std::unique_ptr<AsciiFramer>>(&c.framer)) (*ascii)->finish();
+  }
+  matcher_.finish(last_ns_);
+}
+
+void Analyzer::on_frame(Frame& frame) {
+  frame.index = next_index_++;
+  if (options_.clock == ClockQuality::none) last_ns_ = std::max(last_ns_, frame.end_ns);
+  matcher_.on_frame(frame, channels_[frame.channel].info.role);
+  out_.on_frame(frame);
+}
+
+void Analyzer::on_noise(Noise& noise) {
+  noise.index = next_index_++;
+  matcher_.on_noise(noise, channels_[noise.channel].info.role);
+  out_.on_noise(noise);
+}
+
+void Analyzer::on_timeout(const Timeout& timeout) {
+  out_.on_timeout(timeout);
+}
+
+}  // namespace modtap

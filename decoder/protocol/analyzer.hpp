@@ -1,0 +1,92 @@
+// The pipeline for one bus: a framer per channel feeding one matcher, records out in order.
+// It owns no I/O: sources push chunks in, a RecordSink takes records out.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "decoder/protocol/ascii_framer.hpp"
+#include "decoder/protocol/frame_sink.hpp"
+#include "decoder/protocol/framing_evidence.hpp"
+#include "decoder/protocol/matcher.hpp"
+#include "decoder/protocol/record_sink.hpp"
+#include "decoder/protocol/records.hpp"
+#include "decoder/protocol/rtu_framer.hpp"
+#include "decoder/protocol/serial_format.hpp"
+
+namespace modtap {
+
+enum class ModeChoice : uint8_t { automatic, rtu, ascii };
+template <>
+struct EnumNames<ModeChoice> {
+  static constexpr std::array<std::string_view, 3> names{"auto", "rtu", "ascii"};
+};
+
+struct AnalyzerOptions {
+  ModeChoice mode = ModeChoice::automatic;
+  SerialFormat format;
+  ClockQuality clock = ClockQuality::per_chunk;
+  int64_t timeout_ns = 1'000'000'000;
+  std::map<uint8_t, int64_t> slave_timeout_ns;  // slaves whose model sets their own time-out
+  int64_t ascii_char_timeout_ns = 1'000'000'000;
+  int64_t chunk_jitter_ns = default_read_jitter_ns;
+  // Told the readings the RTU framer weighs at each start (--explain); not the mode trials'.
+  FramingObserver* framing_observer = nullptr;
+};
+
+class Analyzer final : private FrameSink {
+ public:
+  Analyzer(const AnalyzerOptions& options, std::vector<ChannelInfo> channels, RecordSink& out);
+  ~Analyzer() override;
+
+  void push(const Chunk& chunk);
+  void flush(int64_t now_ns);  // live sources: call on idle so silences resolve frames
+  void finish();
+
+  // The mode the bus settled on (automatic mode decides from the first frames).
+  std::optional<Mode> mode() const { return mode_; }
+  // How often a chunk's time stamp was earlier than one before it (a capture whose clock
+  // stepped back); latencies across such a step are not measured.
+  uint64_t clock_steps_back() const { return clock_steps_back_; }
+  const Matcher& matcher() const { return matcher_; }
+  // No byte pushed so far waits in a framer or in the mode's probe: what comes next begins
+  // a new record, so a file of raw reads may turn here without cutting a frame in two.
+  bool between_frames() const { return !probe_ && settled_ns(INT64_MAX) == INT64_MAX; }
+
+ private:
+  class ModeProbe;
+  using Framer =
+      std::variant<std::monostate, std::unique_ptr<RtuFramer>, std::unique_ptr<AsciiFramer>>;
+  struct Channel {
+    ChannelInfo info;
+    Framer framer;
+  };
+
+  Channel& channel(uint16_t id);
+  void feed(const Chunk& chunk);
+  // The matcher's clock: never past a byte a framer still holds, so a response that framer
+  // has yet to emit is not preceded by its request's time-out.
+  int64_t settled_ns(int64_t now_ns) const;
+  void start_framer(uint16_t id, Mode mode);
+  void settle_mode();
+  void on_frame(Frame& frame) override;
+  void on_noise(Noise& noise) override;
+  const Expectation& expectation() const override { return matcher_.expectation(); }
+  void on_timeout(const Timeout& timeout);
+
+  AnalyzerOptions options_;
+  std::vector<Channel> channels_;
+  RecordSink& out_;
+  Matcher matcher_;
+  std::unique_ptr<ModeProbe> probe_;  // until automatic mode has decided
+  std::optional<Mode> mode_;
+  uint64_t next_index_ = 1;
+  int64_t last_ns_ = 0;
+  uint64_t clock_steps_back_ = 0;
+};
+
+}  // namespace modtap

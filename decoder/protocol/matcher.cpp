@@ -1,0 +1,330 @@
+#include "decoder/protocol/matcher.hpp"
+
+#include <algorithm>
+#include <utility>
+
+#include "decoder/protocol/framing_evidence.hpp"
+#include "decoder/protocol/function_codes.hpp"
+
+namespace modtap {
+Matcher::Matcher(const MatcherOptions& options, TimeoutHandler on_timeout)
+    : options_(options), on_timeout_(std::move(on_timeout)) {}
+
+void Matcher::set_pending(Pending* pending) {
+  pending_ = pending;
+  if (!pending) {
+    expectation_ = {};
+    return;
+  }
+  const bool echoed = response_prefix({pending->pdu.data(), pending->size}).echoes_request;
+  expectation_ = {true,
+                  pending->slave,
+                  pending->pdu[0],
+                  static_cast<uint16_t>(echoed ? pending->adu_size : 0),
+                  echoed && pending->ambiguous_end,
+                  {pending->pdu.data(), pending->size},
+                  options_.timed ? pending->end_ns + retry_from_ns(pending->slave) : 0};
+}
+
+void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
+  advance(frame.t_ns);
+  const bool garbage = !frame.check_ok && awaits_answer(channel_role) && !pending_matches(frame);
+  if (garbage) frame.findings |= finding_garbage_after_request;
+  if (garbage && in_answer_time(frame.t_ns, channel_role)) return garbled_answer(frame);
+  const CopyJudgement judgement = judge_copy(frame);
+  const Copy copy = judgement.copy;
+  frame.role = decide_role(frame, channel_role, judgement);
+  // Right after an echo that may have been a retry, a frame that may answer the same request
+  // is as ambiguous as a request, and an answer only a retry leaves room for answers that.
+  const auto echo = std::exchange(ambiguous_echo_, std::nullopt);
+  const bool after_echo = echo && may_answer(frame, *echo->request);
+  if (frame.role == Role::request) {
+    if (after_echo) frame.findings |= finding_ambiguous_echo;
+    on_request(frame);
+  } else if (frame.role == Role::response && after_echo && !pending_matches(frame)) {
+    answers_retry(frame, *echo);
+  } else if (frame.role == Role::response) {
+    on_response(frame, copy);
+  }
+}
+
+// A glitch is a driver turning on, so it says nothing of the answer. Other noise in the answer's
+// time is the answer, garbled past reading (a slave at another baud rate, a bad line).
+void Matcher::on_noise(Noise& noise, ChannelRole channel_role) {
+  advance(noise.t_ns);
+  if (!awaits_answer(channel_role) || noise.reason == NoiseReason::glitch) return;
+  noise.findings |= finding_garbage_after_request;
+  noise.request = pending_->index;
+  noise.request_slave = pending_->slave;
+  noise.damaged_answer = in_answer_time(noise.t_ns, channel_role);
+  pending_->garbled_answer |= noise.damaged_answer;
+}
+
+// A frame with a bad check in the answer's time is the answer, whatever its damaged address or
+// function code says. The wait goes on: junk may come before the answer itself (a vendor code
+// of no length rule, a device starting at the wrong moment). If nothing readable follows, the
+// slave did answer, garbled: no time-out.
+void Matcher::garbled_answer(Frame& frame) {
+  frame.role = Role::response;
+  frame.request = pending_->index;
+  frame.request_slave = pending_->slave;
+  pending_->garbled_answer = true;
+}
+
+// Whether something starting at `t_ns` on this channel comes where the pending request's answer
+// belongs: before the master would send again. Without a clock nothing tells junk that came
+// after the master gave up from a garbled answer.
+bool Matcher::in_answer_time(int64_t t_ns, ChannelRole channel_role) const {
+  return awaits_answer(channel_role) && options_.timed &&
+         t_ns - pending_->end_ns < retry_from_ns(pending_->slave);
+}
+
+// Whether what comes on this channel now is where the pending request's answer belongs: on a
+// split tap, the master's own channel carries none.
+bool Matcher::awaits_answer(ChannelRole channel_role) const {
+  return pending_ && channel_role != ChannelRole::master;
+}
+
+Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role,
+                          const CopyJudgement& judgement) const {
+  if (channel_role == ChannelRole::master) return Role::request;
+  if (channel_role == ChannelRole::slave) return Role::response;
+  // The exception bit says response, even on a damaged frame or an unexpected slave.
+  if (frame.is_exception()) return Role::response;
+  if (frame.fit.request && !frame.fit.response) return Role::request;
+  if (frame.fit.response && !frame.fit.request) return Role::response;
+  // Both or neither: an echo, or a frame too damaged to tell. What the bus waits for decides,
+  // unless the frame is the pending request again, or another request of its kind that does
+  // not fit as the answer (a write of other values), sent past the time for its answer: the
+  // master's, after its time-out. A late answer that fits (a FC08 counter, a read of 3 bytes
+  // of coils, as long as their requests) stays the answer.
+  if (pending_matches(frame)) {
+    const Copy copy = judgement.copy;
+    // --explain: what told echo and retry apart, where both could be.
+    if (judgement.margin.runner_up != RunnerUp::none && options_.observer)
+      options_.observer->on_copy(frame.channel, frame.offset, judgement.margin);
+    const bool another_request = copy == Copy::none && frame.check_ok && frame.fit.request &&
+                                 !fits_pending(frame) && past_answer_time(frame);
+    return copy == Copy::retry || another_request ? Role::request : Role::response;
+  }
+  return frame.fit.request ? Role::request : Role::unknown;
+}
+
+bool Matcher::fits(const Frame& frame, const Pending& request) {
+  return check_response_fit({request.pdu.data(), request.size}, frame.pdu()) == finding_none;
+}
+
+// Past the pending request's time for a retry, once a turnaround is known (the slave's, else
+// the bus's).
+bool Matcher::long_after_answer_due(const Frame& frame) const {
+  const uint8_t slave = pending_->slave;
+  return options_.timed && turnaround_learned(slave) &&
+         frame.t_ns - pending_->end_ns >= retry_from_ns(slave);
+}
+
+// Past the time the pending request's answer comes in, and what the clock may add to a frame's
+// time; with nothing learned, past the shortest time-out masters use. An answer that late and
+// unfit would be two rare things, where a master's next request after a time-out is common.
+bool Matcher::past_answer_time(const Frame& frame) const {
+  return options_.timed && frame.t_ns - pending_->end_ns >=
+                               answered_within_ns(pending_->slave) + options_.clock_lag_ns;
+}
+
+// A copy of the request, or a frame that fits as its answer (a FC08 counter, an exception).
+bool Matcher::may_answer(const Frame& frame, const Pending& request) {
+  return frame.check_ok && frame.slave() == request.slave &&
+         (frame.function() & 0x7F) == request.pdu[0] &&
+         (frame.is_exception() || copies(frame, request) || fits(frame, request));
+}
+
+bool Matcher::copies(const Frame& frame, const Pending& request) {
+  const auto pdu = frame.pdu();
+  return frame.slave() == request.slave && std::equal(pdu.begin(), pdu.end(), request.pdu.begin(),
+                                                      request.pdu.begin() + request.size);
+}
+
+// A master that gets no answer sends the same request again after its own time-out (50 ms to
+// 1 s in practice); for the echo codes that copy is byte for byte what the response would be.
+// The slave's turnaround, learned from answers no retry could fake, tells them apart: a copy
+// much later than the slave ever answered is a retry. Each reading is the other's runner-up
+// (framing_evidence.hpp, Margin): the echo wins where its time tells against a retry, the retry
+// where its time tells against an echo; where neither does (no clock, nothing learned, a copy
+// only as late as the clock may stamp the answer late) it is taken for the echo, the retry
+// standing beside it.
+Matcher::CopyJudgement Matcher::judge_copy(const Frame& frame) const {
+  if (!pending_ || !copies_pending(frame)) return {};
+  // Where no answer is its request again (FC20's carries records), the copy is a retry.
+  const auto pdu = std::span<const uint8_t>(pending_->pdu.data(), pending_->size);
+  if (check_response_fit(pdu, pdu) != finding_none) return {Copy::retry, {}};
+  const int64_t waited = frame.t_ns - pending_->end_ns;
+  const bool timed = options_.timed;
+  Margin against_retry{RunnerUp::retry};
+  if (against_retry.tell(Feature::too_soon_for_retry,
+                         timed && waited < answered_within_ns(pending_->slave)))
+    return {Copy::response, against_retry};
+  Margin against_echo{RunnerUp::echo};
+  if (against_echo.tell(Feature::late_as_a_retry,
+                        timed && (long_after_answer_due(frame) || as_late_as_a_retry(waited))))
+    return {Copy::retry, against_echo};
+  return {Copy::ambiguous, against_retry};
+}
+
+// How soon the master sends a request again, from retries no echo could fake: a copy of a
+// request whose answer is no copy of it (a read), or one sent after the wait ran out in silence.
+void Matcher::learn_retry_interval(const Frame& retry, const Pending& first) {
+  const auto pdu = std::span<const uint8_t>(first.pdu.data(), first.size);
+  const bool echo_could_fake = check_response_fit(pdu, pdu) == finding_none;
+  if (!options_.timed || (echo_could_fake && !first.timed_out_in_silence)) return;
+  const int64_t interval = retry.t_ns - first.end_ns;
+  if (interval > 0 && (!retry_interval_ns_ || interval < retry_interval_ns_))
+    retry_interval_ns_ = interval;
+}
+
+// Whether a copy this long after its request is as late as the master's retries come, allowing
+// for how late the clock may stamp it.
+bool Matcher::as_late_as_a_retry(int64_t waited_ns) const {
+  return retry_interval_ns_ && waited_ns + options_.clock_lag_ns >= retry_interval_ns_;
+}
+
+// Twice the longest turnaround seen (the slave's, else the bus's) and 20 ms; with nothing
+// learned, 50 ms, the shortest time-out masters use.
+int64_t Matcher::answered_within_ns(uint8_t slave) const {
+  constexpr int64_t earliest_retry_ns = 50'000'000;
+  constexpr int64_t slack_ns = 20'000'000;
+  const int64_t learned = turnaround_learned(slave);
+  return learned ? 2 * learned + slack_ns : earliest_retry_ns;
+}
+
+// Past the answer's time and what the clock may add to one frame's time (a turnaround learned
+// on a read stamped on time says nothing of how late the next read is stamped); with nothing
+// learned, 50 ms on, where a copy may be either.
+int64_t Matcher::retry_from_ns(uint8_t slave) const {
+  const int64_t within = answered_within_ns(slave);
+  return turnaround_learned(slave) ? within + options_.clock_lag_ns : within;
+}
+
+bool Matcher::pending_matches(const Frame& frame) const {
+  return pending_ && pending_->slave == frame.slave() &&
+         pending_->pdu[0] == (frame.function() & 0x7F);
+}
+
+void Matcher::on_request(Frame& frame) {
+  if (pending_) expire(frame.t_ns, TimeoutReason::next_request);
+  // A slave ignores a request whose check fails, so it opens no transaction.
+  if (!frame.check_ok) return;
+  frame.findings |= request_spec_findings(frame.pdu());
+  if (frame.slave() == 0) {
+    frame.findings |= finding_broadcast;
+    if (!may_broadcast(frame.function())) frame.findings |= finding_illegal_broadcast;
+    return;
+  }
+  const auto pdu = frame.pdu();
+  if (unanswered_ && unanswered_->slave == frame.slave() &&
+      std::equal(pdu.begin(), pdu.end(), unanswered_->pdu.begin(),
+                 unanswered_->pdu.begin() + unanswered_->size)) {
+    frame.findings |= finding_retry;
+    frame.retries = static_cast<uint8_t>(std::min(unanswered_->retries + 1, 255));
+    learn_retry_interval(frame, *unanswered_);
+  }
+  unanswered_ = nullptr;
+  Pending& p = slots_[next_slot_];
+  next_slot_ ^= 1;
+  p.index = frame.index;
+  p.channel = frame.channel;
+  p.end_ns = frame.end_ns;
+  p.slave = frame.slave();
+  p.timeout_ns =
+      options_.slave_timeout_ns[p.slave] ? options_.slave_timeout_ns[p.slave] : options_.timeout_ns;
+  p.adu_size = static_cast<uint16_t>(frame.adu.size());
+  p.retries = frame.retries;
+  p.end_read = frame.end_read;
+  p.ambiguous_end = frame.findings & finding_ambiguous_end;
+  p.garbled_answer = false;
+  p.timed_out_in_silence = false;
+  p.size = static_cast<uint16_t>(std::min(pdu.size(), p.pdu.size()));
+  std::copy_n(pdu.begin(), p.size, p.pdu.begin());
+  set_pending(&p);
+}
+
+void Matcher::on_response(Frame& frame, Copy copy) {
+  if (!pending_matches(frame)) {
+    frame.findings |= finding_unsolicited;
+    return;
+  }
+  frame.request = pending_->index;
+  frame.request_slave = pending_->slave;
+  frame.request_pdu = {pending_->pdu.data(), pending_->size};
+  if (copy == Copy::ambiguous) {
+    frame.findings |= finding_ambiguous_echo;
+    ambiguous_echo_ = AmbiguousEcho{pending_, frame.index, frame.end_ns, frame.end_read};
+  }
+  // An answer in its request's read has no latency to show, but its placed one still bounds
+  // the slave's turnaround for telling a retry from an echo. Only an answer no request could
+  // be teaches it: not a copy (a retry's), nor a frame that reads as a request too and came
+  // as late as the master's next one may (a FC08 counter 211 ms on would double every
+  // slave's time for a retry).
+  const int64_t waited = frame.t_ns - pending_->end_ns;
+  const bool may_be_request = frame.fit.request && past_answer_time(frame);
+  if (options_.timed && waited >= 0 && copy == Copy::none && frame.check_ok && !may_be_request)
+    learn_turnaround(pending_->slave, waited);
+  if (count_turnaround(frame, pending_->end_ns, pending_->end_read)) {
+    frame.latency_ns = frame.t_ns - pending_->end_ns;
+    if (options_.exact_clock && *frame.latency_ns < options_.t35_ns)
+      frame.findings |= finding_fast_turnaround;
+  }
+  if (frame.check_ok)
+    frame.findings |= check_response_fit({pending_->pdu.data(), pending_->size}, frame.pdu());
+  set_pending(nullptr);
+}
+
+// An answer right after an ambiguous echo, that only an answer can be: no slave answers twice,
+// so the echo was the master's retry, and this answers it.
+void Matcher::answers_retry(Frame& frame, const AmbiguousEcho& echo) {
+  frame.request = echo.index;
+  frame.request_slave = echo.request->slave;
+  frame.request_pdu = {echo.request->pdu.data(), echo.request->size};
+  if (count_turnaround(frame, echo.end_ns, echo.end_read))
+    frame.latency_ns = frame.t_ns - echo.end_ns;
+}
+
+// Whether the clock saw the silence between the request and this answer. A clock that steps
+// back, or stamps reads later than the bytes ended, can put a response before its request's
+// end: that latency is not measured rather than negative. An answer that came in the read of
+// the request's last bytes has no time of its own (a sniffer's packet, a hex log's block).
+bool Matcher::count_turnaround(const Frame& frame, int64_t request_end_ns,
+                               uint64_t request_end_read) {
+  const bool one_read = frame.start_read != 0 && frame.start_read == request_end_read;
+  if (!options_.timed || one_read) return false;
+  ++timed_answers_;
+  early_answers_ += frame.t_ns < request_end_ns;
+  return frame.t_ns >= request_end_ns;
+}
+
+void Matcher::advance(int64_t now_ns) {
+  if (pending_ && options_.timed && now_ns - pending_->end_ns > pending_->timeout_ns)
+    expire(pending_->end_ns + pending_->timeout_ns, TimeoutReason::silence);
+}
+
+void Matcher::finish(int64_t end_ns) {
+  advance(end_ns);
+  if (pending_) expire(end_ns, TimeoutReason::end_of_capture);
+}
+
+void Matcher::expire(int64_t now_ns, TimeoutReason reason) {
+  if (pending_->garbled_answer) return set_pending(nullptr);  // it answered, garbled
+  Timeout t;
+  t.request = pending_->index;
+  t.channel = pending_->channel;
+  t.slave = pending_->slave;
+  t.function = pending_->pdu[0];
+  // A clock that stepped back may put `now` before the request's end: it waited no time.
+  t.t_ns = std::max(now_ns, pending_->end_ns);
+  t.waited_ns = t.t_ns - pending_->end_ns;
+  t.reason = reason;
+  pending_->timed_out_in_silence = reason == TimeoutReason::silence;
+  unanswered_ = pending_;
+  set_pending(nullptr);
+  on_timeout_(t);
+}
+
+}  // namespace modtap

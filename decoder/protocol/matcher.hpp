@@ -1,0 +1,139 @@
+// Pairs requests with responses on one bus: decides each frame's role, measures turnaround,
+// and reports time-outs, broadcasts, unsolicited responses, responses that do not fit, and
+// noise where an answer was awaited.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <optional>
+
+#include "decoder/protocol/frame_sink.hpp"
+#include "decoder/protocol/framing_evidence.hpp"
+#include "decoder/protocol/records.hpp"
+
+namespace modtap {
+
+struct MatcherOptions {
+  int64_t timeout_ns = 1'000'000'000;
+  std::array<int64_t, 256> slave_timeout_ns{};  // a slave's own time-out; 0: timeout_ns
+  int64_t t35_ns = 0;                           // below this a response counts as a fast turnaround
+  bool timed = true;         // false when the source has no clock: no latency, no silence
+  bool exact_clock = false;  // latencies are exact enough to judge turnaround
+  // How late a clock that stamps reads, not bytes, may put a frame: a read that also holds the
+  // frame after it is stamped when that one ended.
+  int64_t clock_lag_ns = 0;
+  FramingObserver* observer = nullptr;  // told how a copy of the pending request was judged
+};
+
+class Matcher {
+ public:
+  using TimeoutHandler = std::function<void(const Timeout&)>;
+
+  Matcher(const MatcherOptions& options, TimeoutHandler on_timeout);
+
+  // Decides the role and fills request, latency and findings. `channel_role` is what the
+  // frame's port says of its direction.
+  void on_frame(Frame& frame, ChannelRole channel_role);
+  // Noise where a slave's answer was awaited is marked so, with the request it came after.
+  void on_noise(Noise& noise, ChannelRole channel_role);
+  // Any record or the clock moving on: a pending request older than the time-out expires.
+  void advance(int64_t now_ns);
+  void finish(int64_t end_ns);
+
+  const Expectation& expectation() const { return expectation_; }
+  // Answers in a read of their own, and those of them placed to begin before their request
+  // ended: at the line's real speed none does, so many say the line is faster than told.
+  uint64_t timed_answers() const { return timed_answers_; }
+  uint64_t early_answers() const { return early_answers_; }
+
+ private:
+  struct Pending {
+    uint64_t index = 0;
+    uint16_t channel = 0;
+    int64_t end_ns = 0;
+    int64_t timeout_ns = 0;
+    uint8_t slave = 0;
+    uint16_t adu_size = 0;
+    uint8_t retries = 0;
+    bool ambiguous_end = false;
+    uint64_t end_read = 0;              // Frame::end_read
+    bool garbled_answer = false;        // noise or a bad-check frame came in its answer's time
+    bool timed_out_in_silence = false;  // its wait ran out with nothing on the line
+    uint16_t size = 0;                  // PDU bytes kept (enough for echo and fit checks)
+    std::array<uint8_t, 256> pdu;       // left uninitialised: only `size` bytes are ever read
+  };
+  // An echo just taken for the answer that may have been the master's retry (its request's
+  // slot stays as it was until the next request but one).
+  struct AmbiguousEcho {
+    const Pending* request;
+    uint64_t index;
+    int64_t end_ns;
+    uint64_t end_read;
+  };
+
+  // What a frame that repeats the pending request byte for byte is: its (echo) response, the
+  // master's retry, or either; none when it is no such copy.
+  enum class Copy : uint8_t { none, response, retry, ambiguous };
+  // A copy of the pending request judged, with what told its runner-up apart.
+  struct CopyJudgement {
+    Copy copy = Copy::none;
+    Margin margin{};
+  };
+  CopyJudgement judge_copy(const Frame& frame) const;
+  bool copies_pending(const Frame& frame) const { return pending_ && copies(frame, *pending_); }
+  static bool copies(const Frame& frame, const Pending& request);
+  static bool may_answer(const Frame& frame, const Pending& request);
+  // How soon after its request a copy of it can only be the answer, and from when it may be
+  // the master's retry (from when it can only be one, once a turnaround is learned).
+  int64_t answered_within_ns(uint8_t slave) const;
+  int64_t retry_from_ns(uint8_t slave) const;
+  int64_t turnaround_learned(uint8_t slave) const {
+    return turnaround_ns_[slave] ? turnaround_ns_[slave] : bus_turnaround_ns_;
+  }
+  void learn_retry_interval(const Frame& retry, const Pending& first);
+  bool as_late_as_a_retry(int64_t waited_ns) const;
+  void learn_turnaround(uint8_t slave, int64_t latency_ns) {
+    turnaround_ns_[slave] = std::max(turnaround_ns_[slave], latency_ns);
+    bus_turnaround_ns_ = std::max(bus_turnaround_ns_, latency_ns);
+  }
+
+  Role decide_role(const Frame& frame, ChannelRole channel_role,
+                   const CopyJudgement& judgement) const;
+  // Whether the frame fits as the request's answer.
+  static bool fits(const Frame& frame, const Pending& request);
+  bool fits_pending(const Frame& frame) const { return fits(frame, *pending_); }
+  bool long_after_answer_due(const Frame& frame) const;
+  bool past_answer_time(const Frame& frame) const;
+  // Whether the clock saw the answer's turnaround; counts the answers timed, and the early ones.
+  bool count_turnaround(const Frame& frame, int64_t request_end_ns, uint64_t request_end_read);
+  void on_request(Frame& frame);
+  void on_response(Frame& frame, Copy copy);
+  void garbled_answer(Frame& frame);
+  void answers_retry(Frame& frame, const AmbiguousEcho& echo);
+  void expire(int64_t now_ns, TimeoutReason reason);
+  bool pending_matches(const Frame& frame) const;
+  bool awaits_answer(ChannelRole channel_role) const;
+  bool in_answer_time(int64_t t_ns, ChannelRole channel_role) const;
+
+  MatcherOptions options_;
+  TimeoutHandler on_timeout_;
+  // Two slots, so a paired request stays readable through its response's callback while
+  // no request is copied on the hot path.
+  std::array<Pending, 2> slots_;
+  uint8_t next_slot_ = 0;
+  Pending* pending_ = nullptr;     // the open transaction
+  Pending* unanswered_ = nullptr;  // the request that last timed out, until another is sent
+  std::optional<AmbiguousEcho> ambiguous_echo_;  // the last frame, where it was one
+  Expectation expectation_;  // what pending_ means to a framer, kept in step with it
+  uint64_t timed_answers_ = 0, early_answers_ = 0;
+  // The longest turnaround seen per slave, and on the bus, from pairs no retry could fake.
+  std::array<int64_t, 256> turnaround_ns_{};
+  int64_t bus_turnaround_ns_ = 0;
+  int64_t retry_interval_ns_ = 0;  // the shortest seen from a request's end to its retry
+
+  void set_pending(Pending* pending);
+};
+
+}  // namespace modtap
