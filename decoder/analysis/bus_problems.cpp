@@ -112,7 +112,8 @@ void ProblemEvidence::on_frame(const Frame& frame) {
   after_request_ = false;
   if (frame.adu.empty()) return;
   if (frame.role == Role::request && frame.check_ok) return on_request(frame);
-  const bool awaited = frame.role == Role::response && frame.request;
+  const bool awaited =
+      frame.role == Role::response && frame.request && !(frame.findings & finding_late_response);
   if (!frame.check_ok && !awaited) return note(bad_requests_, frame.t_ns, frame.index);
   if (frame.role != Role::response) return;
   if (!awaited) {  // an answer after its request timed out: late, if the history says so

@@ -58,8 +58,9 @@ void BusStatistics::on_frame(const Frame& frame) {
   retries += (frame.findings & finding_retry) != 0;
   ++damaged[static_cast<size_t>(frame.damage)];
   findings_of(frame).each([&](size_t slot) { count_finding(slot, frame.index); });
-  // Latency of good responses only; a negative one (a clock that stepped back) never counts.
-  if (frame.check_ok && frame.latency_ns && *frame.latency_ns >= 0)
+  // Latency of good responses in time only; a negative one (a clock that stepped back) never
+  // counts, nor a late answer's wait: the master had given up (the late-response finding).
+  if (frame.check_ok && counts_latency(frame))
     latency_ns.add(static_cast<uint64_t>(*frame.latency_ns));
   if (frame.adu.empty() || frame.device() == 0) return;
   keep_values(frame);
@@ -76,8 +77,7 @@ void BusStatistics::count_exchange(const Frame& frame, SlaveStatistics& s) {
   count(s.by_function[frame.function() & 0x7F], frame);
   if (frame.role == Role::response && frame.is_exception() && frame.adu.size() > 2)
     ++s.exceptions_by_code[frame.adu[2]];
-  if (frame.latency_ns && *frame.latency_ns >= 0)
-    s.latency_ns.add(static_cast<uint64_t>(*frame.latency_ns));
+  if (counts_latency(frame)) s.latency_ns.add(static_cast<uint64_t>(*frame.latency_ns));
   if (frame.role != Role::request) return;
   auto& last = last_request_ns_[frame.device()];
   if (last && frame.t_ns >= *last)

@@ -133,6 +133,9 @@ class BusStatistics final : public RecordSink {
   void see_time(int64_t start_ns, int64_t end_ns);
   void count_finding(size_t slot, uint64_t index);
   void count_exchange(const Frame& frame, SlaveStatistics& slave);
+  static bool counts_latency(const Frame& frame) {
+    return frame.latency_ns && *frame.latency_ns >= 0 && !(frame.findings & finding_late_response);
+  }
   void keep_values(const Frame& frame);
 
   SerialFormat format_;

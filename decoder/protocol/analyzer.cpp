@@ -152,7 +152,11 @@ void Analyzer::push(const Chunk& chunk) {
 // Pushed chunks, and those the mode probe kept and replays once the mode is known.
 void Analyzer::feed(const Chunk& chunk) {
   Channel& c = channel(chunk.channel);
-  if (options_.clock != ClockQuality::none) matcher_.advance(settled_ns(chunk.t_ns));
+  if (options_.clock != ClockQuality::none) {
+    const int64_t settled = settled_ns(chunk.t_ns);
+    release_held_by(settled);
+    matcher_.advance(settled);
+  }
   if (probe_) {
     if (probe_->push(chunk, c.info.role)) settle_mode();
     return;
@@ -170,7 +174,11 @@ void Analyzer::flush(int64_t now_ns) {
     if (auto* rtu = std::get_if<std::unique_ptr<RtuFramer>>(&c.framer)) (*rtu)->flush(now_ns);
     if (auto* ascii = std::get_if<std::unique_ptr<AsciiFramer>>(&c.framer)) (*ascii)->flush(now_ns);
   }
-  if (options_.clock != ClockQuality::none) matcher_.advance(settled_ns(now_ns));
+  if (options_.clock != ClockQuality::none) {
+    const int64_t settled = settled_ns(now_ns);
+    release_held_by(settled);
+    matcher_.advance(settled);
+  }
 }
 
 int64_t Analyzer::settled_ns(int64_t now_ns) const {
@@ -197,18 +205,56 @@ void Analyzer::finish() {
     if (auto* rtu = std::get_if<std::unique_ptr<RtuFramer>>(&c.framer)) (*rtu)->finish();
     if (auto* ascii = std::get_if<std::unique_ptr<AsciiFramer>>(&c.framer)) (*ascii)->finish();
   }
+  // The capture ended before the master's next move: the copy may be either. A copy of the
+  // pending request stays as its time told (a retry); one of a request that timed out already,
+  // read as its late answer, invents no request.
+  if (held_) {
+    held_->findings |= finding_ambiguous_echo;
+    release_held(!matcher_.copies_pending(*held_));
+  }
   matcher_.finish(last_ns_);
 }
 
 void Analyzer::on_frame(Frame& frame) {
   frame.index = next_index_++;
   if (options_.clock == ClockQuality::none) last_ns_ = std::max(last_ns_, frame.end_ns);
-  matcher_.on_frame(frame, channels_[frame.channel].info.role);
+  if (held_) release_held(Matcher::moved_on_after(*held_, frame, held_decide_by_ns_));
+  const ChannelRole role = channels_[frame.channel].info.role;
+  if (role == ChannelRole::bus) {
+    if (const auto decide_by = matcher_.copy_in_doubt(frame)) return hold(frame, *decide_by);
+  }
+  matcher_.on_frame(frame, role);
   out_.on_frame(frame);
+}
+
+void Analyzer::hold(const Frame& frame, int64_t decide_by_ns) {
+  held_bytes_.assign(frame.raw.begin(), frame.raw.end());
+  held_bytes_.insert(held_bytes_.end(), frame.adu.begin(), frame.adu.end());
+  held_ = frame;
+  held_->raw = {held_bytes_.data(), frame.raw.size()};
+  held_->adu = {held_bytes_.data() + frame.raw.size(), frame.adu.size()};
+  held_decide_by_ns_ = decide_by_ns;
+  matcher_.doubt(*held_);
+}
+
+// The master's next move decides the held copy: a request of its own sent without waiting for
+// the copy's answer makes the copy the slave's late answer; anything else (noise, the request
+// again, silence) leaves the matcher to judge it as any copy: the master's retry.
+void Analyzer::release_held(bool late) {
+  Frame& copy = *held_;
+  matcher_.end_doubt();
+  if (late) {
+    matcher_.on_late_copy(copy);
+  } else {
+    matcher_.on_frame(copy, ChannelRole::bus);
+  }
+  out_.on_frame(copy);
+  held_.reset();
 }
 
 void Analyzer::on_noise(Noise& noise) {
   noise.index = next_index_++;
+  if (held_) release_held(false);
   matcher_.on_noise(noise, channels_[noise.channel].info.role);
   out_.on_noise(noise);
 }

@@ -77,6 +77,13 @@ class Analyzer final : private FrameSink {
   void on_noise(Noise& noise) override;
   const Expectation& expectation() const override { return matcher_.expectation(); }
   void on_timeout(const Timeout& timeout);
+  // A copy the matcher cannot yet tell from a retry (Matcher::copy_in_doubt) waits, its bytes
+  // copied, for the master's next move: the next frame, or the clock past `decide_by_ns`.
+  void hold(const Frame& frame, int64_t decide_by_ns);
+  void release_held(bool late);
+  void release_held_by(int64_t now_ns) {
+    if (held_ && now_ns >= held_decide_by_ns_) release_held(false);
+  }
 
   AnalyzerOptions options_;
   std::vector<Channel> channels_;
@@ -87,6 +94,9 @@ class Analyzer final : private FrameSink {
   uint64_t next_index_ = 1;
   int64_t last_ns_ = 0;
   uint64_t clock_steps_back_ = 0;
+  std::optional<Frame> held_;
+  std::vector<uint8_t> held_bytes_;  // its raw and ADU bytes, kept from one copy to the next
+  int64_t held_decide_by_ns_ = 0;
 };
 
 }  // namespace modtap

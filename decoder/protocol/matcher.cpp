@@ -12,18 +12,51 @@ Matcher::Matcher(const MatcherOptions& options, TimeoutHandler on_timeout)
 
 void Matcher::set_pending(Pending* pending) {
   pending_ = pending;
-  if (!pending) {
-    expectation_ = {};
-    return;
-  }
-  const bool echoed = response_prefix({pending->pdu.data(), pending->size}).echoes_request;
-  expectation_ = {true,
-                  pending->slave,
-                  pending->pdu[0],
-                  static_cast<uint16_t>(echoed ? pending->adu_size : 0),
-                  echoed && pending->ambiguous_end,
-                  {pending->pdu.data(), pending->size},
-                  options_.timed ? pending->end_ns + retry_from_ns(pending->slave) : 0};
+  // With nothing pending, the answer the bus may still get is the late one of the request that
+  // timed out last: its bytes are read as that answer first.
+  expectation_ = pending         ? expecting(*pending)
+                 : overdue_open_ ? overdue_expectation_
+                                 : Expectation{};
+}
+
+inline Expectation Matcher::expecting(const Pending& request) const {
+  const bool echoed = response_prefix({request.pdu.data(), request.size}).echoes_request;
+  return {true,
+          request.slave,
+          request.pdu[0],
+          static_cast<uint16_t>(echoed ? request.adu_size : 0),
+          echoed && request.ambiguous_end,
+          {request.pdu.data(), request.size},
+          options_.timed ? request.end_ns + retry_from_ns(request.slave) : 0};
+}
+
+inline void Matcher::remember(Pending& p, const Frame& frame) const {
+  const auto pdu = frame.pdu();
+  p.index = frame.index;
+  p.channel = frame.channel;
+  p.end_ns = frame.end_ns;
+  p.slave = frame.slave();
+  p.timeout_ns =
+      options_.slave_timeout_ns[p.slave] ? options_.slave_timeout_ns[p.slave] : options_.timeout_ns;
+  p.adu_size = static_cast<uint16_t>(frame.adu.size());
+  p.retries = frame.retries;
+  p.end_read = frame.end_read;
+  p.ambiguous_end = frame.findings & finding_ambiguous_end;
+  p.garbled_answer = false;
+  p.timed_out_in_silence = false;
+  p.size = static_cast<uint16_t>(std::min(pdu.size(), p.pdu.size()));
+  std::copy_n(pdu.begin(), p.size, p.pdu.begin());
+}
+
+// While a copy in doubt waits, the framers read the bytes after it as they would after the
+// master's retry: that copy pending. Once it is told, the bus waits for what it did before.
+void Matcher::doubt(const Frame& copy) {
+  remember(copy_in_doubt_, copy);
+  expectation_ = expecting(copy_in_doubt_);
+}
+
+void Matcher::end_doubt() {
+  set_pending(pending_);
 }
 
 void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
@@ -107,6 +140,13 @@ Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role,
                                  !fits_pending(frame) && past_answer_time(frame);
     return copy == Copy::retry || another_request ? Role::request : Role::response;
   }
+  // A frame that answers the request that timed out last is that slave's answer, late: while
+  // the master waits for another slave's answer it sends nothing, and a request that is not the
+  // same again fits as that answer by chance. The same again is told by the master's next move
+  // (Analyzer holds it: copy_in_doubt).
+  if (answers_overdue(frame) && (in_answer_time(frame.t_ns, channel_role) ||
+                                 (frame.fit.response && !copies(frame, overdue_))))
+    return Role::response;
   return frame.fit.request ? Role::request : Role::unknown;
 }
 
@@ -227,27 +267,17 @@ void Matcher::on_request(Frame& frame) {
     learn_retry_interval(frame, *unanswered_);
   }
   unanswered_ = nullptr;
+  // The slave asked anew answers the new request, not the one it let time out.
+  if (overdue_open_ && overdue_.slave == frame.slave()) overdue_open_ = false;
   Pending& p = slots_[next_slot_];
   next_slot_ ^= 1;
-  p.index = frame.index;
-  p.channel = frame.channel;
-  p.end_ns = frame.end_ns;
-  p.slave = frame.slave();
-  p.timeout_ns =
-      options_.slave_timeout_ns[p.slave] ? options_.slave_timeout_ns[p.slave] : options_.timeout_ns;
-  p.adu_size = static_cast<uint16_t>(frame.adu.size());
-  p.retries = frame.retries;
-  p.end_read = frame.end_read;
-  p.ambiguous_end = frame.findings & finding_ambiguous_end;
-  p.garbled_answer = false;
-  p.timed_out_in_silence = false;
-  p.size = static_cast<uint16_t>(std::min(pdu.size(), p.pdu.size()));
-  std::copy_n(pdu.begin(), p.size, p.pdu.begin());
+  remember(p, frame);
   set_pending(&p);
 }
 
 void Matcher::on_response(Frame& frame, Copy copy) {
   if (!pending_matches(frame)) {
+    if (answers_overdue(frame)) return late_answer(frame);
     frame.findings |= finding_unsolicited;
     return;
   }
@@ -287,6 +317,74 @@ void Matcher::answers_retry(Frame& frame, const AmbiguousEcho& echo) {
     frame.latency_ns = frame.t_ns - echo.end_ns;
 }
 
+// An answer after its request's time-out (the master's next request, or silence as long as the
+// time-out): the slave did answer, late. It counts against the master's time-out, not as an
+// answer the master got, and a slave answers once.
+void Matcher::late_answer(Frame& frame) {
+  frame.role = Role::response;
+  frame.request = overdue_.index;
+  frame.request_slave = overdue_.slave;
+  frame.request_pdu = {overdue_.pdu.data(), overdue_.size};
+  frame.findings |= finding_late_response;
+  if (count_turnaround(frame, overdue_.end_ns, overdue_.end_read))
+    frame.latency_ns = frame.t_ns - overdue_.end_ns;
+  overdue_open_ = false;
+  set_pending(pending_);
+}
+
+// A copy of a request whose answer is that request again, where the master may have given up
+// waiting: the pending request's copy too late for its answer (judge_copy's retry), or the
+// copy of the one that timed out last. A master sends a retry only after its time-out, and then
+// waits as long again for the retry's answer; so the copy's wait since its request, halved,
+// bounds how soon a request of the master's own shows it never waited for the copy's answer.
+std::optional<int64_t> Matcher::judge_doubt(const Frame& frame) {
+  advance(frame.t_ns);  // a pending request whose time-out has run out by now is overdue
+  const Pending* request = copied_in_doubt(frame);
+  if (!request) return std::nullopt;
+  const int64_t decide_by = frame.end_ns + (frame.t_ns - request->end_ns) / 2;
+  // The pending request's time-out comes no later than the copy is told.
+  if (request == pending_) return std::min(decide_by, request->end_ns + request->timeout_ns);
+  return decide_by;
+}
+
+const Matcher::Pending* Matcher::copied_in_doubt(const Frame& frame) const {
+  const Pending* request = pending_matches(frame) ? pending_ : overdue_open_ ? &overdue_ : nullptr;
+  // Most copies of the pending request are its echo, in the time an answer takes.
+  if (!request ||
+      (request == pending_ && frame.t_ns - request->end_ns < answered_within_ns(request->slave)))
+    return nullptr;
+  if (!copies(frame, *request)) return nullptr;
+  if (request != pending_ &&
+      (in_answer_time(frame.t_ns, ChannelRole::bus) || !in_late_answer_time(frame, *request)))
+    return nullptr;
+  const auto pdu = std::span<const uint8_t>(request->pdu.data(), request->size);
+  if (!response_prefix(pdu).echoes_request) return nullptr;  // no echo could be it
+  if (request == pending_ && judge_copy(frame).copy != Copy::retry) return nullptr;
+  return request;
+}
+
+// A late answer comes within a time-out of its request's; a copy long after is the master
+// asking again.
+bool Matcher::in_late_answer_time(const Frame& frame, const Pending& request) {
+  return frame.t_ns - request.end_ns < 2 * request.timeout_ns;
+}
+
+// The master's request to another slave or function, sooner than it waits for an answer.
+bool Matcher::moved_on_after(const Frame& copy, const Frame& next, int64_t decide_by_ns) {
+  return next.check_ok && next.fit.request && next.channel == copy.channel &&
+         next.t_ns < decide_by_ns &&
+         (next.slave() != copy.slave() || next.function() != copy.function());
+}
+
+// The copy was the answer: to the pending request, as its echo (a turnaround too late to teach
+// anything), or to the request that timed out, late.
+void Matcher::on_late_copy(Frame& frame) {
+  ambiguous_echo_.reset();
+  frame.role = Role::response;
+  if (pending_matches(frame)) return on_response(frame, Copy::response);
+  late_answer(frame);
+}
+
 // Whether the clock saw the silence between the request and this answer. A clock that steps
 // back, or stamps reads later than the bytes ended, can put a response before its request's
 // end: that latency is not measured rather than negative. An answer that came in the read of
@@ -323,6 +421,9 @@ void Matcher::expire(int64_t now_ns, TimeoutReason reason) {
   t.reason = reason;
   pending_->timed_out_in_silence = reason == TimeoutReason::silence;
   unanswered_ = pending_;
+  overdue_ = *pending_;
+  overdue_open_ = true;
+  overdue_expectation_ = expecting(overdue_);
   set_pending(nullptr);
   on_timeout_(t);
 }

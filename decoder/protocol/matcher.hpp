@@ -42,6 +42,29 @@ class Matcher {
   void advance(int64_t now_ns);
   void finish(int64_t end_ns);
 
+  // A copy of an echo request (FC05/06/08/16...) that the master may have given up on: the
+  // pending one past the time its answer takes, or the one that timed out last. It is the
+  // slave's late answer or the master's retry, and only the master's next move tells: the time
+  // by which a request of the master's that shows it did not wait for the copy's answer would
+  // come (Analyzer holds the copy until then). None where the frame is no such copy.
+  std::optional<int64_t> copy_in_doubt(const Frame& frame) {
+    const uint8_t slave = frame.slave();
+    const bool may_copy =
+        (pending_ && pending_->slave == slave) || (overdue_open_ && overdue_.slave == slave);
+    if (!options_.timed || !frame.check_ok || !frame.fit.request || !may_copy) return std::nullopt;
+    return judge_doubt(frame);
+  }
+  // Whether `next`, the first frame after such a copy, is the master's request to another slave
+  // or function, sent before the master waits for an answer: then the copy was no request.
+  static bool moved_on_after(const Frame& copy, const Frame& next, int64_t decide_by_ns);
+  // The copy in doubt taken for the late answer of the request it copies.
+  void on_late_copy(Frame& frame);
+  bool copies_pending(const Frame& frame) const { return pending_ && copies(frame, *pending_); }
+  // What the bus waits for while the copy is held in doubt, and after: its answer, as after a
+  // retry, so that the bytes after it are framed as they would be were it the master's.
+  void doubt(const Frame& copy);
+  void end_doubt();
+
   const Expectation& expectation() const { return expectation_; }
   // Answers in a read of their own, and those of them placed to begin before their request
   // ended: at the line's real speed none does, so many say the line is faster than told.
@@ -82,7 +105,6 @@ class Matcher {
     Margin margin{};
   };
   CopyJudgement judge_copy(const Frame& frame) const;
-  bool copies_pending(const Frame& frame) const { return pending_ && copies(frame, *pending_); }
   static bool copies(const Frame& frame, const Pending& request);
   static bool may_answer(const Frame& frame, const Pending& request);
   // How soon after its request a copy of it can only be the answer, and from when it may be
@@ -112,6 +134,15 @@ class Matcher {
   void on_response(Frame& frame, Copy copy);
   void garbled_answer(Frame& frame);
   void answers_retry(Frame& frame, const AmbiguousEcho& echo);
+  // An answer to the request that timed out last, after its time-out: paired, and late.
+  bool answers_overdue(const Frame& frame) const {
+    return overdue_open_ && in_late_answer_time(frame, overdue_) && may_answer(frame, overdue_);
+  }
+  void late_answer(Frame& frame);
+  static bool in_late_answer_time(const Frame& frame, const Pending& request);
+  // The request a copy in doubt copies, and whether it is still pending.
+  const Pending* copied_in_doubt(const Frame& frame) const;
+  std::optional<int64_t> judge_doubt(const Frame& frame);
   void expire(int64_t now_ns, TimeoutReason reason);
   bool pending_matches(const Frame& frame) const;
   bool awaits_answer(ChannelRole channel_role) const;
@@ -125,6 +156,11 @@ class Matcher {
   uint8_t next_slot_ = 0;
   Pending* pending_ = nullptr;     // the open transaction
   Pending* unanswered_ = nullptr;  // the request that last timed out, until another is sent
+  // The request that last timed out, kept until its slave is asked again or answers it late:
+  // a slave answers after the master has moved on to others.
+  Pending overdue_;
+  bool overdue_open_ = false;
+  Expectation overdue_expectation_;              // what overdue_ means to a framer, while open
   std::optional<AmbiguousEcho> ambiguous_echo_;  // the last frame, where it was one
   Expectation expectation_;  // what pending_ means to a framer, kept in step with it
   uint64_t timed_answers_ = 0, early_answers_ = 0;
@@ -134,6 +170,9 @@ class Matcher {
   int64_t retry_interval_ns_ = 0;  // the shortest seen from a request's end to its retry
 
   void set_pending(Pending* pending);
+  Expectation expecting(const Pending& request) const;
+  void remember(Pending& request, const Frame& frame) const;
+  Pending copy_in_doubt_;  // the copy Analyzer holds, as a pending request
 };
 
 }  // namespace modtap

@@ -44,6 +44,9 @@ struct Scenario {
   size_t max_missing = 0;
   Via via = Via::direct;
   busgen::ClockError clock{};
+  // modtap is told the master's time-out (--timeout), as a user who knows it sets it; else it
+  // waits its own second.
+  bool told_timeout = false;
 };
 
 void PrintTo(const Scenario& s, std::ostream* os) {
@@ -100,6 +103,7 @@ Collector run(const BusCapture& capture, const Scenario& s, RecordSink* also = n
   options.mode = ModeChoice::automatic;
   options.format = s.bus.format;
   options.framing_observer = observer;
+  if (s.told_timeout) options.timeout_ns = s.bus.retry_after_ns;
   Collector collected;
   Tee out(collected, also);
   if (s.via == Via::direct) {
@@ -175,6 +179,7 @@ TEST_P(BusScenario, WrittenAsPcapngReadsBackToTheSameRecords) {
   options.mode = ModeChoice::automatic;
   options.format = s.bus.format;
   options.clock = source->clock();
+  if (s.told_timeout) options.timeout_ns = s.bus.retry_after_ns;
   Collector again;
   Analyzer analyzer(options, source->channels(), again);
   Chunk chunk;
@@ -390,6 +395,23 @@ BusOptions long_echoes(uint64_t seed) {
   return o;
 }
 
+// Slaves that answer only after the master's time-out, one address in ten, at every function
+// code: an echo (FC05, 06, 08, 16) as the request again, after the master has moved on.
+BusOptions late_answers(uint64_t seed) {
+  BusOptions o = clean(seed, 3000);
+  for (unsigned address = 10; address <= 240; address += 10)
+    o.slave_faults[static_cast<uint8_t>(address)].answers_after_timeout = true;
+  return o;
+}
+
+// The same, with a master that sends unanswered requests again: a late echo and a retry are
+// both the request again.
+BusOptions late_answers_and_retries(uint64_t seed) {
+  BusOptions o = late_answers(seed);
+  o.retry_rate = 0.7;
+  return o;
+}
+
 constexpr busgen::ClockError usb_jitter{8'000'000, 1};
 constexpr busgen::ClockError coarse_timer{0, 10'000'000};
 constexpr busgen::ClockError sample_clock{0, 2'000};  // a logic analyzer at 500 kHz
@@ -420,6 +442,32 @@ INSTANTIATE_TEST_SUITE_P(
         Scenario{"long_echoes_per_frame", Delivery::per_frame, long_echoes(36), 0, Via::direct,
                  usb_jitter}),
     [](const auto& info) { return std::string(info.param.name); });
+
+// Faulty buses: each late answer is paired with the request it answers and never read as a
+// request, and that request still timed out (the master's time-out told, or the master's next
+// request after it); a retry is never an answer.
+std::vector<Scenario> faulty_buses() {
+  static std::deque<std::string> names;  // the scenarios point at their names
+  std::vector<Scenario> out;
+  const char* first = std::getenv("MODTAP_FAULT_SEEDS");
+  const uint64_t from = first ? std::strtoull(first, nullptr, 10) : 41;
+  for (uint64_t seed = from; seed < from + 20; ++seed) {
+    names.push_back("late_per_byte_" + std::to_string(seed));
+    out.push_back(Scenario{
+        names.back().c_str(), Delivery::per_byte, late_answers(seed), 0, Via::direct, {}, true});
+    names.push_back("late_retries_per_byte_" + std::to_string(seed));
+    out.push_back(Scenario{names.back().c_str(),
+                           Delivery::per_byte,
+                           late_answers_and_retries(seed),
+                           0,
+                           Via::direct,
+                           {},
+                           true});
+  }
+  return out;
+}
+INSTANTIATE_TEST_SUITE_P(FaultyBuses, BusScenario, ::testing::ValuesIn(faulty_buses()),
+                         [](const auto& info) { return std::string(info.param.name); });
 
 // The seeds to run: MODTAP_SEEDS=FIRST-LAST (a sweep of fresh seeds by hand, to find what no
 // rule covers yet: docs/testing.md), else 100-1125 (100-119 under the sanitizers) and the seeds

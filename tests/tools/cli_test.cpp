@@ -917,6 +917,34 @@ TEST(Cli, AnAsciiFrameEndingBeforeItsLrcIsCutWithTheCodeItHolds) {
   EXPECT_THAT(json.lines[1], ::testing::HasSubstr("\"exception_code\":82"));
 }
 
+// A write's answer is the request again. One that comes after the master's time-out (100 ms)
+// is the slave's late answer where the master's next request follows it without waiting for an
+// answer to it, and the master's retry where its own answer follows.
+TEST(Cli, AnEchoAfterTheTimeOutIsTheLateAnswerWhereTheMasterMovesOnAtOnce) {
+  const std::string write = "01 06 00 01 00 03 98 0B";
+  const std::string late = hexlog("modtap-late-echo.log",
+                                  {"00.000000", write, "00.125000", write, "00.130000",
+                                   "02 03 00 00 00 01 84 39", "00.140000", "02 03 02 00 05 3C 47"});
+  const Outcome moved_on = run("-r " + late + " --timeout 0.1");
+  ASSERT_EQ(moved_on.lines.size(), 5u);
+  EXPECT_NE(moved_on.lines[1].find("TIMEOUT request #1"), std::string::npos) << moved_on.lines[1];
+  EXPECT_NE(moved_on.lines[2].find("rsp slave 1"), std::string::npos) << moved_on.lines[2];
+  EXPECT_NE(moved_on.lines[2].find("req #1 120.417 ms [late-response]"), std::string::npos)
+      << moved_on.lines[2];
+  EXPECT_NE(moved_on.lines[3].find("req slave 2"), std::string::npos) << moved_on.lines[3];
+  EXPECT_NE(moved_on.lines[4].find("req #3"), std::string::npos) << moved_on.lines[4];
+
+  const std::string retried =
+      hexlog("modtap-retry-echo.log", {"00.000000", write, "00.125000", write, "00.135000", write,
+                                       "00.300000", "02 03 00 00 00 01 84 39"});
+  const Outcome retry = run("-r " + retried + " --timeout 0.1");
+  ASSERT_GE(retry.lines.size(), 4u);
+  EXPECT_NE(retry.lines[2].find("req slave 1"), std::string::npos) << retry.lines[2];
+  EXPECT_NE(retry.lines[2].find("[retry]"), std::string::npos) << retry.lines[2];
+  EXPECT_NE(retry.lines[3].find("rsp slave 1"), std::string::npos) << retry.lines[3];
+  EXPECT_NE(retry.lines[3].find("req #2"), std::string::npos) << retry.lines[3];
+}
+
 TEST(Cli, AnN3SlaveTimesOutAfterItsManualsTimeUnlessTimeoutSaysOtherwise) {
   // 002, 2.3 "TIME-OUT (400ms) & RETRY (max. : 2 times)": an answer 500 ms late is too late.
   const std::string log = hexlog("modtap-n3-late.log", {"00.000000", "02 03 01 20 00 01 84 0F",
@@ -928,7 +956,9 @@ TEST(Cli, AnN3SlaveTimesOutAfterItsManualsTimeUnlessTimeoutSaysOtherwise) {
                              "after 400.000 ms"),
             std::string::npos)
       << n3.lines[1];
-  EXPECT_NE(n3.lines[2].find("[unsolicited]"), std::string::npos) << n3.lines[2];
+  // The answer to the request that timed out, late: paired with it, never unsolicited.
+  EXPECT_NE(n3.lines[2].find("req #1 495.990 ms [late-response]"), std::string::npos)
+      << n3.lines[2];
   const Outcome told = run("-r " + log + " --model 2=n3 --timeout 1");
   ASSERT_EQ(told.lines.size(), 2u);
   // From the end of the request to the start of the answer, each block ending at its stamp.
