@@ -573,7 +573,7 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
   if (length && *length != size) {
     if (size < *length) return emit_damaged(begin, end, Damage::cut, findings);
     emit_damaged(begin, begin + *length, Damage::collision, findings);
-    return emit_piece(begin + *length, end);
+    return emit_run_on(begin + *length, end);
   }
   if (size >= min_adu && size <= max_rtu_adu && may_start(p[1])) {
     RoleFit fit{options_.role != ChannelRole::slave && fits_role(Role::request, begin, size),
@@ -602,6 +602,15 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
   // Long runs of junk leave as several records so each stays printable and memory stays flat.
   for (uint64_t at = begin; at < end; at += max_rtu_adu)
     emit_noise(at, std::min<uint64_t>(end, at + max_rtu_adu), reason);
+}
+
+// What ran on past a collided answer's structure, before a silence or a good frame: the other
+// talker's bytes, however they begin, so never a frame of their own (a request to a slave the
+// bus never had). A lone byte there is weighed as any, a glitch or junk.
+void RtuFramer::emit_run_on(uint64_t begin, uint64_t end) {
+  if (end - begin == 1) return emit_piece(begin, end);
+  for (uint64_t at = begin; at < end; at += max_rtu_adu)
+    emit_noise(at, std::min<uint64_t>(end, at + max_rtu_adu), NoiseReason::junk);
 }
 
 // The header of a piece that may be a damaged frame: a frame's, or noise's (PieceHeader). A

@@ -212,6 +212,7 @@ class RtuFramer {
   // weighs against its own last byte being a second (last_edge).
   void emit_piece(uint64_t begin, uint64_t end, uint32_t findings = finding_none,
                   bool glitch_after = false);
+  void emit_run_on(uint64_t begin, uint64_t end);
   PieceHeader piece_header(uint64_t at) const;
   std::optional<EdgeByte> first_edge(uint64_t begin, uint64_t end) const;
   std::optional<EdgeByte> last_edge(uint64_t begin, uint64_t end, bool glitch_after) const;

@@ -205,6 +205,25 @@ TEST(RtuFramer, AnAwaitedResponseRunIntoEndsWhereItsStructureSays) {
   EXPECT_EQ(out.bytes_of(0), bytes);
 }
 
+// Two devices answering at once: what runs on past the answer's structure is the other
+// device's bytes, however they begin (here as a request of a known slave with a bad CRC), so
+// they are noise after the damaged answer, never a request nor a slave of their own.
+TEST(RtuFramer, WhatRunsOnPastACollidedAnswerIsNeverAFrame) {
+  auto hit = read_response;
+  hit[24] ^= 0x5A;
+  const auto tail = hex("11 03 00 00 00 01 aa bb");  // reads as FC03 to slave 17, check bad
+  const auto bytes = concat({read_request, hit, tail, read_request});
+  const auto out = analyze_untimed(bytes);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].raw, hit);
+  EXPECT_EQ(frames[1].damage, Damage::collision);
+  EXPECT_EQ(frames[2].raw, read_request);
+  ASSERT_EQ(out.noise().size(), 1u);
+  EXPECT_EQ(out.noise()[0].raw, tail);
+  expect_same_at_every_split(bytes);
+}
+
 TEST(RtuFramer, GivesTheSameRecordsWhereverTheInputIsCut) {
   expect_same_at_every_split(concat({read_request, read_response, hex("00"), read_request,
                                      hex("11 22"), read_request, read_response}));
