@@ -14,7 +14,7 @@ stamp=$profile/trained
 if [ "${1:-}" = --keep ] && [ -f "$stamp" ]; then exit 0; fi
 mkdir -p "$train"
 cmake -S . -B "$train" -DCMAKE_BUILD_TYPE=Release -DMODTAP_TESTS=OFF -DMODTAP_BENCHMARKS=OFF \
-  -DMODTAP_PGO=train -DMODTAP_PGO_DIR="$profile" >/dev/null
+  -DMODTAP_IPO=ON -DMODTAP_PGO=train -DMODTAP_PGO_DIR="$profile" >/dev/null
 cmake --build "$train" -j"$(nproc)" --target modtap modtap-bus-simulator >"$train/build.log" 2>&1 ||
   { tail -30 "$train/build.log"; exit 1; }
 modtap=$train/tools/modtap/modtap
