@@ -218,8 +218,16 @@ void Analyzer::finish() {
 void Analyzer::on_frame(Frame& frame) {
   frame.index = next_index_++;
   if (options_.clock == ClockQuality::none) last_ns_ = std::max(last_ns_, frame.end_ns);
-  if (held_) release_held(Matcher::moved_on_after(*held_, frame, held_decide_by_ns_));
   const ChannelRole role = channels_[frame.channel].info.role;
+  if (held_ || (role == ChannelRole::bus && matcher_.may_be_copy_in_doubt(frame)))
+    return on_frame_in_doubt(frame, role);
+  matcher_.on_frame(frame, role);
+  out_.on_frame(frame);
+}
+
+// The few frames that follow a held copy, or may be one.
+void Analyzer::on_frame_in_doubt(Frame& frame, ChannelRole role) {
+  if (held_) release_held(Matcher::moved_on_after(*held_, frame, held_decide_by_ns_));
   if (role == ChannelRole::bus) {
     if (const auto decide_by = matcher_.copy_in_doubt(frame)) return hold(frame, *decide_by);
   }

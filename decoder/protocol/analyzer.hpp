@@ -79,6 +79,7 @@ class Analyzer final : private FrameSink {
   void on_timeout(const Timeout& timeout);
   // A copy the matcher cannot yet tell from a retry (Matcher::copy_in_doubt) waits, its bytes
   // copied, for the master's next move: the next frame, or the clock past `decide_by_ns`.
+  void on_frame_in_doubt(Frame& frame, ChannelRole role);
   void hold(const Frame& frame, int64_t decide_by_ns);
   void release_held(bool late);
   void release_held_by(int64_t now_ns) {

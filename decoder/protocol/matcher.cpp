@@ -10,7 +10,7 @@ namespace modtap {
 Matcher::Matcher(const MatcherOptions& options, TimeoutHandler on_timeout)
     : options_(options), on_timeout_(std::move(on_timeout)) {}
 
-void Matcher::set_pending(Pending* pending) {
+inline void Matcher::set_pending(Pending* pending) {
   pending_ = pending;
   // With nothing pending, the answer the bus may still get is the late one of the request that
   // timed out last: its bytes are read as that answer first.
@@ -226,15 +226,6 @@ bool Matcher::as_late_as_a_retry(int64_t waited_ns) const {
   return retry_interval_ns_ && waited_ns + options_.clock_lag_ns >= retry_interval_ns_;
 }
 
-// Twice the longest turnaround seen (the slave's, else the bus's) and 20 ms; with nothing
-// learned, 50 ms, the shortest time-out masters use.
-int64_t Matcher::answered_within_ns(uint8_t slave) const {
-  constexpr int64_t earliest_retry_ns = 50'000'000;
-  constexpr int64_t slack_ns = 20'000'000;
-  const int64_t learned = turnaround_learned(slave);
-  return learned ? 2 * learned + slack_ns : earliest_retry_ns;
-}
-
 // Past the answer's time and what the clock may add to one frame's time (a turnaround learned
 // on a read stamped on time says nothing of how late the next read is stamped); with nothing
 // learned, 50 ms on, where a copy may be either.
@@ -337,7 +328,7 @@ void Matcher::late_answer(Frame& frame) {
 // copy of the one that timed out last. A master sends a retry only after its time-out, and then
 // waits as long again for the retry's answer; so the copy's wait since its request, halved,
 // bounds how soon a request of the master's own shows it never waited for the copy's answer.
-std::optional<int64_t> Matcher::judge_doubt(const Frame& frame) {
+std::optional<int64_t> Matcher::copy_in_doubt(const Frame& frame) {
   advance(frame.t_ns);  // a pending request whose time-out has run out by now is overdue
   const Pending* request = copied_in_doubt(frame);
   if (!request) return std::nullopt;

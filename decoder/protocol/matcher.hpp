@@ -47,12 +47,18 @@ class Matcher {
   // slave's late answer or the master's retry, and only the master's next move tells: the time
   // by which a request of the master's that shows it did not wait for the copy's answer would
   // come (Analyzer holds the copy until then). None where the frame is no such copy.
-  std::optional<int64_t> copy_in_doubt(const Frame& frame) {
+  std::optional<int64_t> copy_in_doubt(const Frame& frame);
+  // What copy_in_doubt asks first, cheaply, of every frame: a good frame that reads as a
+  // request, of the pending request's slave later than its answer takes (or past its time-out),
+  // or of the slave whose request timed out last.
+  bool may_be_copy_in_doubt(const Frame& frame) const {
+    if (!options_.timed || !frame.check_ok || !frame.fit.request) return false;
     const uint8_t slave = frame.slave();
-    const bool may_copy =
-        (pending_ && pending_->slave == slave) || (overdue_open_ && overdue_.slave == slave);
-    if (!options_.timed || !frame.check_ok || !frame.fit.request || !may_copy) return std::nullopt;
-    return judge_doubt(frame);
+    if (pending_ && pending_->slave == slave) {
+      const int64_t waited = frame.t_ns - pending_->end_ns;
+      return waited >= answered_within_ns(slave) || waited > pending_->timeout_ns;
+    }
+    return overdue_open_ && overdue_.slave == slave;
   }
   // Whether `next`, the first frame after such a copy, is the master's request to another slave
   // or function, sent before the master waits for an answer: then the copy was no request.
@@ -108,8 +114,15 @@ class Matcher {
   static bool copies(const Frame& frame, const Pending& request);
   static bool may_answer(const Frame& frame, const Pending& request);
   // How soon after its request a copy of it can only be the answer, and from when it may be
-  // the master's retry (from when it can only be one, once a turnaround is learned).
-  int64_t answered_within_ns(uint8_t slave) const;
+  // the master's retry (from when it can only be one, once a turnaround is learned). The first:
+  // twice the longest turnaround seen (the slave's, else the bus's) and 20 ms; with nothing
+  // learned, 50 ms, the shortest time-out masters use.
+  int64_t answered_within_ns(uint8_t slave) const {
+    constexpr int64_t earliest_retry_ns = 50'000'000;
+    constexpr int64_t slack_ns = 20'000'000;
+    const int64_t learned = turnaround_learned(slave);
+    return learned ? 2 * learned + slack_ns : earliest_retry_ns;
+  }
   int64_t retry_from_ns(uint8_t slave) const;
   int64_t turnaround_learned(uint8_t slave) const {
     return turnaround_ns_[slave] ? turnaround_ns_[slave] : bus_turnaround_ns_;
@@ -142,7 +155,6 @@ class Matcher {
   static bool in_late_answer_time(const Frame& frame, const Pending& request);
   // The request a copy in doubt copies, and whether it is still pending.
   const Pending* copied_in_doubt(const Frame& frame) const;
-  std::optional<int64_t> judge_doubt(const Frame& frame);
   void expire(int64_t now_ns, TimeoutReason reason);
   bool pending_matches(const Frame& frame) const;
   bool awaits_answer(ChannelRole channel_role) const;
