@@ -14,6 +14,8 @@
 
 #include <filesystem>
 
+#include <unistd.h>
+
 #include "captures/hexlog_writer.hpp"
 #include "captures/open_capture.hpp"
 #include "captures/pcap_chunk_writer.hpp"
@@ -55,12 +57,18 @@ void PrintTo(const Scenario& s, std::ostream* os) {
 
 constexpr int64_t file_epoch_ns = 1'700'000'000'000'000'000;
 
+// A scenario's temporary file: named by the scenario, and by the process, so that two test runs
+// on one machine (a developer's beside CI's, or shards) never read each other's.
+std::string temp_path(const std::string& stem, const char* extension) {
+  return (std::filesystem::temp_directory_path() /
+          (stem + "-" + std::to_string(getpid()) + extension))
+      .string();
+}
+
 // Writes the delivered chunks as the scenario's file format and returns the path.
 std::string write_file(const BusCapture& capture, const Scenario& s) {
   const auto path =
-      (std::filesystem::temp_directory_path() /
-       (std::string("modtap-scenario-") + s.name + (s.via == Via::pcap ? ".pcap" : ".log")))
-          .string();
+      temp_path(std::string("modtap-scenario-") + s.name, s.via == Via::pcap ? ".pcap" : ".log");
   const auto chunks = busgen::deliver(capture, s.delivery, s.bus.seed, s.clock);
   auto chunk_at = [&](const busgen::DeliveredChunk& c) {
     return Chunk{0, file_epoch_ns + c.t_ns, {capture.bytes.data() + c.offset, c.size}};
@@ -162,9 +170,7 @@ bool sends_no_junk(const BusOptions& bus) {
 TEST_P(BusScenario, WrittenAsPcapngReadsBackToTheSameRecords) {
   const Scenario& s = GetParam();
   const BusCapture capture = busgen::simulate(s.bus);
-  const auto path =
-      (std::filesystem::temp_directory_path() / (std::string("modtap-round-") + s.name + ".pcapng"))
-          .string();
+  const auto path = temp_path(std::string("modtap-round-") + s.name, ".pcapng");
   Collector first;
   {
     const std::vector<ChannelInfo> channels{{"bus", ChannelRole::bus}};
