@@ -466,6 +466,7 @@ INSTANTIATE_TEST_SUITE_P(
         Scenario{"glitches_per_frame", Delivery::per_frame, glitch_every_turnaround(29)},
         Scenario{"glitches_untimed", Delivery::untimed, glitch_every_turnaround(30)},
         Scenario{"long_echoes_bursts", Delivery::bursts, long_echoes(35)},
+        Scenario{"long_echoes_usb_packets", Delivery::usb_packets, long_echoes(37)},
         Scenario{"long_echoes_per_frame", Delivery::per_frame, long_echoes(36), 0, Via::direct,
                  usb_jitter}),
     [](const auto& info) { return std::string(info.param.name); });
@@ -581,6 +582,7 @@ INSTANTIATE_TEST_SUITE_P(
                       Scenario{"untimed", Delivery::untimed, clean(4)},
                       Scenario{"fast_per_byte", Delivery::per_byte, fast(5)},
                       Scenario{"fast_bursts", Delivery::bursts, fast(6)},
+                      Scenario{"fast_usb_packets", Delivery::usb_packets, fast(7)},
                       Scenario{"rough_per_byte", Delivery::per_byte, rough(7)},
                       Scenario{"rough_bursts", Delivery::bursts, rough(8)},
                       Scenario{"rough_per_frame", Delivery::per_frame, rough(9)},

@@ -816,6 +816,7 @@ ClockQuality clock_of(Delivery delivery) {
     case Delivery::per_byte:
       return ClockQuality::per_byte;
     case Delivery::bursts:
+    case Delivery::usb_packets:
     case Delivery::per_frame:
     case Delivery::whole_frames:
       return ClockQuality::per_chunk;
@@ -858,13 +859,18 @@ std::vector<DeliveredChunk> deliver(const BusCapture& capture, Delivery delivery
       for (uint64_t i = 0; i < n; i += 4096)
         chunks.push_back({0, i, static_cast<uint32_t>(std::min<uint64_t>(4096, n - i))});
       break;
-    case Delivery::bursts: {
+    case Delivery::bursts:
+    case Delivery::usb_packets: {
+      // An FTDI chip sends its 64-byte USB packet (2 status bytes, 62 of data) once it is full,
+      // and what it holds when its latency timer runs out: at 115200 baud a full packet every
+      // 5.4 ms, not every 16 ms.
       constexpr int64_t period = 16'000'000;
+      const uint64_t packet = delivery == Delivery::usb_packets ? 62 : n;
       for (uint64_t i = 0; i < n;) {
         const int64_t due = (ends[i] / period + 1) * period;
         uint64_t j = i;
-        while (j < n && ends[j] <= due) ++j;
-        chunks.push_back({due, i, static_cast<uint32_t>(j - i)});
+        while (j < n && ends[j] <= due && j - i < packet) ++j;
+        chunks.push_back({j - i == packet ? ends[j - 1] : due, i, static_cast<uint32_t>(j - i)});
         i = j;
       }
       break;

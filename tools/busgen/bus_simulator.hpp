@@ -147,6 +147,7 @@ void encode_frame(Mode mode, const std::vector<uint8_t>& body, std::vector<uint8
 enum class Delivery {
   per_byte,      // each byte with its exact time (a logic analyzer)
   bursts,        // FTDI-style: whatever arrived, every 16 ms
+  usb_packets,   // FTDI as it is: a packet once 62 bytes have come, else every 16 ms
   per_frame,     // a gap-based sniffer: one chunk per frame, some split, some merged
   whole_frames,  // exactly one chunk per frame or run of noise: what tshark's mbrtu needs
   untimed,       // a raw file: blocks with no time

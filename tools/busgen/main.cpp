@@ -52,9 +52,10 @@ int main(int argc, char** argv) {
   app.add_option("--format", format, "raw, pcap (DLT_USER0) or hexlog")
       ->check(CLI::IsMember({"raw", "pcap", "hexlog"}));
   app.add_option("--delivery", delivery_name,
-                 "For pcap and hexlog: frames (one frame a packet), bytes, bursts (16 ms), "
-                 "sniffer (frames, some split, some merged)")
-      ->check(CLI::IsMember({"frames", "bytes", "bursts", "sniffer"}));
+                 "For pcap and hexlog: frames (one frame a packet), bytes, bursts (16 ms), usb "
+                 "(an FTDI's packets: 62 bytes, or 16 ms), sniffer (frames, some split, some "
+                 "merged)")
+      ->check(CLI::IsMember({"frames", "bytes", "bursts", "usb", "sniffer"}));
   app.add_option("--slaves", o.polled_slaves,
                  "Poll slaves 1 to N in turn, as a PLC's scan list does (default: each request to "
                  "a slave picked at random from 1-247)")
@@ -103,6 +104,7 @@ int main(int argc, char** argv) {
       {"frames", busgen::Delivery::whole_frames},
       {"bytes", busgen::Delivery::per_byte},
       {"bursts", busgen::Delivery::bursts},
+      {"usb", busgen::Delivery::usb_packets},
       {"sniffer", busgen::Delivery::per_frame}};
   const auto capture = busgen::simulate(o);
   std::fprintf(stderr, "%zu frames, %zu bytes\n", capture.frames.size(), capture.bytes.size());
