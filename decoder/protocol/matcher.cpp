@@ -51,8 +51,8 @@ inline void Matcher::remember(Pending& p, const Frame& frame) const {
 // While a copy in doubt waits, the framers read the bytes after it as they would after the
 // master's retry: that copy pending. Once it is told, the bus waits for what it did before.
 void Matcher::doubt(const Frame& copy) {
-  remember(copy_in_doubt_, copy);
-  expectation_ = expecting(copy_in_doubt_);
+  remember(held_copy_, copy);
+  expectation_ = expecting(held_copy_);
 }
 
 void Matcher::end_doubt() {

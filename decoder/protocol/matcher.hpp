@@ -184,7 +184,7 @@ class Matcher {
   void set_pending(Pending* pending);
   Expectation expecting(const Pending& request) const;
   void remember(Pending& request, const Frame& frame) const;
-  Pending copy_in_doubt_;  // the copy Analyzer holds, as a pending request
+  Pending held_copy_;  // the copy in doubt Analyzer holds, as a pending request
 };
 
 }  // namespace modtap

@@ -690,6 +690,21 @@ TEST(BusSimulator, ACollisionLeavesNoGoodFrame) {
   }
 }
 
+// An FTDI sends its USB packet once 62 bytes have come, not only when its 16 ms timer runs out:
+// at 115200 baud, long echoes fill packets every 5.4 ms, each stamped when its last byte came.
+TEST(BusSimulator, UsbPacketsCarryAtMost62BytesAndGoOutWhenFull) {
+  const BusOptions options = long_echoes(37);
+  const busgen::BusCapture capture = busgen::simulate(options);
+  size_t full = 0;
+  for (const auto& c : busgen::deliver(capture, Delivery::usb_packets, options.seed)) {
+    ASSERT_LE(c.size, 62u);
+    if (c.size < 62) continue;
+    ++full;
+    EXPECT_EQ(c.t_ns, capture.end_ns[c.offset + c.size - 1]);  // not at the timer's tick
+  }
+  EXPECT_GT(full, 100u);
+}
+
 // What --explain shows is what decided: a good frame starts where a reading of its length was
 // kept, and noise or a damaged frame where none was. Every row of the evidence table decides
 // somewhere in the real masters' seeds (a row none needed would be dead weight): these seeds
