@@ -153,7 +153,7 @@ void Analyzer::push(const Chunk& chunk) {
 void Analyzer::feed(const Chunk& chunk) {
   Channel& c = channel(chunk.channel);
   if (options_.clock != ClockQuality::none) {
-    const int64_t settled = settled_ns(chunk.t_ns);
+    const int64_t settled = settled_ns(earliest_start_ns(chunk));
     release_held_by(settled);
     matcher_.advance(settled);
   }
@@ -179,6 +179,14 @@ void Analyzer::flush(int64_t now_ns) {
     release_held_by(settled);
     matcher_.advance(settled);
   }
+}
+
+// A read is stamped when it came, and its bytes may have begun as early as the line could carry
+// them all: until they are framed, and their frames timed, nothing times out after that. A
+// time-out then falls where the frames' own times put it, as it does reading the frames back
+// from a file that times each (a pcapng modtap wrote).
+int64_t Analyzer::earliest_start_ns(const Chunk& chunk) const {
+  return chunk.t_ns - static_cast<int64_t>(chunk.bytes.size()) * options_.format.char_time_ns();
 }
 
 int64_t Analyzer::settled_ns(int64_t now_ns) const {

@@ -71,6 +71,7 @@ class Analyzer final : private FrameSink {
   // The matcher's clock: never past a byte a framer still holds, so a response that framer
   // has yet to emit is not preceded by its request's time-out.
   int64_t settled_ns(int64_t now_ns) const;
+  int64_t earliest_start_ns(const Chunk& chunk) const;
   void start_framer(uint16_t id, Mode mode);
   void settle_mode();
   void on_frame(Frame& frame) override;
