@@ -9,11 +9,13 @@
 #include <cstdlib>
 #include <cstring>
 #include <deque>
+#include <fstream>
 #include <map>
 #include <set>
 #include <stdexcept>
 
 #include <filesystem>
+#include <iterator>
 
 #include <unistd.h>
 
@@ -221,113 +223,130 @@ TEST_P(BusScenario, WrittenAsPcapngReadsBackToTheSameRecords) {
   }
 }
 
-TEST_P(BusScenario, FindsExactlyTheFramesSentWithRolesAndPairs) {
-  const Scenario& s = GetParam();
-  const BusCapture capture = busgen::simulate(s.bus);
-  const Collector out = run(capture, s);
+// How the records of one run differ from what the simulator sent: each count, and the first
+// few of each kind with the records and the frames sent around them.
+struct Differences {
+  size_t bytes_lost = 0;    // bytes the records do not give back as they came
+  size_t bad_verdicts = 0;  // a frame whose check verdict is not its CRC's
+  size_t missing = 0, wrong_role = 0, wrong_pair = 0, wrong_damage = 0, wrong_findings = 0,
+         false_frames = 0, invented = 0, clashes_misread = 0, timeouts_differ = 0;
+  std::vector<std::string> examples;
 
-  EXPECT_EQ(out.bytes_of(0), capture.bytes) << "byte conservation";
-  // A frame's verdict is its check, whatever was around it: a CRC that holds is never bad.
-  for (const auto& r : out.records) {
-    if (r.type != testing::Record::Type::frame || s.bus.mode != Mode::rtu ||
-        r.damage == Damage::cut)
-      continue;
-    EXPECT_EQ(r.check_ok, r.expected_check == (r.raw[r.raw.size() - 2] | r.raw.back() << 8))
-        << "frame " << r.index;
+  // Counts one more in `count`, and keeps what `example` says of the first few: saying it
+  // walks the records around it, too dear for every one.
+  template <typename Example>
+  void note(size_t& count, Example example) {
+    if (++count <= 3) examples.push_back(example());
+  }
+  // "missing 1, wrong role 2", or empty where the records are the truth.
+  std::string summary() const {
+    std::string text;
+    const std::pair<const char*, size_t> counts[] = {{"bytes lost", bytes_lost},
+                                                     {"bad verdicts", bad_verdicts},
+                                                     {"missing", missing},
+                                                     {"wrong role", wrong_role},
+                                                     {"wrong pair", wrong_pair},
+                                                     {"wrong damage", wrong_damage},
+                                                     {"wrong findings", wrong_findings},
+                                                     {"false frames", false_frames},
+                                                     {"invented", invented},
+                                                     {"clashes misread", clashes_misread},
+                                                     {"time-outs differ", timeouts_differ}};
+    for (const auto& [name, count] : counts)
+      if (count)
+        text += (text.empty() ? "" : ", ") + std::string(name) + " " + std::to_string(count);
+    return text;
+  }
+};
+
+// The records' frames, by offset.
+struct RecordIndex {
+  std::map<uint64_t, const testing::Record*> frames, noise;
+  explicit RecordIndex(const Collector& out) {
+    for (const auto& r : out.records) {
+      if (r.type == testing::Record::Type::frame) frames[r.offset] = &r;
+      if (r.type == testing::Record::Type::noise) noise[r.offset] = &r;
+    }
   }
 
-  std::map<uint64_t, const testing::Record*> by_offset, noise_at;
-  for (const auto& r : out.records) {
-    if (r.type == testing::Record::Type::frame) by_offset[r.offset] = &r;
-    if (r.type == testing::Record::Type::noise) noise_at[r.offset] = &r;
-  }
   // A frame that says its last byte may be a glitch is found at the other reading too: one
   // byte short with that byte as a glitch after it, or one byte long ending in 0x00/0xFF.
-  auto other_reading = [&](const testing::Record& r, const busgen::TruthFrame& truth) {
+  bool other_reading(const testing::Record& r, const busgen::TruthFrame& truth) const {
     if (!(r.findings & finding_ambiguous_end)) return false;
     const uint64_t size = r.raw.size();
     if (size + 1 == truth.size) {  // the byte it lacks leads the noise after it
-      const auto glitch = noise_at.find(truth.offset + size);
-      return glitch != noise_at.end() && (r.check_ok || glitch->second->raw.size() == 1);
+      const auto glitch = noise.find(truth.offset + size);
+      return glitch != noise.end() && (r.check_ok || glitch->second->raw.size() == 1);
     }
     return size == truth.size + 1 && (r.raw.back() == 0x00 || r.raw.back() == 0xFF);
-  };
+  }
   // A response cut one byte short whose missing byte the next driver's glitch repeats puts the
   // whole response on the wire, byte for byte (1 cut in 512): found as the good frame it reads.
-  auto made_whole = [&](const testing::Record& r, const busgen::TruthFrame& truth) {
+  static bool made_whole(const testing::Record& r, const busgen::TruthFrame& truth) {
     return truth.damage == Damage::cut && r.check_ok && r.raw.size() == truth.size + 1 &&
            r.damage == Damage::none;
-  };
-  auto found = [&](const busgen::TruthFrame& truth) -> const testing::Record* {
-    auto it = by_offset.find(truth.offset);
-    if (it == by_offset.end()) return nullptr;
+  }
+  const testing::Record* found(const busgen::TruthFrame& truth) const {
+    auto it = frames.find(truth.offset);
+    if (it == frames.end()) return nullptr;
     const testing::Record& r = *it->second;
     if (made_whole(r, truth)) return &r;
     if (r.raw.size() != truth.size && !other_reading(r, truth)) return nullptr;
-    const bool damaged = truth.damage != Damage::none;
-    if (r.check_ok == damaged) return nullptr;
+    if (r.check_ok == (truth.damage != Damage::none)) return nullptr;
     return &r;
-  };
+  }
+};
 
-  std::vector<uint64_t> index_of(capture.frames.size(), 0);
-  size_t wrong_role = 0, wrong_pair = 0, wrong_damage = 0, wrong_findings = 0, missing = 0;
-  std::set<uint64_t> sent_good, made_whole_at;
+// The sent frames: each found, with its role, pair, damage and findings.
+void compare_frames(const BusCapture& capture, const Collector& out, const RecordIndex& records,
+                    std::vector<uint64_t>& index_of, Differences& d) {
   for (size_t i = 0; i < capture.frames.size(); ++i) {
     const auto& truth = capture.frames[i];
-    if (truth.damage == Damage::none) sent_good.insert(truth.offset);
-    const testing::Record* got = found(truth);
+    auto where = [&] {
+      return "frame " + std::to_string(i) + " at offset " + std::to_string(truth.offset) +
+             " size " + std::to_string(truth.size);
+    };
+    auto around = [&] { return context(capture, out, truth.offset); };
+    const testing::Record* got = records.found(truth);
     if (!got) {
-      if (missing >= s.max_missing && missing < s.max_missing + 3) {
-        ADD_FAILURE() << "frame " << i << " at offset " << truth.offset << " size " << truth.size
-                      << " not found; context: " << context(capture, out, truth.offset);
-      }
-      ++missing;
+      d.note(d.missing, [&] { return std::string(where() + " not found" + around()); });
       continue;
     }
     index_of[i] = got->index;
     // Where nothing can tell a retry from an echo, a frame that says so stands at either role.
     const bool said_ambiguous = got->findings & finding_ambiguous_echo;
-    if (got->role != truth.role && !said_ambiguous && ++wrong_role > s.max_missing &&
-        wrong_role <= s.max_missing + 3)
-      ADD_FAILURE() << "frame " << i << " at offset " << truth.offset << " has the wrong role"
-                    << context(capture, out, truth.offset);
+    if (got->role != truth.role && !said_ambiguous)
+      d.note(d.wrong_role, [&] { return std::string(where() + " has the wrong role" + around()); });
     // A response made whole carries a whole answer's damage and findings; a frame found at its
     // other reading, that reading's damage (cut one byte short, run on one byte long).
-    const bool whole = made_whole(*got, truth);
-    if (whole) made_whole_at.insert(truth.offset);
-    const bool other = got->raw.size() != truth.size;
-    if (!whole && !other && got->damage != truth.damage && ++wrong_damage > s.max_missing &&
-        wrong_damage <= s.max_missing + 3)
-      ADD_FAILURE() << "frame " << i << " at offset " << truth.offset << " has the wrong damage"
-                    << context(capture, out, truth.offset);
-    if (truth.request && got->request != index_of[*truth.request] && !said_ambiguous &&
-        ++wrong_pair > missing + s.max_missing && wrong_pair <= missing + s.max_missing + 3)
-      ADD_FAILURE() << "frame " << i << " at offset " << truth.offset << " paired wrongly"
-                    << context(capture, out, truth.offset);
+    const bool whole = RecordIndex::made_whole(*got, truth);
+    if (!whole && got->raw.size() == truth.size && got->damage != truth.damage)
+      d.note(d.wrong_damage,
+             [&] { return std::string(where() + " has the wrong damage" + around()); });
+    if (truth.request && got->request != index_of[*truth.request] && !said_ambiguous)
+      d.note(d.wrong_pair, [&] { return std::string(where() + " paired wrongly" + around()); });
     // A retry merged into one read with its original cannot be timed; counted like a miss.
     const uint32_t knowable = said_ambiguous ? truth.findings & ~finding_retry : truth.findings;
-    if (!whole && (got->findings & knowable) != knowable && ++wrong_findings > s.max_missing)
-      ADD_FAILURE() << "frame " << i << " at offset " << truth.offset << " lacks findings "
-                    << truth.findings << context(capture, out, truth.offset);
+    if (!whole && (got->findings & knowable) != knowable)
+      d.note(d.wrong_findings, [&] {
+        return std::string(where() + " lacks findings " + std::to_string(truth.findings) +
+                           around());
+      });
   }
-  size_t false_frames = 0;
-  for (const auto& [offset, r] : by_offset) {
-    if (!r->check_ok || sent_good.count(offset) || made_whole_at.count(offset)) continue;
-    if (++false_frames > s.max_missing && false_frames <= s.max_missing + 3)
-      ADD_FAILURE() << "false frame at offset " << offset << context(capture, out, offset);
-  }
-  // Two devices answering over each other put one damaged answer on the wire, from the first
-  // start bit to the last stop bit: one record, the answer's (a damaged frame paired with its
-  // request, or where its header is garbled too, noise that says it is that slave's answer),
-  // and nothing else starts inside it.
+}
+
+// Two devices answering over each other put one damaged answer on the wire, from the first
+// start bit to the last stop bit: one record, the answer's (a damaged frame paired with its
+// request, or where its header is garbled too, noise that says it is that slave's answer), and
+// nothing else starts inside it.
+void compare_clashes(const BusCapture& capture, const Collector& out, const RecordIndex& records,
+                     const std::vector<uint64_t>& index_of, Differences& d) {
+  std::map<uint64_t, const testing::Record*> record_at = records.noise;
+  record_at.insert(records.frames.begin(), records.frames.end());
   std::set<uint64_t> sent_at;
   for (const auto& f : capture.frames) sent_at.insert(f.offset);
-  std::map<uint64_t, const testing::Record*> record_at = noise_at;
-  record_at.insert(by_offset.begin(), by_offset.end());
-  size_t clashes_misread = 0;
   for (const busgen::Clash& clash : capture.clashes) {
     if (sent_at.count(clash.offset)) continue;  // begun within one bit: a frame of the truth
-    sent_at.insert(clash.offset);
     const auto it = record_at.find(clash.offset);
     const testing::Record* r = it == record_at.end() ? nullptr : it->second;
     const auto& request = capture.frames[clash.request];
@@ -338,40 +357,92 @@ TEST_P(BusScenario, FindsExactlyTheFramesSentWithRolesAndPairs) {
              : !r->check_ok && r->role == Role::response && r->request == index_of[clash.request]);
     const auto next = record_at.upper_bound(clash.offset);
     const bool nothing_inside = next == record_at.end() || next->first >= clash.offset + clash.size;
-    if ((!one_answer || !nothing_inside) && ++clashes_misread <= 3)
-      ADD_FAILURE() << "the answers clashing at offset " << clash.offset << " (" << clash.size
-                    << " bytes) are not one answer of slave " << int(request.slave)
-                    << context(capture, out, clash.offset);
+    if (!one_answer || !nothing_inside)
+      d.note(d.clashes_misread, [&] {
+        return std::string("the answers clashing at offset " + std::to_string(clash.offset) + " (" +
+                           std::to_string(clash.size) + " bytes) are not one answer of slave " +
+                           std::to_string(request.slave) + context(capture, out, clash.offset));
+      });
   }
-  EXPECT_EQ(clashes_misread, 0u);
-  // Nor a bad frame where none was sent, where no junk was sent either: what runs on past a
-  // collided answer is the other talker's, never a request to a slave of its own. (Junk itself
-  // may read as a damaged frame of its header: the rough and garbled scenarios send it.)
-  size_t invented = 0;
-  for (const auto& [offset, r] : by_offset) {
-    if (r->check_ok || sent_at.count(offset)) continue;
-    if (++invented > s.max_missing && invented <= s.max_missing + 3 && sends_no_junk(s.bus)) {
-      ADD_FAILURE() << "bad frame where none was sent, at offset " << offset
-                    << context(capture, out, offset);
-    }
+}
+
+// Good frames where none was sent, and bad ones where neither a frame nor a clash was.
+void compare_extra_frames(const BusCapture& capture, const Collector& out,
+                          const RecordIndex& records, const Scenario& s, Differences& d) {
+  std::map<uint64_t, const busgen::TruthFrame*> truth_at;
+  std::set<uint64_t> sent_at;
+  for (const auto& f : capture.frames) truth_at[f.offset] = &f;
+  for (const auto& f : capture.frames) sent_at.insert(f.offset);
+  for (const busgen::Clash& clash : capture.clashes) sent_at.insert(clash.offset);
+  for (const auto& [offset, r] : records.frames) {
+    const auto truth = truth_at.find(offset);
+    const bool sent_good = truth != truth_at.end() && truth->second->damage == Damage::none;
+    const bool whole = truth != truth_at.end() && RecordIndex::made_whole(*r, *truth->second);
+    if (r->check_ok && !sent_good && !whole)
+      d.note(d.false_frames, [&] {
+        return std::string("false frame at offset " + std::to_string(offset) +
+                           context(capture, out, offset));
+      });
+    // What runs on past a collided answer is the other talker's, never a request to a slave
+    // of its own. Junk itself may read as a damaged frame of its header: only where no junk
+    // was sent is a bad frame counted.
+    if (!r->check_ok && !sent_at.count(offset) && sends_no_junk(s.bus))
+      d.note(d.invented, [&] {
+        return std::string("bad frame where none was sent, at offset " + std::to_string(offset) +
+                           context(capture, out, offset));
+      });
   }
-  if (sends_no_junk(s.bus)) {
-    EXPECT_LE(invented, s.max_missing);
+}
+
+Differences compare_with_truth(const BusCapture& capture, const Collector& out, const Scenario& s) {
+  Differences d;
+  if (out.bytes_of(0) != capture.bytes)
+    d.note(d.bytes_lost, [&] { return std::string("byte conservation"); });
+  // A frame's verdict is its check, whatever was around it: a CRC that holds is never bad.
+  for (const auto& r : out.records) {
+    if (r.type != testing::Record::Type::frame || s.bus.mode != Mode::rtu ||
+        r.damage == Damage::cut)
+      continue;
+    if (r.check_ok != (r.expected_check == (r.raw[r.raw.size() - 2] | r.raw.back() << 8)))
+      d.note(d.bad_verdicts,
+             [&] { return std::string("the check verdict of frame " + std::to_string(r.index)); });
   }
+  const RecordIndex records(out);
+  std::vector<uint64_t> index_of(capture.frames.size(), 0);
+  compare_frames(capture, out, records, index_of, d);
+  compare_clashes(capture, out, records, index_of, d);
+  compare_extra_frames(capture, out, records, s, d);
+  if (d.missing) return d;  // a lost request also changes which time-outs are seen
+  std::set<uint64_t> timed_out, expected, differ;
+  for (const auto& t : out.timeouts()) timed_out.insert(*t.request);
+  for (size_t i : capture.timed_out) expected.insert(index_of[i]);
+  std::set_symmetric_difference(timed_out.begin(), timed_out.end(), expected.begin(),
+                                expected.end(), std::inserter(differ, differ.begin()));
+  for (const uint64_t request : differ)
+    d.note(d.timeouts_differ, [&] {
+      return std::string("request record " + std::to_string(request) +
+                         (timed_out.count(request) ? " timed out, in truth not"
+                                                   : " did not time out, in truth did"));
+    });
+  return d;
+}
+
+TEST_P(BusScenario, FindsExactlyTheFramesSentWithRolesAndPairs) {
+  const Scenario& s = GetParam();
+  const BusCapture capture = busgen::simulate(s.bus);
+  const Differences d = compare_with_truth(capture, run(capture, s), s);
+  EXPECT_EQ(d.bytes_lost, 0u);
+  EXPECT_EQ(d.bad_verdicts, 0u);
+  EXPECT_EQ(d.clashes_misread, 0u);
   // Where the clock cannot see a turnaround, a response cut one byte short and the next
   // frame's glitch complete a good CRC 1 time in 256: counted with the misses.
-  EXPECT_LE(false_frames, s.max_missing);
-  EXPECT_LE(wrong_damage, s.max_missing);
-  EXPECT_LE(missing, s.max_missing);
-  EXPECT_LE(wrong_role, s.max_missing);
-  EXPECT_LE(wrong_pair, missing + s.max_missing);
-  if (missing) return;  // a lost request also changes which time-outs are seen
-
-  std::set<uint64_t> timed_out;
-  for (const auto& t : out.timeouts()) timed_out.insert(*t.request);
-  std::set<uint64_t> expected;
-  for (size_t i : capture.timed_out) expected.insert(index_of[i]);
-  EXPECT_EQ(timed_out, expected);
+  for (const size_t count : {d.missing, d.wrong_role, d.wrong_damage, d.false_frames, d.invented})
+    EXPECT_LE(count, s.max_missing);
+  EXPECT_LE(d.wrong_pair, d.missing + s.max_missing);
+  EXPECT_LE(d.wrong_findings, s.max_missing);
+  EXPECT_EQ(d.timeouts_differ, 0u);
+  if (::testing::Test::HasFailure())
+    for (const std::string& example : d.examples) ADD_FAILURE() << example;
 }
 
 BusOptions clean(uint64_t seed, size_t n = 3000) {
@@ -690,6 +761,142 @@ INSTANTIATE_TEST_SUITE_P(
                       Scenario{"hexlog_bursts", Delivery::bursts, clean(17), 0, Via::hexlog},
                       Scenario{"hexlog_ascii", Delivery::bursts, ascii(18), 0, Via::hexlog}),
     [](const auto& info) { return std::string(info.param.name); });
+
+// The baseline of wrong readings (tests/protocol/wrong_readings.txt): every run of the sweeps
+// whose records differ from what the simulator sent, one line a run, "SWEEP SEED DELIVERY: what
+// differs". Each slice (a sweep at one delivery) runs its cheap seeds and fails where a run
+// differs otherwise than the file says, better or worse; MODTAP_BASELINE=full runs every seed,
+// MODTAP_BASELINE=update (or full-update) rewrites the lines of the runs it read.
+struct BaselineSlice {
+  const char* sweep;
+  const char* delivery_name;
+  Delivery delivery;
+  busgen::ClockError clock;
+  bool told_timeout;
+  BusOptions (*make)(uint64_t seed);
+  uint64_t first, cheap_last, last;  // seeds: the test's, and the full sweep's
+};
+
+void PrintTo(const BaselineSlice& b, std::ostream* os) {
+  *os << b.sweep << " " << b.delivery_name;
+}
+
+#ifndef MODTAP_BASELINE_TENTHS
+#define MODTAP_BASELINE_TENTHS 10
+#endif
+// The cheap seeds of a slice: all of [first, last], or under the sanitizers a tenth.
+constexpr uint64_t cheap_last(uint64_t first, uint64_t last) {
+  return first + (last - first + 1) * MODTAP_BASELINE_TENTHS / 10 - 1;
+}
+
+std::vector<BaselineSlice> baseline_slices() {
+  std::vector<BaselineSlice> out;
+  for (const TimedDelivery& d : timed_deliveries)
+    out.push_back({"real-masters", d.name, d.delivery, d.clock, false, real_masters, 100,
+                   cheap_last(100, 299), 7125});
+  for (const auto& [name, delivery] :
+       {std::pair{"per_byte", Delivery::per_byte}, std::pair{"bursts", Delivery::bursts},
+        std::pair{"per_frame", Delivery::per_frame}, std::pair{"untimed", Delivery::untimed}})
+    out.push_back({"rough", name, delivery, {}, false, rough, 100, cheap_last(100, 1125), 1125});
+  static std::deque<std::string> names;  // the slices point at their names
+  for (const FaultKind& kind : fault_kinds)
+    for (const TimedDelivery& d : timed_deliveries)
+      for (const bool told : {true, false}) {
+        names.push_back(std::string("faulty-") + kind.name + (told ? "-told" : ""));
+        out.push_back({names.back().c_str(), d.name, d.delivery, d.clock, told, kind.make, 41,
+                       cheap_last(41, 60), 60});
+      }
+  return out;
+}
+
+std::string baseline_path() {
+  return std::string(MODTAP_TEST_DATA) + "/protocol/wrong_readings.txt";
+}
+
+// The file's lines, by run ("SWEEP SEED DELIVERY"); its comments apart.
+std::map<std::string, std::string> read_baseline(std::vector<std::string>* comments = nullptr) {
+  std::map<std::string, std::string> lines;
+  std::ifstream in(baseline_path());
+  for (std::string line; std::getline(in, line);) {
+    const size_t colon = line.find(": ");
+    if (line.empty() || line[0] == '#' || colon == std::string::npos) {
+      if (comments) comments->push_back(line);
+      continue;
+    }
+    lines[line.substr(0, colon)] = line.substr(colon + 2);
+  }
+  return lines;
+}
+
+std::string run_key(const BaselineSlice& b, uint64_t seed) {
+  return std::string(b.sweep) + " " + std::to_string(seed) + " " + b.delivery_name;
+}
+
+// Sweep, seed, delivery, in that order; seeds by number.
+bool key_before(const std::string& a, const std::string& b) {
+  auto parts = [](const std::string& key) {
+    const size_t first = key.find(' '), second = key.find(' ', first + 1);
+    return std::tuple(key.substr(0, first), std::stoull(key.substr(first + 1, second - first - 1)),
+                      key.substr(second + 1));
+  };
+  return parts(a) < parts(b);
+}
+
+void write_baseline(const std::map<std::string, std::string>& lines,
+                    const std::vector<std::string>& comments) {
+  std::vector<std::string> keys;
+  for (const auto& [key, what] : lines) keys.push_back(key);
+  std::sort(keys.begin(), keys.end(), key_before);
+  std::ofstream out(baseline_path());
+  for (const std::string& comment : comments) out << comment << "\n";
+  for (const std::string& key : keys) out << key << ": " << lines.at(key) << "\n";
+  ASSERT_TRUE(out.flush()) << baseline_path();
+}
+
+class WrongReadings : public ::testing::TestWithParam<BaselineSlice> {};
+
+TEST_P(WrongReadings, AreThoseTheBaselineShows) {
+  const BaselineSlice& b = GetParam();
+  const char* asked = std::getenv("MODTAP_BASELINE");
+  const std::string mode = asked ? asked : "";
+  const bool full = mode.starts_with("full");
+  std::vector<std::string> comments;
+  std::map<std::string, std::string> baseline = read_baseline(&comments);
+  std::vector<std::string> changed;
+  for (uint64_t seed = b.first; seed <= (full ? b.last : b.cheap_last); ++seed) {
+    const Scenario s{"baseline", b.delivery, b.make(seed), 0, Via::direct, b.clock, b.told_timeout};
+    const BusCapture capture = busgen::simulate(s.bus);
+    const std::string what = compare_with_truth(capture, run(capture, s), s).summary();
+    const std::string key = run_key(b, seed);
+    const auto known = baseline.find(key);
+    const std::string was = known == baseline.end() ? "" : known->second;
+    if (what == was) continue;
+    changed.push_back(key + ": " + (was.empty() ? "exact" : was) + " -> " +
+                      (what.empty() ? "exact" : what));
+    if (what.empty())
+      baseline.erase(key);
+    else
+      baseline[key] = what;
+  }
+  if (mode.ends_with("update")) {
+    // Slices run one at a time in one process; as shards, each rewrites the file it read.
+    write_baseline(baseline, comments);
+    return;
+  }
+  std::string list;
+  for (const std::string& line : changed) list += "\n  " + line;
+  EXPECT_TRUE(changed.empty()) << "runs that differ otherwise than " << baseline_path()
+                               << " says (where better, MODTAP_BASELINE=update rewrites it):"
+                               << list;
+}
+
+INSTANTIATE_TEST_SUITE_P(Sweeps, WrongReadings, ::testing::ValuesIn(baseline_slices()),
+                         [](const auto& info) {
+                           std::string name =
+                               std::string(info.param.sweep) + "_" + info.param.delivery_name;
+                           std::replace(name.begin(), name.end(), '-', '_');
+                           return name;
+                         });
 
 }  // namespace
 }  // namespace modtap
