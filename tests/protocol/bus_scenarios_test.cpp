@@ -991,6 +991,27 @@ TEST(BusSimulator, ACollisionLeavesNoGoodFrame) {
   }
 }
 
+// A request broken off where its bytes pass a CRC of their own (seeds 164 and 609: an FC08 query
+// whose CRC ends in 0x00, cut before that byte) would be a good frame to any receiver: the
+// simulator breaks it off a byte sooner. No bytes between the frames it sent are one.
+TEST(BusSimulator, ARequestBrokenOffLeavesNoGoodFrame) {
+  for (const uint64_t seed : {164u, 609u}) {
+    const busgen::BusCapture capture = busgen::simulate(rough(seed));
+    uint64_t sent_to = 0;
+    size_t pieces = 0;
+    for (const busgen::TruthFrame& frame : capture.frames) {
+      const uint64_t size = frame.offset - sent_to;
+      if (size >= 4) {
+        ++pieces;
+        EXPECT_FALSE(rtu_crc_holds({capture.bytes.data() + sent_to, static_cast<size_t>(size)}))
+            << seed << " @" << sent_to;
+      }
+      sent_to = frame.offset + frame.size;
+    }
+    EXPECT_GT(pieces, 10u) << seed;
+  }
+}
+
 // An FTDI sends its USB packet once 62 bytes have come, not only when its 16 ms timer runs out:
 // at 115200 baud, long echoes fill packets every 5.4 ms, each stamped when its last byte came.
 TEST(BusSimulator, UsbPacketsCarryAtMost62BytesAndGoOutWhenFull) {
