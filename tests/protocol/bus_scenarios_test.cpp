@@ -991,20 +991,31 @@ TEST(BusSimulator, ACollisionLeavesNoGoodFrame) {
   }
 }
 
-// A request broken off where its bytes pass a CRC of their own (seeds 164 and 609: an FC08 query
-// whose CRC ends in 0x00, cut before that byte) would be a good frame to any receiver: the
-// simulator breaks it off a byte sooner. No bytes between the frames it sent are one.
-TEST(BusSimulator, ARequestBrokenOffLeavesNoGoodFrame) {
-  for (const uint64_t seed : {164u, 609u}) {
+// Junk and requests broken off hold no span whose CRC holds: no receiver could call one anything
+// but a frame. The simulator keeps them free of one (a request broken off sooner, a junk byte
+// changed): seeds 164 and 609 broke off an FC08 query whose CRC ends in 0x00 before that byte,
+// 200, 382, 933 and 1033 drew junk that held a frame, 526 a broken-off request.
+TEST(BusSimulator, JunkAndBrokenOffRequestsHoldNoGoodFrame) {
+  for (const uint64_t seed : {164u, 200u, 382u, 526u, 609u, 933u, 1033u}) {
     const busgen::BusCapture capture = busgen::simulate(rough(seed));
     uint64_t sent_to = 0;
     size_t pieces = 0;
+    const int64_t char_ns = rough(seed).format.char_time_ns();
+    // Where the piece sent back to back from `first` ends, before `limit` at the latest.
+    auto piece_end = [&](uint64_t first, uint64_t limit) {
+      uint64_t end = first + 1;
+      while (end < limit && capture.end_ns[end] - capture.end_ns[end - 1] <= char_ns) ++end;
+      return end;
+    };
     for (const busgen::TruthFrame& frame : capture.frames) {
-      const uint64_t size = frame.offset - sent_to;
-      if (size >= 4) {
-        ++pieces;
-        EXPECT_FALSE(rtu_crc_holds({capture.bytes.data() + sent_to, static_cast<size_t>(size)}))
-            << seed << " @" << sent_to;
+      for (uint64_t piece = sent_to; piece < frame.offset;) {
+        const uint64_t piece_to = piece_end(piece, frame.offset);
+        pieces += piece_to - piece >= 4;
+        for (uint64_t first = piece; first + 4 <= piece_to; ++first)
+          for (uint64_t end = first + 4; end <= piece_to; ++end)
+            EXPECT_FALSE(rtu_crc_holds({capture.bytes.data() + first, size_t(end - first)}))
+                << seed << " @" << first << "-" << end;
+        piece = piece_to;
       }
       sent_to = frame.offset + frame.size;
     }

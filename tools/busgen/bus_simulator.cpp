@@ -59,6 +59,21 @@ class Simulator {
     b.push_back(static_cast<uint8_t>(v >> 8));
     b.push_back(static_cast<uint8_t>(v & 0xFF));
   }
+  // Where bytes that are no frame hold a span of 4 or more whose RTU CRC holds, the end of the
+  // first such span: no receiver could call it anything but a frame (1 span in 65,536 by
+  // chance, a few a run in a long sweep), so junk and broken-off requests are kept free of one.
+  std::optional<size_t> good_span_end(const Bytes& b) const {
+    if (o_.mode != Mode::rtu) return std::nullopt;
+    for (size_t first = 0; first + 4 <= b.size(); ++first) {
+      uint16_t crc = 0xFFFF;  // over a span and its own CRC, the register comes back to 0
+      for (size_t end = first + 1; end <= b.size(); ++end) {
+        crc = crc16_step(crc, b[end - 1]);
+        if (crc == 0 && end - first >= 4) return end;
+      }
+    }
+    return std::nullopt;
+  }
+
   void random_bytes(Bytes& b, size_t n) {
     for (size_t i = 0; i < n; ++i) b.push_back(static_cast<uint8_t>(pick(0, 255)));
   }
@@ -216,6 +231,7 @@ class Simulator {
     if (chance(o_.noise_rate)) {
       Bytes junk;
       random_bytes(junk, pick(1, 40));
+      while (const auto good = good_span_end(junk)) junk[*good - 1] ^= 1;
       send(junk, idle_gap());
     }
     if (chance(o_.truncation_rate)) {
@@ -223,8 +239,8 @@ class Simulator {
       encode_frame(o_.mode, request, wire);
       wire.resize(pick(1, static_cast<unsigned>(wire.size() - 1)));
       // Broken off where its bytes pass a CRC of their own (an FC08 query whose CRC ends in
-      // 0x00, cut before it), it is a good frame to any receiver: broken off a byte sooner.
-      while (o_.mode == Mode::rtu && wire.size() >= 4 && check_ok(wire)) wire.pop_back();
+      // 0x00, cut before it), it holds a good frame to any receiver: broken off sooner.
+      while (const auto good = good_span_end(wire)) wire.resize(*good - 1);
       send(wire, idle_gap());
     }
     size_t req = send_request(request, request_findings, idle_gap());
