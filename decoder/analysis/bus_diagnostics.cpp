@@ -112,13 +112,10 @@ void BusDiagnostics::remember_interval(SlaveHistory& slave, int64_t interval) {
 // Where `value` goes among the first `n` sorted values: before its equals, or after them.
 size_t BusDiagnostics::count_before(const std::array<int64_t, poll_history>& sorted, size_t n,
                                     int64_t value, bool after_equals) {
-  size_t count = 0;
-  if (after_equals) {
-    for (size_t i = 0; i < n; ++i) count += sorted[i] <= value;
-  } else {
-    for (size_t i = 0; i < n; ++i) count += sorted[i] < value;
-  }
-  return count;
+  const auto first = sorted.begin(), last = sorted.begin() + static_cast<ptrdiff_t>(n);
+  const auto at =
+      after_equals ? std::upper_bound(first, last, value) : std::lower_bound(first, last, value);
+  return static_cast<size_t>(at - first);
 }
 
 void BusDiagnostics::on_timeout(const Timeout& timeout) {

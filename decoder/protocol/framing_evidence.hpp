@@ -166,6 +166,7 @@ enum class Evidence : uint8_t {
   answer_cut_before_request,
   swallows_known_frame,
   swallows_exchange,
+  resent_inside,
   swallows_request,  // last: evidence_table asserts a row for each
 };
 
@@ -265,6 +266,14 @@ inline constexpr auto evidence_table = std::to_array<EvidenceInfo>({
      "after it",
      {Feature::another_crc, Feature::answer_after, Feature::leaves_junk},
      3},
+    {"resent-inside",
+     "a request that broke off, sent again at once: the same slave and function code start "
+     "again inside it as a frame whose length rules and CRC agree past its end, and a frame of its "
+     "slave and function code comes next (its answer, or its retry); the span's CRC held by "
+     "chance across the two (most often the broken-off frame's missing last CRC byte is the "
+     "slave address the frame sent again begins with)",
+     {Feature::another_crc, Feature::answer_after},
+     2},
     {"swallows-request",
      "its CRC holds across a frame cut short and a whole request after it (the cut frame's "
      "bytes took the CRC back to its start value, the request's bytes did the rest), and a "

@@ -269,6 +269,34 @@ TEST(RtuFramer, TurnsATruncatedFrameIntoNoiseAndFindsTheNextOne) {
   EXPECT_EQ(out.stream()[1].raw, read_request);
 }
 
+// A request broken off before its last CRC byte, where that byte is its slave's address: the
+// broken-off bytes and the first byte of the request sent again at once read as the whole
+// request, its CRC holding (1 cut in 256). What follows says otherwise: the same slave and
+// function code start again inside that span as a request that runs past it, and its answer
+// comes next (`resent-inside`). With no clock to see the pause between, the broken-off bytes
+// are no good frame, and the request sent again and its answer are the frames.
+TEST(RtuFramer, ARequestBrokenOffAndSentAgainIsNoFrameOfItsFirstBytes) {
+  std::vector<uint8_t> request;
+  for (uint16_t address = 0;; ++address) {  // an FC03 read whose CRC ends in its slave address
+    request = with_crc({0x11, 0x03, static_cast<uint8_t>(address >> 8),
+                        static_cast<uint8_t>(address & 0xFF), 0x00, 0x01});
+    if (request.back() == 0x11) break;
+  }
+  const std::vector<uint8_t> broken_off(request.begin(), request.end() - 1);
+  const auto answer = with_crc({0x11, 0x03, 0x02, 0x12, 0x34});
+  const auto bytes = concat({broken_off, request, answer});
+  ASSERT_TRUE(rtu_crc_holds({bytes.data(), request.size()}));  // the reading refuted
+  const auto out = analyze_untimed(bytes);
+  ASSERT_EQ(out.stream().size(), 3u);
+  EXPECT_EQ(out.stream()[0].raw, broken_off);  // noise, or a damaged frame of its header
+  EXPECT_FALSE(out.stream()[0].check_ok);
+  EXPECT_EQ(out.stream()[1].raw, request);
+  EXPECT_EQ(out.stream()[1].role, Role::request);
+  EXPECT_EQ(out.stream()[2].raw, answer);
+  EXPECT_EQ(out.stream()[2].role, Role::response);
+  expect_same_at_every_split(bytes);
+}
+
 TEST(RtuFramer, KeepsEveryByteOfEndlessJunkInBoundedNoiseRecords) {
   std::vector<uint8_t> junk(1 << 20);
   uint32_t x = 12345;
