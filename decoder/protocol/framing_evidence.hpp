@@ -44,6 +44,7 @@ enum class Feature : uint8_t {
   predicted_bytes,
   vendor_code,
   predicted_byte,
+  broken_off_copy,
   public_header,  // last: feature_table asserts a row for each
 };
 
@@ -130,6 +131,9 @@ inline constexpr auto feature_table = std::to_array<FeatureInfo>({
     {"predicted-byte", 1,
      "the pending request tells the answer's byte here, and it is this one; a glitch is this "
      "value too about 1 time in 2"},
+    {"broken-off-copy", 16,
+     "the bytes before it are its own first bytes, two or more: a frame broken off and sent "
+     "again; by chance 1 time in 65,536 at most"},
     {"public-header", 16,
      "it begins as FC08 Return Query Data (sub-function 0000) or FC2B/0D CANopen General "
      "Reference, public functions whose length only their CRC tells: junk begins so 1 time in "
@@ -267,12 +271,11 @@ inline constexpr auto evidence_table = std::to_array<EvidenceInfo>({
      {Feature::another_crc, Feature::answer_after, Feature::leaves_junk},
      3},
     {"resent-inside",
-     "a request that broke off, sent again at once: the same slave and function code start "
-     "again inside it as a frame whose length rules and CRC agree past its end, and a frame of its "
-     "slave and function code comes next (its answer, or its retry); the span's CRC held by "
-     "chance across the two (most often the broken-off frame's missing last CRC byte is the "
-     "slave address the frame sent again begins with)",
-     {Feature::another_crc, Feature::answer_after},
+     "a request that broke off, sent again at once: inside the span a request whose length rules "
+     "and CRC agree starts and runs past its end, and the span's bytes before it are its own "
+     "first bytes; the span's CRC held by chance across the two (most often the broken-off "
+     "request's missing last CRC byte is the slave address the request sent again begins with)",
+     {Feature::another_crc, Feature::broken_off_copy},
      2},
     {"swallows-request",
      "its CRC holds across a frame cut short and a whole request after it (the cut frame's "

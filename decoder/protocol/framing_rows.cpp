@@ -272,10 +272,11 @@ RtuFramer::Say RtuFramer::swallows_request_reading(const Reading& r) {
 
 // A request that broke off and was sent again at once, read as one span (a master sends again;
 // a slave answers once): where the span's own slave and function code start again inside it, as
-// a frame whose length rules and CRC agree and that runs past the span's end, with a frame of
-// its kin after it, the span's CRC held by chance (1 in 65,536, or 1 cut in 256 where the
-// missing last CRC byte is the slave address the request sent again begins with). A clock that
-// sees the pause before the request sent again refutes the span by that silence alone.
+// a request whose length rules and CRC agree and that runs past the span's end, and the span's
+// bytes before it are that request's first bytes, the span's CRC held by chance (1 in 65,536, or
+// 1 cut in 256 where the missing last CRC byte is the slave address the request sent again
+// begins with). A clock that sees the pause before the request sent again refutes the span by
+// that silence alone.
 RtuFramer::Say RtuFramer::resent_inside(const Reading& r) {
   if (r.role != Role::request) return Say::nothing;
   const uint64_t end = r.at + r.length;
@@ -292,22 +293,12 @@ RtuFramer::Say RtuFramer::resent_inside(const Reading& r) {
     const uint64_t start = r.at + static_cast<uint64_t>(p - first);
     const Match again = match_at(start, r.final, 0);
     if (again.kind == Match::Kind::need_more && !r.final) return Say::unknown;
-    if (again.kind != Match::Kind::found || start + again.length <= end) continue;
-    const std::optional<bool> kin = kin_follows(start, start + again.length, r.final);
-    if (!kin) return Say::unknown;
-    if (*kin) return Say::refutes;
+    const uint64_t broken_off = start - r.at;
+    if (again.kind == Match::Kind::found && again.fit.request && start + again.length > end &&
+        again.length > broken_off && std::equal(first, p, p))
+      return Say::refutes;
   }
   return Say::nothing;
-}
-
-// Whether a frame of the slave and function code of the frame [at, end) follows it, after a
-// glitch or not: its answer, or its retry. Nothing while the bytes that tell are to come.
-std::optional<bool> RtuFramer::kin_follows(uint64_t at, uint64_t end, bool final) const {
-  const uint64_t next = end + (end < end_ && is_glitch_byte(*at_ptr(end)) ? 1 : 0);
-  if (next + 2 > end_) return final ? std::optional(false) : std::nullopt;
-  const uint8_t* frame = at_ptr(at);
-  const uint8_t* p = at_ptr(next);
-  return p[0] == frame[0] && (p[1] & 0x7F) == (frame[1] & 0x7F);
 }
 
 // A request's length where its function code alone tells it, else 0: the function codes' own

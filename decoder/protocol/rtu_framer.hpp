@@ -145,7 +145,6 @@ class RtuFramer {
   Say swallows_exchange_reading(const Reading& r);
   Say swallows_request_reading(const Reading& r);
   Say resent_inside(const Reading& r);
-  std::optional<bool> kin_follows(uint64_t at, uint64_t end, bool final) const;
   std::optional<uint64_t> request_ending(uint64_t begin, uint64_t end) const;
   bool request_spans(uint64_t start, uint64_t end) const;
   bool request_before_kin(uint64_t begin, uint64_t end, uint64_t next) const;
