@@ -177,8 +177,21 @@ RtuFramer::Say RtuFramer::retry_read_as_answer(const Reading& r) {
       (copy < r.length && awaited_.may_begin_with_copy(bytes(r.at, r.at + copy), r.length)))
     return Say::nothing;
   if (r.at + copy > end_) return r.final ? Say::nothing : Say::unknown;
-  if (awaited_.copies_request(from(r.at), copy) && !too_soon_for_retry(r.at)) return Say::refutes;
-  return Say::nothing;
+  if (!awaited_.copies_request(from(r.at), copy) || too_soon_for_retry(r.at)) return Say::nothing;
+  if (copy > r.length) return Say::refutes;
+  // A longer answer that begins as its request: the copy read apart leaves the rest to junk
+  // where no frame starts after it, nor the answer to it (talked over or cut), after its
+  // driver's glitch or not (`leaves-junk`, as much against the copy as `request-again` is for
+  // it), and the answer, whose CRC holds, stands.
+  const uint64_t next = r.at + copy;
+  const uint64_t answer = next + (is_glitch_byte(*at_ptr(next)) ? 1 : 0);
+  if (answer + 2 > end_) return r.final ? Say::refutes : Say::unknown;
+  const Match after = match_at(next, r.final, 0);
+  if (after.kind == Match::Kind::need_more && !r.final) return Say::unknown;
+  if (after.kind != Match::Kind::found && !timeline_.gap_at(next) &&
+      !glitch_then_frame(next, r.final, 0) && !awaited_.has_header(from(answer)))
+    return Say::nothing;
+  return Say::refutes;
 }
 
 // A copy of the pending request too soon for a retry, where the awaited answer is longer, is

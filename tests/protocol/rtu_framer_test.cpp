@@ -300,6 +300,34 @@ TEST(RtuFramer, ARequestBrokenOffAndSentAgainIsNoFrameOfItsFirstBytes) {
   }
 }
 
+// An answer that begins as its request, byte for byte, after its driver's glitch: FC12's byte
+// count and first status byte the request's CRC (1 answer in 65,536). Read apart, the copy
+// would be the master's retry and leave the rest of the answer to junk, no frame starting
+// after it; the answer, whose length rules and CRC agree, stands, with no clock to say how soon
+// it came (rough seed 277).
+TEST(RtuFramer, AnAnswerThatBeginsAsItsRequestIsNoRetryWhereJunkWouldFollowTheCopy) {
+  std::vector<uint8_t> request;
+  for (uint8_t slave = 1;; ++slave) {  // a CRC whose low byte is a byte count FC12 may answer
+    request = with_crc({slave, 0x0C});
+    if (request[2] >= 6 && request[2] <= 70) break;
+  }
+  std::vector<uint8_t> answer(request.begin(), request.end());  // slave, 0C, count, status hi
+  while (answer.size() < size_t{3} + request[2])  // the log's bytes, as no frame begins
+    answer.push_back(static_cast<uint8_t>(0x99 + 37 * answer.size()));
+  answer = with_crc(answer);
+  const auto glitch = hex("ff");  // the answering driver turning on
+  const auto bytes = concat({request, glitch, answer, read_request});
+  const auto out = analyze_untimed(bytes);
+  ASSERT_EQ(out.stream().size(), 4u);
+  EXPECT_EQ(out.stream()[0].raw, request);
+  EXPECT_EQ(out.stream()[1].raw, glitch);
+  EXPECT_EQ(out.stream()[2].raw, answer);
+  EXPECT_EQ(out.stream()[2].role, Role::response);
+  EXPECT_EQ(out.stream()[2].request, out.stream()[0].index);
+  EXPECT_EQ(out.stream()[3].raw, read_request);
+  expect_same_at_every_split(bytes);
+}
+
 TEST(RtuFramer, KeepsEveryByteOfEndlessJunkInBoundedNoiseRecords) {
   std::vector<uint8_t> junk(1 << 20);
   uint32_t x = 12345;
