@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include <filesystem>
+#include <iostream>
 #include <iterator>
 
 #include <unistd.h>
@@ -768,7 +769,8 @@ INSTANTIATE_TEST_SUITE_P(
 // whose records differ from what the simulator sent, one line a run, "SWEEP SEED DELIVERY: what
 // differs". Each slice (a sweep at one delivery) runs its cheap seeds and fails where a run
 // differs otherwise than the file says, better or worse; MODTAP_BASELINE=full runs every seed,
-// MODTAP_BASELINE=update (or full-update) rewrites the lines of the runs it read.
+// MODTAP_BASELINE=update (or full-update) rewrites the lines of the runs it read, and
+// MODTAP_BASELINE_SHOW="real-masters 379 per_byte" prints what differs in that run.
 struct BaselineSlice {
   const char* sweep;
   const char* delivery_name;
@@ -862,14 +864,19 @@ TEST_P(WrongReadings, AreThoseTheBaselineShows) {
   const char* asked = std::getenv("MODTAP_BASELINE");
   const std::string mode = asked ? asked : "";
   const bool full = mode.starts_with("full");
+  const char* shown = std::getenv("MODTAP_BASELINE_SHOW");
+  const std::string show = shown ? shown : "";
   std::vector<std::string> comments;
   std::map<std::string, std::string> baseline = read_baseline(&comments);
   std::vector<std::string> changed;
   for (uint64_t seed = b.first; seed <= (full ? b.last : b.cheap_last); ++seed) {
     const Scenario s{"baseline", b.delivery, b.make(seed), 0, Via::direct, b.clock, b.told_timeout};
     const BusCapture capture = busgen::simulate(s.bus);
-    const std::string what = compare_with_truth(capture, run(capture, s), s).summary();
+    const Differences differences = compare_with_truth(capture, run(capture, s), s);
+    const std::string what = differences.summary();
     const std::string key = run_key(b, seed);
+    if (show == key)  // MODTAP_BASELINE_SHOW="SWEEP SEED DELIVERY": what differs, and where
+      for (const std::string& example : differences.examples) std::cout << example << "\n";
     const auto known = baseline.find(key);
     const std::string was = known == baseline.end() ? "" : known->second;
     if (what == was) continue;
