@@ -521,13 +521,19 @@ BusOptions long_echoes(uint64_t seed) {
   return o;
 }
 
+// One address in ten with the fault `set` gives it, on a bus of 3,000 transactions.
+template <typename Fault>
+BusOptions one_in_ten(uint64_t seed, Fault set) {
+  BusOptions o = clean(seed, 3000);
+  for (unsigned address = 10; address <= 240; address += 10)
+    set(o.slave_faults[static_cast<uint8_t>(address)]);
+  return o;
+}
+
 // Slaves that answer only after the master's time-out, one address in ten, at every function
 // code: an echo (FC05, 06, 08, 16) as the request again, after the master has moved on.
 BusOptions late_answers(uint64_t seed) {
-  BusOptions o = clean(seed, 3000);
-  for (unsigned address = 10; address <= 240; address += 10)
-    o.slave_faults[static_cast<uint8_t>(address)].answers_after_timeout = true;
-  return o;
+  return one_in_ten(seed, [](auto& f) { f.answers_after_timeout = true; });
 }
 
 // The same, with a master that sends unanswered requests again: a late echo and a retry are
@@ -569,15 +575,6 @@ INSTANTIATE_TEST_SUITE_P(
         Scenario{"long_echoes_per_frame", Delivery::per_frame, long_echoes(36), 0, Via::direct,
                  usb_jitter}),
     [](const auto& info) { return std::string(info.param.name); });
-
-// One address in ten with the fault `set` gives it, on a bus of 3,000 transactions.
-template <typename Fault>
-BusOptions one_in_ten(uint64_t seed, Fault set) {
-  BusOptions o = clean(seed, 3000);
-  for (unsigned address = 10; address <= 240; address += 10)
-    set(o.slave_faults[static_cast<uint8_t>(address)]);
-  return o;
-}
 
 // Slaves that are not there, polled by a master that sends again what goes unanswered.
 BusOptions absent_with_retries(uint64_t seed) {
