@@ -246,7 +246,8 @@ inline constexpr auto evidence_table = std::to_array<EvidenceInfo>({
     {"retry-read-as-answer",
      "the pending request again, byte for byte and late enough for its retry, starts an answer "
      "that ends elsewhere: shorter (the copy's CRC ends in 0x00s, which keep a CRC good) or "
-     "longer (its CRC holds by chance)",
+     "longer (its CRC holds by chance), where a frame, a silence or the answer's header follows "
+     "the copy (else the copy would leave junk, which weighs as much)",
      {Feature::another_crc, Feature::request_again},
      2},
     {"answer-copying-request",
