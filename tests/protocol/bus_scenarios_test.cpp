@@ -310,28 +310,26 @@ void compare_frames(const BusCapture& capture, const Collector& out, const Recor
     auto around = [&] { return context(capture, out, truth.offset); };
     const testing::Record* got = records.found(truth);
     if (!got) {
-      d.note(d.missing, [&] { return std::string(where() + " not found" + around()); });
+      d.note(d.missing, [&] { return where() + " not found" + around(); });
       continue;
     }
     index_of[i] = got->index;
     // Where nothing can tell a retry from an echo, a frame that says so stands at either role.
     const bool said_ambiguous = got->findings & finding_ambiguous_echo;
     if (got->role != truth.role && !said_ambiguous)
-      d.note(d.wrong_role, [&] { return std::string(where() + " has the wrong role" + around()); });
+      d.note(d.wrong_role, [&] { return where() + " has the wrong role" + around(); });
     // A response made whole carries a whole answer's damage and findings; a frame found at its
     // other reading, that reading's damage (cut one byte short, run on one byte long).
     const bool whole = RecordIndex::made_whole(*got, truth);
     if (!whole && got->raw.size() == truth.size && got->damage != truth.damage)
-      d.note(d.wrong_damage,
-             [&] { return std::string(where() + " has the wrong damage" + around()); });
+      d.note(d.wrong_damage, [&] { return where() + " has the wrong damage" + around(); });
     if (truth.request && got->request != index_of[*truth.request] && !said_ambiguous)
-      d.note(d.wrong_pair, [&] { return std::string(where() + " paired wrongly" + around()); });
+      d.note(d.wrong_pair, [&] { return where() + " paired wrongly" + around(); });
     // A retry merged into one read with its original cannot be timed; counted like a miss.
     const uint32_t knowable = said_ambiguous ? truth.findings & ~finding_retry : truth.findings;
     if (!whole && (got->findings & knowable) != knowable)
       d.note(d.wrong_findings, [&] {
-        return std::string(where() + " lacks findings " + std::to_string(truth.findings) +
-                           around());
+        return where() + " lacks findings " + std::to_string(truth.findings) + around();
       });
   }
 }
@@ -371,10 +369,9 @@ void compare_clashes(const BusCapture& capture, const Collector& out, const Reco
 void compare_extra_frames(const BusCapture& capture, const Collector& out,
                           const RecordIndex& records, const Scenario& s, Differences& d) {
   std::map<uint64_t, const busgen::TruthFrame*> truth_at;
-  std::set<uint64_t> sent_at;
   for (const auto& f : capture.frames) truth_at[f.offset] = &f;
-  for (const auto& f : capture.frames) sent_at.insert(f.offset);
-  for (const busgen::Clash& clash : capture.clashes) sent_at.insert(clash.offset);
+  std::set<uint64_t> clash_at;
+  for (const busgen::Clash& clash : capture.clashes) clash_at.insert(clash.offset);
   for (const auto& [offset, r] : records.frames) {
     const auto truth = truth_at.find(offset);
     const bool sent_good = truth != truth_at.end() && truth->second->damage == Damage::none;
@@ -387,7 +384,7 @@ void compare_extra_frames(const BusCapture& capture, const Collector& out,
     // What runs on past a collided answer is the other talker's, never a request to a slave
     // of its own. Junk itself may read as a damaged frame of its header: only where no junk
     // was sent is a bad frame counted.
-    if (!r->check_ok && !sent_at.count(offset) && sends_no_junk(s.bus))
+    if (!r->check_ok && truth == truth_at.end() && !clash_at.count(offset) && sends_no_junk(s.bus))
       d.note(d.invented, [&] {
         return std::string("bad frame where none was sent, at offset " + std::to_string(offset) +
                            context(capture, out, offset));
