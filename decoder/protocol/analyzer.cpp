@@ -95,6 +95,7 @@ namespace {
 MatcherOptions matcher_options(const AnalyzerOptions& o) {
   MatcherOptions m;
   m.timeout_ns = o.timeout_ns;
+  m.timeout_told = o.timeout_told;
   for (const auto& [slave, timeout] : o.slave_timeout_ns) m.slave_timeout_ns[slave] = timeout;
   m.t35_ns = o.format.t35_ns();
   m.timed = o.clock != ClockQuality::none;
@@ -153,9 +154,7 @@ void Analyzer::push(const Chunk& chunk) {
 void Analyzer::feed(const Chunk& chunk) {
   Channel& c = channel(chunk.channel);
   if (options_.clock != ClockQuality::none) {
-    const int64_t settled = settled_ns(earliest_start_ns(chunk));
-    release_held_by(settled);
-    matcher_.advance(settled);
+    settle(settled_ns(earliest_start_ns(chunk)));
   }
   if (probe_) {
     if (probe_->push(chunk, c.info.role)) settle_mode();
@@ -175,10 +174,16 @@ void Analyzer::flush(int64_t now_ns) {
     if (auto* ascii = std::get_if<std::unique_ptr<AsciiFramer>>(&c.framer)) (*ascii)->flush(now_ns);
   }
   if (options_.clock != ClockQuality::none) {
-    const int64_t settled = settled_ns(now_ns);
-    release_held_by(settled);
-    matcher_.advance(settled);
+    settle(settled_ns(now_ns));
   }
+}
+
+// Nothing before `settled_ns` is still to be framed: a held copy whose time to be told is over
+// goes as the matcher judges it, and time-outs due by then fall. A copy still held may answer
+// the pending request, so that request's time-out waits for it.
+void Analyzer::settle(int64_t settled_ns) {
+  release_held_by(settled_ns);
+  matcher_.advance(held_ ? std::min(settled_ns, held_->t_ns) : settled_ns);
 }
 
 // A read is stamped when it came, and its bytes may have begun as early as the line could carry

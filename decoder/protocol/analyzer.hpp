@@ -31,6 +31,9 @@ struct AnalyzerOptions {
   SerialFormat format;
   ClockQuality clock = ClockQuality::per_chunk;
   int64_t timeout_ns = 1'000'000'000;
+  // The master's time-out is timeout_ns as the user told it (--timeout), not a default: no
+  // retry comes before it. A slave's model time-out is told for that slave.
+  bool timeout_told = false;
   std::map<uint8_t, int64_t> slave_timeout_ns;  // slaves whose model sets their own time-out
   int64_t ascii_char_timeout_ns = 1'000'000'000;
   int64_t chunk_jitter_ns = default_read_jitter_ns;
@@ -83,6 +86,7 @@ class Analyzer final : private FrameSink {
   void on_frame_in_doubt(Frame& frame, ChannelRole role);
   void hold(const Frame& frame, int64_t decide_by_ns);
   void release_held(bool late);
+  void settle(int64_t settled_ns);
   void release_held_by(int64_t now_ns) {
     if (held_ && now_ns >= held_decide_by_ns_) release_held(false);
   }

@@ -27,7 +27,7 @@ inline Expectation Matcher::expecting(const Pending& request) const {
           static_cast<uint16_t>(echoed ? request.adu_size : 0),
           echoed && request.ambiguous_end,
           {request.pdu.data(), request.size},
-          options_.timed ? request.end_ns + retry_from_ns(request.slave) : 0};
+          options_.timed ? request.end_ns + retry_from_ns(request) : 0};
 }
 
 inline void Matcher::remember(Pending& p, const Frame& frame) const {
@@ -36,8 +36,9 @@ inline void Matcher::remember(Pending& p, const Frame& frame) const {
   p.channel = frame.channel;
   p.end_ns = frame.end_ns;
   p.slave = frame.slave();
-  p.timeout_ns =
-      options_.slave_timeout_ns[p.slave] ? options_.slave_timeout_ns[p.slave] : options_.timeout_ns;
+  const int64_t own = options_.slave_timeout_ns[p.slave];
+  p.timeout_ns = own ? own : options_.timeout_ns;
+  p.timeout_told = own || options_.timeout_told;
   p.adu_size = static_cast<uint16_t>(frame.adu.size());
   p.retries = frame.retries;
   p.end_read = frame.end_read;
@@ -105,11 +106,12 @@ void Matcher::garbled_answer(Frame& frame) {
 }
 
 // Whether something starting at `t_ns` on this channel comes where the pending request's answer
-// belongs: before the master would send again. Without a clock nothing tells junk that came
+// belongs: in the time its slave answers in, and what the clock may add (a master told to wait
+// longer still hears junk after that as junk). Without a clock nothing tells junk that came
 // after the master gave up from a garbled answer.
 bool Matcher::in_answer_time(int64_t t_ns, ChannelRole channel_role) const {
   return awaits_answer(channel_role) && options_.timed &&
-         t_ns - pending_->end_ns < retry_from_ns(pending_->slave);
+         t_ns - pending_->end_ns < answer_over_ns(pending_->slave);
 }
 
 // Whether what comes on this channel now is where the pending request's answer belongs: on a
@@ -159,15 +161,15 @@ bool Matcher::fits(const Frame& frame, const Pending& request) {
 bool Matcher::long_after_answer_due(const Frame& frame) const {
   const uint8_t slave = pending_->slave;
   return options_.timed && turnaround_learned(slave) &&
-         frame.t_ns - pending_->end_ns >= retry_from_ns(slave);
+         frame.t_ns - pending_->end_ns >= retry_from_ns(*pending_);
 }
 
 // Past the time the pending request's answer comes in, and what the clock may add to a frame's
 // time; with nothing learned, past the shortest time-out masters use. An answer that late and
 // unfit would be two rare things, where a master's next request after a time-out is common.
 bool Matcher::past_answer_time(const Frame& frame) const {
-  return options_.timed && frame.t_ns - pending_->end_ns >=
-                               answered_within_ns(pending_->slave) + options_.clock_lag_ns;
+  return options_.timed &&
+         frame.t_ns - pending_->end_ns >= answered_within_ns(*pending_) + options_.clock_lag_ns;
 }
 
 // A copy of the request, or a frame that fits as its answer (a FC08 counter, an exception).
@@ -200,7 +202,7 @@ Matcher::CopyJudgement Matcher::judge_copy(const Frame& frame) const {
   const bool timed = options_.timed;
   Margin against_retry{RunnerUp::retry};
   if (against_retry.tell(Feature::too_soon_for_retry,
-                         timed && waited < answered_within_ns(pending_->slave)))
+                         timed && waited < answered_within_ns(*pending_)))
     return {Copy::response, against_retry};
   Margin against_echo{RunnerUp::echo};
   if (against_echo.tell(Feature::late_as_a_retry,
@@ -229,9 +231,15 @@ bool Matcher::as_late_as_a_retry(int64_t waited_ns) const {
 // Past the answer's time and what the clock may add to one frame's time (a turnaround learned
 // on a read stamped on time says nothing of how late the next read is stamped); with nothing
 // learned, 50 ms on, where a copy may be either.
-int64_t Matcher::retry_from_ns(uint8_t slave) const {
-  const int64_t within = answered_within_ns(slave);
+int64_t Matcher::answer_over_ns(uint8_t slave) const {
+  const int64_t within = answer_time_ns(slave);
   return turnaround_learned(slave) ? within + options_.clock_lag_ns : within;
+}
+
+// From when the master may send again: past its slave's answer time, and past its time-out
+// where told.
+int64_t Matcher::retry_from_ns(const Pending& request) const {
+  return std::max(answer_over_ns(request.slave), told_wait_ns(request));
 }
 
 bool Matcher::pending_matches(const Frame& frame) const {
@@ -326,23 +334,23 @@ void Matcher::late_answer(Frame& frame) {
 // A copy of a request whose answer is that request again, where the master may have given up
 // waiting: the pending request's copy too late for its answer (judge_copy's retry), or the
 // copy of the one that timed out last. A master sends a retry only after its time-out, and then
-// waits as long again for the retry's answer; so the copy's wait since its request, halved,
-// bounds how soon a request of the master's own shows it never waited for the copy's answer.
+// waits as long again for the retry's answer: its time-out where told, less what the clock may
+// take off, else at least half the copy's wait since its request. A request of the master's
+// own sooner than that shows it never waited for the copy's answer.
 std::optional<int64_t> Matcher::copy_in_doubt(const Frame& frame) {
   advance(frame.t_ns);  // a pending request whose time-out has run out by now is overdue
   const Pending* request = copied_in_doubt(frame);
   if (!request) return std::nullopt;
-  const int64_t decide_by = frame.end_ns + (frame.t_ns - request->end_ns) / 2;
-  // The pending request's time-out comes no later than the copy is told.
-  if (request == pending_) return std::min(decide_by, request->end_ns + request->timeout_ns);
-  return decide_by;
+  const int64_t waits_ns = request->timeout_told ? request->timeout_ns - options_.clock_lag_ns
+                                                 : (frame.t_ns - request->end_ns) / 2;
+  return frame.end_ns + waits_ns;
 }
 
 const Matcher::Pending* Matcher::copied_in_doubt(const Frame& frame) const {
   const Pending* request = pending_matches(frame) ? pending_ : overdue_open_ ? &overdue_ : nullptr;
   // Most copies of the pending request are its echo, in the time an answer takes.
   if (!request ||
-      (request == pending_ && frame.t_ns - request->end_ns < answered_within_ns(request->slave)))
+      (request == pending_ && frame.t_ns - request->end_ns < answered_within_ns(*request)))
     return nullptr;
   if (!copies(frame, *request)) return nullptr;
   if (request != pending_ &&

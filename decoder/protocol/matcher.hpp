@@ -17,7 +17,8 @@ namespace modtap {
 
 struct MatcherOptions {
   int64_t timeout_ns = 1'000'000'000;
-  std::array<int64_t, 256> slave_timeout_ns{};  // a slave's own time-out; 0: timeout_ns
+  bool timeout_told = false;  // timeout_ns is the master's, told: it sends nothing again sooner
+  std::array<int64_t, 256> slave_timeout_ns{};  // a slave's own time-out (told); 0: timeout_ns
   int64_t t35_ns = 0;                           // below this a response counts as a fast turnaround
   bool timed = true;         // false when the source has no clock: no latency, no silence
   bool exact_clock = false;  // latencies are exact enough to judge turnaround
@@ -56,7 +57,7 @@ class Matcher {
     const uint8_t slave = frame.slave();
     if (pending_ && pending_->slave == slave) {
       const int64_t waited = frame.t_ns - pending_->end_ns;
-      return waited >= answered_within_ns(slave) || waited > pending_->timeout_ns;
+      return waited >= answered_within_ns(*pending_) || waited > pending_->timeout_ns;
     }
     return overdue_open_ && overdue_.slave == slave;
   }
@@ -83,6 +84,7 @@ class Matcher {
     uint16_t channel = 0;
     int64_t end_ns = 0;
     int64_t timeout_ns = 0;
+    bool timeout_told = false;  // the master's time-out for it is known, not a default
     uint8_t slave = 0;
     uint16_t adu_size = 0;
     uint8_t retries = 0;
@@ -116,14 +118,23 @@ class Matcher {
   // How soon after its request a copy of it can only be the answer, and from when it may be
   // the master's retry (from when it can only be one, once a turnaround is learned). The first:
   // twice the longest turnaround seen (the slave's, else the bus's) and 20 ms; with nothing
-  // learned, 50 ms, the shortest time-out masters use.
-  int64_t answered_within_ns(uint8_t slave) const {
+  // learned, 50 ms, the shortest time-out masters use. A master told to wait (--timeout, a
+  // model's time-out) sends nothing again before its time-out, less what the clock may take
+  // off; its slave's answer still comes in the slave's own time (answer_time_ns).
+  int64_t answered_within_ns(const Pending& request) const {
+    return std::max(answer_time_ns(request.slave), told_wait_ns(request));
+  }
+  int64_t told_wait_ns(const Pending& request) const {
+    return request.timeout_told ? request.timeout_ns - options_.clock_lag_ns : 0;
+  }
+  int64_t answer_time_ns(uint8_t slave) const {
     constexpr int64_t earliest_retry_ns = 50'000'000;
     constexpr int64_t slack_ns = 20'000'000;
     const int64_t learned = turnaround_learned(slave);
     return learned ? 2 * learned + slack_ns : earliest_retry_ns;
   }
-  int64_t retry_from_ns(uint8_t slave) const;
+  int64_t answer_over_ns(uint8_t slave) const;
+  int64_t retry_from_ns(const Pending& request) const;
   int64_t turnaround_learned(uint8_t slave) const {
     return turnaround_ns_[slave] ? turnaround_ns_[slave] : bus_turnaround_ns_;
   }

@@ -116,6 +116,7 @@ Collector run(const BusCapture& capture, const Scenario& s, RecordSink* also = n
   options.format = s.bus.format;
   options.framing_observer = observer;
   if (s.told_timeout) options.timeout_ns = s.bus.retry_after_ns;
+  options.timeout_told = s.told_timeout;
   Collector collected;
   Tee out(collected, also);
   if (s.via == Via::direct) {
@@ -195,6 +196,7 @@ TEST_P(BusScenario, WrittenAsPcapngReadsBackToTheSameRecords) {
   options.format = s.bus.format;
   options.clock = source->clock();
   if (s.told_timeout) options.timeout_ns = s.bus.retry_after_ns;
+  options.timeout_told = s.told_timeout;
   Collector again;
   Analyzer analyzer(options, source->channels(), again);
   Chunk chunk;
@@ -418,9 +420,13 @@ Differences compare_with_truth(const BusCapture& capture, const Collector& out, 
                                 expected.end(), std::inserter(differ, differ.begin()));
   for (const uint64_t request : differ)
     d.note(d.timeouts_differ, [&] {
+      const auto& stream = out.stream();
+      const auto r = std::find_if(stream.begin(), stream.end(),
+                                  [&](const testing::Record& x) { return x.index == request; });
       return std::string("request record " + std::to_string(request) +
                          (timed_out.count(request) ? " timed out, in truth not"
-                                                   : " did not time out, in truth did"));
+                                                   : " did not time out, in truth did")) +
+             (r == stream.end() ? "" : context(capture, out, r->offset));
     });
   return d;
 }

@@ -190,9 +190,12 @@ struct Timed {
   int64_t t_ms;
 };
 std::vector<Frame> match_timed(std::initializer_list<Timed> frames, std::vector<Timeout>& timeouts,
-                               std::vector<std::vector<uint8_t>>& keep, int64_t clock_lag_ns = 0) {
+                               std::vector<std::vector<uint8_t>>& keep, int64_t clock_lag_ns = 0,
+                               std::optional<int64_t> told_timeout_ns = std::nullopt) {
   MatcherOptions options;
   options.clock_lag_ns = clock_lag_ns;
+  if (told_timeout_ns) options.timeout_ns = *told_timeout_ns;
+  options.timeout_told = told_timeout_ns.has_value();
   Matcher matcher(options, [&](const Timeout& t) { timeouts.push_back(t); });
   std::vector<Frame> out;
   uint64_t index = 0;
@@ -373,6 +376,64 @@ TEST(Matcher, AnotherWriteLongAfterAnAnswerWasDueIsTheMastersNextRequest) {
                                    timeouts, keep);
   EXPECT_EQ(counter[3].role, Role::response);
   EXPECT_EQ(counter[3].request, counter[2].index);
+}
+
+// A master told to wait 200 ms (--timeout) sends nothing again sooner: a copy of its write
+// 180 ms on, long after slave 1's 5 ms turnaround, is the slave's echo, slow but in time. Not
+// told, that copy is the master's retry after a time-out of its own.
+TEST(Matcher, ACopySoonerThanTheMastersToldTimeOutIsTheAnswer) {
+  const auto bus = [](std::optional<int64_t> told_timeout_ns, std::vector<Timeout>& timeouts) {
+    std::vector<std::vector<uint8_t>> keep;
+    return match_timed({{"01 03 00 00 00 01 84 0a", 0},
+                        {"01 03 02 00 05 78 47", 10},
+                        {"01 06 00 01 00 03 98 0b", 100},
+                        {"01 06 00 01 00 03 98 0b", 285}},
+                       timeouts, keep, 0, told_timeout_ns);
+  };
+  std::vector<Timeout> told_timeouts;
+  const auto told = bus(200'000'000, told_timeouts);
+  EXPECT_EQ(told[3].role, Role::response);
+  EXPECT_EQ(told[3].request, told[2].index);
+  EXPECT_FALSE(told[3].findings & (finding_retry | finding_ambiguous_echo));
+  EXPECT_TRUE(told_timeouts.empty());
+  std::vector<Timeout> untold_timeouts;
+  const auto untold = bus(std::nullopt, untold_timeouts);
+  EXPECT_EQ(untold[3].role, Role::request);
+  EXPECT_TRUE(untold[3].findings & finding_retry);
+}
+
+// On a clock per read (16 ms late at most) an echo 202 ms after its write, past the master's
+// told 200 ms less what the clock may take off, may be the retry or the answer, in time or
+// late: the master's next move tells. Its request to slave 2 10 ms on, sooner than it would
+// wait for a retry's answer, makes the copy the answer to the write, never a request.
+TEST(Matcher, ACopyNearTheMastersToldTimeOutIsTheAnswerWhereTheMasterMovesOnAtOnce) {
+  const auto write = hex("01 06 00 01 00 03 98 0b");
+  const auto moves_on = hex("02 03 00 00 00 01 84 39");
+  for (const bool timer_lag : {false, true}) {
+    Collector out;
+    AnalyzerOptions options;
+    options.mode = ModeChoice::rtu;
+    options.clock = ClockQuality::per_chunk;
+    options.chunk_jitter_ns = timer_lag ? 16'000'000 : 0;
+    options.timeout_ns = 200'000'000;
+    options.timeout_told = true;
+    Analyzer analyzer(options, {{"test", ChannelRole::bus}}, out);
+    const auto read = [&](const std::vector<uint8_t>& bytes, int64_t at_ms) {
+      analyzer.push({0, at_ms * 1'000'000, {bytes.data(), bytes.size()}});
+    };
+    read(hex("01 03 00 00 00 01 84 0a"), 1000);
+    read(hex("01 03 02 00 05 78 47"), 1010);
+    read(write, 1100);
+    read(write, 1302);
+    read(moves_on, 1312);
+    analyzer.finish();
+    const auto frames = out.frames();
+    ASSERT_EQ(frames.size(), 5u);
+    EXPECT_EQ(frames[3].role, Role::response) << timer_lag;
+    EXPECT_EQ(frames[3].request, frames[2].index) << timer_lag;
+    EXPECT_EQ(frames[4].role, Role::request);
+    EXPECT_FALSE(frames[4].findings & finding_retry);
+  }
 }
 
 // A late answer that reads as a request too may be the master's next one: it teaches no

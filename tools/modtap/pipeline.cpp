@@ -113,6 +113,7 @@ AnalyzerOptions analyzer_options(const RunOptions& o, ClockQuality clock) {
   analyzer.format = serial_format(o);
   analyzer.clock = clock;
   analyzer.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
+  analyzer.timeout_told = o.timeout_given;
   analyzer.ascii_char_timeout_ns = static_cast<int64_t>(o.ascii_timeout_s * 1e9);
   analyzer.chunk_jitter_ns = read_jitter_ns(o);
   return analyzer;
