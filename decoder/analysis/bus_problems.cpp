@@ -60,7 +60,8 @@ constexpr double slow_factor = 3.0;             // slow-response: times the othe
 constexpr int64_t slow_margin_ns = 20'000'000;  // ...and this much more
 constexpr double near_timeout = 0.5;            // or its p95 past this share of the time-out
 constexpr double rejected_share = 0.8;          // rejected-requests: this share of a request
-constexpr double glitch_share = 0.2;            // turnaround-glitches: of the turnarounds
+constexpr double glitch_share = 0.2;            // turnaround-glitches: of the requests
+constexpr size_t several = 3;                   // slaves alike: one cause they share
 constexpr double noise_share = 0.01;            // bus-noise: of all frames
 constexpr double noise_share_error = 0.05;
 
@@ -117,11 +118,12 @@ void ProblemEvidence::on_frame(const Frame& frame) {
   if (!frame.check_ok && !awaited) return note(bad_requests_, frame.t_ns, frame.index);
   if (frame.role != Role::response) return;
   if (!awaited) {  // an answer after its request timed out: late, if the history says so
-    if (frame.findings & finding_late_response)
-      note(slaves_[frame.slave()].late, frame.t_ns, frame.index);
+    if (frame.findings & finding_late_response) on_late_answer(frame);
     return;
   }
   Slave& slave = slaves_[frame.device()];
+  // A copy that may be the master's retry as well as the echo is no answer to count on.
+  if (frame.findings & finding_ambiguous_echo) return;
   if (frame.check_ok) return on_answer(frame, slave);
   if (frame.damage == Damage::collision) return note(slave.overlapping, frame.t_ns, frame.index);
   note(slave.damaged, frame.t_ns, frame.index);
@@ -153,6 +155,15 @@ void ProblemEvidence::on_answer(const Frame& frame, Slave& slave) {
   if (frame.is_exception() && awaited_ && std::get<0>(*awaited_) == frame.device())
     note(requests_[*awaited_].by_exception[frame.adu[2]], frame.t_ns, frame.index);
   awaited_.reset();
+}
+
+void ProblemEvidence::on_late_answer(const Frame& frame) {
+  Slave& slave = slaves_[frame.slave()];
+  note(slave.late, frame.t_ns, frame.index);
+  slave.silent_timeouts = 0;  // it is there, only slow
+  if (!frame.latency_ns) return;
+  slave.late_min_ns = std::min(slave.late_min_ns.value_or(INT64_MAX), *frame.latency_ns);
+  slave.late_max_ns = std::max(slave.late_max_ns.value_or(INT64_MIN), *frame.latency_ns);
 }
 
 // An answer past reading: a character or two longer than the awaited answer, it is two answers
@@ -252,8 +263,8 @@ class Diagnosis {
       slow_response(address, slave);
       late_responses(address, slave);
       damaged_answers(address, slave);
-      glitches(address, slave);
     }
+    turnaround_glitches();
     bus_noise();
     master_glitches();
     rejected_requests();
@@ -283,15 +294,24 @@ class Diagnosis {
 
   static double percent(uint64_t part, uint64_t whole) { return 100 * share(part, whole); }
 
+  // Whatever came from a slave in answer: good, damaged, two at once, or late.
+  static uint64_t answered(const Slave& s) {
+    return s.answers + s.damaged.count + s.overlapping.count + s.late.count;
+  }
+
+  // A slave that answers none of its requests, or fewer than a few and one in a hundred at
+  // most (a record read as its answer that was none): silent, not intermittent.
   bool no_response(uint8_t address, const Slave& s) {
-    if (s.requests < few || s.answers || s.damaged.count || s.overlapping.count || s.late.count ||
-        s.timeouts.count < few)
+    const uint64_t came = answered(s);
+    if (s.requests < few || s.timeouts.count < few || came >= few || 100 * came > s.requests)
       return false;
     Problem& p = add(ProblemKind::no_response, address, Severity::error,
                      s.first_request_ns.value_or(0), s.timeouts.first);
-    p.evidence = {{"requests", s.requests}, {"timeouts", s.timeouts.count}};
-    p.text =
-        fmt::format("{} never answers: {} requests, all timed out", who(address, s), s.requests);
+    p.evidence = {{"requests", s.requests}, {"timeouts", s.timeouts.count}, {"answered", came}};
+    p.text = came ? fmt::format("{} almost never answers: {} of {} requests timed out, {} answered",
+                                who(address, s), s.timeouts.count, s.requests, came)
+                  : fmt::format("{} never answers: {} requests, all timed out", who(address, s),
+                                s.requests);
     return true;
   }
 
@@ -342,9 +362,10 @@ class Diagnosis {
     return it == statistics_.addresses().end() ? nullptr : it->second.get();
   }
 
+  // A slave whose answers come late is slow for that reason: the late problem says how slow.
   void slow_response(uint8_t address, const Slave& s) {
     const SlaveStatistics* stats = statistics_of(address);
-    if (!stats || stats->latency_ns.count() < some) return;
+    if (!stats || stats->latency_ns.count() < some || s.late.count >= few) return;
     const auto median = static_cast<int64_t>(stats->latency_ns.percentile(50));
     const auto p95 = static_cast<int64_t>(stats->latency_ns.percentile(95));
     const auto others = others_latency(address);
@@ -364,13 +385,26 @@ class Diagnosis {
                           who(address, s), median / 1e6, p95 / 1e6, options_.timeout_ns / 1e6);
   }
 
+  // How late, against the master's time-out where it was told: the number to set it by.
   void late_responses(uint8_t address, const Slave& s) {
     if (s.late.count < few) return;
     Problem& p =
         add(ProblemKind::late_responses, address, Severity::error, *s.late.first_ns, s.late.first);
     p.evidence = {{"late_answers", s.late.count}, {"requests", s.requests}};
-    p.text = fmt::format("{} answers after the master has given up: {} answers came too late",
-                         who(address, s), s.late.count);
+    p.text = fmt::format(
+        "{} answers after the master has given up: {} of its {} answers came too "
+        "late",
+        who(address, s), s.late.count, answered(s));
+    if (!s.late_min_ns) return;
+    const double low_ms = *s.late_min_ns / 1e6, high_ms = *s.late_max_ns / 1e6;
+    p.evidence.emplace_back("late_min_ms", low_ms);
+    p.evidence.emplace_back("late_max_ms", high_ms);
+    p.text += low_ms < high_ms - 0.5
+                  ? fmt::format(", {:.0f} to {:.0f} ms after their requests", low_ms, high_ms)
+                  : fmt::format(", {:.0f} ms after their requests", low_ms);
+    if (!options_.timeout_told) return;
+    p.evidence.emplace_back("timeout_ms", options_.timeout_ns / 1e6);
+    p.text += fmt::format(" where the master waits {:.0f} ms", options_.timeout_ns / 1e6);
   }
 
   // Each slave's share of damaged answers, for telling one bad device from a bad line.
@@ -388,8 +422,10 @@ class Diagnosis {
                        s.overlapping.first);
       p.evidence = {{"overlapping_answers", s.overlapping.count}, {"requests", s.requests}};
       p.text = fmt::format(
-          "Two devices answer as slave {}: {} of {} answers ({:.0f}%) came as two at once", address,
-          s.overlapping.count, s.requests, 100 * overlap_rate);
+          "Two devices answer as slave {}: {} of {} requests ({:.0f}%) were answered by two at "
+          "once",
+          address, s.overlapping.count, s.requests, 100 * overlap_rate);
+      damage_explained_[address] = true;  // its bad checks are the collisions'
       return;
     }
     const double rate = damaged_rate(s);
@@ -399,6 +435,7 @@ class Diagnosis {
     Problem& p = add(ProblemKind::corrupted_responses, address,
                      rate >= damaged_share_error ? Severity::error : Severity::warning,
                      *s.damaged.first_ns, s.damaged.first);
+    damage_explained_[address] = true;  // one device's answers, not the line
     p.evidence = {
         {"damaged_answers", s.damaged.count}, {"requests", s.requests}, {"others_share", others}};
     p.text = fmt::format(
@@ -407,16 +444,62 @@ class Diagnosis {
         who(address, s), 100 * rate, s.damaged.count, s.requests, 100 * others);
   }
 
-  void glitches(uint8_t address, const Slave& s) {
-    const uint64_t turnarounds = s.answers + s.damaged.count;
-    if (s.glitches.count < some || share(s.glitches.count, turnarounds) < glitch_share) return;
+  // A stray byte between a request and its answer, at a share of a slave's requests.
+  static bool glitching(const Slave& s) {
+    return s.glitches.count >= some && share(s.glitches.count, s.requests) >= glitch_share;
+  }
+
+  // One slave's driver, or one cause at the master's side for all: the stray byte after the
+  // requests of several slaves alike (half of those asked), or of a slave that never drives the
+  // bus at all, is the master's driver releasing it late, or the bus's biasing.
+  void turnaround_glitches() {
+    std::vector<uint8_t> glitchy;
+    size_t asked = 0;
+    bool silent_one = false;
+    for (const auto& [address, s] : evidence_.slaves()) {
+      asked += s.requests >= some;
+      if (!glitching(s)) continue;
+      glitchy.push_back(address);
+      silent_one |= answered(s) == 0;
+    }
+    if (silent_one || (glitchy.size() >= several && 2 * glitchy.size() >= asked))
+      return glitches_after_requests(glitchy, asked);
+    for (const uint8_t address : glitchy) slave_glitches(address, evidence_.slaves().at(address));
+  }
+
+  void slave_glitches(uint8_t address, const Slave& s) {
     Problem& p = add(ProblemKind::turnaround_glitches, address, Severity::warning,
                      *s.glitches.first_ns, s.glitches.first);
-    p.evidence = {{"glitches", s.glitches.count}, {"answers", turnarounds}};
+    p.evidence = {{"glitches", s.glitches.count}, {"requests", s.requests}};
     p.text = fmt::format(
-        "A stray byte on the line each time {} starts to answer: {:.0f}% of its "
-        "answers ({} of {})",
-        who(address, s), percent(s.glitches.count, turnarounds), s.glitches.count, turnarounds);
+        "A stray byte on the line each time {} starts to answer: after {:.0f}% of its requests "
+        "({} of {})",
+        who(address, s), percent(s.glitches.count, s.requests), s.glitches.count, s.requests);
+  }
+
+  void glitches_after_requests(const std::vector<uint8_t>& glitchy, size_t asked) {
+    uint64_t count = 0, requests = 0;
+    int64_t since = INT64_MAX;
+    std::vector<uint64_t> first;
+    for (const uint8_t address : glitchy) {
+      const Slave& s = evidence_.slaves().at(address);
+      count += s.glitches.count;
+      requests += s.requests;
+      since = std::min(since, *s.glitches.first_ns);
+      first.insert(first.end(), s.glitches.first.begin(), s.glitches.first.end());
+    }
+    std::sort(first.begin(), first.end());
+    first.resize(std::min(first.size(), ProblemEvidence::kept_records));
+    Problem& p = add(ProblemKind::turnaround_glitches, std::nullopt, Severity::warning, since,
+                     std::move(first));
+    p.evidence = {{"glitches", count}, {"requests", requests}, {"slaves", glitchy.size()}};
+    const std::string whose = glitchy.size() == asked
+                                  ? std::string("every slave")
+                                  : fmt::format("{} of {} slaves", glitchy.size(), asked);
+    p.text = fmt::format(
+        "A stray byte on the line after the master's requests to {} alike, one cause at the "
+        "master's side or the bus's biasing: after {:.0f}% of their requests ({} of {})",
+        whose, percent(count, requests), count, requests);
   }
 
   void master_glitches() {
@@ -439,6 +522,7 @@ class Diagnosis {
     size_t slaves_hit = 0;
     std::optional<int64_t> since = bad.first_ns;
     for (const auto& [address, s] : evidence_.slaves()) {
+      if (damage_explained_[address]) continue;  // a problem of that device's own
       damaged += s.damaged.count;
       slaves_hit += s.damaged.count >= few;
       if (s.damaged.first_ns) since = std::min(since.value_or(INT64_MAX), *s.damaged.first_ns);
@@ -454,8 +538,9 @@ class Diagnosis {
                   {"slaves_with_damaged_answers", slaves_hit}};
     p.text = fmt::format(
         "Bad checks all over the bus: {:.1f}% of frames ({} of {}), on {} "
-        "requests and on the answers of {} slaves",
-        100 * rate, damaged, statistics_.frames, bad.count, slaves_hit);
+        "requests and on the answers of {} {}",
+        100 * rate, damaged, statistics_.frames, bad.count, slaves_hit,
+        slaves_hit == 1 ? "slave" : "slaves");
   }
 
   void rejected_requests() {
@@ -528,6 +613,7 @@ class Diagnosis {
   }
 
   MedianOfOthers latency_medians_, damaged_rates_, missed_rates_;
+  std::array<bool, 256> damage_explained_{};  // slaves whose bad checks a problem of theirs tells
   const BusStatistics& statistics_;
   const ProblemEvidence& evidence_;
   const ProblemOptions& options_;

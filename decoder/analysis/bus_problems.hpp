@@ -74,6 +74,8 @@ class ProblemEvidence final : public RecordSink {
     uint64_t requests = 0, answers = 0;
     std::optional<int64_t> first_request_ns;
     Events timeouts, damaged, overlapping, late, glitches;
+    // How long after their requests its late answers came, where the clock timed them.
+    std::optional<int64_t> late_min_ns, late_max_ns;
     // The time-outs since its last answer: a slave that stopped answering.
     uint64_t silent_timeouts = 0;
     int64_t silent_since_ns = 0;
@@ -100,6 +102,7 @@ class ProblemEvidence final : public RecordSink {
   void on_request(const Frame& frame);
   void on_answer(const Frame& frame, Slave& slave);
   void on_damaged_answer(uint64_t index, int64_t t_ns, size_t size, Slave& slave);
+  void on_late_answer(const Frame& frame);
   void note(Events& events, int64_t t_ns, uint64_t index);
 
   std::map<uint8_t, Slave> slaves_;
@@ -114,6 +117,7 @@ class ProblemEvidence final : public RecordSink {
 
 struct ProblemOptions {
   int64_t timeout_ns = 1'000'000'000;  // the time-out the analyzer waits for an answer
+  bool timeout_told = false;           // timeout_ns is the master's (--timeout), not a default
 };
 
 // The problems the statistics and the evidence show, errors first, then by slave.

@@ -140,6 +140,7 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
                                                   !o.data_bits && o.mode == ModeChoice::automatic);
     evidence_ = std::make_unique<ProblemEvidence>();
     problem_options_.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
+    problem_options_.timeout_told = o.timeout_given;
     if (!o.report_file.empty()) {  // the report shows the lines of the records problems cite
       cited_ = std::make_unique<output::CitedRecords>(*evidence_, channels, o.register_base,
                                                       o.display_filter.empty() ? nullptr : &clock_);
