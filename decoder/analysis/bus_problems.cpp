@@ -46,6 +46,10 @@ constexpr std::array<ProblemInfo, problem_kind_count> problem_infos{{
     {"turnaround-glitches",
      "check the bus biasing (fail-safe resistors) and termination, and the driver-enable "
      "timing of the device that releases or takes the bus"},
+    {"settings-look-wrong",
+     "give modtap the line's baud rate, parity and stop bits as the master uses them, or let it "
+     "find them (--baud auto --parity auto); the other problems wait until the settings read "
+     "the bus"},
 }};
 
 // Thresholds: a handful of events is chance, not a problem (docs/output.md, "problems").
@@ -111,7 +115,17 @@ void ProblemEvidence::note(Events& events, int64_t t_ns, uint64_t index) {
 void ProblemEvidence::on_frame(const Frame& frame) {
   cited_.reset();
   after_request_ = false;
+  bytes_ += frame.raw.size();
+  if (frame.check_ok) good_frame_bytes_ += frame.raw.size();
   if (frame.adu.empty()) return;
+  if (frame.role == Role::response && frame.request && request_end_ns_ && frame.latency_ns) {
+    ++timed_answers_;
+  } else if (frame.role == Role::response && frame.request && request_end_ns_ &&
+             frame.t_ns < *request_end_ns_) {
+    ++timed_answers_;
+    ++early_answers_;
+  }
+  request_end_ns_.reset();
   if (frame.role == Role::request && frame.check_ok) return on_request(frame);
   const bool awaited =
       frame.role == Role::response && frame.request && !(frame.findings & finding_late_response);
@@ -133,6 +147,7 @@ void ProblemEvidence::on_frame(const Frame& frame) {
 void ProblemEvidence::on_request(const Frame& frame) {
   ++requests_seen_;
   after_request_ = true;
+  request_end_ns_ = frame.end_ns;
   awaited_.reset();
   awaited_slave_.reset();
   if (frame.slave() == 0) return;  // a broadcast: no answer comes
@@ -181,6 +196,7 @@ void ProblemEvidence::on_damaged_answer(uint64_t index, int64_t t_ns, size_t siz
 
 void ProblemEvidence::on_noise(const Noise& noise) {
   cited_.reset();
+  bytes_ += noise.raw.size();
   const bool after_request = std::exchange(after_request_, false);
   if (noise.reason == NoiseReason::glitch) {
     // Right after a request, the slave's driver turning on to answer; else the master's.
@@ -257,6 +273,8 @@ class Diagnosis {
   }
 
   std::vector<Problem> run() {
+    // Read with settings that are not the line's, every other conclusion is the settings'.
+    if (settings_look_wrong()) return std::move(problems_);
     for (const auto& [address, slave] : evidence_.slaves()) {
       if (no_response(address, slave)) continue;  // nothing else to say of a silent address
       stopped_or_intermittent(address, slave);
@@ -284,6 +302,42 @@ class Diagnosis {
     p.advice = problem_info(kind).advice;
     p.first_records = std::move(first);
     return p;
+  }
+
+  // The settings modtap was given do not read the bus: most bytes form no good frame, the reads
+  // bring more bytes than the baud can carry, or answers would begin before their requests
+  // ended. Each is what a wrong baud rate or parity does; a bad line garbles some frames, not
+  // most (the statistics of a noisy bus stay well below), and cannot hurry the bytes.
+  bool settings_look_wrong() {
+    const uint64_t bytes = evidence_.bytes();
+    const double good = share(evidence_.good_frame_bytes(), bytes);
+    const ChunkPace* pace = options_.pace;
+    const uint64_t timed = evidence_.timed_answers(), early = evidence_.early_answers();
+    const std::string settings = describe(statistics_.format());
+    std::string why;
+    if (pace && pace->too_fast()) {
+      why = fmt::format("the bytes arrive faster than {} carries them ({} of {} reads)", settings,
+                        pace->fast_reads, pace->reads);
+    } else if (timed >= 10 && 2 * early > timed) {
+      why = fmt::format("{} of {} answers would begin before their request ended at {}", early,
+                        timed, settings);
+    } else if (bytes >= 64 && good < 0.5) {
+      why = fmt::format("only {:.0f}% of {} bytes form frames with a good check at {}", 100 * good,
+                        bytes, settings);
+    } else {
+      return false;
+    }
+    Problem& p = add(ProblemKind::settings_look_wrong, std::nullopt, Severity::error,
+                     statistics_.first_t_ns.value_or(0), {});
+    p.evidence = {
+        {"bytes", bytes}, {"good_share", good}, {"early_answers", early}, {"timed_answers", timed}};
+    if (pace) {
+      p.evidence.emplace_back("fast_reads", pace->fast_reads);
+      p.evidence.emplace_back("reads", pace->reads);
+    }
+    p.text = fmt::format("The line's settings look wrong: {}. Are they the line's? Try --baud auto",
+                         why);
+    return true;
   }
 
   // "Slave 3 (gd20)": the model named where one was set or found, not the generic one.

@@ -16,6 +16,7 @@
 #include "decoder/analysis/bus_statistics.hpp"
 #include "decoder/models/device_model.hpp"
 #include "decoder/protocol/findings.hpp"
+#include "decoder/protocol/format_probe.hpp"
 #include "decoder/protocol/record_sink.hpp"
 
 namespace modtap {
@@ -31,8 +32,9 @@ enum class ProblemKind : uint8_t {
   rejected_requests,      // the same request answered with the same exception, again and again
   collisions,             // two devices answering at once as one address
   turnaround_glitches,    // a stray byte each time a driver takes the bus
+  settings_look_wrong,    // the line's settings given to modtap do not read the bus
 };
-inline constexpr size_t problem_kind_count = 10;
+inline constexpr size_t problem_kind_count = 11;
 
 // The one place a kind is named and advised on: JSON, text, the report and metrics spell it so.
 struct ProblemInfo {
@@ -94,6 +96,13 @@ class ProblemEvidence final : public RecordSink {
   const Events& bad_requests() const { return bad_requests_; }  // bad checks no answer explains
   const Events& master_glitches() const { return master_glitches_; }
   uint64_t requests_seen() const { return requests_seen_; }
+  // What of the stream made sense: every byte in a record, those of frames whose check holds.
+  uint64_t bytes() const { return bytes_; }
+  uint64_t good_frame_bytes() const { return good_frame_bytes_; }
+  // Answers timed after their request, and of those the ones that would begin before their
+  // request ended: a line faster than the baud modtap was given.
+  uint64_t timed_answers() const { return timed_answers_; }
+  uint64_t early_answers() const { return early_answers_; }
   // The record just given is one of the first of some trouble, which a problem may cite under
   // this index (a time-out's under its request's): a report keeps its line.
   std::optional<uint64_t> cited() const { return cited_; }
@@ -109,7 +118,10 @@ class ProblemEvidence final : public RecordSink {
   std::map<RequestKey, Rejections> requests_;
   Events bad_requests_, master_glitches_;
   uint64_t requests_seen_ = 0;
-  std::optional<RequestKey> awaited_;  // the request whose answer is awaited, if watched
+  uint64_t bytes_ = 0, good_frame_bytes_ = 0;
+  uint64_t timed_answers_ = 0, early_answers_ = 0;
+  std::optional<int64_t> request_end_ns_;  // of the last request, while its answer may come
+  std::optional<RequestKey> awaited_;      // the request whose answer is awaited, if watched
   std::optional<uint8_t> awaited_slave_;
   bool after_request_ = false;  // the last record was a request: a glitch now is the slave's
   std::optional<uint64_t> cited_;
@@ -118,6 +130,9 @@ class ProblemEvidence final : public RecordSink {
 struct ProblemOptions {
   int64_t timeout_ns = 1'000'000'000;  // the time-out the analyzer waits for an answer
   bool timeout_told = false;           // timeout_ns is the master's (--timeout), not a default
+  // Whether the reads came faster than the line's baud could carry their bytes (none: not
+  // watched, as for sources with no clock per read).
+  const ChunkPace* pace = nullptr;
 };
 
 // The problems the statistics and the evidence show, errors first, then by slave.

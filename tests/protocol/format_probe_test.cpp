@@ -30,6 +30,19 @@ TEST(FormatProbe, ReadsFasterThanTheBaudAllowsAreNoticed) {
   EXPECT_FALSE(right.too_fast());
 }
 
+// One byte a read, as a sniffer's pcap stamps each byte as it ends: a 19200 line's bytes,
+// 573 us apart, are too fast for 9600 (1,146 us a byte), never for 19200 itself.
+TEST(FormatProbe, OneByteReadsAtTwiceTheBaudAreTooFast) {
+  const std::vector<uint8_t> one{0x01};
+  const auto bytes_573_us_apart = [&](const SerialFormat& format) {
+    ChunkPace pace(format);
+    for (int i = 0; i < 40; ++i) pace.add({0, i * 573'000LL, one});
+    return pace.too_fast();
+  };
+  EXPECT_TRUE(bytes_573_us_apart(SerialFormat{9600, 8, Parity::even, 1}));
+  EXPECT_FALSE(bytes_573_us_apart(SerialFormat{19200, 8, Parity::even, 1}));
+}
+
 TEST(FormatProbe, LineHealthCountsBytesInGoodFrames) {
   LineHealth health;
   const std::vector<uint8_t> bytes(40, 0);

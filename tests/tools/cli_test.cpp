@@ -146,8 +146,10 @@ TEST(Cli, LastValuesAreWhatTheDeviceConfirmed) {
   EXPECT_THAT(csv.lines[3], ::testing::HasSubstr(",1,2502H,frequency_command,60.00,"));
 }
 
-// A simulated scan of six slaves, one packet a frame, with `faults` (busgen's syntax).
-std::string faulty_bus(const std::string& name, const std::vector<std::string>& faults) {
+// A simulated scan of six slaves at 19200 8E1, one packet a frame (or as `delivery` says), with
+// `faults` (busgen's syntax).
+std::string faulty_bus(const std::string& name, const std::vector<std::string>& faults,
+                       modtap::busgen::Delivery delivery = modtap::busgen::Delivery::whole_frames) {
   modtap::busgen::BusOptions o;
   o.transactions = 1200;
   o.polled_slaves = 6;
@@ -155,7 +157,7 @@ std::string faulty_bus(const std::string& name, const std::vector<std::string>& 
   const auto capture = modtap::busgen::simulate(o);
   const auto path = (std::filesystem::temp_directory_path() / name).string();
   modtap::captures::PcapChunkWriter writer(path, 147);
-  for (const auto& c : modtap::busgen::deliver(capture, modtap::busgen::Delivery::whole_frames, 1))
+  for (const auto& c : modtap::busgen::deliver(capture, delivery, 1))
     writer.write(
         {0, 1'700'000'000'000'000'000 + c.t_ns, {capture.bytes.data() + c.offset, c.size}});
   return path;
@@ -584,6 +586,34 @@ TEST(Cli, AnEmptyFileOrADirectoryIsSaidPlainly) {
     EXPECT_THAT(on_empty.lines,
                 ::testing::ElementsAre("modtap: " + empty.string() + ": the file is empty"));
   }
+}
+
+// A pcap of one byte a packet read at half its baud: the bytes come twice as fast as 9600
+// carries them. That is the problem, first and alone (an absent slave's waits until the
+// settings read the bus), in the statistics and in --stats; at the line's baud, the slave's.
+TEST(Cli, ReadAtHalfItsBaudACaptureShowsItsSettingsAsTheProblem) {
+  const std::string capture =
+      faulty_bus("modtap-half-baud.pcap", {"3:absent"}, modtap::busgen::Delivery::per_byte);
+  const Outcome half = run("-r " + capture + " --baud 9600 -T stats");
+  ASSERT_EQ(half.status, 0);
+  ASSERT_GE(half.lines.size(), 3u);
+  EXPECT_EQ(half.lines[0], "problems");
+  EXPECT_THAT(half.lines[1],
+              ::testing::StartsWith("  error   The line's settings look wrong: the bytes "
+                                    "arrive faster than 9600 8E1 carries them"));
+  EXPECT_THAT(half.lines, ::testing::Not(::testing::Contains(::testing::HasSubstr("Slave 3"))));
+  const auto path = (std::filesystem::temp_directory_path() / "modtap-half-baud.json").string();
+  ASSERT_EQ(run("-r " + capture + " --baud 9600 -q --stats " + path).status, 0);
+  std::ifstream file(path);
+  std::stringstream json;
+  json << file.rdbuf();
+  EXPECT_NE(json.str().find("\"problems\":[{\"problem\":\"settings-look-wrong\",\"slave\":null,"
+                            "\"severity\":\"error\""),
+            std::string::npos)
+      << json.str().substr(0, 400);
+  const Outcome right = run("-r " + capture + " -T stats");
+  ASSERT_GE(right.lines.size(), 2u);
+  EXPECT_THAT(right.lines[1], ::testing::HasSubstr("Slave 3 never answers"));
 }
 
 TEST(Cli, AWrongBaudGivesNoiseAndAHintNotACrash) {

@@ -131,7 +131,7 @@ ModelCatalog load_models(const RunOptions& o) {
 Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output::Output& out,
                    const std::vector<ChannelInfo>& channels, const SerialFormat& format,
                    ClockQuality clock)
-    : terminal_(make_sink(o, out, channels, clock_, clock)) {
+    : terminal_(make_sink(o, out, channels, clock_, clock)), pace_(format) {
   if (o.explain) explain_ = static_cast<output::ExplainSink*>(terminal_.get());
   fan_out_.add(*terminal_);
   const Needs needs = needs_of(o);
@@ -141,6 +141,7 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
     evidence_ = std::make_unique<ProblemEvidence>();
     problem_options_.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
     problem_options_.timeout_told = o.timeout_given;
+    problem_options_.pace = &pace_;
     if (!o.report_file.empty()) {  // the report shows the lines of the records problems cite
       cited_ = std::make_unique<output::CitedRecords>(*evidence_, channels, o.register_base,
                                                       o.display_filter.empty() ? nullptr : &clock_);
@@ -215,6 +216,11 @@ void Pipeline::feed_top(const RunOptions& o, const std::vector<ChannelInfo>& cha
   top_feed_ =
       std::make_unique<top::TopFeed>(channels, text, pcapng_options(o, format, clock), filter_for);
   health_.add(*top_feed_);
+}
+
+void Pipeline::on_read(const Chunk& chunk) {
+  if (!shared_statistics_) return pace_.add(chunk);
+  shared_statistics_->read([&] { pace_.add(chunk); });  // --metrics reads the pace meanwhile
 }
 
 std::vector<Problem> Pipeline::problems() const {

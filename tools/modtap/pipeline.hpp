@@ -150,6 +150,10 @@ class Pipeline {
   const ProblemEvidence* evidence() const { return evidence_.get(); }
   // modtap top's records, read under shared_statistics()'s lock.
   top::TopFeed* top_feed() { return top_feed_.get(); }
+  // A read from the source, before its bytes are framed: its pace says whether the line is
+  // faster than the settings modtap was given. Only for sources timed per read.
+  void on_read(const Chunk& chunk);
+  const ChunkPace& pace() const { return pace_; }
   // The problems the statistics and the evidence beside them show (none without statistics).
   // With --metrics, call it under shared_statistics()'s lock.
   std::vector<Problem> problems() const;
@@ -190,6 +194,7 @@ class Pipeline {
   std::unique_ptr<output::CitedRecords> cited_;  // in front of the evidence, with --report
   FanOut health_;                                // the evidence, then the statistics
   ProblemOptions problem_options_;
+  ChunkPace pace_;  // of the reads: a line faster than its settings (problem_options_.pace)
   std::unique_ptr<output::SharedStatistics> shared_statistics_;
   std::unique_ptr<BusTimeline> timeline_;
   ModelCatalog catalog_;

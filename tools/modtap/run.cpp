@@ -161,7 +161,6 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   options.slave_timeout_ns = session.model_timeouts();
   options.framing_observer = session.explain();
   Analyzer bus(options, source->channels(), health);
-  ChunkPace pace(open.serial);
   Chunk chunk;
   // A capture that breaks off (a truncated file) still gives everything read before the
   // break, in every output, and then the error.
@@ -177,7 +176,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
       stopped_by = autostop_met(autostop, chunk.t_ns - *first_ns, session.pcapng_bytes());
       if (stopped_by) break;
       if (progress) progress->update(*source->file_position());
-      if (source->clock() == ClockQuality::per_chunk) pace.add(chunk);
+      if (source->clock() == ClockQuality::per_chunk) session.pipeline().on_read(chunk);
       if (session.keeps_raw()) session.keep_raw(chunk, bus.between_frames());
       bus.push(chunk);
     }
@@ -212,7 +211,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
     context.unnamed_lines = captures::sigrok_channel_names(o.read_file);
   if (health.looks_wrong() && !piped && !context.logic_analyzer)
     context.better_mode = better_mode(o.read_file, open, analyzer_options(o, source->clock()));
-  hint_settings(open.serial, health, pace, context);
+  hint_settings(open.serial, health, session.pipeline().pace(), context);
   return 0;
 }
 
@@ -245,9 +244,8 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
   options.analyzer.slave_timeout_ns = session.model_timeouts();
   // What the traffic says of the settings, for a hint when the run ends, as a file's run gives.
   LineHealth health(&session.records());
-  ChunkPace pace(options.analyzer.format);
   options.on_read = [&](const Chunk& chunk, bool between_frames) {
-    pace.add(chunk);
+    session.pipeline().on_read(chunk);
     if (session.keeps_raw()) session.keep_raw(chunk, between_frames);
   };
   options.reconnect = o.reconnect;
@@ -269,7 +267,7 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
   if (view) view->close();
   // Ctrl-C, -c and -a end a live run whole; a port gone (status 1) breaks it off.
   session.finish(status == 0, frames_met(o, autostop, session).value_or(stopped_by.value_or("")));
-  hint_settings(options.analyzer.format, health, pace, HintContext{});
+  hint_settings(options.analyzer.format, health, session.pipeline().pace(), HintContext{});
   return status;
 }
 
