@@ -252,8 +252,10 @@ void append_slave(fmt::memory_buffer& out, uint8_t address, const SlaveStatistic
   auto put = fmt::appender(out);
   fmt::format_to(put, "{{\"slave\":{},", address);
   append_counts(out, slave.counts);
-  fmt::format_to(put, ",\"garbled\":{},\"timeout_rate\":{},\"exceptions_by_code\":{{",
-                 slave.counts.garbled, slave.counts.timeout_rate());
+  fmt::format_to(put,
+                 ",\"garbled\":{},\"late_responses\":{},\"timeout_rate\":{},"
+                 "\"exceptions_by_code\":{{",
+                 slave.counts.garbled, slave.counts.late, slave.counts.timeout_rate());
   bool first = true;
   for (const auto& [code, count] : slave.exceptions_by_code) {
     fmt::format_to(put, "{}\"{}\":{}", first ? "" : ",", code, count);

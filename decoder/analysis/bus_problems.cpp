@@ -445,10 +445,12 @@ class Diagnosis {
     Problem& p =
         add(ProblemKind::late_responses, address, Severity::error, *s.late.first_ns, s.late.first);
     p.evidence = {{"late_answers", s.late.count}, {"requests", s.requests}};
+    // A share of its requests, as the time-outs' are: with those it never answered, the
+    // statistics' time-out rate.
     p.text = fmt::format(
-        "{} answers after the master has given up: {} of its {} answers came too "
-        "late",
-        who(address, s), s.late.count, answered(s));
+        "{} answers after the master has given up: {} of its {} requests ({:.0f}%) were "
+        "answered too late",
+        who(address, s), s.late.count, s.requests, percent(s.late.count, s.requests));
     if (!s.late_min_ns) return;
     const double low_ms = *s.late_min_ns / 1e6, high_ms = *s.late_max_ns / 1e6;
     p.evidence.emplace_back("late_min_ms", low_ms);

@@ -18,6 +18,7 @@ namespace {
 void count(ExchangeCounts& c, const Frame& frame) {
   c.requests += frame.role == Role::request;
   c.responses += frame.role == Role::response;
+  c.late += frame.role == Role::response && (frame.findings & finding_late_response);
   c.exceptions += frame.check_ok && frame.role == Role::response && frame.is_exception();
   c.bad_checks += !frame.check_ok;
   c.retries += (frame.findings & finding_retry) != 0;

@@ -29,10 +29,14 @@ struct ExchangeCounts {
   uint64_t bad_checks = 0;
   uint64_t retries = 0;
   uint64_t garbled = 0;  // answers that came as noise, past reading (Noise::damaged_answer)
+  // Responses that came after the master gave up (late-response): each is a response, and its
+  // request a time-out; the master got an answer to the others.
+  uint64_t late = 0;
 
   double timeout_rate() const {
     return requests ? static_cast<double>(timeouts) / static_cast<double>(requests) : 0.0;
   }
+  uint64_t answered_in_time() const { return responses - std::min(late, responses); }
 };
 
 struct SlaveStatistics {

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
 #include <set>
 #include <string>
 #include <utility>
@@ -24,6 +25,7 @@ constexpr int64_t master_timeout_ns = 200'000'000;
 
 struct Diagnosed {
   std::vector<Problem> problems;
+  std::map<uint8_t, ExchangeCounts> counts;  // the statistics' of each slave
   std::set<std::pair<std::string, int>> kinds() const {  // (kind, slave or -1)
     std::set<std::pair<std::string, int>> out;
     for (const Problem& p : problems)
@@ -49,7 +51,10 @@ Diagnosed diagnose(const BusOptions& bus, Delivery delivery = Delivery::whole_fr
   for (const auto& c : busgen::deliver(capture, delivery, bus.seed))
     analyzer.push({0, c.t_ns, {capture.bytes.data() + c.offset, c.size}});
   analyzer.finish();
-  return {find_problems(statistics, evidence, {master_timeout_ns, true})};
+  Diagnosed run{find_problems(statistics, evidence, {master_timeout_ns, true}), {}};
+  statistics.for_each_slave(
+      [&](uint8_t address, const SlaveStatistics& slave) { run.counts[address] = slave.counts; });
+  return run;
 }
 
 // A scan list of six slaves, nothing wrong but what real buses always have: a few exceptions,
@@ -181,6 +186,27 @@ TEST(BusProblems, OneCauseIsOneProblemWhateverTheSeedAndClock) {
             << (c.faults.empty() ? "glitches" : c.faults[0]) << " seed " << seed << " delivery "
             << static_cast<int>(delivery) << describe(run);
       }
+}
+
+// One set of numbers: a slave that misses some requests and answers others late has, in its
+// problems, as many time-outs as the statistics count, the late ones as their late responses.
+TEST(BusProblems, TheProblemsCountTheTimeOutsTheStatisticsCount) {
+  for (const Delivery delivery : {Delivery::per_byte, Delivery::bursts}) {
+    const Diagnosed run = diagnose(scan(21, "2:late,drop=0.2"), delivery);
+    const auto figure = [&](std::string_view kind, std::string_view name) {
+      for (const Problem& p : run.problems)
+        if (problem_info(p.kind).name == kind && p.slave == 2)
+          for (const auto& [key, value] : p.evidence)
+            if (key == name) return static_cast<uint64_t>(value);
+      ADD_FAILURE() << kind << " " << name << describe(run);
+      return uint64_t{0};
+    };
+    const ExchangeCounts& counts = run.counts.at(2);
+    EXPECT_EQ(figure("late-responses", "late_answers"), counts.late);
+    EXPECT_EQ(figure("intermittent-response", "timeouts") + counts.late, counts.timeouts);
+    EXPECT_EQ(figure("intermittent-response", "requests"), counts.requests);
+    EXPECT_EQ(counts.answered_in_time() + counts.timeouts, counts.requests);
+  }
 }
 
 // A slave asked 200 times that answered once (a record read as its answer that was none, or

@@ -21,7 +21,7 @@ SlaveRow row(uint8_t address, uint64_t requests, uint64_t timeouts) {
   r.address = address;
   r.model = "nta5000";
   r.requests = requests;
-  r.responses = requests - timeouts;
+  r.answered_in_time = requests - timeouts;
   r.timeouts = timeouts;
   r.p50_ms = 3.1;
   r.p99_ms = 4.9;

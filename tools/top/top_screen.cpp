@@ -173,9 +173,9 @@ constexpr std::string_view help_text[] = {
     "  q              quit",
     "",
     "A row's colour is its slave's worst problem: red an error, yellow a warning.",
-    "ans% answers to requests, t/o time-outs, exc exceptions, bad bad checks and",
-    "garbled answers, p50ms p99ms the latency from a request's end to its answer's",
-    "start, seen how long ago the slave last answered (- never).",
+    "ans% answers in time to requests (late ones are time-outs), t/o time-outs, exc",
+    "exceptions, bad bad checks and garbled answers, p50ms p99ms the latency from a",
+    "request's end to its answer's start, seen how long ago the slave last answered.",
 };
 
 constexpr std::string_view footer =
@@ -246,7 +246,8 @@ void add_panel(Lines& out, const Snapshot& s, const ViewState& view) {
 
 std::optional<double> SlaveRow::answered_percent() const {
   if (requests == 0) return std::nullopt;
-  return 100.0 * static_cast<double>(std::min(responses, requests)) / static_cast<double>(requests);
+  return 100.0 * static_cast<double>(std::min(answered_in_time, requests)) /
+         static_cast<double>(requests);
 }
 
 std::string_view column_title(Column column) {

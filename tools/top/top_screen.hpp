@@ -33,7 +33,8 @@ inline constexpr size_t column_count = 12;
 struct SlaveRow {
   uint8_t address = 0;
   std::string model;
-  uint64_t requests = 0, responses = 0, timeouts = 0, retries = 0, exceptions = 0, bad_checks = 0;
+  uint64_t requests = 0, timeouts = 0, retries = 0, exceptions = 0, bad_checks = 0;
+  uint64_t answered_in_time = 0;          // answers the master got: late ones are time-outs to it
   std::optional<double> p50_ms, p99_ms;   // none: no latency measured
   std::optional<int64_t> last_answer_ns;  // none: it never answered
   std::string problem;  // the worst problem's kind (problem_info's name); empty: none

@@ -95,7 +95,7 @@ SlaveRow slave_row(uint8_t address, const SlaveStatistics& slave, const DeviceMo
   row.address = address;
   const ExchangeCounts& c = slave.counts;
   row.requests = c.requests;
-  row.responses = c.responses;
+  row.answered_in_time = c.answered_in_time();
   row.timeouts = c.timeouts;
   row.retries = c.retries;
   row.exceptions = c.exceptions;
