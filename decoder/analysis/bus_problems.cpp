@@ -50,6 +50,9 @@ constexpr std::array<ProblemInfo, problem_kind_count> problem_infos{{
      "give modtap the line's baud rate, parity and stop bits as the master uses them, or let it "
      "find them (--baud auto --parity auto); the other problems wait until the settings read "
      "the bus"},
+    {"wrong-baud-device",
+     "set this device's baud rate, parity and stop bits to the bus's: its answers come at "
+     "another speed (junk longer than the answer: a slower device; shorter: a faster one)"},
 }};
 
 // Thresholds: a handful of events is chance, not a problem (docs/output.md, "problems").
@@ -66,6 +69,7 @@ constexpr double near_timeout = 0.5;            // or its p95 past this share of
 constexpr double rejected_share = 0.8;          // rejected-requests: this share of a request
 constexpr double glitch_share = 0.2;            // turnaround-glitches: of the requests
 constexpr size_t several = 3;                   // slaves alike: one cause they share
+constexpr double wrong_baud_share = 0.8;        // wrong-baud-device: of its answers, as junk
 constexpr double noise_share = 0.01;            // bus-noise: of all frames
 constexpr double noise_share_error = 0.05;
 
@@ -140,6 +144,9 @@ void ProblemEvidence::on_frame(const Frame& frame) {
   if (frame.findings & finding_ambiguous_echo) return;
   if (frame.check_ok) return on_answer(frame, slave);
   if (frame.damage == Damage::collision) return note(slave.overlapping, frame.t_ns, frame.index);
+  // Neither its address nor its function the request's: junk in the answer's place.
+  if (frame.findings & finding_garbage_after_request)
+    return on_damaged_answer(frame.index, frame.t_ns, frame.raw.size(), slave);
   note(slave.damaged, frame.t_ns, frame.index);
   slave.silent_timeouts = 0;
 }
@@ -190,6 +197,11 @@ void ProblemEvidence::on_damaged_answer(uint64_t index, int64_t t_ns, size_t siz
     note(slave.overlapping, t_ns, index);
   } else {
     note(slave.damaged, t_ns, index);
+    slave.garbled.add(t_ns, index);
+    if (expected) {
+      slave.garbled_bytes += size;
+      slave.garbled_bytes_due += expected;
+    }
   }
   slave.silent_timeouts = 0;
 }
@@ -472,6 +484,7 @@ class Diagnosis {
   // Two devices answering at once also make frames with bad checks (begun within a bit of each
   // other): where they collide, those are part of it, not a damaged device of their own.
   void damaged_answers(uint8_t address, const Slave& s) {
+    if (wrong_baud_device(address, s)) return;
     const double overlap_rate = share(s.overlapping.count, s.requests);
     if (s.overlapping.count >= few && overlap_rate >= damaged_share) {
       Problem& p = add(ProblemKind::collisions, address, Severity::error, *s.overlapping.first_ns,
@@ -498,6 +511,27 @@ class Diagnosis {
         "{}'s answers arrive damaged: {:.0f}% ({} of {}) fail their check, the other slaves' "
         "{:.1f}%",
         who(address, s), 100 * rate, s.damaged.count, s.requests, 100 * others);
+  }
+
+  // A device at another baud rate or parity answers every time, and every time in junk no
+  // frame reads, of a length its speed sets: not a weak driver, whose answers mostly come
+  // through. Its bad checks are this problem's.
+  bool wrong_baud_device(uint8_t address, const Slave& s) {
+    if (s.garbled.count < some || s.garbled.count < wrong_baud_share * answered(s)) return false;
+    Problem& p = add(ProblemKind::wrong_baud_device, address, Severity::error, *s.garbled.first_ns,
+                     s.garbled.first);
+    p.evidence = {{"garbled_answers", s.garbled.count}, {"answers", answered(s)}};
+    p.text = fmt::format(
+        "{} answers in junk every time, as a device at another baud rate or parity does: {} of "
+        "its {} answers",
+        who(address, s), s.garbled.count, answered(s));
+    if (s.garbled_bytes_due) {
+      const double ratio = share(s.garbled_bytes, s.garbled_bytes_due);
+      p.evidence.emplace_back("length_ratio", ratio);
+      p.text += fmt::format(", {:.1f} times as long as the answers due", ratio);
+    }
+    damage_explained_[address] = true;
+    return true;
   }
 
   // A stray byte between a request and its answer, at a share of a slave's requests.

@@ -33,8 +33,9 @@ enum class ProblemKind : uint8_t {
   collisions,             // two devices answering at once as one address
   turnaround_glitches,    // a stray byte each time a driver takes the bus
   settings_look_wrong,    // the line's settings given to modtap do not read the bus
+  wrong_baud_device,      // one device answers at another baud rate or parity: always junk
 };
-inline constexpr size_t problem_kind_count = 11;
+inline constexpr size_t problem_kind_count = 12;
 
 // The one place a kind is named and advised on: JSON, text, the report and metrics spell it so.
 struct ProblemInfo {
@@ -76,6 +77,10 @@ class ProblemEvidence final : public RecordSink {
     uint64_t requests = 0, answers = 0;
     std::optional<int64_t> first_request_ns;
     Events timeouts, damaged, overlapping, late, glitches;
+    // Its answers that came as junk past reading (noise in the answer's time), and their bytes
+    // against those the answers due would have had, where the request told.
+    Events garbled;
+    uint64_t garbled_bytes = 0, garbled_bytes_due = 0;
     // How long after their requests its late answers came, where the clock timed them.
     std::optional<int64_t> late_min_ns, late_max_ns;
     // The time-outs since its last answer: a slave that stopped answering.

@@ -25,7 +25,7 @@ constexpr int64_t master_timeout_ns = 200'000'000;
 
 struct Diagnosed {
   std::vector<Problem> problems;
-  std::map<uint8_t, ExchangeCounts> counts;  // the statistics' of each slave
+  std::map<uint8_t, ExchangeCounts> counts;              // the statistics' of each slave
   std::set<std::pair<std::string, int>> kinds() const {  // (kind, slave or -1)
     std::set<std::pair<std::string, int>> out;
     for (const Problem& p : problems)
@@ -170,6 +170,8 @@ TEST(BusProblems, OneCauseIsOneProblemWhateverTheSeedAndClock) {
        0,
        {{"corrupted-responses", 2}, {"corrupted-responses", 5}}},
       {{"6:duplicate"}, 0, {{"collisions", 6}}},
+      {{"4:half-baud"}, 0, {{"wrong-baud-device", 4}}},
+      {{"4:half-baud", "2:late"}, 0, {{"wrong-baud-device", 4}, {"late-responses", 2}}},
       {{"3:absent"}, 0, {{"no-response", 3}}},
       {{"2:late"}, 0, {{"late-responses", 2}}},
       {{}, 0.5, {{"turnaround-glitches", -1}}},

@@ -372,8 +372,9 @@ void compare_extra_frames(const BusCapture& capture, const Collector& out,
                           const RecordIndex& records, const Scenario& s, Differences& d) {
   std::map<uint64_t, const busgen::TruthFrame*> truth_at;
   for (const auto& f : capture.frames) truth_at[f.offset] = &f;
-  std::set<uint64_t> clash_at;
+  std::set<uint64_t> clash_at, garbled_at;
   for (const busgen::Clash& clash : capture.clashes) clash_at.insert(clash.offset);
+  garbled_at.insert(capture.garbled.begin(), capture.garbled.end());
   for (const auto& [offset, r] : records.frames) {
     const auto truth = truth_at.find(offset);
     const bool sent_good = truth != truth_at.end() && truth->second->damage == Damage::none;
@@ -385,8 +386,9 @@ void compare_extra_frames(const BusCapture& capture, const Collector& out,
       });
     // What runs on past a collided answer is the other talker's, never a request to a slave
     // of its own. Junk itself may read as a damaged frame of its header: only where no junk
-    // was sent is a bad frame counted.
-    if (!r->check_ok && truth == truth_at.end() && !clash_at.count(offset) && sends_no_junk(s.bus))
+    // was sent is a bad frame counted (a garbled answer's junk is known by its start).
+    if (!r->check_ok && truth == truth_at.end() && !clash_at.count(offset) &&
+        !garbled_at.count(offset) && sends_no_junk(s.bus))
       d.note(d.invented, [&] {
         return std::string("bad frame where none was sent, at offset " + std::to_string(offset) +
                            context(capture, out, offset));
@@ -599,6 +601,10 @@ BusOptions bit_errors(uint64_t seed) {
   o.retry_rate = 0.7;
   return o;
 }
+// A device set to half the line's baud rate: every answer junk twice its length.
+BusOptions half_baud_devices(uint64_t seed) {
+  return one_in_ten(seed, [](auto& f) { f.half_baud = true; });
+}
 // Bursts of junk between transactions.
 BusOptions noisy(uint64_t seed) {
   BusOptions o = clean(seed, 3000);
@@ -623,6 +629,7 @@ constexpr FaultKind fault_kinds[] = {{"absent", absent_with_retries, true},
                                      {"glitch", glitching_slaves, true},
                                      {"biterr", bit_errors, true},
                                      {"noise", noisy, true},
+                                     {"halfbaud", half_baud_devices, true},
                                      {"late", late_answers, false},
                                      {"late_retries", late_answers_and_retries, false}};
 

@@ -271,11 +271,13 @@ class Simulator {
     // An answer after the master's time-out: the master has given up on it, and sends its next
     // request its usual idle time after the answer ends (it does not talk over a frame).
     const bool late = faults && turnaround >= o_.retry_after_ns;
-    if (chance(o_.garbled_rate)) {
+    const bool half_baud = faults && faults->half_baud;
+    if (half_baud || chance(o_.garbled_rate)) {
       // Junk in the answer's time is the answer, garbled; after the time-out, too late.
       if (late) capture_.timed_out.push_back(req);
       timing_out_ns_ = late ? 0 : o_.retry_after_ns;  // what came was no answer it could read
-      return send_garbled(slave, turnaround);
+      return half_baud ? send_at_half_baud(slave, response, turnaround)
+                       : send_garbled(slave, turnaround);
     }
     if (late) capture_.timed_out.push_back(req);
     if ((faults && faults->turnaround_glitch) || chance(o_.glitch_rate))
@@ -364,6 +366,17 @@ class Simulator {
     Bytes junk;
     random_bytes(junk, pick(3, 12));
     if (junk[0] == slave) junk[0] ^= 0x80;
+    capture_.garbled.push_back(send(junk, gap_ns));
+  }
+
+  // An answer sent at half the line's baud rate: every character it sends reads as about two
+  // of the line's, none of them its own (the receiver finds its start bits in the middle of the
+  // sender's), and no span of them a frame.
+  void send_at_half_baud(uint8_t slave, const Bytes& response, int64_t gap_ns) {
+    Bytes junk;
+    random_bytes(junk, 2 * static_cast<unsigned>(adu_of(response).size()));
+    if (junk[0] == slave) junk[0] ^= 0x80;
+    while (const auto good = good_span_end(junk)) junk[*good - 1] ^= 1;
     capture_.garbled.push_back(send(junk, gap_ns));
   }
 
@@ -746,7 +759,7 @@ std::optional<unsigned> register_address(std::string_view text) {
 
 constexpr std::string_view fault_names =
     "absent, stops=TIME, drop=RATE, slow=TIME, late, bit-errors=RATE, missing-block=START+COUNT, "
-    "duplicate, glitch";
+    "duplicate, glitch, half-baud";
 
 void add_fault(SlaveFaults& faults, std::string_view name, std::optional<std::string_view> value) {
   const std::string what(name);
@@ -780,6 +793,9 @@ void add_fault(SlaveFaults& faults, std::string_view name, std::optional<std::st
   } else if (name == "glitch") {
     no_value();
     faults.turnaround_glitch = true;
+  } else if (name == "half-baud") {
+    no_value();
+    faults.half_baud = true;
   } else if (name == "stops") {
     faults.stops_after_ns = time();
   } else if (name == "slow") {

@@ -44,6 +44,9 @@ struct SlaveFaults {
   std::optional<RegisterBlock> missing_block;
   bool duplicate_address = false;  // a second device has its address: both answer, over each other
   bool turnaround_glitch = false;  // its driver puts a 0x00 or 0xFF on the line before every answer
+  // Set to half the bus's baud rate: each of its bits lasts two of the line's, so every answer
+  // reads as junk about twice its length, where the answer is due (Damage-free truth: garbled).
+  bool half_baud = false;
   friend bool operator==(const SlaveFaults&, const SlaveFaults&) = default;
 };
 
@@ -92,7 +95,7 @@ struct BusOptions {
 
 // Adds faults written as on busgen's command line, "ADDR:FAULT[,FAULT...]": absent, stops=TIME,
 // drop=RATE, slow=TIME, late, bit-errors=RATE, missing-block=START+COUNT (START as 0400H,
-// 0x400 or 1024), duplicate, glitch; TIME as 131ms, 60s, 500us or 2.5s. Throws
+// 0x400 or 1024), duplicate, glitch, half-baud; TIME as 131ms, 60s, 500us or 2.5s. Throws
 // std::invalid_argument saying what is wrong.
 void add_slave_faults(BusOptions& options, std::string_view spec);
 

@@ -76,7 +76,8 @@ int main(int argc, char** argv) {
                  "(silent from then on), drop=RATE (misses requests), slow=TIME (its turnaround), "
                  "late (answers after the master's time-out), bit-errors=RATE (of its answers), "
                  "missing-block=START+COUNT (read every cycle, answered by exception 02), "
-                 "duplicate (two devices answer at once), glitch (before every answer); "
+                 "duplicate (two devices answer at once), glitch (before every answer), "
+                 "half-baud (set to half the line's baud: its answers read as junk); "
                  "e.g. 2:slow=131ms 6:missing-block=0400H+4");
   app.add_flag("--ascii", ascii, "Modbus ASCII instead of RTU (7E1)");
   CLI11_PARSE(app, argc, argv);
