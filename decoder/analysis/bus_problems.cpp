@@ -53,6 +53,9 @@ constexpr std::array<ProblemInfo, problem_kind_count> problem_infos{{
     {"wrong-baud-device",
      "set this device's baud rate, parity and stop bits to the bus's: its answers come at "
      "another speed (junk longer than the answer: a slower device; shorter: a faster one)"},
+    {"device-restarts",
+     "check the device's power supply for brown-outs, its fault log and watchdog, and what "
+     "switches near it when it drops out (the first silences' times are below)"},
 }};
 
 // Thresholds: a handful of events is chance, not a problem (docs/output.md, "problems").
@@ -148,7 +151,7 @@ void ProblemEvidence::on_frame(const Frame& frame) {
   if (frame.findings & finding_garbage_after_request)
     return on_damaged_answer(frame.index, frame.t_ns, frame.raw.size(), slave);
   note(slave.damaged, frame.t_ns, frame.index);
-  slave.silent_timeouts = 0;
+  heard(slave, frame.t_ns);
 }
 
 void ProblemEvidence::on_request(const Frame& frame) {
@@ -172,7 +175,7 @@ void ProblemEvidence::on_request(const Frame& frame) {
 
 void ProblemEvidence::on_answer(const Frame& frame, Slave& slave) {
   ++slave.answers;
-  slave.silent_timeouts = 0;
+  heard(slave, frame.t_ns);
   if (frame.meaning && frame.meaning->model) slave.model = frame.meaning->model;
   if (frame.is_exception() && awaited_ && std::get<0>(*awaited_) == frame.device())
     note(requests_[*awaited_].by_exception[frame.adu[2]], frame.t_ns, frame.index);
@@ -182,7 +185,7 @@ void ProblemEvidence::on_answer(const Frame& frame, Slave& slave) {
 void ProblemEvidence::on_late_answer(const Frame& frame) {
   Slave& slave = slaves_[frame.slave()];
   note(slave.late, frame.t_ns, frame.index);
-  slave.silent_timeouts = 0;  // it is there, only slow
+  heard(slave, frame.t_ns);  // it is there, only slow
   if (!frame.latency_ns) return;
   slave.late_min_ns = std::min(slave.late_min_ns.value_or(INT64_MAX), *frame.latency_ns);
   slave.late_max_ns = std::max(slave.late_max_ns.value_or(INT64_MIN), *frame.latency_ns);
@@ -202,6 +205,18 @@ void ProblemEvidence::on_damaged_answer(uint64_t index, int64_t t_ns, size_t siz
       slave.garbled_bytes += size;
       slave.garbled_bytes_due += expected;
     }
+  }
+  heard(slave, t_ns);
+}
+
+// The slave spoke: a silence of a few time-outs in a row, seconds long, is over (a restart).
+void ProblemEvidence::heard(Slave& slave, int64_t t_ns) {
+  if (slave.silent_timeouts >= restart_timeouts && t_ns - slave.silent_since_ns >= restart_ns) {
+    const int64_t lasted = t_ns - slave.silent_since_ns;
+    slave.silences.add(slave.silent_since_ns, slave.silent_since_request);
+    slave.silence_timeouts += slave.silent_timeouts;
+    slave.shortest_silence_ns = std::min(slave.shortest_silence_ns, lasted);
+    slave.longest_silence_ns = std::max(slave.longest_silence_ns, lasted);
   }
   slave.silent_timeouts = 0;
 }
@@ -289,7 +304,8 @@ class Diagnosis {
     if (settings_look_wrong()) return std::move(problems_);
     for (const auto& [address, slave] : evidence_.slaves()) {
       if (no_response(address, slave)) continue;  // nothing else to say of a silent address
-      stopped_or_intermittent(address, slave);
+      const bool restarts = device_restarts(address, slave);
+      stopped_or_intermittent(address, slave, restarts);
       slow_response(address, slave);
       late_responses(address, slave);
       damaged_answers(address, slave);
@@ -382,8 +398,12 @@ class Diagnosis {
   }
 
   // A slave silent from a time to the end stopped; one that misses a share throughout drops.
-  void stopped_or_intermittent(uint8_t address, const Slave& s) {
-    const bool stopped = s.answers >= few && s.silent_timeouts >= some;
+  void stopped_or_intermittent(uint8_t address, const Slave& s, bool restarts) {
+    // A restarting device silent at the end, no longer than twice its longest silence, is
+    // restarting again, not gone.
+    const int64_t silent_at_end = statistics_.last_t_ns.value_or(0) - s.silent_since_ns;
+    const bool stopped = s.answers >= few && s.silent_timeouts >= some &&
+                         (!restarts || silent_at_end > 2 * s.longest_silence_ns);
     if (stopped) {
       Problem& p = add(ProblemKind::stopped_responding, address, Severity::error, s.silent_since_ns,
                        {s.silent_since_request});
@@ -393,8 +413,10 @@ class Diagnosis {
                       moment_text(statistics_, s.silent_since_ns), s.silent_timeouts);
     }
     // Time-outs its late answers explain are late-responses; those after it stopped, stopped.
+    // Restarts, their silences'.
     const uint64_t explained =
-        std::min(s.timeouts.count, s.late.count + (stopped ? s.silent_timeouts : 0));
+        std::min(s.timeouts.count, s.late.count + (stopped || restarts ? s.silent_timeouts : 0) +
+                                       (restarts ? s.silence_timeouts : 0));
     const uint64_t missed = s.timeouts.count - explained;
     const uint64_t asked = s.requests - (stopped ? s.silent_timeouts : 0);
     const double missed_rate = share(missed, asked);
@@ -408,6 +430,29 @@ class Diagnosis {
     p.text = fmt::format("{} fails to answer {:.0f}% of requests ({} of {}) since {}",
                          who(address, s), 100 * missed_rate, missed, asked,
                          moment_text(statistics_, *s.timeouts.first_ns));
+  }
+
+  // Silent for seconds a few times, answering again after each, and hardly ever missing a
+  // request in between: a device that restarts, not one that drops requests.
+  bool device_restarts(uint8_t address, const Slave& s) {
+    if (s.silences.count < 2) return false;
+    const uint64_t between =
+        s.timeouts.count -
+        std::min(s.timeouts.count, s.silence_timeouts + s.late.count + s.silent_timeouts);
+    if (share(between, s.requests) >= missed_share) return false;
+    Problem& p = add(ProblemKind::device_restarts, address, Severity::error, *s.silences.first_ns,
+                     s.silences.first);
+    const double shortest_s = s.shortest_silence_ns / 1e9, longest_s = s.longest_silence_ns / 1e9;
+    p.evidence = {{"silences", s.silences.count},
+                  {"timeouts_in_silences", s.silence_timeouts},
+                  {"shortest_s", shortest_s},
+                  {"longest_s", longest_s}};
+    p.text = fmt::format(
+        "{} went silent {} times, {:.1f} to {:.1f} s each, and answered again after each, as a "
+        "device restarting does; first at {}",
+        who(address, s), s.silences.count, shortest_s, longest_s,
+        moment_text(statistics_, *s.silences.first_ns));
+    return true;
   }
 
   // The median of the other slaves' shares of time-outs: a master whose time-out is too short

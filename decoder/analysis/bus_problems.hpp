@@ -34,8 +34,9 @@ enum class ProblemKind : uint8_t {
   turnaround_glitches,    // a stray byte each time a driver takes the bus
   settings_look_wrong,    // the line's settings given to modtap do not read the bus
   wrong_baud_device,      // one device answers at another baud rate or parity: always junk
+  device_restarts,        // silent for seconds, a few times, answering cleanly in between
 };
-inline constexpr size_t problem_kind_count = 12;
+inline constexpr size_t problem_kind_count = 13;
 
 // The one place a kind is named and advised on: JSON, text, the report and metrics spell it so.
 struct ProblemInfo {
@@ -87,6 +88,11 @@ class ProblemEvidence final : public RecordSink {
     uint64_t silent_timeouts = 0;
     int64_t silent_since_ns = 0;
     uint64_t silent_since_request = 0;
+    // Its silences that ended, each a few time-outs and seconds long (a restart), and the
+    // time-outs they hold.
+    Events silences;
+    uint64_t silence_timeouts = 0;
+    int64_t shortest_silence_ns = INT64_MAX, longest_silence_ns = 0;
     uint16_t expected_answer_size = 0;  // of the request it was last asked, 0 if unknown
   };
   // A request as the master repeats it: slave, function, start address and quantity.
@@ -117,6 +123,9 @@ class ProblemEvidence final : public RecordSink {
   void on_answer(const Frame& frame, Slave& slave);
   void on_damaged_answer(uint64_t index, int64_t t_ns, size_t size, Slave& slave);
   void on_late_answer(const Frame& frame);
+  static void heard(Slave& slave, int64_t t_ns);
+  static constexpr uint64_t restart_timeouts = 3;       // in a row, as an outage's
+  static constexpr int64_t restart_ns = 1'000'000'000;  // a restart takes seconds
   void note(Events& events, int64_t t_ns, uint64_t index);
 
   std::map<uint8_t, Slave> slaves_;

@@ -36,6 +36,8 @@ void encode_frame(Mode mode, const Bytes& body, Bytes& out) {
 
 namespace {
 
+constexpr int64_t restart_silence_ns = 5'000'000'000;  // how long a restarting slave is silent
+
 class Simulator {
  public:
   explicit Simulator(const BusOptions& o)
@@ -302,7 +304,11 @@ class Simulator {
   bool silent(const SlaveFaults* faults) {
     if (!faults) return false;
     if (faults->absent) return true;
-    if (faults->stops_after_ns && capture_.end_ns.back() >= *faults->stops_after_ns) return true;
+    const int64_t now = capture_.end_ns.back();
+    if (faults->stops_after_ns && now >= *faults->stops_after_ns) return true;
+    if (const auto every = faults->restarts_every_ns;
+        every && now >= *every && now % *every < restart_silence_ns)
+      return true;
     return chance(faults->drop_rate);
   }
 
@@ -759,7 +765,7 @@ std::optional<unsigned> register_address(std::string_view text) {
 
 constexpr std::string_view fault_names =
     "absent, stops=TIME, drop=RATE, slow=TIME, late, bit-errors=RATE, missing-block=START+COUNT, "
-    "duplicate, glitch, half-baud";
+    "duplicate, glitch, half-baud, restarts=TIME";
 
 void add_fault(SlaveFaults& faults, std::string_view name, std::optional<std::string_view> value) {
   const std::string what(name);
@@ -798,6 +804,8 @@ void add_fault(SlaveFaults& faults, std::string_view name, std::optional<std::st
     faults.half_baud = true;
   } else if (name == "stops") {
     faults.stops_after_ns = time();
+  } else if (name == "restarts") {
+    faults.restarts_every_ns = time();
   } else if (name == "slow") {
     faults.turnaround_ns = time();
   } else if (name == "drop") {

@@ -28,6 +28,9 @@ struct SlaveFaults {
   bool absent = false;  // never answers: a dead device, or a polled address with nothing behind it
   // Answers until this bus time (from the capture's start), never after: it died or lost power.
   std::optional<int64_t> stops_after_ns;
+  // Restarts this often (a watchdog, a brown-out): silent for the first 5 s of every period of
+  // bus time after the first, answering cleanly in between.
+  std::optional<int64_t> restarts_every_ns;
   double drop_rate = 0.0;  // misses this share of requests (a busy CPU, a marginal receiver)
   // A slow device: answers after this and up to 3 ms more instead of the bus's turnaround. At
   // the master's time-out (retry_after_ns) or beyond, it answers late, as below.
@@ -95,8 +98,8 @@ struct BusOptions {
 
 // Adds faults written as on busgen's command line, "ADDR:FAULT[,FAULT...]": absent, stops=TIME,
 // drop=RATE, slow=TIME, late, bit-errors=RATE, missing-block=START+COUNT (START as 0400H,
-// 0x400 or 1024), duplicate, glitch, half-baud; TIME as 131ms, 60s, 500us or 2.5s. Throws
-// std::invalid_argument saying what is wrong.
+// 0x400 or 1024), duplicate, glitch, half-baud, restarts=TIME; TIME as 131ms, 60s, 500us or 2.5s.
+// Throws std::invalid_argument saying what is wrong.
 void add_slave_faults(BusOptions& options, std::string_view spec);
 
 // A frame the master or a slave really sent.
