@@ -30,6 +30,10 @@ constexpr std::array<ProblemInfo, problem_kind_count> problem_infos{{
     {"late-responses",
      "lengthen the master's time-out beyond this device's answer time, or shorten the "
      "device's response delay: its answers come after the master gave up and are lost"},
+    {"slow-block",
+     "this request is what takes the device long (a block it computes or fetches, a "
+     "gateway's remote registers): make sure the master's time-out leaves room for it, or read "
+     "it less often or in smaller parts"},
     {"corrupted-responses",
      "check this device's transceiver and its wiring: the A/B wires and shield at its "
      "terminals, its stub, its segment; a device at another baud rate or parity answers in "
@@ -55,7 +59,7 @@ constexpr std::array<ProblemInfo, problem_kind_count> problem_infos{{
      "another speed (junk longer than the answer: a slower device; shorter: a faster one)"},
     {"device-restarts",
      "check the device's power supply for brown-outs, its fault log and watchdog, and what "
-     "switches near it when it drops out (the first silences' times are below)"},
+     "switches near it when it drops out"},
 }};
 
 // Thresholds: a handful of events is chance, not a problem (docs/output.md, "problems").
@@ -177,8 +181,15 @@ void ProblemEvidence::on_answer(const Frame& frame, Slave& slave) {
   ++slave.answers;
   heard(slave, frame.t_ns);
   if (frame.meaning && frame.meaning->model) slave.model = frame.meaning->model;
-  if (frame.is_exception() && awaited_ && std::get<0>(*awaited_) == frame.device())
-    note(requests_[*awaited_].by_exception[frame.adu[2]], frame.t_ns, frame.index);
+  if (awaited_ && std::get<0>(*awaited_) == frame.device()) {
+    Asked& asked = requests_[*awaited_];
+    if (frame.is_exception()) {
+      note(asked.by_exception[frame.adu[2]], frame.t_ns, frame.index);
+    } else if (frame.latency_ns) {
+      ++asked.timed_answers;
+      asked.latency_sum_ns += *frame.latency_ns;
+    }
+  }
   awaited_.reset();
 }
 
@@ -306,7 +317,7 @@ class Diagnosis {
       if (no_response(address, slave)) continue;  // nothing else to say of a silent address
       const bool restarts = device_restarts(address, slave);
       stopped_or_intermittent(address, slave, restarts);
-      slow_response(address, slave);
+      if (!slow_block(address, slave)) slow_response(address, slave);
       late_responses(address, slave);
       damaged_answers(address, slave);
     }
@@ -474,6 +485,44 @@ class Diagnosis {
   }
 
   // A slave whose answers come late is slow for that reason: the late problem says how slow.
+  // One request the slave answers far slower than its others, as slow-response compares
+  // slaves: the request is slow, not the device (latency by what is asked).
+  bool slow_block(uint8_t address, const Slave& s) {
+    using Key = ProblemEvidence::RequestKey;
+    const auto& requests = evidence_.requests();
+    const auto first = requests.lower_bound(Key{address, 0, 0, 0});
+    const auto last = requests.lower_bound(Key{static_cast<uint8_t>(address + 1), 0, 0, 0});
+    const auto end = address == 255 ? requests.end() : last;
+    uint64_t timed = 0;
+    int64_t sum_ns = 0;
+    for (auto it = first; it != end; ++it) {
+      timed += it->second.timed_answers;
+      sum_ns += it->second.latency_sum_ns;
+    }
+    for (auto it = first; it != end; ++it) {
+      const ProblemEvidence::Asked& asked = it->second;
+      const uint64_t others = timed - asked.timed_answers;
+      if (asked.timed_answers < some || others < some) continue;
+      const double mean = asked.mean_latency_ns();
+      const double others_mean = static_cast<double>(sum_ns - asked.latency_sum_ns) / others;
+      if (mean < slow_factor * others_mean || mean - others_mean < slow_margin_ns) continue;
+      const auto [slave, fc, start, quantity] = it->first;
+      Problem& p = add(ProblemKind::slow_block, address, Severity::warning,
+                       s.first_request_ns.value_or(0), {});
+      p.evidence = {{"function", fc},
+                    {"address", start},
+                    {"quantity", quantity},
+                    {"latency_ms", mean / 1e6},
+                    {"others_latency_ms", others_mean / 1e6}};
+      p.text = fmt::format(
+          "{} answers its {} of {:04X}H ({} registers) in {:.0f} ms, where its "
+          "other requests take {:.0f} ms",
+          who(address, s), verb(fc), start, quantity, mean / 1e6, others_mean / 1e6);
+      return true;
+    }
+    return false;
+  }
+
   void slow_response(uint8_t address, const Slave& s) {
     const SlaveStatistics* stats = statistics_of(address);
     if (!stats || stats->latency_ns.count() < some || s.late.count >= few) return;
@@ -679,10 +728,10 @@ class Diagnosis {
   }
 
   void rejected_requests() {
-    for (const auto& [key, rejections] : evidence_.requests())
-      for (const auto& [code, events] : rejections.by_exception)
-        if (events.count >= some && share(events.count, rejections.requests) >= rejected_share)
-          rejected(key, rejections.requests, code, events);
+    for (const auto& [key, asked] : evidence_.requests())
+      for (const auto& [code, events] : asked.by_exception)
+        if (events.count >= some && share(events.count, asked.requests) >= rejected_share)
+          rejected(key, asked.requests, code, events);
   }
 
   void rejected(const ProblemEvidence::RequestKey& key, uint64_t requests, uint8_t code,

@@ -27,6 +27,7 @@ enum class ProblemKind : uint8_t {
   intermittent_response,  // misses a share of requests, answers the rest
   slow_response,          // far slower than the bus's other slaves, or near the time-out
   late_responses,         // answers after the master has given up
+  slow_block,             // one request's answers far slower than the slave's others
   corrupted_responses,    // bad checks concentrated on one slave's answers
   bus_noise,              // bad checks spread over requests and several slaves
   rejected_requests,      // the same request answered with the same exception, again and again
@@ -36,7 +37,7 @@ enum class ProblemKind : uint8_t {
   wrong_baud_device,      // one device answers at another baud rate or parity: always junk
   device_restarts,        // silent for seconds, a few times, answering cleanly in between
 };
-inline constexpr size_t problem_kind_count = 13;
+inline constexpr size_t problem_kind_count = 14;
 
 // The one place a kind is named and advised on: JSON, text, the report and metrics spell it so.
 struct ProblemInfo {
@@ -97,13 +98,20 @@ class ProblemEvidence final : public RecordSink {
   };
   // A request as the master repeats it: slave, function, start address and quantity.
   using RequestKey = std::tuple<uint8_t, uint8_t, uint16_t, uint16_t>;
-  struct Rejections {
+  // What came of one request as the master repeats it: its exceptions, and how long its
+  // answers took.
+  struct Asked {
     uint64_t requests = 0;
     std::map<uint8_t, Events> by_exception;
+    uint64_t timed_answers = 0;
+    int64_t latency_sum_ns = 0;
+    double mean_latency_ns() const {
+      return timed_answers ? static_cast<double>(latency_sum_ns) / timed_answers : 0;
+    }
   };
 
   const std::map<uint8_t, Slave>& slaves() const { return slaves_; }
-  const std::map<RequestKey, Rejections>& requests() const { return requests_; }
+  const std::map<RequestKey, Asked>& requests() const { return requests_; }
   const Events& bad_requests() const { return bad_requests_; }  // bad checks no answer explains
   const Events& master_glitches() const { return master_glitches_; }
   uint64_t requests_seen() const { return requests_seen_; }
@@ -129,7 +137,7 @@ class ProblemEvidence final : public RecordSink {
   void note(Events& events, int64_t t_ns, uint64_t index);
 
   std::map<uint8_t, Slave> slaves_;
-  std::map<RequestKey, Rejections> requests_;
+  std::map<RequestKey, Asked> requests_;
   Events bad_requests_, master_glitches_;
   uint64_t requests_seen_ = 0;
   uint64_t bytes_ = 0, good_frame_bytes_ = 0;

@@ -172,6 +172,8 @@ TEST(BusProblems, OneCauseIsOneProblemWhateverTheSeedAndClock) {
       {{"6:duplicate"}, 0, {{"collisions", 6}}},
       {{"4:half-baud"}, 0, {{"wrong-baud-device", 4}}},
       {{"3:restarts=20s"}, 0, {{"device-restarts", 3}}},
+      {{"2:slow-block=0400H+10"}, 0, {{"slow-block", 2}}},
+      {{"2:slow-block=0400H+10", "5:absent"}, 0, {{"slow-block", 2}, {"no-response", 5}}},
       {{"3:restarts=20s", "5:bit-errors=0.3"},
        0,
        {{"device-restarts", 3}, {"corrupted-responses", 5}}},

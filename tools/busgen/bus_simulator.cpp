@@ -37,6 +37,7 @@ void encode_frame(Mode mode, const Bytes& body, Bytes& out) {
 namespace {
 
 constexpr int64_t restart_silence_ns = 5'000'000'000;  // how long a restarting slave is silent
+constexpr int64_t slow_block_ns = 60'000'000;          // a slow block's answer time, at least
 
 class Simulator {
  public:
@@ -209,7 +210,8 @@ class Simulator {
       return std::exchange(block_due_, 0);
     }
     const auto slave = static_cast<uint8_t>(polls_++ % o_.polled_slaves + 1);
-    if (faults_[slave] && faults_[slave]->missing_block) block_due_ = slave;
+    if (faults_[slave] && (faults_[slave]->missing_block || faults_[slave]->slow_block))
+      block_due_ = slave;
     return slave;
   }
 
@@ -220,8 +222,10 @@ class Simulator {
     const SlaveFaults* faults = faults_[slave];
     Bytes request{slave}, response{slave};
     uint32_t request_findings = 0;
-    if (block_read_) {
+    if (block_read_ && faults->missing_block) {
       read_missing_block(*faults->missing_block, request, response);
+    } else if (block_read_) {
+      read_block(*faults->slow_block, request, response);
     } else if (!broadcast && chance(o_.out_of_spec_rate)) {
       request_findings = out_of_spec(request, response);
     } else if (o_.polled_slaves) {
@@ -313,6 +317,7 @@ class Simulator {
   }
 
   int64_t slave_turnaround(const SlaveFaults& faults, int64_t turnaround) {
+    if (block_read_ && faults.slow_block) return slow_block_ns + pick(0, 3'000'000);
     if (faults.answers_after_timeout) return o_.retry_after_ns + t35_ + pick(0, 3'000'000);
     if (faults.turnaround_ns) return *faults.turnaround_ns + pick(0, 3'000'000);
     return turnaround;
@@ -480,6 +485,15 @@ class Simulator {
     if (!faults || !faults->missing_block) return false;
     const RegisterBlock& block = *faults->missing_block;
     return start < block.start + block.count && block.start < start + count;
+  }
+
+  void read_block(const RegisterBlock& block, Bytes& req, Bytes& rsp) {
+    req.push_back(0x03);
+    u16(req, block.start);
+    u16(req, block.count);
+    rsp.push_back(0x03);
+    rsp.push_back(static_cast<uint8_t>(2 * block.count));
+    for (unsigned i = 0; i < block.count; ++i) u16(rsp, pick(0, 0xFFFF));
   }
 
   void read_missing_block(const RegisterBlock& block, Bytes& req, Bytes& rsp) {
@@ -765,7 +779,7 @@ std::optional<unsigned> register_address(std::string_view text) {
 
 constexpr std::string_view fault_names =
     "absent, stops=TIME, drop=RATE, slow=TIME, late, bit-errors=RATE, missing-block=START+COUNT, "
-    "duplicate, glitch, half-baud, restarts=TIME";
+    "slow-block=START+COUNT, duplicate, glitch, half-baud, restarts=TIME";
 
 void add_fault(SlaveFaults& faults, std::string_view name, std::optional<std::string_view> value) {
   const std::string what(name);
@@ -786,6 +800,17 @@ void add_fault(SlaveFaults& faults, std::string_view name, std::optional<std::st
     const auto r = number(text());
     if (!r || *r < 0 || *r > 1) throw std::invalid_argument(what + " wants a rate from 0 to 1");
     return *r;
+  };
+  auto block = [&] {
+    const std::string_view spec = text();
+    const size_t plus = spec.find('+');
+    const auto start = register_address(spec.substr(0, plus));
+    const auto count =
+        plus == std::string_view::npos ? std::nullopt : whole_number(spec.substr(plus + 1), 10);
+    if (!start || !count || *count < 1 || *count > 125 || *start + *count > 0x10000)
+      throw std::invalid_argument(what +
+                                  " wants START+COUNT, as 0400H+4 (COUNT 1-125, a FC03 read's)");
+    return RegisterBlock{static_cast<uint16_t>(*start), static_cast<uint16_t>(*count)};
   };
   if (name == "absent") {
     no_value();
@@ -813,16 +838,9 @@ void add_fault(SlaveFaults& faults, std::string_view name, std::optional<std::st
   } else if (name == "bit-errors") {
     faults.corruption_rate = rate();
   } else if (name == "missing-block") {
-    const std::string_view block = text();
-    const size_t plus = block.find('+');
-    const auto start = register_address(block.substr(0, plus));
-    const auto count =
-        plus == std::string_view::npos ? std::nullopt : whole_number(block.substr(plus + 1), 10);
-    if (!start || !count || *count < 1 || *count > 125 || *start + *count > 0x10000)
-      throw std::invalid_argument(what +
-                                  " wants START+COUNT, as 0400H+4 (COUNT 1-125, a FC03 read's)");
-    faults.missing_block =
-        RegisterBlock{static_cast<uint16_t>(*start), static_cast<uint16_t>(*count)};
+    faults.missing_block = block();
+  } else if (name == "slow-block") {
+    faults.slow_block = block();
   } else {
     throw std::invalid_argument("no fault '" + what + "'; the faults: " + std::string(fault_names));
   }

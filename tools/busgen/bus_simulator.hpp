@@ -45,6 +45,9 @@ struct SlaveFaults {
   // Address. With a scan list, the master reads the block from this slave every cycle, right
   // after its usual read (a master configured for another firmware).
   std::optional<RegisterBlock> missing_block;
+  // A block it answers slowly (one it computes, a gateway's remote registers): read every cycle
+  // as a missing block is, its answer comes 60 to 63 ms after the request; the rest as usual.
+  std::optional<RegisterBlock> slow_block;
   bool duplicate_address = false;  // a second device has its address: both answer, over each other
   bool turnaround_glitch = false;  // its driver puts a 0x00 or 0xFF on the line before every answer
   // Set to half the bus's baud rate: each of its bits lasts two of the line's, so every answer
@@ -98,8 +101,8 @@ struct BusOptions {
 
 // Adds faults written as on busgen's command line, "ADDR:FAULT[,FAULT...]": absent, stops=TIME,
 // drop=RATE, slow=TIME, late, bit-errors=RATE, missing-block=START+COUNT (START as 0400H,
-// 0x400 or 1024), duplicate, glitch, half-baud, restarts=TIME; TIME as 131ms, 60s, 500us or 2.5s.
-// Throws std::invalid_argument saying what is wrong.
+// 0x400 or 1024), slow-block=START+COUNT, duplicate, glitch, half-baud, restarts=TIME; TIME as
+// 131ms, 60s, 500us or 2.5s. Throws std::invalid_argument saying what is wrong.
 void add_slave_faults(BusOptions& options, std::string_view spec);
 
 // A frame the master or a slave really sent.

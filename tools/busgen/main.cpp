@@ -78,7 +78,8 @@ int main(int argc, char** argv) {
                  "missing-block=START+COUNT (read every cycle, answered by exception 02), "
                  "duplicate (two devices answer at once), glitch (before every answer), "
                  "half-baud (set to half the line's baud: its answers read as junk), "
-                 "restarts=TIME (silent 5 s of every TIME); "
+                 "restarts=TIME (silent 5 s of every TIME), slow-block=START+COUNT (read every "
+                 "cycle, answered after 60 ms); "
                  "e.g. 2:slow=131ms 6:missing-block=0400H+4");
   app.add_flag("--ascii", ascii, "Modbus ASCII instead of RTU (7E1)");
   CLI11_PARSE(app, argc, argv);
