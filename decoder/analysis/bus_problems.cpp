@@ -41,6 +41,10 @@ constexpr std::array<ProblemInfo, problem_kind_count> problem_infos{{
     {"bus-noise",
      "check the termination (120 ohm at both ends of the trunk only), the biasing, the "
      "grounding and shield, and the cable's route past power wiring and drives"},
+    {"reflections",
+     "check the termination: 120 ohm at both ends of the trunk, none elsewhere (a missing or "
+     "misplaced terminator reflects each bit, and long frames fail first); then stub lengths "
+     "and the cable's type"},
     {"rejected-requests",
      "check the master's configuration for this device against its manual: the function, "
      "the register addresses (and their numbering base) and the values it asks for"},
@@ -77,6 +81,7 @@ constexpr double rejected_share = 0.8;          // rejected-requests: this share
 constexpr double glitch_share = 0.2;            // turnaround-glitches: of the requests
 constexpr size_t several = 3;                   // slaves alike: one cause they share
 constexpr double wrong_baud_share = 0.8;        // wrong-baud-device: of its answers, as junk
+constexpr uint64_t long_frames_needed = 50;     // reflections: long and short frames, each
 constexpr double noise_share = 0.01;            // bus-noise: of all frames
 constexpr double noise_share_error = 0.05;
 
@@ -129,6 +134,7 @@ void ProblemEvidence::on_frame(const Frame& frame) {
   bytes_ += frame.raw.size();
   if (frame.check_ok) good_frame_bytes_ += frame.raw.size();
   if (frame.adu.empty()) return;
+  count_length(frame);
   if (frame.role == Role::response && frame.request && request_end_ns_ && frame.latency_ns) {
     ++timed_answers_;
   } else if (frame.role == Role::response && frame.request && request_end_ns_ &&
@@ -156,6 +162,18 @@ void ProblemEvidence::on_frame(const Frame& frame) {
     return on_damaged_answer(frame.index, frame.t_ns, frame.raw.size(), slave);
   note(slave.damaged, frame.t_ns, frame.index);
   heard(slave, frame.t_ns);
+}
+
+// Short and long frames, the bus's and each slave's (the one asked, or answering).
+void ProblemEvidence::count_length(const Frame& frame) {
+  const size_t size = frame.raw.size();
+  if (size > short_frame && size < long_frame) return;
+  Lengths& bus = size <= short_frame ? short_frames_ : long_frames_;
+  bus.add(size, frame.check_ok);
+  const bool known = frame.check_ok || (frame.role == Role::response && frame.request);
+  if (!known || frame.device() == 0) return;
+  Slave& slave = slaves_[frame.device()];
+  (size <= short_frame ? slave.short_frames : slave.long_frames).add(size, frame.check_ok);
 }
 
 void ProblemEvidence::on_request(const Frame& frame) {
@@ -699,8 +717,47 @@ class Diagnosis {
         percent(g.count, turnarounds), g.count, turnarounds);
   }
 
+  // Bad checks that grow with frame length faster than the bits a frame carries, on the
+  // frames of every device whose damage is not its own: reflections, the line's termination.
+  // Bits flipped at random hit a frame as often as it has bits; a reflection builds up over
+  // a frame, and long frames fail out of proportion.
+  bool reflections() {
+    ProblemEvidence::Lengths short_frames = evidence_.short_frames(),
+                             long_frames = evidence_.long_frames();
+    for (const auto& [address, s] : evidence_.slaves()) {
+      if (!damage_explained_[address]) continue;
+      short_frames -= s.short_frames;
+      long_frames -= s.long_frames;
+    }
+    if (long_frames.frames < long_frames_needed || long_frames.bad < some ||
+        short_frames.frames < long_frames_needed)
+      return false;
+    const double long_share = share(long_frames.bad, long_frames.frames);
+    // One bad short frame more than were seen: a bound where none failed, not a zero.
+    const double short_share = share(short_frames.bad + 1, short_frames.frames + 1);
+    const double lengths = share(long_frames.bytes, long_frames.frames) /
+                           share(short_frames.bytes, short_frames.frames);
+    if (long_share < damaged_share || long_share < 2 * lengths * short_share) return false;
+    Problem& p = add(ProblemKind::reflections, std::nullopt,
+                     long_share >= damaged_share_error ? Severity::error : Severity::warning,
+                     statistics_.first_t_ns.value_or(0), evidence_.bad_requests().first);
+    p.evidence = {{"long_frames", long_frames.frames},
+                  {"long_bad", long_frames.bad},
+                  {"short_frames", short_frames.frames},
+                  {"short_bad", short_frames.bad}};
+    p.text = fmt::format(
+        "Bad checks grow with frame length, faster than the bits frames carry, as reflections "
+        "on a line not terminated make them: {:.1f}% of frames of {} bytes or more ({} of {}), "
+        "{:.1f}% of frames of {} bytes or fewer ({} of {})",
+        100 * long_share, ProblemEvidence::long_frame, long_frames.bad, long_frames.frames,
+        percent(short_frames.bad, short_frames.frames), ProblemEvidence::short_frame,
+        short_frames.bad, short_frames.frames);
+    return true;
+  }
+
   // Bad checks on requests, or on the answers of several slaves alike: the line, not a device.
   void bus_noise() {
+    if (reflections()) return;  // the line's damage, told by its cause
     const auto& bad = evidence_.bad_requests();
     uint64_t damaged = bad.count;
     size_t slaves_hit = 0;

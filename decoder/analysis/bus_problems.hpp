@@ -30,6 +30,7 @@ enum class ProblemKind : uint8_t {
   slow_block,             // one request's answers far slower than the slave's others
   corrupted_responses,    // bad checks concentrated on one slave's answers
   bus_noise,              // bad checks spread over requests and several slaves
+  reflections,            // bad checks growing with frame length, on every sender
   rejected_requests,      // the same request answered with the same exception, again and again
   collisions,             // two devices answering at once as one address
   turnaround_glitches,    // a stray byte each time a driver takes the bus
@@ -37,7 +38,7 @@ enum class ProblemKind : uint8_t {
   wrong_baud_device,      // one device answers at another baud rate or parity: always junk
   device_restarts,        // silent for seconds, a few times, answering cleanly in between
 };
-inline constexpr size_t problem_kind_count = 14;
+inline constexpr size_t problem_kind_count = 15;
 
 // The one place a kind is named and advised on: JSON, text, the report and metrics spell it so.
 struct ProblemInfo {
@@ -67,6 +68,24 @@ class ProblemEvidence final : public RecordSink {
   void on_noise(const Noise& noise) override;
   void on_timeout(const Timeout& timeout) override;
 
+  // Frames of a length class (short or long) and how many of them failed their check.
+  struct Lengths {
+    uint64_t frames = 0, bad = 0, bytes = 0;
+    void add(size_t size, bool check_ok) {
+      ++frames;
+      bad += !check_ok;
+      bytes += size;
+    }
+    Lengths& operator-=(const Lengths& other) {
+      frames -= other.frames;
+      bad -= other.bad;
+      bytes -= other.bytes;
+      return *this;
+    }
+  };
+  static constexpr size_t short_frame = 12;  // bytes at most: a request's, a short answer's
+  static constexpr size_t long_frame = 24;   // bytes at least
+
   // Records of one kind of trouble: how many, when the first came, and the first few.
   struct Events {
     uint64_t count = 0;
@@ -83,6 +102,8 @@ class ProblemEvidence final : public RecordSink {
     // against those the answers due would have had, where the request told.
     Events garbled;
     uint64_t garbled_bytes = 0, garbled_bytes_due = 0;
+    // Its frames (requests to it, its answers) by length, for the line's share of bad checks.
+    Lengths short_frames, long_frames;
     // How long after their requests its late answers came, where the clock timed them.
     std::optional<int64_t> late_min_ns, late_max_ns;
     // The time-outs since its last answer: a slave that stopped answering.
@@ -117,6 +138,9 @@ class ProblemEvidence final : public RecordSink {
   uint64_t requests_seen() const { return requests_seen_; }
   // What of the stream made sense: every byte in a record, those of frames whose check holds.
   uint64_t bytes() const { return bytes_; }
+  // Every frame by length, whoever sent it.
+  const Lengths& short_frames() const { return short_frames_; }
+  const Lengths& long_frames() const { return long_frames_; }
   uint64_t good_frame_bytes() const { return good_frame_bytes_; }
   // Answers timed after their request, and of those the ones that would begin before their
   // request ended: a line faster than the baud modtap was given.
@@ -141,6 +165,8 @@ class ProblemEvidence final : public RecordSink {
   Events bad_requests_, master_glitches_;
   uint64_t requests_seen_ = 0;
   uint64_t bytes_ = 0, good_frame_bytes_ = 0;
+  Lengths short_frames_, long_frames_;
+  void count_length(const Frame& frame);
   uint64_t timed_answers_ = 0, early_answers_ = 0;
   std::optional<int64_t> request_end_ns_;  // of the last request, while its answer may come
   std::optional<RequestKey> awaited_;      // the request whose answer is awaited, if watched

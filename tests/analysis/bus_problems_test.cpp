@@ -163,6 +163,9 @@ TEST(BusProblems, OneCauseIsOneProblemWhateverTheSeedAndClock) {
     std::vector<std::string_view> faults;
     double glitch_rate;
     Found found;
+    double reflection_rate = 0;
+    double corruption_rate = 0;
+    bool random_traffic = false;  // every function, every length, not a scan list's reads
   };
   const Case cases[] = {
       {{"5:bit-errors=0.3"}, 0, {{"corrupted-responses", 5}}},
@@ -181,6 +184,8 @@ TEST(BusProblems, OneCauseIsOneProblemWhateverTheSeedAndClock) {
       {{"3:absent"}, 0, {{"no-response", 3}}},
       {{"2:late"}, 0, {{"late-responses", 2}}},
       {{}, 0.5, {{"turnaround-glitches", -1}}},
+      {{}, 0, {{"reflections", -1}}, 0.15, 0, true},
+      {{}, 0, {{"bus-noise", -1}}, 0, 0.05, true},
   };
   for (const Case& c : cases)
     for (uint64_t seed = 30; seed < 36; ++seed)
@@ -188,7 +193,10 @@ TEST(BusProblems, OneCauseIsOneProblemWhateverTheSeedAndClock) {
            {Delivery::whole_frames, Delivery::per_byte, Delivery::bursts, Delivery::per_frame}) {
         BusOptions o = scan(seed);
         for (const std::string_view fault : c.faults) busgen::add_slave_faults(o, fault);
+        if (c.random_traffic) o.polled_slaves = 0;
         o.glitch_rate = c.glitch_rate;
+        o.reflection_rate = c.reflection_rate;
+        o.corruption_rate = c.corruption_rate;
         const Diagnosed run = diagnose(o, delivery);
         EXPECT_EQ(run.kinds(), c.found)
             << (c.faults.empty() ? "glitches" : c.faults[0]) << " seed " << seed << " delivery "

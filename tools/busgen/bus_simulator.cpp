@@ -99,7 +99,9 @@ class Simulator {
     Bytes adu = adu_of(body);
     uint32_t findings = 0;
     auto damage = Damage::none;
-    if ((chance(corruption_rate) || chance(o_.corruption_rate)) && corrupt(adu, role)) {
+    if ((chance(corruption_rate) || chance(o_.corruption_rate) ||
+         chance(reflection_odds(adu.size()))) &&
+        corrupt(adu, role)) {
       findings = finding_bad_check;
       damage = Damage::corrupted;
     }
@@ -114,6 +116,11 @@ class Simulator {
     capture_.frames.push_back(
         {offset, static_cast<uint32_t>(wire.size()), role, request, findings, damage, body[0]});
     return capture_.frames.size() - 1;
+  }
+
+  double reflection_odds(size_t length) const {
+    if (length <= 8) return 0;
+    return o_.reflection_rate * std::min(1.0, static_cast<double>(length - 8) / 24);
   }
 
   size_t check_size() const { return o_.mode == Mode::rtu ? 2 : 1; }

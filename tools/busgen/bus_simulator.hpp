@@ -91,6 +91,9 @@ struct BusOptions {
   // arrives with a bit flipped in 1 to 3 bytes, as SlaveFaults::corruption_rate. A slave ignores
   // a corrupted request, so the master waits out its time-out.
   double corruption_rate = 0.0;
+  // A trunk not terminated: reflections flip bits in frames with odds that grow with their
+  // length, none at 8 bytes, this at 32 and on (capped at 1), from every sender alike.
+  double reflection_rate = 0.0;
   int64_t poll_gap_ns = 5'000'000;  // master's idle time between transactions (at least)
   bool back_to_back = false;        // no idle time at all: the densest file for benchmarks
   // 0: each request goes to a slave picked at random from 1-247 (every address exercised);
