@@ -588,6 +588,21 @@ TEST(Cli, AnEmptyFileOrADirectoryIsSaidPlainly) {
   }
 }
 
+// The demo's capture (scripts/demo.sh): its two faulty drives lead the statistics, nothing else.
+TEST(Cli, TheDemoCaptureNamesItsTwoFaultyDrivesFirst) {
+  const Outcome r =
+      run(std::string("-r ") + MODTAP_SAMPLES + "/six-drives-two-faults.pcap -T stats");
+  ASSERT_EQ(r.status, 0);
+  std::vector<std::string> problems;
+  for (const auto& line : r.lines) {
+    if (line.empty()) break;
+    if (line.rfind("  error", 0) == 0 || line.rfind("  warning", 0) == 0) problems.push_back(line);
+  }
+  ASSERT_EQ(problems.size(), 2u) << ::testing::PrintToString(r.lines);
+  EXPECT_THAT(problems[0], ::testing::StartsWith("  error   Slave 2 went silent 3 times"));
+  EXPECT_THAT(problems[1], ::testing::StartsWith("  error   Slave 4 answers in junk every time"));
+}
+
 // A pcap of one byte a packet read at half its baud: the bytes come twice as fast as 9600
 // carries them. That is the problem, first and alone (an absent slave's waits until the
 // settings read the bus), in the statistics and in --stats; at the line's baud, the slave's.
