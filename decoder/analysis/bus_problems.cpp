@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 #include <fmt/format.h>
 
@@ -45,6 +46,9 @@ constexpr std::array<ProblemInfo, problem_kind_count> problem_infos{{
      "check the termination: 120 ohm at both ends of the trunk, none elsewhere (a missing or "
      "misplaced terminator reflects each bit, and long frames fail first); then stub lengths "
      "and the cable's type"},
+    {"noise-bursts",
+     "find what switches at this period (a contactor, a relay, a drive's or heater's cycle) and "
+     "keep the cable away from it or its wiring; check the shield's grounding at one end"},
     {"rejected-requests",
      "check the master's configuration for this device against its manual: the function, "
      "the register addresses (and their numbering base) and the values it asks for"},
@@ -82,6 +86,10 @@ constexpr double glitch_share = 0.2;            // turnaround-glitches: of the r
 constexpr size_t several = 3;                   // slaves alike: one cause they share
 constexpr double wrong_baud_share = 0.8;        // wrong-baud-device: of its answers, as junk
 constexpr uint64_t long_frames_needed = 50;     // reflections: long and short frames, each
+constexpr size_t bursts_needed = 8;             // noise-bursts: times between bursts, at least
+constexpr int64_t burst_merge_ns = 20'000'000;  // junk closer than this is one burst
+constexpr double period_slack = 0.1;            // of a period, either side of a multiple
+constexpr double regular_share = 0.8;           // of the times between bursts, regular
 constexpr double noise_share = 0.01;            // bus-noise: of all frames
 constexpr double noise_share_error = 0.05;
 
@@ -135,6 +143,7 @@ void ProblemEvidence::on_frame(const Frame& frame) {
   if (frame.check_ok) good_frame_bytes_ += frame.raw.size();
   if (frame.adu.empty()) return;
   count_length(frame);
+  if (!frame.check_ok) note_junk(frame.t_ns, frame.role == Role::response ? frame.device() : 0);
   if (frame.role == Role::response && frame.request && request_end_ns_ && frame.latency_ns) {
     ++timed_answers_;
   } else if (frame.role == Role::response && frame.request && request_end_ns_ &&
@@ -253,6 +262,8 @@ void ProblemEvidence::heard(Slave& slave, int64_t t_ns) {
 void ProblemEvidence::on_noise(const Noise& noise) {
   cited_.reset();
   bytes_ += noise.raw.size();
+  if (noise.reason != NoiseReason::glitch)
+    note_junk(noise.t_ns, noise.damaged_answer ? noise.request_slave : 0);
   const bool after_request = std::exchange(after_request_, false);
   if (noise.reason == NoiseReason::glitch) {
     // Right after a request, the slave's driver turning on to answer; else the master's.
@@ -755,9 +766,42 @@ class Diagnosis {
     return true;
   }
 
+  // Junk at a regular period (a contactor, a drive switching): the times between bursts are
+  // nearly all whole multiples of one period (a burst that falls where nothing shows it, or
+  // is read as part of a frame, leaves a multiple). Junk that a device's own problem explains
+  // is left out: a device answering junk at every poll is periodic too.
+  bool noise_bursts() {
+    std::vector<int64_t> gaps;
+    std::optional<int64_t> last;
+    for (const auto& [t_ns, slave] : evidence_.junk()) {
+      if (damage_explained_[slave] && slave) continue;
+      if (last && t_ns - *last < burst_merge_ns) continue;  // one burst's pieces
+      if (last) gaps.push_back(t_ns - *last);
+      last = t_ns;
+    }
+    if (gaps.size() < bursts_needed) return false;
+    std::vector<int64_t> sorted = gaps;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    const double period = static_cast<double>(sorted[sorted.size() / 2]);
+    const auto regular = std::count_if(gaps.begin(), gaps.end(), [&](int64_t gap) {
+      const double periods = static_cast<double>(gap) / period;
+      return std::abs(periods - std::round(periods)) <= period_slack;
+    });
+    if (static_cast<double>(regular) < regular_share * static_cast<double>(gaps.size()))
+      return false;
+    Problem& p = add(ProblemKind::noise_bursts, std::nullopt, Severity::warning,
+                     evidence_.junk().front().first, {});
+    p.evidence = {{"period_ms", period / 1e6}, {"bursts", gaps.size() + 1}};
+    p.text = fmt::format(
+        "Junk on the line every {:.0f} ms, as regular as a contactor or a drive switching "
+        "nearby makes it: {} bursts, frames failing their check where one fell on them",
+        period / 1e6, gaps.size() + 1);
+    return true;
+  }
+
   // Bad checks on requests, or on the answers of several slaves alike: the line, not a device.
   void bus_noise() {
-    if (reflections()) return;  // the line's damage, told by its cause
+    if (reflections() || noise_bursts()) return;  // the line's damage, told by its cause
     const auto& bad = evidence_.bad_requests();
     uint64_t damaged = bad.count;
     size_t slaves_hit = 0;

@@ -31,6 +31,7 @@ enum class ProblemKind : uint8_t {
   corrupted_responses,    // bad checks concentrated on one slave's answers
   bus_noise,              // bad checks spread over requests and several slaves
   reflections,            // bad checks growing with frame length, on every sender
+  noise_bursts,           // junk at a regular period, destroying what it falls on
   rejected_requests,      // the same request answered with the same exception, again and again
   collisions,             // two devices answering at once as one address
   turnaround_glitches,    // a stray byte each time a driver takes the bus
@@ -38,7 +39,7 @@ enum class ProblemKind : uint8_t {
   wrong_baud_device,      // one device answers at another baud rate or parity: always junk
   device_restarts,        // silent for seconds, a few times, answering cleanly in between
 };
-inline constexpr size_t problem_kind_count = 15;
+inline constexpr size_t problem_kind_count = 16;
 
 // The one place a kind is named and advised on: JSON, text, the report and metrics spell it so.
 struct ProblemInfo {
@@ -138,6 +139,10 @@ class ProblemEvidence final : public RecordSink {
   uint64_t requests_seen() const { return requests_seen_; }
   // What of the stream made sense: every byte in a record, those of frames whose check holds.
   uint64_t bytes() const { return bytes_; }
+  // When junk came (noise but a turnaround's glitch, a frame whose check fails) and the slave
+  // it is counted against (0: none), the first kept_junk of them: a period shows in them.
+  static constexpr size_t kept_junk = 4096;
+  const std::vector<std::pair<int64_t, uint8_t>>& junk() const { return junk_; }
   // Every frame by length, whoever sent it.
   const Lengths& short_frames() const { return short_frames_; }
   const Lengths& long_frames() const { return long_frames_; }
@@ -166,6 +171,10 @@ class ProblemEvidence final : public RecordSink {
   uint64_t requests_seen_ = 0;
   uint64_t bytes_ = 0, good_frame_bytes_ = 0;
   Lengths short_frames_, long_frames_;
+  std::vector<std::pair<int64_t, uint8_t>> junk_;
+  void note_junk(int64_t t_ns, uint8_t slave) {
+    if (junk_.size() < kept_junk) junk_.emplace_back(t_ns, slave);
+  }
   void count_length(const Frame& frame);
   uint64_t timed_answers_ = 0, early_answers_ = 0;
   std::optional<int64_t> request_end_ns_;  // of the last request, while its answer may come

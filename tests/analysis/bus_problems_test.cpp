@@ -166,6 +166,7 @@ TEST(BusProblems, OneCauseIsOneProblemWhateverTheSeedAndClock) {
     double reflection_rate = 0;
     double corruption_rate = 0;
     bool random_traffic = false;  // every function, every length, not a scan list's reads
+    int64_t noise_burst_period_ns = 0;
   };
   const Case cases[] = {
       {{"5:bit-errors=0.3"}, 0, {{"corrupted-responses", 5}}},
@@ -186,6 +187,14 @@ TEST(BusProblems, OneCauseIsOneProblemWhateverTheSeedAndClock) {
       {{}, 0.5, {{"turnaround-glitches", -1}}},
       {{}, 0, {{"reflections", -1}}, 0.15, 0, true},
       {{}, 0, {{"bus-noise", -1}}, 0, 0.05, true},
+      {{}, 0, {{"noise-bursts", -1}}, 0, 0, false, 700'000'000},
+      {{"4:half-baud"},
+       0,
+       {{"noise-bursts", -1}, {"wrong-baud-device", 4}},
+       0,
+       0,
+       false,
+       700'000'000},
   };
   for (const Case& c : cases)
     for (uint64_t seed = 30; seed < 36; ++seed)
@@ -196,6 +205,7 @@ TEST(BusProblems, OneCauseIsOneProblemWhateverTheSeedAndClock) {
         if (c.random_traffic) o.polled_slaves = 0;
         o.glitch_rate = c.glitch_rate;
         o.reflection_rate = c.reflection_rate;
+        o.noise_burst_period_ns = c.noise_burst_period_ns;
         o.corruption_rate = c.corruption_rate;
         const Diagnosed run = diagnose(o, delivery);
         EXPECT_EQ(run.kinds(), c.found)

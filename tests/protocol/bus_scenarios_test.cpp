@@ -167,7 +167,8 @@ class BusScenario : public ::testing::TestWithParam<Scenario> {};
 
 // Bytes that are no frame: junk bursts, requests broken off, answers at another baud rate.
 bool sends_no_junk(const BusOptions& bus) {
-  return bus.noise_rate == 0 && bus.truncation_rate == 0 && bus.garbled_rate == 0;
+  return bus.noise_rate == 0 && bus.truncation_rate == 0 && bus.garbled_rate == 0 &&
+         bus.noise_burst_period_ns == 0;
 }
 
 // The pcapng modtap writes reads back to the same records: frames, noise, roles, pairs,

@@ -99,7 +99,9 @@ class Simulator {
     Bytes adu = adu_of(body);
     uint32_t findings = 0;
     auto damage = Damage::none;
-    if ((chance(corruption_rate) || chance(o_.corruption_rate) ||
+    gap_ns = bursts_before(gap_ns);
+    const bool burst = burst_hits(gap_ns, static_cast<int64_t>(wire_of(adu).size()) * char_ns_);
+    if ((burst || chance(corruption_rate) || chance(o_.corruption_rate) ||
          chance(reflection_odds(adu.size()))) &&
         corrupt(adu, role)) {
       findings = finding_bad_check;
@@ -116,6 +118,36 @@ class Simulator {
     capture_.frames.push_back(
         {offset, static_cast<uint32_t>(wire.size()), role, request, findings, damage, body[0]});
     return capture_.frames.size() - 1;
+  }
+
+  int64_t now_ns() const { return capture_.end_ns.empty() ? 0 : capture_.end_ns.back(); }
+
+  // The noise bursts due before a frame that starts `gap_ns` from now, each junk in the gap
+  // where it falls there with a silence after it; the gap left to the frame.
+  int64_t bursts_before(int64_t gap_ns) {
+    if (!o_.noise_burst_period_ns) return gap_ns;
+    if (!next_burst_ns_) next_burst_ns_ = o_.noise_burst_period_ns;
+    const int64_t frame_ns = now_ns() + gap_ns;
+    while (next_burst_ns_ < frame_ns) {
+      const int64_t now = now_ns();
+      Bytes junk;
+      random_bytes(junk, pick(2, 6));
+      while (const auto good = good_span_end(junk)) junk[*good - 1] ^= 1;
+      const int64_t junk_ns = static_cast<int64_t>(junk.size()) * char_ns_;
+      // One on bytes sent already went with them; one too close to the frame is on the frame.
+      if (next_burst_ns_ + junk_ns + t35_ > frame_ns) return gap_ns;
+      if (next_burst_ns_ >= now + t35_) send(junk, next_burst_ns_ - now);
+      next_burst_ns_ += o_.noise_burst_period_ns + pick(0, 1'000'000);
+    }
+    return frame_ns - now_ns();
+  }
+
+  // Whether the next noise burst falls on a frame `gap_ns` from now lasting `frame_ns` (or just
+  // before it): the frame is damaged, and the burst spent.
+  bool burst_hits(int64_t gap_ns, int64_t frame_ns) {
+    if (!o_.noise_burst_period_ns || next_burst_ns_ >= now_ns() + gap_ns + frame_ns) return false;
+    next_burst_ns_ += o_.noise_burst_period_ns + pick(0, 1'000'000);
+    return true;
   }
 
   double reflection_odds(size_t length) const {
@@ -737,6 +769,7 @@ class Simulator {
   }
   size_t answered_ = 0;
   int64_t timing_out_ns_ = 0;  // the master's time-out, still to run before its next request
+  int64_t next_burst_ns_ = 0;  // when the next noise burst comes (noise_burst_period_ns)
   std::array<const SlaveFaults*, 248> faults_{};  // by address; none for a healthy slave
   uint8_t block_due_ = 0;    // the slave whose missing block the scan list reads next
   bool block_read_ = false;  // this transaction reads it

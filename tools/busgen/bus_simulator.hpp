@@ -94,6 +94,10 @@ struct BusOptions {
   // A trunk not terminated: reflections flip bits in frames with odds that grow with their
   // length, none at 8 bytes, this at 32 and on (capped at 1), from every sender alike.
   double reflection_rate = 0.0;
+  // A contactor or a drive switching nearby: a burst of 2 to 6 junk bytes every this long (and
+  // up to 1 ms more), from the first period on. One that falls between frames is junk there;
+  // one that falls on a frame (or too close before it) destroys that frame's check.
+  int64_t noise_burst_period_ns = 0;
   int64_t poll_gap_ns = 5'000'000;  // master's idle time between transactions (at least)
   bool back_to_back = false;        // no idle time at all: the densest file for benchmarks
   // 0: each request goes to a slave picked at random from 1-247 (every address exercised);
