@@ -49,6 +49,9 @@ constexpr std::array<ProblemInfo, problem_kind_count> problem_infos{{
     {"noise-bursts",
      "find what switches at this period (a contactor, a relay, a drive's or heater's cycle) and "
      "keep the cable away from it or its wiring; check the shield's grounding at one end"},
+    {"second-master",
+     "one master to an RS-485 line: find the other (an HMI, a gateway, a laptop or SCADA left "
+     "polling) and take it off, or give it a line of its own"},
     {"rejected-requests",
      "check the master's configuration for this device against its manual: the function, "
      "the register addresses (and their numbering base) and the values it asks for"},
@@ -90,6 +93,7 @@ constexpr size_t bursts_needed = 8;             // noise-bursts: times between b
 constexpr int64_t burst_merge_ns = 20'000'000;  // junk closer than this is one burst
 constexpr double period_slack = 0.1;            // of a period, either side of a multiple
 constexpr double regular_share = 0.8;           // of the times between bursts, regular
+constexpr double second_master_share = 0.01;    // second-master: of the requests, cut short
 constexpr double noise_share = 0.01;            // bus-noise: of all frames
 constexpr double noise_share_error = 0.05;
 
@@ -181,15 +185,14 @@ void ProblemEvidence::count_length(const Frame& frame) {
   bus.add(size, frame.check_ok);
   const bool known = frame.check_ok || (frame.role == Role::response && frame.request);
   if (!known || frame.device() == 0) return;
-  Slave& slave = slaves_[frame.device()];
-  (size <= short_frame ? slave.short_frames : slave.long_frames).add(size, frame.check_ok);
+  slave_lengths_[frame.device()][size <= short_frame ? 0 : 1].add(size, frame.check_ok);
 }
 
 void ProblemEvidence::on_request(const Frame& frame) {
   ++requests_seen_;
   after_request_ = true;
   request_end_ns_ = frame.end_ns;
-  awaited_.reset();
+  awaited_ = nullptr;
   awaited_slave_.reset();
   if (frame.slave() == 0) return;  // a broadcast: no answer comes
   Slave& slave = slaves_[frame.slave()];
@@ -199,17 +202,22 @@ void ProblemEvidence::on_request(const Frame& frame) {
   slave.expected_answer_size = expected_answer_size(frame);
   awaited_slave_ = frame.slave();
   const auto key = request_key(frame);
-  if (!key || (requests_.size() >= kept_requests && !requests_.count(*key))) return;
-  ++requests_[*key].requests;
-  awaited_ = key;
+  if (!key) return;
+  auto it = requests_.find(*key);
+  if (it == requests_.end()) {
+    if (requests_.size() >= kept_requests) return;
+    it = requests_.emplace(*key, Asked{}).first;
+  }
+  ++it->second.requests;
+  awaited_ = &it->second;  // a map's entries stay where they are
 }
 
 void ProblemEvidence::on_answer(const Frame& frame, Slave& slave) {
   ++slave.answers;
   heard(slave, frame.t_ns);
   if (frame.meaning && frame.meaning->model) slave.model = frame.meaning->model;
-  if (awaited_ && std::get<0>(*awaited_) == frame.device()) {
-    Asked& asked = requests_[*awaited_];
+  if (awaited_ && awaited_slave_ == frame.device()) {
+    Asked& asked = *awaited_;
     if (frame.is_exception()) {
       note(asked.by_exception[frame.adu[2]], frame.t_ns, frame.index);
     } else if (frame.latency_ns) {
@@ -217,11 +225,16 @@ void ProblemEvidence::on_answer(const Frame& frame, Slave& slave) {
       asked.latency_sum_ns += *frame.latency_ns;
     }
   }
-  awaited_.reset();
+  awaited_ = nullptr;
 }
 
 void ProblemEvidence::on_late_answer(const Frame& frame) {
   Slave& slave = slaves_[frame.slave()];
+  if (frame.request && frame.request == interrupted_request_) {
+    ++slave.answered_after_interruption;  // in its time; another master spoke first
+    ++slave.answers;
+    return heard(slave, frame.t_ns);
+  }
   note(slave.late, frame.t_ns, frame.index);
   heard(slave, frame.t_ns);  // it is there, only slow
   if (!frame.latency_ns) return;
@@ -281,9 +294,15 @@ void ProblemEvidence::on_noise(const Noise& noise) {
 void ProblemEvidence::on_timeout(const Timeout& timeout) {
   cited_.reset();
   after_request_ = false;
-  awaited_.reset();
+  awaited_ = nullptr;
   if (!timeout.timed_out() || timeout.slave == 0) return;
   Slave& slave = slaves_[timeout.slave];
+  if (timeout.reason == TimeoutReason::next_request && timeout.waited_ns < master_waits_ns_) {
+    ++slave.interrupted;
+    note(interruptions_, timeout.t_ns, timeout.request);
+    interrupted_request_ = timeout.request;
+    return;  // no silence of the slave's: it was given no time to answer
+  }
   note(slave.timeouts, timeout.t_ns, timeout.request);
   if (slave.silent_timeouts++ == 0) {
     slave.silent_since_ns = timeout.t_ns - timeout.waited_ns;
@@ -352,6 +371,7 @@ class Diagnosis {
     }
     turnaround_glitches();
     bus_noise();
+    second_master();
     master_glitches();
     rejected_requests();
     std::stable_sort(problems_.begin(), problems_.end(),
@@ -737,8 +757,8 @@ class Diagnosis {
                              long_frames = evidence_.long_frames();
     for (const auto& [address, s] : evidence_.slaves()) {
       if (!damage_explained_[address]) continue;
-      short_frames -= s.short_frames;
-      long_frames -= s.long_frames;
+      short_frames -= evidence_.lengths_of(address)[0];
+      long_frames -= evidence_.lengths_of(address)[1];
     }
     if (long_frames.frames < long_frames_needed || long_frames.bad < some ||
         short_frames.frames < long_frames_needed)
@@ -797,6 +817,22 @@ class Diagnosis {
         "nearby makes it: {} bursts, frames failing their check where one fell on them",
         period / 1e6, gaps.size() + 1);
     return true;
+  }
+
+  // Requests that come while another request's answer is due, sooner than any master's own
+  // time-out lets it send again: a second master polling on its own program. The requests it
+  // cut short, and the answers after them, are its doing, not their slaves'.
+  void second_master() {
+    const ProblemEvidence::Events& cut = evidence_.interruptions();
+    if (cut.count < some || share(cut.count, evidence_.requests_seen()) < second_master_share)
+      return;
+    Problem& p =
+        add(ProblemKind::second_master, std::nullopt, Severity::error, *cut.first_ns, cut.first);
+    p.evidence = {{"requests_cut_short", cut.count}, {"requests", evidence_.requests_seen()}};
+    p.text = fmt::format(
+        "Two masters on the line: {} requests ({:.0f}%) came while another request's answer was "
+        "due, sooner than a master waits, as a second master polling on its own does",
+        cut.count, percent(cut.count, evidence_.requests_seen()));
   }
 
   // Bad checks on requests, or on the answers of several slaves alike: the line, not a device.

@@ -4,6 +4,7 @@
 // what came in its place, a glitch at whose turnaround), into problems of the kinds below.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -32,6 +33,7 @@ enum class ProblemKind : uint8_t {
   bus_noise,              // bad checks spread over requests and several slaves
   reflections,            // bad checks growing with frame length, on every sender
   noise_bursts,           // junk at a regular period, destroying what it falls on
+  second_master,          // requests while another request's answer is due: two masters
   rejected_requests,      // the same request answered with the same exception, again and again
   collisions,             // two devices answering at once as one address
   turnaround_glitches,    // a stray byte each time a driver takes the bus
@@ -39,7 +41,7 @@ enum class ProblemKind : uint8_t {
   wrong_baud_device,      // one device answers at another baud rate or parity: always junk
   device_restarts,        // silent for seconds, a few times, answering cleanly in between
 };
-inline constexpr size_t problem_kind_count = 16;
+inline constexpr size_t problem_kind_count = 17;
 
 // The one place a kind is named and advised on: JSON, text, the report and metrics spell it so.
 struct ProblemInfo {
@@ -62,6 +64,10 @@ struct Problem {
 // What the records show beyond the statistics' counts, per slave. A sink beside the statistics.
 class ProblemEvidence final : public RecordSink {
  public:
+  // `master_timeout_ns`: the master's time-out, where the user told it.
+  explicit ProblemEvidence(std::optional<int64_t> master_timeout_ns = std::nullopt)
+      : master_waits_ns_(
+            std::min(master_timeout_ns.value_or(shortest_timeout_ns), shortest_timeout_ns)) {}
   static constexpr size_t kept_records = 5;
   static constexpr size_t kept_requests = 4096;  // distinct requests watched for rejection
 
@@ -103,8 +109,9 @@ class ProblemEvidence final : public RecordSink {
     // against those the answers due would have had, where the request told.
     Events garbled;
     uint64_t garbled_bytes = 0, garbled_bytes_due = 0;
-    // Its frames (requests to it, its answers) by length, for the line's share of bad checks.
-    Lengths short_frames, long_frames;
+    // Its requests cut short by another request sooner than any master's time-out, and its
+    // answers that came after such a request: another master's doing, not its own.
+    uint64_t interrupted = 0, answered_after_interruption = 0;
     // How long after their requests its late answers came, where the clock timed them.
     std::optional<int64_t> late_min_ns, late_max_ns;
     // The time-outs since its last answer: a slave that stopped answering.
@@ -137,6 +144,11 @@ class ProblemEvidence final : public RecordSink {
   const Events& bad_requests() const { return bad_requests_; }  // bad checks no answer explains
   const Events& master_glitches() const { return master_glitches_; }
   uint64_t requests_seen() const { return requests_seen_; }
+  // Requests that came while another request's answer was due, sooner than any master's
+  // time-out (50 ms, the shortest masters use, or the master's own where it was told and is
+  // shorter): a second master's, polling on its own.
+  const Events& interruptions() const { return interruptions_; }
+  static constexpr int64_t shortest_timeout_ns = 50'000'000;
   // What of the stream made sense: every byte in a record, those of frames whose check holds.
   uint64_t bytes() const { return bytes_; }
   // When junk came (noise but a turnaround's glitch, a frame whose check fails) and the slave
@@ -146,6 +158,8 @@ class ProblemEvidence final : public RecordSink {
   // Every frame by length, whoever sent it.
   const Lengths& short_frames() const { return short_frames_; }
   const Lengths& long_frames() const { return long_frames_; }
+  // A slave's frames (requests to it, its answers) by length: short, long.
+  const std::array<Lengths, 2>& lengths_of(uint8_t slave) const { return slave_lengths_[slave]; }
   uint64_t good_frame_bytes() const { return good_frame_bytes_; }
   // Answers timed after their request, and of those the ones that would begin before their
   // request ended: a line faster than the baud modtap was given.
@@ -171,14 +185,19 @@ class ProblemEvidence final : public RecordSink {
   uint64_t requests_seen_ = 0;
   uint64_t bytes_ = 0, good_frame_bytes_ = 0;
   Lengths short_frames_, long_frames_;
+  std::array<std::array<Lengths, 2>, 256>
+      slave_lengths_{};  // by address: a frame's costs no lookup
   std::vector<std::pair<int64_t, uint8_t>> junk_;
+  Events interruptions_;
+  int64_t master_waits_ns_;  // sooner than this, a request is no retry nor next of the master's
+  std::optional<uint64_t> interrupted_request_;  // the last, whose answer may still come
   void note_junk(int64_t t_ns, uint8_t slave) {
     if (junk_.size() < kept_junk) junk_.emplace_back(t_ns, slave);
   }
   void count_length(const Frame& frame);
   uint64_t timed_answers_ = 0, early_answers_ = 0;
   std::optional<int64_t> request_end_ns_;  // of the last request, while its answer may come
-  std::optional<RequestKey> awaited_;      // the request whose answer is awaited, if watched
+  Asked* awaited_ = nullptr;               // the request whose answer is awaited, if watched
   std::optional<uint8_t> awaited_slave_;
   bool after_request_ = false;  // the last record was a request: a glitch now is the slave's
   std::optional<uint64_t> cited_;

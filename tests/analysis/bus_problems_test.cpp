@@ -34,15 +34,16 @@ struct Diagnosed {
   }
 };
 
+// The bus read as a technician who gives modtap the master's time-out (--timeout) reads it.
 Diagnosed diagnose(const BusOptions& bus, Delivery delivery = Delivery::whole_frames) {
   const busgen::BusCapture capture = busgen::simulate(bus);
   AnalyzerOptions options;
   options.format = bus.format;
   options.clock = busgen::clock_of(delivery);
-  options.timeout_ns = master_timeout_ns;
+  options.timeout_ns = bus.retry_after_ns;
   options.timeout_told = true;
   BusStatistics statistics(bus.format, options.clock);
-  ProblemEvidence evidence;
+  ProblemEvidence evidence(bus.retry_after_ns);
   FanOut sinks;
   sinks.add(statistics);
   sinks.add(evidence);
@@ -51,7 +52,7 @@ Diagnosed diagnose(const BusOptions& bus, Delivery delivery = Delivery::whole_fr
   for (const auto& c : busgen::deliver(capture, delivery, bus.seed))
     analyzer.push({0, c.t_ns, {capture.bytes.data() + c.offset, c.size}});
   analyzer.finish();
-  Diagnosed run{find_problems(statistics, evidence, {master_timeout_ns, true}), {}};
+  Diagnosed run{find_problems(statistics, evidence, {bus.retry_after_ns, true}), {}};
   statistics.for_each_slave(
       [&](uint8_t address, const SlaveStatistics& slave) { run.counts[address] = slave.counts; });
   return run;
@@ -167,6 +168,7 @@ TEST(BusProblems, OneCauseIsOneProblemWhateverTheSeedAndClock) {
     double corruption_rate = 0;
     bool random_traffic = false;  // every function, every length, not a scan list's reads
     int64_t noise_burst_period_ns = 0;
+    int64_t second_master_period_ns = 0;
   };
   const Case cases[] = {
       {{"5:bit-errors=0.3"}, 0, {{"corrupted-responses", 5}}},
@@ -188,6 +190,8 @@ TEST(BusProblems, OneCauseIsOneProblemWhateverTheSeedAndClock) {
       {{}, 0, {{"reflections", -1}}, 0.15, 0, true},
       {{}, 0, {{"bus-noise", -1}}, 0, 0.05, true},
       {{}, 0, {{"noise-bursts", -1}}, 0, 0, false, 700'000'000},
+      {{}, 0, {{"second-master", -1}}, 0, 0, false, 0, 1'000'000'000},
+      {{"3:absent"}, 0, {{"second-master", -1}, {"no-response", 3}}, 0, 0, false, 0, 1'000'000'000},
       {{"4:half-baud"},
        0,
        {{"noise-bursts", -1}, {"wrong-baud-device", 4}},
@@ -206,12 +210,23 @@ TEST(BusProblems, OneCauseIsOneProblemWhateverTheSeedAndClock) {
         o.glitch_rate = c.glitch_rate;
         o.reflection_rate = c.reflection_rate;
         o.noise_burst_period_ns = c.noise_burst_period_ns;
+        o.second_master_period_ns = c.second_master_period_ns;
         o.corruption_rate = c.corruption_rate;
         const Diagnosed run = diagnose(o, delivery);
         EXPECT_EQ(run.kinds(), c.found)
             << (c.faults.empty() ? "glitches" : c.faults[0]) << " seed " << seed << " delivery "
             << static_cast<int>(delivery) << describe(run);
       }
+}
+
+// A master whose own time-out is short (30 ms, told) sends its next request that soon after an
+// unanswered one: that is its own program, not a second master's.
+TEST(BusProblems, AMasterWithAShortTimeOutIsNoSecondMaster) {
+  BusOptions o = scan(22, "3:absent");
+  o.retry_after_ns = 30'000'000;
+  o.format = {115200, 8, Parity::even, 1};
+  const Diagnosed run = diagnose(o, Delivery::per_byte);
+  EXPECT_EQ(run.kinds(), (Found{{"no-response", 3}})) << describe(run);
 }
 
 // One set of numbers: a slave that misses some requests and answers others late has, in its

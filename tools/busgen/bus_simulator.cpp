@@ -122,6 +122,22 @@ class Simulator {
 
   int64_t now_ns() const { return capture_.end_ns.empty() ? 0 : capture_.end_ns.back(); }
 
+  // The second master's read of its slave, where its time has come: request and answer, each
+  // after a quiet line.
+  void second_master_polls() {
+    if (!o_.second_master_period_ns) return;
+    if (!next_second_poll_ns_) next_second_poll_ns_ = o_.second_master_period_ns;
+    if (now_ns() < next_second_poll_ns_) return;
+    next_second_poll_ns_ = now_ns() + o_.second_master_period_ns;
+    constexpr uint8_t its_slave = 201;
+    Bytes request{its_slave, 0x03}, response{its_slave, 0x03, 2};
+    u16(request, 0x0100);
+    u16(request, 1);
+    u16(response, pick(0, 1000));
+    const size_t req = send_frame(request, Role::request, t35_ + pick(0, 2'000'000), std::nullopt);
+    send_frame(response, Role::response, t35_ + pick(0, 3'000'000), req);
+  }
+
   // The noise bursts due before a frame that starts `gap_ns` from now, each junk in the gap
   // where it falls there with a silence after it; the gap left to the frame.
   int64_t bursts_before(int64_t gap_ns) {
@@ -290,6 +306,7 @@ class Simulator {
     }
     size_t req = send_request(request, request_findings, idle_gap());
     if (broadcast) return;
+    second_master_polls();
     // A corrupted request no slave takes; a retry is one only after a copy the analyzer saw.
     bool unanswered_copy = false;
     for (unsigned retries = 0;; ++retries) {
@@ -768,8 +785,9 @@ class Simulator {
     return values;
   }
   size_t answered_ = 0;
-  int64_t timing_out_ns_ = 0;  // the master's time-out, still to run before its next request
-  int64_t next_burst_ns_ = 0;  // when the next noise burst comes (noise_burst_period_ns)
+  int64_t timing_out_ns_ = 0;        // the master's time-out, still to run before its next request
+  int64_t next_burst_ns_ = 0;        // when the next noise burst comes (noise_burst_period_ns)
+  int64_t next_second_poll_ns_ = 0;  // when the second master reads next
   std::array<const SlaveFaults*, 248> faults_{};  // by address; none for a healthy slave
   uint8_t block_due_ = 0;    // the slave whose missing block the scan list reads next
   bool block_read_ = false;  // this transaction reads it

@@ -98,6 +98,11 @@ struct BusOptions {
   // up to 1 ms more), from the first period on. One that falls between frames is junk there;
   // one that falls on a frame (or too close before it) destroys that frame's check.
   int64_t noise_burst_period_ns = 0;
+  // A second master on the line (an HMI, a gateway, a laptop left polling): every this long it
+  // reads slave 201 on its own program, as soon as the line is quiet, which may be right after
+  // the first master's request, before that request's answer. Its slave answers first; the
+  // first master's slave, waiting for the line, after.
+  int64_t second_master_period_ns = 0;
   int64_t poll_gap_ns = 5'000'000;  // master's idle time between transactions (at least)
   bool back_to_back = false;        // no idle time at all: the densest file for benchmarks
   // 0: each request goes to a slave picked at random from 1-247 (every address exercised);
