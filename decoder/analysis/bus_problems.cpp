@@ -148,14 +148,7 @@ void ProblemEvidence::on_frame(const Frame& frame) {
   if (frame.adu.empty()) return;
   count_length(frame);
   if (!frame.check_ok) note_junk(frame.t_ns, frame.role == Role::response ? frame.device() : 0);
-  if (frame.role == Role::response && frame.request && request_end_ns_ && frame.latency_ns) {
-    ++timed_answers_;
-  } else if (frame.role == Role::response && frame.request && request_end_ns_ &&
-             frame.t_ns < *request_end_ns_) {
-    ++timed_answers_;
-    ++early_answers_;
-  }
-  request_end_ns_.reset();
+  time_answer(frame);
   if (frame.role == Role::request && frame.check_ok) return on_request(frame);
   const bool awaited =
       frame.role == Role::response && frame.request && !(frame.findings & finding_late_response);
@@ -175,6 +168,17 @@ void ProblemEvidence::on_frame(const Frame& frame) {
     return on_damaged_answer(frame.index, frame.t_ns, frame.raw.size(), slave);
   note(slave.damaged, frame.t_ns, frame.index);
   heard(slave, frame.t_ns);
+}
+
+// An answer right after its request, where the clock timed it: early where it would begin
+// before its request ended (the matcher leaves such a latency unmeasured).
+void ProblemEvidence::time_answer(const Frame& frame) {
+  if (frame.role == Role::response && frame.request && request_end_ns_) {
+    const bool early = !frame.latency_ns && frame.t_ns < *request_end_ns_;
+    timed_answers_ += frame.latency_ns || early;
+    early_answers_ += early;
+  }
+  request_end_ns_.reset();
 }
 
 // Short and long frames, the bus's and each slave's (the one asked, or answering).

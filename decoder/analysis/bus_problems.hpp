@@ -195,6 +195,7 @@ class ProblemEvidence final : public RecordSink {
     if (junk_.size() < kept_junk) junk_.emplace_back(t_ns, slave);
   }
   void count_length(const Frame& frame);
+  void time_answer(const Frame& frame);
   uint64_t timed_answers_ = 0, early_answers_ = 0;
   std::optional<int64_t> request_end_ns_;  // of the last request, while its answer may come
   Asked* awaited_ = nullptr;               // the request whose answer is awaited, if watched
