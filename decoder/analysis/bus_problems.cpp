@@ -88,6 +88,7 @@ constexpr double rejected_share = 0.8;          // rejected-requests: this share
 constexpr double glitch_share = 0.2;            // turnaround-glitches: of the requests
 constexpr size_t several = 3;                   // slaves alike: one cause they share
 constexpr double wrong_baud_share = 0.8;        // wrong-baud-device: of its answers, as junk
+constexpr double wrong_baud_asked = 0.5;        // and of the requests to it
 constexpr uint64_t long_frames_needed = 50;     // reflections: long and short frames, each
 constexpr size_t bursts_needed = 8;             // noise-bursts: times between bursts, at least
 constexpr int64_t burst_merge_ns = 20'000'000;  // junk closer than this is one burst
@@ -234,8 +235,12 @@ void ProblemEvidence::on_answer(const Frame& frame, Slave& slave) {
 
 void ProblemEvidence::on_late_answer(const Frame& frame) {
   Slave& slave = slaves_[frame.slave()];
-  if (frame.request && frame.request == interrupted_request_) {
-    ++slave.answered_after_interruption;  // in its time; another master spoke first
+  // The answer to a request another request cut short sooner than a master waits: it came,
+  // after another master's exchange; no time-out of the slave's.
+  if (frame.request && interrupted_ && frame.request == interrupted_->first) {
+    note(interruptions_, interrupted_->second, frame.index);
+    interrupted_.reset();
+    if (slave.timeouts.count) --slave.timeouts.count;
     ++slave.answers;
     return heard(slave, frame.t_ns);
   }
@@ -301,12 +306,10 @@ void ProblemEvidence::on_timeout(const Timeout& timeout) {
   awaited_ = nullptr;
   if (!timeout.timed_out() || timeout.slave == 0) return;
   Slave& slave = slaves_[timeout.slave];
-  if (timeout.reason == TimeoutReason::next_request && timeout.waited_ns < master_waits_ns_) {
-    ++slave.interrupted;
-    note(interruptions_, timeout.t_ns, timeout.request);
-    interrupted_request_ = timeout.request;
-    return;  // no silence of the slave's: it was given no time to answer
-  }
+  const bool cut_short =
+      timeout.reason == TimeoutReason::next_request && timeout.waited_ns < master_waits_ns_;
+  interrupted_.reset();
+  if (cut_short) interrupted_ = {timeout.request, timeout.t_ns};
   note(slave.timeouts, timeout.t_ns, timeout.request);
   if (slave.silent_timeouts++ == 0) {
     slave.silent_since_ns = timeout.t_ns - timeout.waited_ns;
@@ -664,7 +667,9 @@ class Diagnosis {
   // frame reads, of a length its speed sets: not a weak driver, whose answers mostly come
   // through. Its bad checks are this problem's.
   bool wrong_baud_device(uint8_t address, const Slave& s) {
-    if (s.garbled.count < some || s.garbled.count < wrong_baud_share * answered(s)) return false;
+    if (s.garbled.count < some || s.garbled.count < wrong_baud_share * answered(s) ||
+        s.garbled.count < wrong_baud_asked * s.requests)
+      return false;
     Problem& p = add(ProblemKind::wrong_baud_device, address, Severity::error, *s.garbled.first_ns,
                      s.garbled.first);
     p.evidence = {{"garbled_answers", s.garbled.count}, {"answers", answered(s)}};

@@ -109,9 +109,6 @@ class ProblemEvidence final : public RecordSink {
     // against those the answers due would have had, where the request told.
     Events garbled;
     uint64_t garbled_bytes = 0, garbled_bytes_due = 0;
-    // Its requests cut short by another request sooner than any master's time-out, and its
-    // answers that came after such a request: another master's doing, not its own.
-    uint64_t interrupted = 0, answered_after_interruption = 0;
     // How long after their requests its late answers came, where the clock timed them.
     std::optional<int64_t> late_min_ns, late_max_ns;
     // The time-outs since its last answer: a slave that stopped answering.
@@ -146,7 +143,8 @@ class ProblemEvidence final : public RecordSink {
   uint64_t requests_seen() const { return requests_seen_; }
   // Requests that came while another request's answer was due, sooner than any master's
   // time-out (50 ms, the shortest masters use, or the master's own where it was told and is
-  // shorter): a second master's, polling on its own.
+  // shorter), and the answer came after them: a second master's, polling on its own. (A master
+  // with a short time-out that moves on from a silent slave gets no answer after.)
   const Events& interruptions() const { return interruptions_; }
   static constexpr int64_t shortest_timeout_ns = 50'000'000;
   // What of the stream made sense: every byte in a record, those of frames whose check holds.
@@ -190,7 +188,8 @@ class ProblemEvidence final : public RecordSink {
   std::vector<std::pair<int64_t, uint8_t>> junk_;
   Events interruptions_;
   int64_t master_waits_ns_;  // sooner than this, a request is no retry nor next of the master's
-  std::optional<uint64_t> interrupted_request_;  // the last, whose answer may still come
+  // The request cut short last, and when: its answer may still come.
+  std::optional<std::pair<uint64_t, int64_t>> interrupted_;
   void note_junk(int64_t t_ns, uint8_t slave) {
     if (junk_.size() < kept_junk) junk_.emplace_back(t_ns, slave);
   }

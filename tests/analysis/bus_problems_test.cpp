@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <utility>
@@ -34,16 +35,18 @@ struct Diagnosed {
   }
 };
 
-// The bus read as a technician who gives modtap the master's time-out (--timeout) reads it.
-Diagnosed diagnose(const BusOptions& bus, Delivery delivery = Delivery::whole_frames) {
+// The bus read as a technician who gives modtap the master's time-out (--timeout) reads it,
+// or as one who does not know it (`told` false).
+Diagnosed diagnose(const BusOptions& bus, Delivery delivery = Delivery::whole_frames,
+                   bool told = true) {
   const busgen::BusCapture capture = busgen::simulate(bus);
   AnalyzerOptions options;
   options.format = bus.format;
   options.clock = busgen::clock_of(delivery);
-  options.timeout_ns = bus.retry_after_ns;
-  options.timeout_told = true;
+  if (told) options.timeout_ns = bus.retry_after_ns;
+  options.timeout_told = told;
   BusStatistics statistics(bus.format, options.clock);
-  ProblemEvidence evidence(bus.retry_after_ns);
+  ProblemEvidence evidence(told ? std::optional(bus.retry_after_ns) : std::nullopt);
   FanOut sinks;
   sinks.add(statistics);
   sinks.add(evidence);
@@ -52,7 +55,7 @@ Diagnosed diagnose(const BusOptions& bus, Delivery delivery = Delivery::whole_fr
   for (const auto& c : busgen::deliver(capture, delivery, bus.seed))
     analyzer.push({0, c.t_ns, {capture.bytes.data() + c.offset, c.size}});
   analyzer.finish();
-  Diagnosed run{find_problems(statistics, evidence, {bus.retry_after_ns, true}), {}};
+  Diagnosed run{find_problems(statistics, evidence, {options.timeout_ns, told}), {}};
   statistics.for_each_slave(
       [&](uint8_t address, const SlaveStatistics& slave) { run.counts[address] = slave.counts; });
   return run;
@@ -219,14 +222,18 @@ TEST(BusProblems, OneCauseIsOneProblemWhateverTheSeedAndClock) {
       }
 }
 
-// A master whose own time-out is short (30 ms, told) sends its next request that soon after an
-// unanswered one: that is its own program, not a second master's.
+// A master whose own time-out is short (30 ms) sends its next request that soon after an
+// unanswered one: its own program, not a second master's. Told, its time-out says so; not
+// told, no answer comes after the request it moved on from, as one would after another
+// master's exchange.
 TEST(BusProblems, AMasterWithAShortTimeOutIsNoSecondMaster) {
   BusOptions o = scan(22, "3:absent");
   o.retry_after_ns = 30'000'000;
   o.format = {115200, 8, Parity::even, 1};
-  const Diagnosed run = diagnose(o, Delivery::per_byte);
-  EXPECT_EQ(run.kinds(), (Found{{"no-response", 3}})) << describe(run);
+  for (const bool told : {true, false}) {
+    const Diagnosed run = diagnose(o, Delivery::per_byte, told);
+    EXPECT_EQ(run.kinds(), (Found{{"no-response", 3}})) << "told " << told << describe(run);
+  }
 }
 
 // One set of numbers: a slave that misses some requests and answers others late has, in its
