@@ -146,6 +146,16 @@ TEST(Cli, LastValuesAreWhatTheDeviceConfirmed) {
   EXPECT_THAT(csv.lines[3], ::testing::HasSubstr(",1,2502H,frequency_command,60.00,"));
 }
 
+// The --stats JSON of a run of modtap with `options` (and -q), written to a file `name`.
+std::string stats_json(const std::string& options, const std::string& name) {
+  const auto path = (std::filesystem::temp_directory_path() / name).string();
+  EXPECT_EQ(run(options + " -q --stats " + path).status, 0);
+  std::ifstream file(path);
+  std::stringstream json;
+  json << file.rdbuf();
+  return json.str();
+}
+
 // A simulated scan of six slaves at 19200 8E1, one packet a frame (or as `delivery` says), with
 // `faults` (busgen's syntax).
 std::string faulty_bus(const std::string& name, const std::vector<std::string>& faults,
@@ -178,17 +188,13 @@ TEST(Cli, StatsLeadWithTheProblemsEachFaultyDeviceNamed) {
   EXPECT_THAT(r.lines, ::testing::Contains(::testing::HasSubstr(
                            "warning Slave 4 answers nearly every read of 0400H (4 registers) "
                            "with exception 02H")));
-  const auto path = (std::filesystem::temp_directory_path() / "modtap-problems.json").string();
-  ASSERT_EQ(run("-r " + capture + " -q --stats " + path).status, 0);
-  std::ifstream file(path);
-  std::stringstream json;
-  json << file.rdbuf();
-  EXPECT_NE(json.str().find("\"problems\":[{\"problem\":\"no-response\",\"slave\":3,"
-                            "\"severity\":\"error\",\"since_ns\":"),
+  const std::string json = stats_json("-r " + capture, "modtap-problems.json");
+  EXPECT_NE(json.find("\"problems\":[{\"problem\":\"no-response\",\"slave\":3,"
+                      "\"severity\":\"error\",\"since_ns\":"),
             std::string::npos)
-      << json.str().substr(0, 400);
-  EXPECT_NE(json.str().find(",\"evidence\":{\"requests\":"), std::string::npos);
-  EXPECT_NE(json.str().find("{\"problem\":\"rejected-requests\",\"slave\":4,"), std::string::npos);
+      << json.substr(0, 400);
+  EXPECT_NE(json.find(",\"evidence\":{\"requests\":"), std::string::npos);
+  EXPECT_NE(json.find("{\"problem\":\"rejected-requests\",\"slave\":4,"), std::string::npos);
 }
 
 // One count, one number: an exception answer whose check fails may have its code damaged, so
@@ -617,15 +623,11 @@ TEST(Cli, ReadAtHalfItsBaudACaptureShowsItsSettingsAsTheProblem) {
               ::testing::StartsWith("  error   The line's settings look wrong: the bytes "
                                     "arrive faster than 9600 8E1 carries them"));
   EXPECT_THAT(half.lines, ::testing::Not(::testing::Contains(::testing::HasSubstr("Slave 3"))));
-  const auto path = (std::filesystem::temp_directory_path() / "modtap-half-baud.json").string();
-  ASSERT_EQ(run("-r " + capture + " --baud 9600 -q --stats " + path).status, 0);
-  std::ifstream file(path);
-  std::stringstream json;
-  json << file.rdbuf();
-  EXPECT_NE(json.str().find("\"problems\":[{\"problem\":\"settings-look-wrong\",\"slave\":null,"
-                            "\"severity\":\"error\""),
+  const std::string json = stats_json("-r " + capture + " --baud 9600", "modtap-half-baud.json");
+  EXPECT_NE(json.find("\"problems\":[{\"problem\":\"settings-look-wrong\",\"slave\":null,"
+                      "\"severity\":\"error\""),
             std::string::npos)
-      << json.str().substr(0, 400);
+      << json.substr(0, 400);
   const Outcome right = run("-r " + capture + " -T stats");
   ASSERT_GE(right.lines.size(), 2u);
   EXPECT_THAT(right.lines[1], ::testing::HasSubstr("Slave 3 never answers"));
