@@ -227,8 +227,11 @@ class ModelReader {
       problems_.add(node, "stations must be [first, last]");
       return;
     }
-    read_integer(node.items()[0], problems_, model_.station_min, 0, 255);
-    read_integer(node.items()[1], problems_, model_.station_max, 0, 255);
+    if (read_integer(node.items()[0], problems_, model_.station_min, 0, 255) &&
+        read_integer(node.items()[1], problems_, model_.station_max, 0, 255) &&
+        model_.station_min > model_.station_max)
+      problems_.add(node, fmt::format("stations [{}, {}]: the first is above the last",
+                                      model_.station_min, model_.station_max));
   }
 
   void read_word_limits(const YamlNode& node, WordLimits& limits) {
@@ -310,7 +313,9 @@ class ModelReader {
           groups.counts[group] = count;
       }
     }
-    if (const auto& closed = map["closed"]; closed.is_sequence()) {
+    if (const auto& closed = map["closed"]; closed && !closed.is_sequence()) {
+      problems_.add(closed, "closed must be a list of groups, as [3, 4]");
+    } else if (closed) {
       for (const auto& item : closed.items()) {
         unsigned group = 0;
         if (read_integer(item, problems_, group, 0, 255)) groups.closed.insert(group);
@@ -358,8 +363,9 @@ class ModelReader {
     if (!map["address"]) return problems_.add(node, "a register needs an address");
     if (!read_integer(map["address"], problems_, def.address, 0, 0xFFFF)) return;
     last = def.address;
+    if (map["reserved"]) def.reserved = read_flag(map["reserved"]);
     if (map["to"] && read_integer(map["to"], problems_, last, def.address, 0xFFFF) &&
-        last != def.address && !map["reserved"])
+        last != def.address && !def.reserved)
       problems_.add(map["to"], "'to' is for runs of reserved registers");
     if (map["table"])
       read_choice(map["table"], problems_,
@@ -384,10 +390,11 @@ class ModelReader {
     if (map["max"]) read_number(map["max"], problems_, def.max.emplace());
     if (def.min && def.max && *def.min > *def.max)
       problems_.add(map["min"], fmt::format("min {:g} is above max {:g}", *def.min, *def.max));
+    if (map["enum"] && map["values"])
+      problems_.add(map["values"], "'enum' and 'values' both name the values: give one");
     if (map["enum"]) read_named_enum(map["enum"], def);
     if (map["values"]) def.values = read_enum(map["values"], problems_);
     if (map["bits"]) read_bits(map["bits"], def);
-    if (map["reserved"]) def.reserved = read_flag(map["reserved"]);
     if (map["fault"]) def.fault = read_flag(map["fault"]);
     if (def.name.empty() && !def.reserved) problems_.add(node, "a register needs a name");
     if (def.type == ValueType::u32 || def.type == ValueType::s32 || def.type == ValueType::f32)

@@ -801,6 +801,34 @@ TEST(ModelFiles, ALimitUpsideDownOrARegisterTwiceIsAProblem) {
   }
 }
 
+// What a model file says against itself is refused with its line, not taken one way: stations
+// upside down, closed groups not a list, a register's values named twice, a run of registers
+// ('to') that is not reserved.
+TEST(ModelFiles, ContradictionsAreProblems) {
+  struct Case {
+    const char* yaml;
+    const char* problem;
+  };
+  const Case cases[] = {
+      {"model: x\nstations: [32, 1]\n", "x.yaml:2: stations [32, 1]: the first is above the last"},
+      {"model: x\ngroups:\n  prefix: P\n  closed: 29\n",
+       "x.yaml:4: closed must be a list of groups"},
+      {"model: x\nenums:\n  on_off: {0: off, 1: on}\nregisters:\n"
+       "  - {address: 1, name: a, enum: on_off, values: {0: no, 1: yes}}\n",
+       "x.yaml:5: 'enum' and 'values' both name the values"},
+      {"model: x\nregisters:\n  - {address: 1, to: 4, name: a, reserved: false}\n",
+       "x.yaml:3: 'to' is for runs of reserved registers"},
+  };
+  for (const Case& c : cases) {
+    try {
+      parse_model(c.yaml, "x.yaml");
+      ADD_FAILURE() << "no error for " << c.yaml;
+    } catch (const ModelError& e) {
+      EXPECT_THAT(e.problems(), ::testing::Contains(HasSubstr(c.problem))) << c.yaml;
+    }
+  }
+}
+
 TEST(ModelFiles, FlagsAreYamlsWordsForTrueAndFalse) {
   const auto reserved = [](const std::string& word) {
     const DeviceModel model = parse_model(

@@ -281,7 +281,8 @@ void add_analysis_options(CLI::App& app, RunOptions& o, Command& command) {
   app.add_option("--sigrok-channels", o.sigrok_channels,
                  "sigrok lines: tx=NAME,rx=NAME (the master's transmit and receive) or bus=NAME");
   app.add_flag("--sigrok-invert", o.sigrok_invert, "The sigrok lines have inverted levels");
-  app.add_option("--models-dir", o.models_dir, "A folder of the user's model files (*.yaml)");
+  app.add_option("--models-dir", o.models_dir,
+                 "A folder of the user's model files (*.yaml, *.yml)");
 }
 
 void add_subcommands(CLI::App& app, RunOptions& o, Command& command) {
