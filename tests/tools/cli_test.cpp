@@ -794,6 +794,22 @@ TEST(Cli, ModelsCheckReportsTheFileAndLine) {
   EXPECT_THAT(both.lines, ::testing::Contains(::testing::StartsWith(gd20 + ": model gd20")));
 }
 
+// A file that extends a model of --models-dir checks against it; a file that cannot be read is
+// said and the next one checked, the run failing at the end.
+TEST(Cli, ModelsCheckReadsTheModelsDirAndGoesOnPastAnUnreadableFile) {
+  const auto dir = std::filesystem::temp_directory_path() / "modtap-check-dir";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "base.yaml") << "model: mybase\nregisters:\n  - {address: 1, name: a}\n";
+  const auto mine = std::filesystem::temp_directory_path() / "modtap-check-mine.yaml";
+  std::ofstream(mine) << "model: mine\nextends: mybase\nregisters:\n  - {address: 2, name: b}\n";
+  const std::string missing = (dir / "missing.yaml").string();
+  const Outcome r =
+      run("models check --models-dir " + dir.string() + " " + missing + " " + mine.string());
+  EXPECT_EQ(r.status >> 8, 1);
+  EXPECT_THAT(r.lines, ::testing::Contains(missing + ": cannot open"));
+  EXPECT_THAT(r.lines, ::testing::Contains(::testing::StartsWith(mine.string() + ": model mine")));
+}
+
 TEST(Cli, JsonCarriesRegistersOfTheSlavesModel) {
   const std::string capture =
       raw_capture("modtap-models.raw", {{0x01, 0x06, 0x25, 0x02, 0x17, 0x70},

@@ -380,7 +380,7 @@ void warn_idle_options(const RunOptions& o, const Command& command) {
 
 int run_command(RunOptions& o, const Command& command) {
   try {
-    if (command.check->parsed()) return tools::check_model_files(command.check_files);
+    if (command.check->parsed()) return tools::check_model_files(command.check_files, o.models_dir);
     if (command.models->parsed()) return list_models(o);
     if (command.fields->parsed()) return list_fields();
     if (auto refusal = refuse_source(o)) {

@@ -138,22 +138,24 @@ ModelChoice ModelCatalog::choose(const std::vector<std::string>& specs) const {
   return choice;
 }
 
-int check_model_files(const std::vector<std::string>& files) {
+int check_model_files(const std::vector<std::string>& files, const std::string& models_dir) {
   ModelCatalog catalog;
   catalog.load_builtin();
+  if (!models_dir.empty()) catalog.load_dir(models_dir);
   int status = 0;
   for (const auto& file : files) status |= check_model_file(catalog, file);
   return status;
 }
 
 int check_model_file(const ModelCatalog& catalog, const std::string& file) {
-  const std::string yaml = read_text(file);
   try {
-    const ModelFile parsed(yaml, file);
+    const ModelFile parsed(read_text(file), file);
     const DeviceModel* base = parsed.base().empty() ? nullptr : catalog.find(parsed.base());
     if (!parsed.base().empty() && !base)
       throw ModelError(
-          {fmt::format("{}: extends '{}', which is not a built-in model", file, parsed.base())});
+          {fmt::format("{}: extends '{}', which is no built-in model nor one of "
+                       "--models-dir",
+                       file, parsed.base())});
     const DeviceModel model = parsed.model(base);
     fmt::print("{}: model {} ({}{}{}): {} registers, {} exception codes{}\n", file, model.name,
                model.title, model.source.empty() ? "" : ", from ", model.source,
@@ -162,6 +164,9 @@ int check_model_file(const ModelCatalog& catalog, const std::string& file) {
     return 0;
   } catch (const ModelError& e) {
     for (const auto& problem : e.problems()) fmt::print(stderr, "{}\n", problem);
+    return 1;
+  } catch (const std::runtime_error& e) {  // unreadable: said, and the next file checked
+    fmt::print(stderr, "{}\n", e.what());
     return 1;
   }
 }

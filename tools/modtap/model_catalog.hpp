@@ -41,10 +41,11 @@ class ModelCatalog {
   std::vector<std::string> left_out_;
 };
 
-// `modtap models check FILE...`: loads each file against the built-in models and prints what
-// it finds: the model, or every problem with its line. Returns the process status, 1 if any
-// file has a problem.
-int check_model_files(const std::vector<std::string>& files);
+// `modtap models check FILE...`: loads each file against the built-in models and those of
+// `models_dir` (a file may extend a user's model) and prints what it finds: the model, or every
+// problem with its line, or that it cannot be read, and goes on. Returns the process status, 1
+// if any file has a problem.
+int check_model_files(const std::vector<std::string>& files, const std::string& models_dir);
 int check_model_file(const ModelCatalog& catalog, const std::string& file);
 
 }  // namespace modtap::tools
