@@ -226,6 +226,16 @@ def replay_ends_on_the_statistics():
     keys("q")
     tmux("kill-server")
 
+    # TERM=dumb on a terminal 100 columns wide: the plain pages are as wide as the terminal, so
+    # that no line wraps (joined again, no line is longer).
+    tmux("new-session", "-d", "-s", SESSION, "-x", "100", "-y", "30", "-c", WORK,
+         f"env TERM=dumb {MODTAP} top -r {capture} --speed 1000; sleep 60")
+    wait_for(lambda lines: any("end of capture" in line for line in lines))
+    joined = tmux("capture-pane", "-p", "-J", "-t", SESSION).splitlines()
+    check("dumb terminal", joined and max(map(len, joined)) <= 100,
+          f"{max(map(len, joined), default=0)} columns on a terminal of 100")
+    tmux("kill-server")
+
     plain = subprocess.run([MODTAP, "top", "-r", capture, "--speed", "1000"], env={
         **os.environ, "TERM": "dumb"}, capture_output=True, text=True, timeout=120)
     lines = plain.stdout.splitlines()

@@ -1,6 +1,7 @@
 #include "tools/top/top_view.hpp"
 
 #include <langinfo.h>
+#include <sys/ioctl.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -8,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -25,17 +27,29 @@ constexpr int escape = 27;
 constexpr auto refresh_every = std::chrono::seconds(1);
 constexpr size_t history_kept = 120;  // a followed register's values, one a refresh
 
-// The plain screen's size: COLUMNS and LINES where the shell exports them, else a wide page.
-size_t plain_size(const char* variable, size_t otherwise) {
+// A size the environment gives (COLUMNS, LINES), where the shell exports it.
+size_t exported_size(const char* variable, size_t otherwise) {
   const char* value = std::getenv(variable);
   const long number = value ? std::strtol(value, nullptr, 10) : 0;
   return number >= 10 && number <= 1000 ? static_cast<size_t>(number) : otherwise;
 }
+
+// The plain screen's size (a terminal that cannot draw, TERM=dumb, or a pipe): the terminal's
+// own where the output is one, else COLUMNS and LINES, else 80 columns and 40 lines, so that
+// a page never wraps on a terminal narrower than it.
+std::pair<size_t, size_t> plain_size() {
+  winsize size{};
+  const bool terminal = isatty(STDOUT_FILENO) && ioctl(STDOUT_FILENO, TIOCGWINSZ, &size) == 0;
+  const size_t columns = terminal && size.ws_col >= 10 ? size.ws_col : exported_size("COLUMNS", 80);
+  const size_t lines = terminal && size.ws_row >= 10 ? size.ws_row : exported_size("LINES", 40);
+  return {columns, lines};
+}
+
 // The screen as text: its lines without the spaces that pad them, and a blank line after.
 std::string plain_page(const Snapshot& snapshot, const ViewState& view) {
   std::string page;
-  for (const ScreenLine& line :
-       lay_out(snapshot, view, plain_size("COLUMNS", 132), plain_size("LINES", 40))) {
+  const auto [columns, lines] = plain_size();
+  for (const ScreenLine& line : lay_out(snapshot, view, columns, lines)) {
     std::string_view text(line.text);
     while (!text.empty() && text.back() == ' ') text.remove_suffix(1);
     page.append(text).push_back('\n');
