@@ -224,16 +224,19 @@ def replay_ends_on_the_statistics():
         check("replay", row and int(row[2]) == slave["requests"] and
               int(row[4]) == slave["timeouts"], f"slave {slave['slave']}: {row}, {slave}")
     keys("q")
-    tmux("kill-server")
 
-    # TERM=dumb on a terminal 100 columns wide: the plain pages are as wide as the terminal, so
-    # that no line wraps (joined again, no line is longer).
-    tmux("new-session", "-d", "-s", SESSION, "-x", "100", "-y", "30", "-c", WORK,
+    # TERM=dumb on a terminal 100 columns wide, a session of its own beside the first: the
+    # plain pages are as wide as the terminal, so no line wraps (joined again, none is longer).
+    dumb = "dumb"
+    tmux("new-session", "-d", "-s", dumb, "-x", "100", "-y", "30", "-c", WORK,
          f"env TERM=dumb {MODTAP} top -r {capture} --speed 1000; sleep 60")
-    wait_for(lambda lines: any("end of capture" in line for line in lines))
-    joined = tmux("capture-pane", "-p", "-J", "-t", SESSION).splitlines()
+    deadline = time.time() + 30
+    joined = []
+    while time.time() < deadline and not any("end of capture" in line for line in joined):
+        time.sleep(0.3)
+        joined = tmux("capture-pane", "-p", "-J", "-S", "-200", "-t", dumb).splitlines()
     check("dumb terminal", joined and max(map(len, joined)) <= 100,
-          f"{max(map(len, joined), default=0)} columns on a terminal of 100")
+          f"{max(map(len, joined), default=0)} columns on a terminal of 100: {joined[-3:]}")
     tmux("kill-server")
 
     plain = subprocess.run([MODTAP, "top", "-r", capture, "--speed", "1000"], env={
