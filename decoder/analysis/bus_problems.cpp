@@ -413,10 +413,10 @@ class Diagnosis {
     if (pace && pace->too_fast()) {
       why = fmt::format("the bytes arrive faster than {} carries them ({} of {} reads)", settings,
                         pace->fast_reads, pace->reads);
-    } else if (timed >= 10 && 2 * early > timed) {
+    } else if (mostly_early(timed, early)) {
       why = fmt::format("{} of {} answers would begin before their request ended at {}", early,
                         timed, settings);
-    } else if (bytes >= 64 && good < 0.5) {
+    } else if (mostly_junk(bytes, evidence_.good_frame_bytes())) {
       why = fmt::format("only {:.0f}% of {} bytes form frames with a good check at {}", 100 * good,
                         bytes, settings);
     } else {

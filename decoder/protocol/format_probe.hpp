@@ -13,6 +13,16 @@
 
 namespace modtap {
 
+// What says a line's settings are not the ones modtap reads it with, one place for the hint
+// after a run and the settings-look-wrong problem: too little of a sizeable stream forms good
+// frames, or most timed answers would begin before their request ended (the line is faster).
+inline bool mostly_junk(uint64_t bytes, uint64_t good_frame_bytes) {
+  return bytes >= 64 && 2 * good_frame_bytes < bytes;
+}
+inline bool mostly_early(uint64_t timed_answers, uint64_t early_answers) {
+  return timed_answers >= 10 && 2 * early_answers > timed_answers;
+}
+
 // Counts how much of the traffic made sense, and passes every record on (or nowhere).
 class LineHealth final : public RecordSink {
  public:
@@ -27,7 +37,7 @@ class LineHealth final : public RecordSink {
   uint64_t good_frames = 0;
   double good_share() const { return bytes ? static_cast<double>(good_frame_bytes) / bytes : 0; }
   // Too little of a sizeable stream made sense: the settings are probably wrong.
-  bool looks_wrong() const { return bytes >= 64 && good_share() < 0.5; }
+  bool looks_wrong() const { return mostly_junk(bytes, good_frame_bytes); }
 
  private:
   RecordSink* next_;

@@ -84,7 +84,7 @@ void hint_settings(const SerialFormat& format, const LineHealth& health, const C
                100 * health.good_share(), health.bytes);
     return;
   }
-  if (context.timed_answers >= 10 && context.early_answers * 2 > context.timed_answers) {
+  if (mostly_early(context.timed_answers, context.early_answers)) {
     fmt::print(stderr,
                "modtap: hint: {} of {} answers would begin before their request ended at {}; "
                "the line is faster: try --baud auto\n",
