@@ -527,8 +527,8 @@ void append_timeline(fmt::memory_buffer& out, const BusTimeline& timeline, const
       "class=\"noise\"></span>noise records</p>\n"));
 }
 
-void append_outages(fmt::memory_buffer& out, const BusStatistics& s, const BusDiagnostics& d) {
-  if (d.outage_count() == 0) return;
+void append_outages(fmt::memory_buffer& out, const BusStatistics& s) {
+  if (s.outage_count() == 0) return;
   auto put = fmt::appender(out);
   fmt::format_to(put,
                  "<h2>Slaves that stopped answering</h2>\n<p><span "
@@ -536,9 +536,8 @@ void append_outages(fmt::memory_buffer& out, const BusStatistics& s, const BusDi
                  "a row unanswered.</p>\n<table><tr><th>slave</th><th class=\"text\">silent "
                  "from</th><th>first unanswered record</th><th>time-outs</th><th "
                  "class=\"text\">back at</th></tr>\n",
-                 d.outage_count(), d.outage_count() == 1 ? "time" : "times",
-                 BusDiagnostics::outage_timeouts);
-  for (const Outage& outage : d.outages()) {
+                 s.outage_count(), s.outage_count() == 1 ? "time" : "times", silent_after_timeouts);
+  for (const Outage& outage : s.outages()) {
     fmt::format_to(put,
                    "<tr><td>{}</td><td class=\"text\">{}</td><td>#{}</td><td>{}</td><td "
                    "class=\"text\">",
@@ -719,8 +718,7 @@ void append_cited_records(fmt::memory_buffer& out, std::span<const Problem> prob
 
 }  // namespace
 
-void append_report(fmt::memory_buffer& out, const BusStatistics& stats,
-                   const BusDiagnostics& diagnostics, const BusTimeline& timeline,
+void append_report(fmt::memory_buffer& out, const BusStatistics& stats, const BusTimeline& timeline,
                    std::span<const Problem> problems, const CitedLines& cited,
                    const ReportInfo& info) {
   const TimeAxis axis = time_axis(timeline, stats);
@@ -731,7 +729,7 @@ void append_report(fmt::memory_buffer& out, const BusStatistics& stats,
   append_slaves(out, stats, problems);
   append_timeline(out, timeline, axis, stats.clock());
   append_latency(out, stats);
-  append_outages(out, stats, diagnostics);
+  append_outages(out, stats);
   append_followed(out, timeline, axis, info);
   append_registers(out, stats, info.register_base);
   append_cited_records(out, problems, cited);

@@ -14,7 +14,6 @@
 
 #include <fmt/format.h>
 
-#include "decoder/analysis/bus_diagnostics.hpp"
 #include "decoder/analysis/bus_problems.hpp"
 #include "decoder/analysis/bus_statistics.hpp"
 #include "decoder/analysis/bus_timeline.hpp"
@@ -33,8 +32,7 @@ struct ReportInfo {
 // The lines of the records problems cite, by the index they cite (CitedRecords).
 using CitedLines = std::map<uint64_t, std::string>;
 
-void append_report(fmt::memory_buffer& out, const BusStatistics& stats,
-                   const BusDiagnostics& diagnostics, const BusTimeline& timeline,
+void append_report(fmt::memory_buffer& out, const BusStatistics& stats, const BusTimeline& timeline,
                    std::span<const Problem> problems, const CitedLines& cited,
                    const ReportInfo& info);
 

@@ -110,12 +110,12 @@ void print_findings(Output& out, const BusStatistics& s) {
 }
 
 // "slave 7 silent from 12.345 s (request #10), 5 time-outs, back at 15.678 s"
-void print_outages(Output& out, const BusStatistics& s, const BusDiagnostics& d) {
-  if (d.outage_count() == 0) return;
+void print_outages(Output& out, const BusStatistics& s) {
+  if (s.outage_count() == 0) return;
   out.print("\nslaves that stopped answering ({} or more time-outs in a row): {}\n",
-            BusDiagnostics::outage_timeouts, d.outage_count());
+            silent_after_timeouts, s.outage_count());
   const int64_t start = s.first_t_ns.value_or(0);
-  for (const Outage& outage : d.outages()) {
+  for (const Outage& outage : s.outages()) {
     out.print("  slave {:<3} silent from {} s (request #{}), {} time-outs, ", outage.slave,
               Fixed{outage.silent_from_ns - start, 9, 3}, outage.first_request, outage.timeouts);
     if (outage.back_ns) {
@@ -181,8 +181,8 @@ void print_problems(Output& out, std::span<const Problem> problems) {
 
 }  // namespace
 
-void print_statistics(Output& out, const BusStatistics& s, const BusDiagnostics& d,
-                      std::span<const Problem> problems, RegisterBase base) {
+void print_statistics(Output& out, const BusStatistics& s, std::span<const Problem> problems,
+                      RegisterBase base) {
   print_problems(out, problems);
   print_span(out, s);
   out.print("{:<16}{}", "frames", s.frames);
@@ -210,7 +210,7 @@ void print_statistics(Output& out, const BusStatistics& s, const BusDiagnostics&
               h.count());
   }
   print_slaves(out, s);
-  print_outages(out, s, d);
+  print_outages(out, s);
   print_registers(out, s, base);
   print_findings(out, s);
   out.flush();
@@ -325,11 +325,11 @@ void append_registers(fmt::memory_buffer& out, const BusStatistics& s) {
   fmt::format_to(put, "],\"register_values_not_kept\":{}", s.register_values_not_kept);
 }
 
-void append_outages(fmt::memory_buffer& out, const BusDiagnostics& d) {
+void append_outages(fmt::memory_buffer& out, const BusStatistics& s) {
   auto put = fmt::appender(out);
-  fmt::format_to(put, ",\"outage_count\":{},\"outages\":[", d.outage_count());
+  fmt::format_to(put, ",\"outage_count\":{},\"outages\":[", s.outage_count());
   bool first = true;
-  for (const Outage& o : d.outages()) {
+  for (const Outage& o : s.outages()) {
     fmt::format_to(put,
                    "{}{{\"slave\":{},\"first_request\":{},\"silent_from_ns\":{},\"timeouts\":{},"
                    "\"back_ns\":",
@@ -372,8 +372,7 @@ void append_problems_json(fmt::memory_buffer& out, std::span<const Problem> prob
 }
 
 void append_statistics_json(fmt::memory_buffer& out, const BusStatistics& s,
-                            const BusDiagnostics& d, std::span<const Problem> problems,
-                            bool complete) {
+                            std::span<const Problem> problems, bool complete) {
   auto put = fmt::appender(out);
   fmt::format_to(put,
                  "{{\"complete\":{},\"clock\":\"{}\",\"serial\":\"{}\",\"problems\":", complete,
@@ -412,7 +411,7 @@ void append_statistics_json(fmt::memory_buffer& out, const BusStatistics& s,
   });
   fmt::format_to(put, "],\"stray_addresses\":{},\"stray_bad_checks\":{}", s.stray_addresses(),
                  s.stray_bad_checks());
-  append_outages(out, d);
+  append_outages(out, s);
   append_registers(out, s);
   append_diagnostics(out, s);
   fmt::format_to(put, "}}\n");

@@ -6,7 +6,6 @@
 
 #include <span>
 
-#include "decoder/analysis/bus_diagnostics.hpp"
 #include "decoder/analysis/bus_problems.hpp"
 #include "decoder/analysis/bus_statistics.hpp"
 #include "decoder/protocol/register_numbering.hpp"
@@ -14,15 +13,13 @@
 
 namespace modtap::output {
 
-// The outages (slaves that went silent) come from the diagnostics stage; the problems, first,
-// from find_problems.
-void print_statistics(Output& out, const BusStatistics& stats, const BusDiagnostics& diagnostics,
-                      std::span<const Problem> problems, RegisterBase base = RegisterBase::hex);
+// The problems, first, come from find_problems.
+void print_statistics(Output& out, const BusStatistics& stats, std::span<const Problem> problems,
+                      RegisterBase base = RegisterBase::hex);
 
 // `complete` is false when the input ended in an error: the numbers cover what was read.
 void append_statistics_json(fmt::memory_buffer& out, const BusStatistics& stats,
-                            const BusDiagnostics& diagnostics, std::span<const Problem> problems,
-                            bool complete);
+                            std::span<const Problem> problems, bool complete);
 
 // The problems as a JSON array, as --stats, the metrics and MQTT give them.
 void append_problems_json(fmt::memory_buffer& out, std::span<const Problem> problems);

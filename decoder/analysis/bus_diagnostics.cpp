@@ -33,6 +33,9 @@ uint32_t BusDiagnostics::diagnose(const Frame& frame) {
       frame.t_ns - *last_end < t35_ns_)
     found |= finding_short_gap;
   last_end = frame.end_ns;
+  // A garbled answer to a request is the device speaking, however badly: it is not silent.
+  if (!frame.check_ok && frame.role == Role::response && frame.request)
+    found |= back_from_silence(slaves_[frame.device()]);
   if (!frame.check_ok || frame.adu.empty()) return found;
   SlaveHistory& slave = slaves_[frame.slave()];
   if (frame.role == Role::request) {
@@ -49,12 +52,7 @@ uint32_t BusDiagnostics::answered(const Frame& frame, SlaveHistory& slave) {
   if ((frame.findings & finding_unsolicited) && slave.timed_out_function == function)
     found |= finding_late_response;
   slave.timed_out_function.reset();
-  if (slave.timeouts_in_a_row >= outage_timeouts) {
-    found |= finding_answers_again;
-    if (slave.open_outage) outages_[*slave.open_outage].back_ns = frame.t_ns;
-  }
-  slave.timeouts_in_a_row = 0;
-  slave.open_outage.reset();
+  found |= back_from_silence(slave);
   if (frame.is_exception() && frame.adu.size() > 2) {
     const bool same = slave.exceptions_in_a_row > 0 && slave.exception == frame.adu[2] &&
                       slave.exception_function == function;
@@ -66,6 +64,13 @@ uint32_t BusDiagnostics::answered(const Frame& frame, SlaveHistory& slave) {
     slave.exceptions_in_a_row = 0;
   }
   return found;
+}
+
+// The slave was heard: after a silence, its answer is the finding that says it is back.
+uint32_t BusDiagnostics::back_from_silence(SlaveHistory& slave) {
+  const bool was_silent = slave.timeouts_in_a_row >= silent_after_timeouts;
+  slave.timeouts_in_a_row = 0;
+  return was_silent ? uint32_t{finding_answers_again} : 0u;
 }
 
 // A master polls each slave in a cycle; a request far off the slave's usual interval shows the
@@ -118,23 +123,16 @@ size_t BusDiagnostics::count_before(const std::array<int64_t, poll_history>& sor
   return static_cast<size_t>(at - first);
 }
 
+void BusDiagnostics::on_noise(const Noise& noise) {
+  if (noise.damaged_answer) back_from_silence(slaves_[noise.request_slave]);
+  next_.on_noise(noise);
+}
+
 void BusDiagnostics::on_timeout(const Timeout& timeout) {
   if (timeout.timed_out()) {
     SlaveHistory& slave = slaves_[timeout.slave];
     slave.timed_out_function = timeout.function & 0x7F;
-    if (slave.timeouts_in_a_row++ == 0) {
-      slave.first_unanswered = timeout.request;
-      slave.silent_from_ns = timeout.t_ns - timeout.waited_ns;
-    }
-    if (slave.timeouts_in_a_row == outage_timeouts) {
-      ++outage_count_;
-      if (outages_.size() < kept_outages) {
-        slave.open_outage = outages_.size();
-        outages_.push_back(
-            {timeout.slave, slave.first_unanswered, slave.silent_from_ns, std::nullopt, 0});
-      }
-    }
-    if (slave.open_outage) outages_[*slave.open_outage].timeouts = slave.timeouts_in_a_row;
+    ++slave.timeouts_in_a_row;
   }
   next_.on_timeout(timeout);
 }

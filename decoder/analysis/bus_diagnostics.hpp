@@ -14,21 +14,9 @@
 
 namespace modtap {
 
-// A slave that stopped answering: from the end of the first unanswered request to the start of
-// its next answer (none yet: it had not come back when the capture ended).
-struct Outage {
-  uint8_t slave = 0;
-  uint64_t first_request = 0;  // the first request it left unanswered
-  int64_t silent_from_ns = 0;
-  std::optional<int64_t> back_ns;
-  uint64_t timeouts = 0;
-};
-
 class BusDiagnostics final : public RecordSink {
  public:
-  static constexpr uint64_t outage_timeouts = 3;   // time-outs in a row that make an outage
   static constexpr uint64_t storm_exceptions = 5;  // the same exception in a row that is a storm
-  static constexpr size_t kept_outages = 1000;     // a week of a flapping slave stays bounded
   // A slave's usual poll interval is the median of its last `poll_history` intervals, known
   // once `poll_history_known` are seen; a request off it by half or more is poll-jitter.
   static constexpr size_t poll_history = 16, poll_history_known = 8;
@@ -38,19 +26,12 @@ class BusDiagnostics final : public RecordSink {
                  int64_t read_jitter_ns = default_read_jitter_ns);
 
   void on_frame(const Frame& frame) override;
-  void on_noise(const Noise& noise) override { next_.on_noise(noise); }
+  void on_noise(const Noise& noise) override;
   void on_timeout(const Timeout& timeout) override;
-
-  // The first kept_outages outages, in the order they began, and how many there were in all.
-  const std::vector<Outage>& outages() const { return outages_; }
-  uint64_t outage_count() const { return outage_count_; }
 
  private:
   struct SlaveHistory {
     uint64_t timeouts_in_a_row = 0;
-    uint64_t first_unanswered = 0;
-    int64_t silent_from_ns = 0;
-    std::optional<size_t> open_outage;          // in outages_, while the slave stays silent
     std::optional<uint8_t> timed_out_function;  // its last request timed out, none since
     uint8_t exception = 0;  // the exception of its answers in a row, and how many
     uint8_t exception_function = 0;
@@ -64,6 +45,7 @@ class BusDiagnostics final : public RecordSink {
   uint32_t diagnose(const Frame& frame);
   uint32_t answered(const Frame& frame, SlaveHistory& slave);
   uint32_t polled(const Frame& frame, SlaveHistory& slave);
+  static uint32_t back_from_silence(SlaveHistory& slave);
   static void remember_interval(SlaveHistory& slave, int64_t interval);
   static size_t count_before(const std::array<int64_t, poll_history>& sorted, size_t n,
                              int64_t value, bool after_equals);
@@ -74,8 +56,6 @@ class BusDiagnostics final : public RecordSink {
   RecordSink& next_;
   std::array<SlaveHistory, 256> slaves_{};
   std::vector<std::optional<int64_t>> last_end_ns_;  // per channel
-  std::vector<Outage> outages_;
-  uint64_t outage_count_ = 0;
 };
 
 }  // namespace modtap

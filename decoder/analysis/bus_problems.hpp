@@ -173,7 +173,7 @@ class ProblemEvidence final : public RecordSink {
   void on_damaged_answer(uint64_t index, int64_t t_ns, size_t size, Slave& slave);
   void on_late_answer(const Frame& frame);
   static void heard(Slave& slave, int64_t t_ns);
-  static constexpr uint64_t restart_timeouts = 3;       // in a row, as an outage's
+  static constexpr uint64_t restart_timeouts = silent_after_timeouts;
   static constexpr int64_t restart_ns = 1'000'000'000;  // a restart takes seconds
   void note(Events& events, int64_t t_ns, uint64_t index);
 

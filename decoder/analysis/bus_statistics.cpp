@@ -73,6 +73,8 @@ void BusStatistics::on_frame(const Frame& frame) {
 void BusStatistics::count_exchange(const Frame& frame, SlaveStatistics& s) {
   count(s.counts, frame);
   s.last_frame_ns = std::max(s.last_frame_ns, frame.end_ns);
+  // An answer to a request, however garbled, is the slave speaking.
+  if (frame.role == Role::response && (frame.check_ok || frame.request)) heard(s, frame.t_ns);
   if (!frame.check_ok) return;  // its function code may be as corrupted as its check
   if (frame.role == Role::response) s.last_answer_ns = frame.end_ns;
   count(s.by_function[frame.function() & 0x7F], frame);
@@ -133,7 +135,30 @@ void BusStatistics::on_noise(const Noise& noise) {
   ++noise_by_reason[static_cast<size_t>(noise.reason)];
   for_each_frame_finding(noise.findings, [&](size_t slot) { count_finding(slot, noise.index); });
   see_time(noise.t_ns, noise.end_ns);
-  if (noise.damaged_answer) ++slave(noise.request_slave).counts.garbled;
+  if (!noise.damaged_answer) return;
+  SlaveStatistics& s = slave(noise.request_slave);
+  ++s.counts.garbled;
+  heard(s, noise.t_ns);
+}
+
+void BusStatistics::heard(SlaveStatistics& s, int64_t t_ns) {
+  if (s.open_outage) outages_[*s.open_outage].back_ns = t_ns;
+  s.open_outage.reset();
+  s.timeouts_in_a_row = 0;
+}
+
+void BusStatistics::unanswered_again(SlaveStatistics& s, const Timeout& timeout) {
+  if (s.timeouts_in_a_row++ == 0)
+    s.silence = {timeout.slave, timeout.request, timeout.t_ns - timeout.waited_ns, {}, 0};
+  s.silence.timeouts = s.timeouts_in_a_row;
+  if (s.timeouts_in_a_row == silent_after_timeouts) {
+    ++outage_count_;
+    if (outages_.size() < kept_outages) {
+      s.open_outage = outages_.size();
+      outages_.push_back(s.silence);
+    }
+  }
+  if (s.open_outage) outages_[*s.open_outage].timeouts = s.timeouts_in_a_row;
 }
 
 void BusStatistics::on_timeout(const Timeout& timeout) {
@@ -147,6 +172,7 @@ void BusStatistics::on_timeout(const Timeout& timeout) {
   SlaveStatistics& s = slave(timeout.slave);
   ++s.counts.timeouts;
   ++s.by_function[timeout.function & 0x7F].timeouts;
+  unanswered_again(s, timeout);
 }
 
 uint64_t BusStatistics::stray_bad_checks() const {

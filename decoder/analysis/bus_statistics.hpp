@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "decoder/analysis/histogram.hpp"
 #include "decoder/models/register_meaning.hpp"
@@ -39,6 +40,17 @@ struct ExchangeCounts {
   uint64_t answered_in_time() const { return responses - std::min(late, responses); }
 };
 
+// A slave that went silent (silent_after_timeouts or more time-outs in a row): from the end of
+// the first unanswered request to the start of the next answer it gave, garbled or not (none
+// yet: it had not come back when the capture ended). A device that answers in junk is there.
+struct Outage {
+  uint8_t slave = 0;
+  uint64_t first_request = 0;  // the first request it left unanswered
+  int64_t silent_from_ns = 0;
+  std::optional<int64_t> back_ns;
+  uint64_t timeouts = 0;
+};
+
 struct SlaveStatistics {
   ExchangeCounts counts;
   std::map<uint8_t, uint64_t> exceptions_by_code;
@@ -47,7 +59,11 @@ struct SlaveStatistics {
   Histogram poll_interval_ns;                     // start of one request to the next's
   int64_t last_frame_ns = 0;
   std::optional<int64_t> last_answer_ns;  // the end of its last good answer: when it last spoke
-  bool good = false;  // a frame with a good check came from or went to this address
+  // Its time-outs since it was last heard, and the silence they began.
+  uint64_t timeouts_in_a_row = 0;
+  Outage silence;
+  std::optional<size_t> open_outage;  // in outages(), while it stays silent
+  bool good = false;                  // a frame with a good check came from or went to this address
 };
 
 // The last value the bus carried for one register: the bus's state, as a data logger shows it.
@@ -104,6 +120,10 @@ class BusStatistics final : public RecordSink {
   static constexpr size_t kept_registers = 20000;
   std::map<RegisterKey, LastValue> registers;
   uint64_t register_values_not_kept = 0;
+  // The first kept_outages silences, in the order they began, and how many there were in all.
+  static constexpr size_t kept_outages = 1000;  // a week of a flapping slave stays bounded
+  const std::vector<Outage>& outages() const { return outages_; }
+  uint64_t outage_count() const { return outage_count_; }
 
   // Every address a frame named, slave 0 (broadcast) aside. Only those `good` are slaves: a
   // corrupted address byte does not make one. Bad checks on the others are counted apart.
@@ -141,12 +161,16 @@ class BusStatistics final : public RecordSink {
     return frame.latency_ns && *frame.latency_ns >= 0 && !(frame.findings & finding_late_response);
   }
   void keep_values(const Frame& frame);
+  void heard(SlaveStatistics& slave, int64_t t_ns);
+  void unanswered_again(SlaveStatistics& slave, const Timeout& timeout);
 
   SerialFormat format_;
   ClockQuality clock_;
   bool data_bits_from_mode_;
   std::map<uint8_t, std::unique_ptr<SlaveStatistics>> addresses_;
   std::array<std::optional<int64_t>, 256> last_request_ns_{};
+  std::vector<Outage> outages_;
+  uint64_t outage_count_ = 0;
 };
 
 // When `t_ns` was, as a person reads it of this capture: the time of day (UTC) in a dated

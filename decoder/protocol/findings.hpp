@@ -39,6 +39,9 @@ enum Finding : uint32_t {
   finding_ambiguous_end = 1u << 19,  // a damaged frame whose last byte may be a glitch, or not
 };
 inline constexpr size_t frame_finding_count = 20;
+// Time-outs in a row after which a slave has gone silent: its next answer, garbled or not, is
+// answers-again, and the statistics list the silence as an outage.
+inline constexpr uint64_t silent_after_timeouts = 3;
 // A response whose content is not what its request asked for.
 inline constexpr uint32_t response_misfit = finding_length_mismatch | finding_echo_mismatch;
 

@@ -5,6 +5,7 @@
 #include <map>
 #include <set>
 
+#include "decoder/analysis/bus_statistics.hpp"
 #include "decoder/models/model_interpreter.hpp"
 #include "decoder/protocol/analyzer.hpp"
 #include "decoder/protocol/checksum.hpp"
@@ -17,12 +18,16 @@ namespace {
 
 using testing::Collector;
 
-// Records handed straight to the stage, as the analyzer would hand them.
+// Records handed straight to the stage, as the analyzer would hand them; the stage hands them
+// on to a collector and to the statistics, which keep the outages.
 class History {
  public:
   explicit History(ClockQuality clock = ClockQuality::per_byte,
                    int64_t read_jitter_ns = default_read_jitter_ns)
-      : stage_(SerialFormat{}, clock, out, read_jitter_ns) {}
+      : statistics_(SerialFormat{}, clock), stage_(SerialFormat{}, clock, fan_, read_jitter_ns) {
+    fan_.add(out);
+    fan_.add(statistics_);
+  }
 
   // A good frame from `hex` (slave, PDU; the CRC is added) at `t_ms`.
   uint32_t frame(Role role, const std::string& hex, int64_t t_ms, uint32_t findings = 0) {
@@ -51,10 +56,35 @@ class History {
     t.reason = TimeoutReason::silence;
     stage_.on_timeout(t);
   }
-  const BusDiagnostics& stage() const { return stage_; }
+  // Junk where slave `slave`'s answer to `request` was awaited, as a frame with a bad check.
+  void garbled_answer(uint8_t slave, uint64_t request, int64_t t_ms) {
+    Frame f;
+    f.index = ++index_;
+    f.role = Role::response;
+    f.raw = f.adu = adus_.emplace_back(testing::hex("5A 47 14 19 0F A5"));
+    f.request = request;
+    f.request_slave = slave;
+    f.t_ns = t_ms * 1'000'000;
+    f.end_ns = f.t_ns + 3'000'000;
+    stage_.on_frame(f);
+  }
+  // The same as a noise record: bytes that are no frame at all.
+  void garbled_noise(uint8_t slave, uint64_t request, int64_t t_ms) {
+    Noise n;
+    n.index = ++index_;
+    n.raw = adus_.emplace_back(testing::hex("B2 A6 C6 18"));
+    n.request = request;
+    n.request_slave = slave;
+    n.damaged_answer = true;
+    n.t_ns = t_ms * 1'000'000;
+    stage_.on_noise(n);
+  }
+  const BusStatistics& statistics() const { return statistics_; }
   Collector out;
 
  private:
+  FanOut fan_;
+  BusStatistics statistics_;
   BusDiagnostics stage_;
   std::vector<std::vector<uint8_t>> adus_{};
   uint64_t index_ = 0;
@@ -71,8 +101,8 @@ TEST(BusDiagnostics, ASlaveThatGoesSilentAndComesBackIsAnOutageWithBothTimes) {
   bus.frame(Role::request, "07 03 00 00 00 01", t);
   EXPECT_EQ(bus.frame(Role::response, "07 03 02 00 2A", t + 20) & finding_answers_again,
             finding_answers_again);
-  ASSERT_EQ(bus.stage().outages().size(), 1u);
-  const Outage& outage = bus.stage().outages()[0];
+  ASSERT_EQ(bus.statistics().outages().size(), 1u);
+  const Outage& outage = bus.statistics().outages()[0];
   EXPECT_EQ(outage.slave, 7);
   EXPECT_EQ(outage.first_request, 1u);
   EXPECT_EQ(outage.silent_from_ns, 4'000'000);  // the end of the first unanswered request
@@ -82,7 +112,33 @@ TEST(BusDiagnostics, ASlaveThatGoesSilentAndComesBackIsAnOutageWithBothTimes) {
   bus.timeout(7, 3, 9, t + 2000);
   bus.timeout(7, 3, 10, t + 3000);
   EXPECT_EQ(bus.frame(Role::response, "07 03 02 00 2A", t + 3100) & finding_answers_again, 0u);
-  EXPECT_EQ(bus.stage().outage_count(), 1u);
+  EXPECT_EQ(bus.statistics().outage_count(), 1u);
+}
+
+// An outage is a device gone silent; one that answers in junk (another baud rate, a broken
+// driver) is there, and its problem is the junk, not silence.
+TEST(BusDiagnostics, AGarbledAnswerEndsASilenceAsAGoodOneDoes) {
+  for (const bool as_noise : {false, true}) {
+    History bus;
+    int64_t t = 0;
+    for (uint64_t i = 0; i < 3; ++i) {
+      bus.frame(Role::request, "07 03 00 00 00 01", t);
+      bus.timeout(7, 3, bus.out.records.back().index, t + 1004);
+      t += 1100;
+    }
+    bus.frame(Role::request, "07 03 00 00 00 01", t);
+    const uint64_t request = bus.out.records.back().index;
+    if (as_noise) {
+      bus.garbled_noise(7, request, t + 20);
+    } else {
+      bus.garbled_answer(7, request, t + 20);
+    }
+    ASSERT_EQ(bus.statistics().outages().size(), 1u) << as_noise;
+    EXPECT_EQ(bus.statistics().outages()[0].back_ns, (t + 20) * 1'000'000) << as_noise;
+    // Silent again later: a second outage, counted from its own first time-out.
+    for (uint64_t i = 0; i < 3; ++i) bus.timeout(7, 3, request + 1 + i, t + 2000 + 1000 * i);
+    EXPECT_EQ(bus.statistics().outage_count(), 2u) << as_noise;
+  }
 }
 
 TEST(BusDiagnostics, TheFifthSameExceptionInARowIsAStorm) {

@@ -609,6 +609,25 @@ TEST(Cli, TheDemoCaptureNamesItsTwoFaultyDrivesFirst) {
   EXPECT_THAT(problems[1], ::testing::StartsWith("  error   Slave 4 answers in junk every time"));
 }
 
+// The demo's drive 2 goes silent three times; drive 4 answers in junk, which is speaking, so
+// none of its dropped requests runs into a silence. The list shows what -Y keeps, as every
+// other list of the statistics does.
+TEST(Cli, OnlyASlaveThatWentSilentIsListedAsStoppedAndTheFilterPicksFromTheList) {
+  const std::string demo = std::string("-r ") + MODTAP_SAMPLES + "/six-drives-two-faults.pcap";
+  const auto silences = [](const Outcome& r) {
+    std::vector<std::string> listed;
+    for (const auto& line : r.lines)
+      if (line.find(" silent from ") != std::string::npos) listed.push_back(line.substr(0, 11));
+    return listed;
+  };
+  const std::vector<std::string> drive_2(3, "  slave 2  ");
+  EXPECT_EQ(silences(run(demo + " -T stats")), drive_2);
+  EXPECT_EQ(silences(run(demo + " -T stats -Y 'slave == 2'")), drive_2);
+  EXPECT_THAT(silences(run(demo + " -T stats -Y 'slave != 2'")), ::testing::IsEmpty());
+  const std::string json = stats_json(demo + " -Y 'slave != 2'", "modtap-demo-filtered.json");
+  EXPECT_NE(json.find("\"outage_count\":0,\"outages\":[]"), std::string::npos);
+}
+
 // A pcap of one byte a packet read at half its baud: the bytes come twice as fast as 9600
 // carries them. That is the problem, first and alone (an absent slave's waits until the
 // settings read the bus), in the statistics and in --stats; at the line's baud, the slave's.

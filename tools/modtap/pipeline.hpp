@@ -134,7 +134,6 @@ class Pipeline {
     if (limit_) return *limit_;
     return *diagnostics_;
   }
-  const BusDiagnostics& diagnostics() const { return *diagnostics_; }
   // -c N: stop after N frames and noise records; `on_reached` stops a live run.
   void limit_records(uint64_t max_records, std::function<void()> on_reached = {});
   bool limit_reached() const { return limit_ && limit_->reached(); }

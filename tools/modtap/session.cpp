@@ -29,11 +29,10 @@ void summarise(const RunOptions& o, output::Output& out, const Pipeline& pipelin
   if (!statistics) return;
   const auto base = o.register_base;
   const auto problems = pipeline.problems();
-  if (o.output == OutputKind::stats)
-    output::print_statistics(out, *statistics, pipeline.diagnostics(), problems, base);
+  if (o.output == OutputKind::stats) output::print_statistics(out, *statistics, problems, base);
   if (!o.stats_file.empty()) {
     fmt::memory_buffer json;
-    output::append_statistics_json(json, *statistics, pipeline.diagnostics(), problems, complete);
+    output::append_statistics_json(json, *statistics, problems, complete);
     write_whole(o.stats_file, json);
   }
   if (!o.report_file.empty()) {
@@ -42,7 +41,7 @@ void summarise(const RunOptions& o, output::Output& out, const Pipeline& pipelin
                                     ? fmt::format("{}", fmt::join(o.interfaces, " "))
                                 : o.read_file == "-" ? "standard input"
                                                      : o.read_file;
-    output::append_report(html, *statistics, pipeline.diagnostics(), *pipeline.timeline(), problems,
+    output::append_report(html, *statistics, *pipeline.timeline(), problems,
                           pipeline.cited_records()->lines(),
                           {capture, MODTAP_VERSION, complete, base, pipeline.unseen_follow()});
     write_whole(o.report_file, html);
