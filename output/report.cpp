@@ -242,8 +242,7 @@ void append_findings(fmt::memory_buffer& out, const BusStatistics& s) {
     out.append(std::string_view("<td class=\"text\">"));
     append_html(out, info.title);
     out.append(std::string_view("</td><td class=\"text\">"));
-    for (size_t i = 0; i < std::min<uint64_t>(f.count, FindingCount::kept); ++i)
-      fmt::format_to(put, "#{} ", f.first[i]);
+    for (uint64_t index : f.first_records()) fmt::format_to(put, "#{} ", index);
     out.append(std::string_view("</td></tr>\n"));
   }
   out.append(std::string_view("</table>\n"));

@@ -103,8 +103,7 @@ void print_findings(Output& out, const BusStatistics& s) {
     if (!any) out.print("\nfindings                 count  first records\n");
     any = true;
     out.print("  {:<21}  {:5} ", finding_registry()[slot].name, f.count);
-    for (size_t i = 0; i < std::min<uint64_t>(f.count, FindingCount::kept); ++i)
-      out.print(" #{}", f.first[i]);
+    for (uint64_t index : f.first_records()) out.print(" #{}", index);
     out.print("\n");
   }
 }
@@ -293,8 +292,9 @@ void append_diagnostics(fmt::memory_buffer& out, const BusStatistics& s) {
     const FindingInfo& info = finding_registry()[slot];
     fmt::format_to(put, "{}\"{}\":{{\"count\":{},\"severity\":\"{}\",\"first\":[", first ? "" : ",",
                    info.name, f.count, to_string(info.severity));
-    for (size_t i = 0; i < std::min<uint64_t>(f.count, FindingCount::kept); ++i)
-      fmt::format_to(put, "{}{}", i ? "," : "", f.first[i]);
+    const char* separator = "";
+    for (uint64_t index : f.first_records())
+      fmt::format_to(put, "{}{}", std::exchange(separator, ","), index);
     fmt::format_to(put, "]}}");
     first = false;
   }

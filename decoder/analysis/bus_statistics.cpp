@@ -38,9 +38,7 @@ void BusStatistics::see_time(int64_t start_ns, int64_t end_ns) {
 }
 
 void BusStatistics::count_finding(size_t slot, uint64_t index) {
-  FindingCount& finding = findings[slot];
-  if (finding.count < FindingCount::kept) finding.first[finding.count] = index;
-  ++finding.count;
+  findings[slot].add(index);
 }
 
 void BusStatistics::on_frame(const Frame& frame) {

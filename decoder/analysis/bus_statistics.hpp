@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -86,11 +87,22 @@ struct RegisterKey {
   auto operator<=>(const RegisterKey&) const = default;
 };
 
-// A finding's count and the indexes of the first records that show it.
+// A finding's count and the indexes of the first records that show it, each once: a frame may
+// show a model's finding for several of its registers, and counts for each.
 struct FindingCount {
   static constexpr size_t kept = 5;
   uint64_t count = 0;
-  std::array<uint64_t, kept> first{};
+
+  void add(uint64_t index) {
+    ++count;
+    if (records_ < kept && (records_ == 0 || first_[records_ - 1] != index))
+      first_[records_++] = index;
+  }
+  std::span<const uint64_t> first_records() const { return {first_.data(), records_}; }
+
+ private:
+  std::array<uint64_t, kept> first_{};
+  size_t records_ = 0;
 };
 
 class BusStatistics final : public RecordSink {

@@ -441,6 +441,23 @@ TEST(Cli, AsciiIsSevenDataBitsUnlessTold) {
               ::testing::Contains(::testing::HasSubstr("19200 8E1")));
 }
 
+// One write of two values past their range is two out-of-range findings in one record: the
+// count says two, the first records name the record once.
+TEST(Cli, AFindingsFirstRecordsNameEachRecordOnce) {
+  const std::string capture =
+      raw_capture("modtap-two-out-of-range.bin",
+                  {{0x03, 0x10, 0x00, 0x0B, 0x00, 0x02, 0x04, 0x9C, 0x40, 0x9C, 0x40},
+                   {0x03, 0x10, 0x00, 0x0B, 0x00, 0x02}});
+  const Outcome r = run("-r " + capture + " --model 3=gd20 -T stats");
+  ASSERT_EQ(r.status, 0);
+  EXPECT_THAT(r.lines, ::testing::Contains(::testing::MatchesRegex(" *out-of-range +2 +#1")))
+      << ::testing::PrintToString(r.lines);
+  const std::string json = stats_json("-r " + capture + " --model 3=gd20", "modtap-two.json");
+  EXPECT_NE(json.find("\"out-of-range\":{\"count\":2,\"severity\":\"warning\",\"first\":[1]}"),
+            std::string::npos)
+      << json;
+}
+
 // A status register's meaning beside its number; -t ad, the date and time its name promises.
 TEST(Cli, CsvGivesAnEnumerationsTextAndTheDateWithTad) {
   const std::string drives = std::string("-r ") + MODTAP_SAMPLES +
