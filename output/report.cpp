@@ -380,34 +380,57 @@ void append_latency_chart(fmt::memory_buffer& out, uint8_t address, const Histog
   plot.finish();
 }
 
-// A histogram per slave; on a bus of many slaves, those with the slowest answers (p99).
+// A histogram per slave; on a bus of many slaves, those with the slowest answers (p99). The
+// caption counts the answers the clock timed against all the slave gave in time.
 void append_latency(fmt::memory_buffer& out, const BusStatistics& s) {
   constexpr size_t charted = 32;
-  std::vector<std::pair<uint8_t, const Histogram*>> slaves;
+  std::vector<std::pair<uint8_t, const SlaveStatistics*>> slaves;
   for (const auto& [address, slave] : s.addresses())
-    if (slave->good && slave->latency_ns.count()) slaves.emplace_back(address, &slave->latency_ns);
+    if (slave->good && slave->latency_ns.count()) slaves.emplace_back(address, slave.get());
   if (slaves.empty()) return;
   const size_t all = slaves.size();
   if (all > charted) {
     std::stable_sort(slaves.begin(), slaves.end(), [](const auto& a, const auto& b) {
-      return a.second->percentile(99) > b.second->percentile(99);
+      return a.second->latency_ns.percentile(99) > b.second->latency_ns.percentile(99);
     });
     slaves.resize(charted);
     std::sort(slaves.begin(), slaves.end());
   }
   out.append(std::string_view("<h2>Response latency</h2>\n"));
+  auto put = fmt::appender(out);
   if (all > charted)
-    fmt::format_to(fmt::appender(out),
+    fmt::format_to(put,
                    "<p class=\"meta\">The {} of {} slaves with the slowest answers (p99).</p>\n",
                    charted, all);
+  if (std::any_of(slaves.begin(), slaves.end(), [](const auto& slave) {
+        return slave.second->latency_ns.count() < slave.second->counts.answered_in_time();
+      }))
+    out.append(std::string_view(
+        "<p class=\"meta\">Only the answers the clock timed: on a clock per read, an answer "
+        "read together with its request has no time of its own.</p>\n"));
   out.append(std::string_view("<div class=\"charts\">\n"));
-  for (const auto& [address, h] : slaves) {
-    fmt::format_to(fmt::appender(out),
-                   "<figure><figcaption>slave {}: {} responses, p50 {} ms, p99 {} ms, max {} "
-                   "ms</figcaption>\n",
-                   address, h->count(), milliseconds(h->percentile(50)),
-                   milliseconds(h->percentile(99)), milliseconds(h->max()));
-    append_latency_chart(out, address, *h);
+  for (const auto& [address, slave] : slaves) {
+    const Histogram& h = slave->latency_ns;
+    const uint64_t answers = slave->counts.answered_in_time();
+    const auto stat = [&](std::string_view name, std::string shown, double scale) {
+      stat_element(out, "span", {}, fmt::format("slaves.{}.latency_us.{}", address, name), shown,
+                   scale);
+    };
+    fmt::format_to(put, "<figure><figcaption>slave {}: ", address);
+    stat("count", fmt::format("{}", h.count()), 1);
+    if (h.count() < answers) {
+      fmt::format_to(put, " of {} answers timed", answers);
+    } else {
+      out.append(std::string_view(h.count() == 1 ? " answer" : " answers"));
+    }
+    out.append(std::string_view(", p50 "));
+    stat("p50", milliseconds(h.percentile(50)), 1000);
+    out.append(std::string_view(" ms, p99 "));
+    stat("p99", milliseconds(h.percentile(99)), 1000);
+    out.append(std::string_view(" ms, max "));
+    stat("max", milliseconds(h.max()), 1000);
+    out.append(std::string_view(" ms</figcaption>\n"));
+    append_latency_chart(out, address, h);
     out.append(std::string_view("</figure>\n"));
   }
   out.append(std::string_view("</div>\n"));

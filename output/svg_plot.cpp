@@ -20,6 +20,15 @@ std::vector<double> round_ticks(double low, double high, int about) {
   return ticks;
 }
 
+std::string plain_number(double value) {
+  for (int decimals = 0; decimals < 6; ++decimals) {
+    const double scale = std::pow(10.0, decimals);
+    if (std::abs(std::round(value * scale) - value * scale) < 1e-6 * scale)
+      return fmt::format("{:.{}f}", value == 0 ? 0.0 : value, decimals);  // no "-0"
+  }
+  return fmt::format("{:.6f}", value);
+}
+
 std::vector<double> log_ticks(double low, double high) {
   std::vector<double> ticks;
   // Over more than three powers of ten, 2 and 5 would crowd the labels.
@@ -55,6 +64,9 @@ void append_html(fmt::memory_buffer& out, std::string_view text) {
 
 SvgPlot::SvgPlot(fmt::memory_buffer& out, PlotFrame frame, std::string_view title)
     : out_(out), frame_(std::move(frame)) {
+  size_t widest = 0;
+  for (double y : frame_.y_ticks) widest = std::max(widest, frame_.y_tick_text(y).size());
+  left_ = std::max(least_left, y_label_space + 6 + static_cast<double>(widest) * char_width);
   fmt::format_to(fmt::appender(out_),
                  "<svg class=\"chart\" viewBox=\"0 0 {0} {1}\" width=\"{0}\" height=\"{1}\" "
                  "role=\"img\"><title>",
@@ -68,7 +80,7 @@ double SvgPlot::to_x(double x) const {
   const auto position = [&](double v) { return frame_.x_log ? std::log10(v) : v; };
   const double from = position(frame_.x_min), to = position(frame_.x_max);
   const double share = to > from ? (position(x) - from) / (to - from) : 0.5;
-  return left + std::clamp(share, 0.0, 1.0) * (frame_.width - left - right);
+  return left_ + std::clamp(share, 0.0, 1.0) * (frame_.width - left_ - right);
 }
 
 double SvgPlot::to_y(double y) const {
@@ -77,9 +89,14 @@ double SvgPlot::to_y(double y) const {
   return top + (1 - std::clamp(share, 0.0, 1.0)) * (frame_.height - top - bottom);
 }
 
+double SvgPlot::fit_centred(double x, std::string_view text) const {
+  const double half = static_cast<double>(text.size()) * char_width / 2;
+  return std::clamp(x, half, std::max(half, frame_.width - half));
+}
+
 void SvgPlot::axes() {
   auto put = fmt::appender(out_);
-  const double x0 = left, x1 = frame_.width - right, y0 = frame_.height - bottom, y1 = top;
+  const double x0 = left_, x1 = frame_.width - right, y0 = frame_.height - bottom, y1 = top;
   for (double y : frame_.y_ticks) {
     fmt::format_to(put,
                    "<line class=\"grid\" x1=\"{:.1f}\" x2=\"{:.1f}\" y1=\"{:.1f}\" y2=\"{:.1f}\"/>",
@@ -93,9 +110,10 @@ void SvgPlot::axes() {
     fmt::format_to(put,
                    "<line class=\"axis\" x1=\"{:.1f}\" x2=\"{:.1f}\" y1=\"{:.1f}\" y2=\"{:.1f}\"/>",
                    to_x(x), to_x(x), y0, y0 + 4);
+    const std::string text = frame_.x_tick_text(x);
     fmt::format_to(put, "<text class=\"tick\" x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">",
-                   to_x(x), y0 + 16);
-    append_html(out_, frame_.x_tick_text(x));
+                   fit_centred(to_x(x), text), y0 + 16);
+    append_html(out_, text);
     out_.append(std::string_view("</text>"));
   }
   fmt::format_to(
@@ -153,8 +171,8 @@ void SvgPlot::marker(double x, std::string_view label) {
   fmt::format_to(
       fmt::appender(out_),
       "<line class=\"marker\" x1=\"{0:.1f}\" x2=\"{0:.1f}\" y1=\"{1:.1f}\" y2=\"{2:.1f}\"/>"
-      "<text class=\"tick\" x=\"{0:.1f}\" y=\"{3:.1f}\" text-anchor=\"middle\">",
-      to_x(x), frame_.height - bottom, top + 10, top + 6);
+      "<text class=\"tick\" x=\"{4:.1f}\" y=\"{3:.1f}\" text-anchor=\"middle\">",
+      to_x(x), frame_.height - bottom, top + 10, top + 6, fit_centred(to_x(x), label));
   append_html(out_, label);
   out_.append(std::string_view("</text>\n"));
 }

@@ -20,6 +20,10 @@ std::vector<double> round_ticks(double low, double high, int about = 5);
 // the powers of ten over a range of more than a thousand.
 std::vector<double> log_ticks(double low, double high);
 
+// A tick's number as a person writes it: no exponent, and no more decimals than it has
+// (1500000, 0.25, 49.5).
+std::string plain_number(double value);
+
 struct PlotFrame {
   double width = 880, height = 220;
   double x_min = 0, x_max = 1;
@@ -27,8 +31,8 @@ struct PlotFrame {
   bool x_log = false;
   std::vector<double> x_ticks, y_ticks;
   std::string x_label, y_label;
-  std::function<std::string(double)> x_tick_text = [](double x) { return fmt::format("{:g}", x); };
-  std::function<std::string(double)> y_tick_text = [](double y) { return fmt::format("{:g}", y); };
+  std::function<std::string(double)> x_tick_text = plain_number;
+  std::function<std::string(double)> y_tick_text = plain_number;
 };
 
 // One chart: the constructor opens the <svg> and draws the axes, finish() closes it.
@@ -47,13 +51,21 @@ class SvgPlot {
   void finish();
 
  private:
-  static constexpr double left = 64, right = 16, top = 12, bottom = 40;
+  // The widest a character of the ticks' font (11 px) draws: DejaVu Sans's digits are 0.64 em.
+  static constexpr double char_width = 7.2;
+  static constexpr double right = 16, top = 12, bottom = 40;
+  static constexpr double y_label_space = 24;  // the rotated y label, left of the tick labels
+  // Charts whose tick labels are short all start their plot here, so stacked ones line up.
+  static constexpr double least_left = 64;
+  // A tick's text centred at x, moved in as far as it must to stay inside the chart.
+  double fit_centred(double x, std::string_view text) const;
   double to_x(double x) const;
   double to_y(double y) const;
   void axes();
 
   fmt::memory_buffer& out_;
   PlotFrame frame_;
+  double left_;  // room for the y axis's label and its widest tick label
 };
 
 // Text for HTML: & < > " escaped.
