@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <ctime>
+#include <functional>
+#include <map>
 #include <optional>
 #include <set>
 
@@ -21,6 +23,7 @@ constexpr std::string_view style = R"(
 body { font: 14px/1.4 "DejaVu Sans", Arial, sans-serif; color: #1d2733; margin: 0; background: #f4f6f8; }
 main { max-width: 960px; margin: 0 auto; padding: 16px 24px 48px; background: #fff; }
 h1 { font-size: 22px; margin: 8px 0 2px; } h2 { font-size: 17px; margin: 28px 0 8px; border-bottom: 1px solid #d5dbe1; }
+h3 { font-size: 15px; margin: 16px 0 4px; } summary { cursor: pointer; color: #5a6673; margin: 6px 0; }
 .meta { color: #5a6673; margin: 0 0 12px; }
 .broken { background: #fdecea; border: 1px solid #d64541; padding: 8px 12px; }
 .cards { display: grid; grid-template-columns: repeat(4, 1fr); gap: 8px; }
@@ -210,24 +213,10 @@ void append_problems(fmt::memory_buffer& out, const BusStatistics& s,
   }
 }
 
-// The findings, errors first: what to look at, and in which records.
-void append_findings(fmt::memory_buffer& out, const BusStatistics& s) {
-  std::vector<size_t> slots;
-  for (size_t slot = 0; slot < s.findings.size(); ++slot)
-    if (s.findings[slot].count) slots.push_back(slot);
-  out.append(std::string_view("<h2>What to look at</h2>\n"));
-  if (slots.empty()) {
-    out.append(
-        std::string_view("<p>No findings: every frame is as the standard and the models "
-                         "say it should be.</p>\n"));
-    return;
-  }
+// Findings as rows: severity, name, count, meaning, the first records that show them.
+void append_finding_table(fmt::memory_buffer& out, const BusStatistics& s,
+                          std::span<const size_t> slots) {
   const auto registry = finding_registry();
-  std::stable_sort(slots.begin(), slots.end(), [&](size_t a, size_t b) {
-    if (registry[a].severity != registry[b].severity)
-      return registry[a].severity > registry[b].severity;
-    return s.findings[a].count > s.findings[b].count;
-  });
   out.append(std::string_view(
       "<table><tr><th class=\"text\">severity</th><th class=\"text\">finding</th><th>count</th>"
       "<th class=\"text\">what it means</th><th class=\"text\">first records</th></tr>\n"));
@@ -246,6 +235,44 @@ void append_findings(fmt::memory_buffer& out, const BusStatistics& s) {
     out.append(std::string_view("</td></tr>\n"));
   }
   out.append(std::string_view("</table>\n"));
+}
+
+// The findings, errors first: what to look at, and in which records.
+void append_findings(fmt::memory_buffer& out, const BusStatistics& s) {
+  std::vector<size_t> slots;
+  for (size_t slot = 0; slot < s.findings.size(); ++slot)
+    if (s.findings[slot].count) slots.push_back(slot);
+  out.append(std::string_view("<h2>What to look at</h2>\n"));
+  if (slots.empty()) {
+    out.append(
+        std::string_view("<p>No findings: every frame is as the standard and the models "
+                         "say it should be.</p>\n"));
+    return;
+  }
+  const auto registry = finding_registry();
+  std::stable_sort(slots.begin(), slots.end(), [&](size_t a, size_t b) {
+    if (registry[a].severity != registry[b].severity)
+      return registry[a].severity > registry[b].severity;
+    return s.findings[a].count > s.findings[b].count;
+  });
+  // Errors and warnings in view; the notes (poll jitter, broadcasts, exceptions a model
+  // explains) folded under a line that names them.
+  const auto notes = std::find_if(slots.begin(), slots.end(), [&](size_t slot) {
+    return registry[slot].severity == Severity::note;
+  });
+  if (notes != slots.begin()) append_finding_table(out, s, {slots.begin(), notes});
+  if (notes == slots.end()) return;
+  out.append(std::string_view("<details><summary>"));
+  const char* separator = "";
+  uint64_t noted = 0;
+  for (auto it = notes; it != slots.end(); ++it) noted += s.findings[*it].count;
+  fmt::format_to(fmt::appender(out), "{}: ", counted(noted, "note", "notes"));
+  for (auto it = notes; it != slots.end(); ++it)
+    fmt::format_to(fmt::appender(out), "{}{} {}", std::exchange(separator, ", "),
+                   registry[*it].name, s.findings[*it].count);
+  out.append(std::string_view("</summary>\n"));
+  append_finding_table(out, s, {notes, slots.end()});
+  out.append(std::string_view("</details>\n"));
 }
 
 std::string exceptions_text(const SlaveStatistics& slave) {
@@ -549,29 +576,43 @@ void append_timeline(fmt::memory_buffer& out, const BusTimeline& timeline, const
       "class=\"noise\"></span>noise records</p>\n"));
 }
 
-void append_outages(fmt::memory_buffer& out, const BusStatistics& s) {
-  if (s.outage_count() == 0) return;
+void append_outage_table(fmt::memory_buffer& out, const BusStatistics& s,
+                         std::span<const Outage> outages) {
   auto put = fmt::appender(out);
-  fmt::format_to(put,
-                 "<h2>Slaves that stopped answering</h2>\n<p><span "
-                 "data-stat=\"outage_count\">{}</span> {} a slave left {} or more requests in "
-                 "a row unanswered.</p>\n<table><tr><th>slave</th><th class=\"text\">silent "
-                 "from</th><th>first unanswered record</th><th>time-outs</th><th "
-                 "class=\"text\">back at</th></tr>\n",
-                 s.outage_count(), s.outage_count() == 1 ? "time" : "times", silent_after_timeouts);
-  for (const Outage& outage : s.outages()) {
+  out.append(std::string_view(
+      "<table><tr><th>slave</th><th class=\"text\">silent from</th><th>first unanswered "
+      "record</th><th>time-outs</th><th class=\"text\">back at</th></tr>\n"));
+  for (const Outage& outage : outages) {
     fmt::format_to(put,
                    "<tr><td>{}</td><td class=\"text\">{}</td><td>#{}</td><td>{}</td><td "
-                   "class=\"text\">",
+                   "class=\"text\">{}</td></tr>\n",
                    outage.slave, moment_text(s, outage.silent_from_ns), outage.first_request,
-                   outage.timeouts);
-    if (outage.back_ns) {
-      fmt::format_to(put, "{}</td></tr>\n", moment_text(s, *outage.back_ns));
-    } else {
-      out.append(std::string_view("not by the end</td></tr>\n"));
-    }
+                   outage.timeouts,
+                   outage.back_ns ? moment_text(s, *outage.back_ns) : "not by the end");
   }
   out.append(std::string_view("</table>\n"));
+}
+
+// The silences in the order they began: the first few in view, the rest folded.
+void append_outages(fmt::memory_buffer& out, const BusStatistics& s) {
+  constexpr size_t in_view = 10;
+  if (s.outage_count() == 0) return;
+  fmt::format_to(fmt::appender(out),
+                 "<h2>Slaves that stopped answering</h2>\n<p><span "
+                 "data-stat=\"outage_count\">{}</span> {} a slave left {} or more requests in "
+                 "a row unanswered.</p>\n",
+                 s.outage_count(), s.outage_count() == 1 ? "time" : "times", silent_after_timeouts);
+  const std::span<const Outage> outages = s.outages();
+  append_outage_table(out, s, outages.first(std::min(in_view, outages.size())));
+  if (outages.size() > in_view) {
+    fmt::format_to(fmt::appender(out), "<details><summary>{} more</summary>\n",
+                   outages.size() - in_view);
+    append_outage_table(out, s, outages.subspan(in_view));
+    out.append(std::string_view("</details>\n"));
+  }
+  if (s.outage_count() > outages.size())
+    fmt::format_to(fmt::appender(out), "<p class=\"meta\">The first {} are listed.</p>\n",
+                   outages.size());
 }
 
 // The states a register took over time, as one band coloured by the state last read in each
@@ -687,31 +728,92 @@ void append_followed(fmt::memory_buffer& out, const BusTimeline& timeline, const
   }
 }
 
-// The named registers' last values: the drives' state as the master last saw it.
+// A register's value as the page shows it: its last, or one end of its range in its unit.
+std::string register_text(const LastValue& last, const RegisterKey& key,
+                          std::optional<double> instead = std::nullopt) {
+  RegisterValue reg = last.as_register(key.table, key.address);
+  if (instead) {
+    reg.value = *instead;
+    reg.text = {};
+  }
+  fmt::memory_buffer text;
+  append_value_text(text, reg);
+  return fmt::to_string(text);
+}
+
+void append_text_cell(fmt::memory_buffer& out, std::string_view text) {
+  out.append(std::string_view("<td class=\"text\">"));
+  append_html(out, text);
+  out.append(std::string_view("</td>"));
+}
+
+// One slave's named registers: those whose value moved, each with its range and how often it
+// changed; then, folded, those that held one value throughout (a drive's parameters, read
+// again and again, would otherwise fill the page).
+void append_slave_registers(fmt::memory_buffer& out, uint8_t slave,
+                            std::span<const std::pair<const RegisterKey*, const LastValue*>> regs,
+                            RegisterBase base) {
+  auto put = fmt::appender(out);
+  const auto moved = [](const auto& reg) { return reg.second->changes > 0; };
+  const auto held =
+      static_cast<size_t>(std::count_if(regs.begin(), regs.end(), std::not_fn(moved)));
+  fmt::format_to(put, "<h3>Slave {}</h3>\n", slave);
+  if (held < regs.size()) {
+    out.append(std::string_view(
+        "<table><tr><th>address</th><th class=\"text\">register</th><th class=\"text\">last "
+        "value</th><th class=\"text\">lowest</th><th class=\"text\">highest</th><th>changes</th>"
+        "<th>reads</th></tr>\n"));
+    for (const auto& [key, last] : regs) {
+      if (!last->changes) continue;
+      fmt::format_to(put, "<tr><td>{}</td>", RegisterNumber{key->table, key->address, base});
+      append_text_cell(out, last->name);
+      append_text_cell(out, register_text(*last, *key));
+      const bool ranged = last->text.empty() && last->lowest <= last->highest;
+      append_text_cell(out, ranged ? register_text(*last, *key, last->lowest) : "");
+      append_text_cell(out, ranged ? register_text(*last, *key, last->highest) : "");
+      fmt::format_to(put, "<td>{}</td><td>{}</td></tr>\n", last->changes, last->reads);
+    }
+    out.append(std::string_view("</table>\n"));
+  }
+  if (held == 0) return;
+  // Open when there is little else to see of this slave.
+  fmt::format_to(put, "<details{}><summary>{} that did not change</summary>\n",
+                 held == regs.size() && held <= 12 ? " open" : "",
+                 counted(held, "register", "registers"));
+  out.append(std::string_view(
+      "<table><tr><th>address</th><th class=\"text\">register</th><th class=\"text\">value</th>"
+      "<th>reads</th></tr>\n"));
+  for (const auto& [key, last] : regs) {
+    if (last->changes) continue;
+    fmt::format_to(put, "<tr><td>{}</td>", RegisterNumber{key->table, key->address, base});
+    append_text_cell(out, last->name);
+    append_text_cell(out, register_text(*last, *key));
+    fmt::format_to(put, "<td>{}</td></tr>\n", last->reads);
+  }
+  out.append(std::string_view("</table>\n</details>\n"));
+}
+
+// The named registers' values, slave by slave: the drives' state as the master last saw it,
+// and what moved while it watched.
 void append_registers(fmt::memory_buffer& out, const BusStatistics& s, RegisterBase base) {
-  constexpr size_t shown = 200;
+  constexpr size_t shown = 400;
+  std::map<uint8_t, std::vector<std::pair<const RegisterKey*, const LastValue*>>> by_slave;
   size_t named = 0;
-  fmt::memory_buffer value;
   for (const auto& [key, last] : s.registers) {
     if (last.name.empty()) continue;
-    if (named++ == shown) break;
-    if (named == 1)
-      out.append(
-          std::string_view("<h2>Last values</h2>\n<table><tr><th>slave</th><th>address</th><th "
-                           "class=\"text\">register</th><th class=\"text\">value</th></tr>\n"));
-    fmt::format_to(fmt::appender(out), "<tr><td>{}</td><td>{}</td><td class=\"text\">", key.slave,
-                   RegisterNumber{key.table, key.address, base});
-    append_html(out, last.name);
-    out.append(std::string_view("</td><td class=\"text\">"));
-    value.clear();
-    append_value_text(value, last.as_register(key.table, key.address));
-    append_html(out, std::string_view(value.data(), value.size()));
-    out.append(std::string_view("</td></tr>\n"));
+    if (named++ < shown) by_slave[key.slave].emplace_back(&key, &last);
   }
   if (named == 0) return;
-  out.append(std::string_view("</table>\n"));
+  out.append(std::string_view(
+      "<h2>Register values</h2>\n<p class=\"meta\">As the bus last carried them: first those "
+      "that changed while modtap listened, with the range of their values; then those that did "
+      "not change.</p>\n"));
+  for (const auto& [slave, regs] : by_slave) append_slave_registers(out, slave, regs, base);
   if (named > shown)
-    out.append(std::string_view("<p class=\"meta\">More in the statistics file (--stats).</p>\n"));
+    fmt::format_to(fmt::appender(out),
+                   "<p class=\"meta\">The first {} of {} named registers; every one is in the "
+                   "statistics file (--stats).</p>\n",
+                   shown, named);
 }
 
 // The lines of the records the problems cite, as `modtap -r` prints them, each a link target.

@@ -319,6 +319,16 @@ void append_registers(fmt::memory_buffer& out, const BusStatistics& s) {
     fmt::format_to(put, "{}{{\"slave\":{},\"table\":\"{}\",\"t_ns\":{},", first ? "" : ",",
                    key.slave, to_string(key.table), last.t_ns);
     append_register_keys(out, last.as_register(key.table, key.address));
+    fmt::format_to(put, ",\"reads\":{},\"changes\":{}", last.reads, last.changes);
+    for (const auto& [name, bound] :
+         {std::pair{"lowest", last.lowest}, {"highest", last.highest}}) {
+      fmt::format_to(put, ",\"{}\":", name);
+      if (last.lowest <= last.highest) {
+        append_number(out, bound, last.decimals);
+      } else {
+        out.append(std::string_view("null"));
+      }
+    }
     out.push_back('}');
     first = false;
   }

@@ -105,6 +105,11 @@ void BusStatistics::keep_values(const Frame& frame) {
 }
 
 void LastValue::keep(const RegisterValue& reg, int64_t when) {
+  changes += reads++ && reg.raw != raw;
+  if (std::isfinite(reg.value)) {
+    lowest = std::min(lowest, reg.value);
+    highest = std::max(highest, reg.value);
+  }
   name = reg.name;
   unit = reg.unit;
   text = reg.text;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -75,6 +76,11 @@ struct LastValue {
   int decimals = 0;
   uint32_t raw = 0;
   int64_t t_ns = 0;
+  // Over the capture: how often it was carried, how often its value differed from the one
+  // before, and the range of its finite values (a drive's parameter holds one; a measurement
+  // moves): lowest > highest where none was finite.
+  uint64_t reads = 0, changes = 0;
+  double lowest = INFINITY, highest = -INFINITY;
 
   void keep(const RegisterValue& reg, int64_t when);
   // As the register it was, its texts pointing here.
