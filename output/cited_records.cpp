@@ -10,14 +10,22 @@ CitedRecords::CitedRecords(ProblemEvidence& evidence, const std::vector<ChannelI
 
 template <typename Render>
 void CitedRecords::keep(std::optional<uint64_t> request, Render render) {
-  const auto index = evidence_.cited();
-  if (!index || lines_.size() >= max_kept) return;
+  if (const auto withdrawn = evidence_.withdrawn()) may_cite_.erase(*withdrawn);
+  const auto cited = evidence_.cited();
+  const auto index = cited ? cited : evidence_.may_cite();
+  if (!index || lines_.size() + may_cite_.size() >= max_kept) return;
   if (request && request_.index == *request && *request != 0 && !request_raw_.empty())
     text_.on_frame(request_);
   render();
   fmt::memory_buffer& line = text_out_.buffer();
-  lines_[*index].append(line.data(), line.size());
+  (cited ? lines_ : may_cite_)[*index].append(line.data(), line.size());
   line.clear();
+}
+
+std::map<uint64_t, std::string> CitedRecords::lines() const {
+  std::map<uint64_t, std::string> all = lines_;
+  all.insert(may_cite_.begin(), may_cite_.end());
+  return all;
 }
 
 // A copy that outlives the framer's buffer, without what points into other stages' storage.

@@ -34,7 +34,7 @@ class CitedRecords final : public RecordSink {
 
   // By the index a problem cites: the record's line, after its request's (a time-out's under
   // its request's index).
-  const std::map<uint64_t, std::string>& lines() const { return lines_; }
+  std::map<uint64_t, std::string> lines() const;
 
  private:
   template <typename Render>
@@ -46,6 +46,8 @@ class CitedRecords final : public RecordSink {
   Output text_out_;
   TextSink text_;
   std::map<uint64_t, std::string> lines_;
+  // The lines of time-outs that began a silence still open or counted (the evidence's may_cite).
+  std::map<uint64_t, std::string> may_cite_;
   Frame request_;  // the last request, its spans into the bytes below
   std::vector<uint8_t> request_raw_, request_adu_;
 };

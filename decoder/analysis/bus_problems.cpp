@@ -142,7 +142,7 @@ void ProblemEvidence::note(Events& events, int64_t t_ns, uint64_t index) {
 }
 
 void ProblemEvidence::on_frame(const Frame& frame) {
-  cited_.reset();
+  forget_citations();
   after_request_ = false;
   bytes_ += frame.raw.size();
   if (frame.check_ok) good_frame_bytes_ += frame.raw.size();
@@ -271,9 +271,13 @@ void ProblemEvidence::on_damaged_answer(uint64_t index, int64_t t_ns, size_t siz
 
 // The slave spoke: a silence of a few time-outs in a row, seconds long, is over (a restart).
 void ProblemEvidence::heard(Slave& slave, int64_t t_ns) {
-  if (slave.silent_timeouts >= restart_timeouts && t_ns - slave.silent_since_ns >= restart_ns) {
+  if (slave.silent_timeouts == 0) return;
+  const bool restart =
+      slave.silent_timeouts >= restart_timeouts && t_ns - slave.silent_since_ns >= restart_ns;
+  if (!restart || !slave.silences.add(slave.silent_since_ns, slave.silent_since_request))
+    withdrawn_ = slave.silent_since_request;
+  if (restart) {
     const int64_t lasted = t_ns - slave.silent_since_ns;
-    slave.silences.add(slave.silent_since_ns, slave.silent_since_request);
     slave.silence_timeouts += slave.silent_timeouts;
     slave.shortest_silence_ns = std::min(slave.shortest_silence_ns, lasted);
     slave.longest_silence_ns = std::max(slave.longest_silence_ns, lasted);
@@ -282,7 +286,7 @@ void ProblemEvidence::heard(Slave& slave, int64_t t_ns) {
 }
 
 void ProblemEvidence::on_noise(const Noise& noise) {
-  cited_.reset();
+  forget_citations();
   bytes_ += noise.raw.size();
   if (noise.reason != NoiseReason::glitch)
     note_junk(noise.t_ns, noise.damaged_answer ? noise.request_slave : 0);
@@ -301,7 +305,7 @@ void ProblemEvidence::on_noise(const Noise& noise) {
 }
 
 void ProblemEvidence::on_timeout(const Timeout& timeout) {
-  cited_.reset();
+  forget_citations();
   after_request_ = false;
   awaited_ = nullptr;
   if (!timeout.timed_out() || timeout.slave == 0) return;
@@ -314,6 +318,7 @@ void ProblemEvidence::on_timeout(const Timeout& timeout) {
   if (slave.silent_timeouts++ == 0) {
     slave.silent_since_ns = timeout.t_ns - timeout.waited_ns;
     slave.silent_since_request = timeout.request;
+    may_cite_ = timeout.request;
   }
 }
 
@@ -519,6 +524,12 @@ class Diagnosis {
         "device restarting does; first at {}",
         who(address, s), s.silences.count, shortest_s, longest_s,
         moment_text(statistics_, *s.silences.first_ns));
+    // A silence the capture ended in is one more, whose length nobody knows.
+    if (s.silent_timeouts >= silent_after_timeouts) {
+      p.evidence.push_back({"silent_at_end", 1});
+      p.text += fmt::format("; silent again from {} to the end",
+                            moment_text(statistics_, s.silent_since_ns));
+    }
     return true;
   }
 

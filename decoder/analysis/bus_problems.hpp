@@ -166,13 +166,23 @@ class ProblemEvidence final : public RecordSink {
   // The record just given is one of the first of some trouble, which a problem may cite under
   // this index (a time-out's under its request's): a report keeps its line.
   std::optional<uint64_t> cited() const { return cited_; }
+  // The record just given is a time-out that may begin a silence a problem will cite (a
+  // restart's, or a stop): a report keeps its line until withdrawn() names the index, the
+  // slave heard again before its silence counted.
+  std::optional<uint64_t> may_cite() const { return may_cite_; }
+  std::optional<uint64_t> withdrawn() const { return withdrawn_; }
 
  private:
   void on_request(const Frame& frame);
   void on_answer(const Frame& frame, Slave& slave);
   void on_damaged_answer(uint64_t index, int64_t t_ns, size_t size, Slave& slave);
   void on_late_answer(const Frame& frame);
-  static void heard(Slave& slave, int64_t t_ns);
+  void heard(Slave& slave, int64_t t_ns);
+  void forget_citations() {
+    cited_.reset();
+    may_cite_.reset();
+    withdrawn_.reset();
+  }
   static constexpr uint64_t restart_timeouts = silent_after_timeouts;
   static constexpr int64_t restart_ns = 1'000'000'000;  // a restart takes seconds
   void note(Events& events, int64_t t_ns, uint64_t index);
@@ -200,7 +210,7 @@ class ProblemEvidence final : public RecordSink {
   Asked* awaited_ = nullptr;               // the request whose answer is awaited, if watched
   std::optional<uint8_t> awaited_slave_;
   bool after_request_ = false;  // the last record was a request: a glitch now is the slave's
-  std::optional<uint64_t> cited_;
+  std::optional<uint64_t> cited_, may_cite_, withdrawn_;
 };
 
 struct ProblemOptions {

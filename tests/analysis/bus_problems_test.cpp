@@ -27,6 +27,7 @@ constexpr int64_t master_timeout_ns = 200'000'000;
 struct Diagnosed {
   std::vector<Problem> problems;
   std::map<uint8_t, ExchangeCounts> counts;              // the statistics' of each slave
+  std::map<uint8_t, uint64_t> outages;                   // the statistics' silences of each
   std::set<std::pair<std::string, int>> kinds() const {  // (kind, slave or -1)
     std::set<std::pair<std::string, int>> out;
     for (const Problem& p : problems)
@@ -55,9 +56,10 @@ Diagnosed diagnose(const BusOptions& bus, Delivery delivery = Delivery::whole_fr
   for (const auto& c : busgen::deliver(capture, delivery, bus.seed))
     analyzer.push({0, c.t_ns, {capture.bytes.data() + c.offset, c.size}});
   analyzer.finish();
-  Diagnosed run{find_problems(statistics, evidence, {options.timeout_ns, told}), {}};
+  Diagnosed run{find_problems(statistics, evidence, {options.timeout_ns, told}), {}, {}};
   statistics.for_each_slave(
       [&](uint8_t address, const SlaveStatistics& slave) { run.counts[address] = slave.counts; });
+  for (const Outage& outage : statistics.outages()) ++run.outages[outage.slave];
   return run;
 }
 
@@ -255,6 +257,33 @@ TEST(BusProblems, TheProblemsCountTheTimeOutsTheStatisticsCount) {
     EXPECT_EQ(figure("intermittent-response", "requests"), counts.requests);
     EXPECT_EQ(counts.answered_in_time() + counts.timeouts, counts.requests);
   }
+}
+
+// One set of numbers: a restarting device's silences, and the one the capture may end in, are
+// the outages the statistics list for it; a device that answers in junk beside it has none.
+TEST(BusProblems, ARestartingDevicesSilencesAreItsOutages) {
+  uint64_t ended_silent = 0;
+  for (const Delivery delivery : {Delivery::per_byte, Delivery::bursts, Delivery::usb_packets})
+    for (int period_s = 11; period_s < 32; period_s += 2) {
+      const std::string period = std::to_string(period_s) + "s";
+      BusOptions bus = scan(30, "2:restarts=" + period);
+      busgen::add_slave_faults(bus, "4:half-baud");
+      const Diagnosed run = diagnose(bus, delivery);
+      uint64_t silences = 0;
+      for (const Problem& p : run.problems)
+        if (p.kind == ProblemKind::device_restarts && p.slave == 2)
+          for (const auto& [key, value] : p.evidence) {
+            if (key == "silences") silences += static_cast<uint64_t>(value);
+            if (key == "silent_at_end") {
+              silences += static_cast<uint64_t>(value);
+              ended_silent += static_cast<uint64_t>(value);
+            }
+          }
+      EXPECT_GE(silences, 2u) << period << describe(run);
+      EXPECT_EQ(run.outages.count(2) ? run.outages.at(2) : 0, silences) << period << describe(run);
+      EXPECT_EQ(run.outages.count(4), 0u) << period << describe(run);
+    }
+  EXPECT_GT(ended_silent, 0u);  // the capture ended in a silence in some of these
 }
 
 // A slave asked 200 times that answered once (a record read as its answer that was none, or
