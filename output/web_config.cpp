@@ -46,6 +46,15 @@ void read_tls(const std::string& path, const YamlNode& tls, WebConfig& config) {
     throw problem(path, tls.line(), "tls_server_config needs both cert_file and key_file");
 }
 
+// "$2b$" and the highest cost ("10"; two digits, as every bcrypt hash gives it) of the users'
+// hashes, then a salt and checksum of zero bits.
+std::string stand_in_hash(const std::map<std::string, std::string>& users) {
+  std::string cost = "04";
+  for (const auto& [name, hash] : users)
+    if (hash.size() > 6 && hash[6] == '$') cost = std::max(cost, hash.substr(4, 2));
+  return "$2b$" + cost + "$" + std::string(53, '.');
+}
+
 void read_users(const std::string& path, const YamlNode& users, WebConfig& config) {
   if (!users.is_map()) throw problem(path, users.line(), "basic_auth_users must be a map");
   for (const auto& [name, hash] : users.entries()) {
@@ -57,6 +66,7 @@ void read_users(const std::string& path, const YamlNode& users, WebConfig& confi
                                 name.text()));
     config.users[name.text()] = text;
   }
+  config.stand_in_hash = stand_in_hash(config.users);
 }
 
 }  // namespace

@@ -17,6 +17,10 @@ namespace modtap::output {
 struct WebConfig {
   std::string cert_pem, key_pem;             // both empty: plain HTTP
   std::map<std::string, std::string> users;  // name -> bcrypt hash; none: no authentication
+  // A bcrypt hash as costly as the users' costliest, that no password matches: a name no user
+  // has is checked against it, so the answer takes as long as for a user's wrong password and
+  // does not tell a stranger which names exist.
+  std::string stand_in_hash;
   bool tls() const { return !cert_pem.empty(); }
 };
 

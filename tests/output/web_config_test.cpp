@@ -1,5 +1,7 @@
 #include "output/web_config.hpp"
 
+#include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -51,6 +53,28 @@ TEST(WebConfig, ReadsTheToolkitsKeysWithFilesBesideIt) {
   EXPECT_EQ(config.key_pem, "KEY");
   ASSERT_EQ(config.users.size(), 1u);
   EXPECT_EQ(config.users.at("prometheus"), pw_hash);
+}
+
+// A name no user has is checked against a hash of the users' cost: the answer takes as long as
+// a known user's wrong password, so its speed tells a stranger nothing of which names exist.
+TEST(WebConfig, ANameNoUserHasCostsAsMuchAsAWrongPassword) {
+  const WebConfig config = read_web_config(
+      write("modtap-web-users.yml", "basic_auth_users:\n  prometheus: '" + pw_hash + "'\n"));
+  EXPECT_EQ(config.stand_in_hash.substr(0, 7), "$2b$10$");
+  const auto fastest_check = [](const std::string& hash) {
+    auto fastest = std::chrono::steady_clock::duration::max();
+    for (int i = 0; i < 3; ++i) {
+      const auto start = std::chrono::steady_clock::now();
+      EXPECT_FALSE(password_matches("guess", hash));
+      fastest = std::min(fastest, std::chrono::steady_clock::now() - start);
+    }
+    return fastest;
+  };
+  const auto wrong_password = fastest_check(pw_hash),
+             no_such_user = fastest_check(config.stand_in_hash);
+  // The same order of time (a refused hash would answer in microseconds, a thousandth of it).
+  EXPECT_GT(no_such_user * 4, wrong_password);
+  EXPECT_GT(wrong_password * 4, no_such_user);
 }
 
 TEST(WebConfig, ProblemsNameTheFileAndLine) {
