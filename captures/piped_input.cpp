@@ -14,11 +14,11 @@ namespace modtap::captures {
 
 namespace {
 
-// The first bytes of the stream, as many as arrive before its end.
-std::vector<uint8_t> read_head(int fd, const std::string& name) {
+// The first bytes of the stream: `wanted` of them or as many as arrive before its end.
+std::vector<uint8_t> read_head(int fd, const std::string& name, size_t wanted) {
   std::vector<uint8_t> head(capture_head_size);
   size_t got = 0;
-  while (got < head.size()) {
+  while (got < wanted) {
     const ssize_t n = ::read(fd, head.data() + got, head.size() - got);
     if (n < 0 && errno == EINTR) continue;
     if (n < 0)
@@ -46,7 +46,10 @@ bool write_all(int fd, const uint8_t* data, size_t size) {
 class PipedSource final : public ChunkSource {
  public:
   PipedSource(int input, std::string name, const OpenOptions& options) : name_(std::move(name)) {
-    std::vector<uint8_t> head = read_head(input, name_);
+    // A format to find needs the head that tells it; a format given, only the first bytes,
+    // so a slow writer's first frames are not held back.
+    std::vector<uint8_t> head =
+        read_head(input, name_, options.format == Format::automatic ? capture_head_size : 1);
     if (head.empty()) throw CaptureError(fmt::format("{}: the input is empty", name_));
     const Format format =
         options.format == Format::automatic ? detect_format(head, name_) : options.format;

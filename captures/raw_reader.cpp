@@ -1,5 +1,7 @@
 #include "captures/raw_reader.hpp"
 
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstring>
 
@@ -17,15 +19,19 @@ RawReader::RawReader(const std::string& path)
   channels_.push_back({path, ChannelRole::bus});
 }
 
+// What is there, up to a block: a file gives a block at a time, a pipe (a FIFO, standard
+// input) the bytes written so far, as a port does, rather than waiting for a block to fill.
 bool RawReader::next(Chunk& chunk) {
-  const size_t n = std::fread(block_.data(), 1, block_.size(), file_.get());
-  if (n == 0) {
-    if (std::ferror(file_.get()))
-      throw CaptureError(fmt::format("{}: offset {}: read error", path_, offset_));
-    return false;
-  }
-  chunk = {0, 0, {block_.data(), n}};
-  offset_ += n;
+  ssize_t n = 0;
+  do {
+    n = ::read(fileno(file_.get()), block_.data(), block_.size());
+  } while (n < 0 && errno == EINTR);
+  if (n < 0)
+    throw CaptureError(
+        fmt::format("{}: offset {}: read error: {}", path_, offset_, std::strerror(errno)));
+  if (n == 0) return false;
+  chunk = {0, 0, {block_.data(), static_cast<size_t>(n)}};
+  offset_ += static_cast<uint64_t>(n);
   return true;
 }
 

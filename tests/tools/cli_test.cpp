@@ -1,6 +1,10 @@
 // The modtap program end to end: its JSON Lines on a real capture, and its errors.
+#include <fcntl.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <poll.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -1177,6 +1181,40 @@ TEST(Cli, ADiskThatFillsLeavesAPcapngThatReadsUpToItsLastCompleteBlock) {
     ASSERT_EQ(back.lines[i].find("\"check\":\"bad\""), std::string::npos) << back.lines[i];
     ASSERT_EQ(back.lines[i].find("noise"), std::string::npos) << back.lines[i];
   }
+}
+
+// A FIFO whose writer sends a few frames and waits: their lines come at once, as from a port,
+// not when 64 KiB have gathered or the writer closes.
+TEST(Cli, AFifoGivesItsFramesAsTheyComeNotWhenABlockFills) {
+  const auto fifo = (std::filesystem::temp_directory_path() / "modtap-slow.fifo").string();
+  std::filesystem::remove(fifo);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::string command =
+      std::string(MODTAP_BINARY) + " -r " + fifo + " --format raw --baud 9600 2>&1";
+  FILE* lines = popen(command.c_str(), "r");
+  ASSERT_NE(lines, nullptr);
+  const int writer = ::open(fifo.c_str(), O_WRONLY);  // once modtap opens its end
+  ASSERT_GE(writer, 0);
+  // Two exchanges: with no clock, the bytes after a frame tell where it ends, so the first
+  // shows while the second waits for what follows it.
+  std::vector<uint8_t> bytes;
+  for (int exchange = 0; exchange < 2; ++exchange)
+    bytes.insert(bytes.end(), {0x01, 0x03, 0x00, 0x00, 0x00, 0x01, 0x84, 0x0A, 0x01, 0x03, 0x02,
+                               0x00, 0x2A, 0x39, 0x9B});
+  ASSERT_EQ(::write(writer, bytes.data(), bytes.size()), static_cast<ssize_t>(bytes.size()));
+  std::string seen;
+  for (int waited = 0; waited < 100 && std::count(seen.begin(), seen.end(), '\n') < 2; ++waited) {
+    pollfd ready{fileno(lines), POLLIN, 0};
+    if (::poll(&ready, 1, 100) <= 0) continue;
+    char part[512];
+    const ssize_t n = ::read(fileno(lines), part, sizeof part);
+    if (n <= 0) break;
+    seen.append(part, static_cast<size_t>(n));
+  }
+  ::close(writer);
+  pclose(lines);
+  EXPECT_THAT(seen, ::testing::HasSubstr("req slave 1   Read Holding Registers"));
+  EXPECT_THAT(seen, ::testing::HasSubstr("values=[42]  crc ok  req #1"));
 }
 
 TEST(Cli, AClosedPipeEndsTheRunWithoutAMessageAndClosesItsFiles) {

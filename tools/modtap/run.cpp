@@ -179,6 +179,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
       if (source->clock() == ClockQuality::per_chunk) session.pipeline().on_read(chunk);
       if (session.keeps_raw()) session.keep_raw(chunk, bus.between_frames());
       bus.push(chunk);
+      if (piped) session.flush_output();
     }
   } catch (const captures::CaptureError& e) {
     broken = e;

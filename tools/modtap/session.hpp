@@ -51,6 +51,9 @@ class Session {
   output::PortHealth& port_health() { return port_health_; }
 
   // A read as it came, for --save-raw.
+  // What the records printed so far: a pipe's reader sees each read's lines before the next
+  // read waits for its writer.
+  void flush_output() { out_.flush(); }
   bool keeps_raw() const { return raw_ != nullptr; }
   void keep_raw(const Chunk& chunk, bool between_frames) { raw_->write(chunk, between_frames); }
   // Time passing on a quiet bus: MQTT's held values and summary.
