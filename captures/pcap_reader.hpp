@@ -23,7 +23,9 @@ class PcapReader final : public ChunkSource {
   explicit PcapReader(const std::string& path);
 
   bool next(Chunk& chunk) override;
-  ClockQuality clock() const override { return ClockQuality::per_chunk; }
+  // A time a packet, the packet holding several bytes; or, where the packets hold one byte each
+  // stamped apart (a sniffer that stamps every byte), a time a byte.
+  ClockQuality clock() const override { return clock_; }
   bool absolute_time() const override { return true; }
   const std::vector<ChannelInfo>& channels() const override { return channels_; }
   std::optional<uint64_t> file_position() const override { return offset_; }
@@ -36,6 +38,7 @@ class PcapReader final : public ChunkSource {
   // At least `n` bytes buffered from `at_`, reading more as needed; fewer only at the end.
   size_t fill(size_t n);
   uint32_t u32(size_t at) const;  // of the buffer, in the file's byte order
+  ClockQuality clock_of_first_packets() const;
   [[noreturn]] void fail(uint64_t offset, const std::string& what) const;
   [[noreturn]] void fail_in_record(const std::string& what) const;  // at the record being read
 
@@ -48,6 +51,7 @@ class PcapReader final : public ChunkSource {
   // Where the next record starts, counted rather than asked of the file: a pipe cannot say.
   uint64_t offset_ = file_header_size;
   uint64_t packets_ = 0;
+  ClockQuality clock_ = ClockQuality::per_chunk;
   std::vector<ChannelInfo> channels_;
 };
 

@@ -649,6 +649,31 @@ TEST(Cli, OnlyASlaveThatWentSilentIsListedAsStoppedAndTheFilterPicksFromTheList)
   EXPECT_NE(json.find("\"outage_count\":0,\"outages\":[]"), std::string::npos);
 }
 
+// A pcap of one byte a packet, each stamped as it ended, is a clock per byte, and says so; a
+// pcap of frames, or of bytes that share their reads' moments, a clock per packet.
+TEST(Cli, APcapOfOneByteAPacketIsAClockPerByte) {
+  using modtap::busgen::Delivery;
+  const auto clock_line = [](const std::string& capture) {
+    for (const auto& line : run("-r " + capture + " -T stats").lines)
+      if (line.rfind("capture ", 0) == 0) return line.substr(line.rfind(", ") + 2);
+    return std::string();
+  };
+  EXPECT_EQ(clock_line(faulty_bus("modtap-bytes.pcap", {}, Delivery::per_byte)), "clock per-byte");
+  EXPECT_EQ(clock_line(faulty_bus("modtap-frames.pcap", {})), "clock per-chunk");
+  // The same bytes, one a packet, but each USB read's bytes stamped a microsecond apart.
+  const auto path = (std::filesystem::temp_directory_path() / "modtap-read-bytes.pcap").string();
+  {
+    const std::vector<uint8_t> read{0x01, 0x03, 0x00, 0x00, 0x00, 0x01, 0x84, 0x0A};
+    modtap::captures::PcapChunkWriter writer(path, 147);
+    for (int64_t r = 0; r < 8; ++r)
+      for (size_t i = 0; i < read.size(); ++i)
+        writer.write({0,
+                      1'700'000'000'000'000'000 + r * 16'000'000 + static_cast<int64_t>(i) * 1000,
+                      {read.data() + i, 1}});
+  }
+  EXPECT_EQ(clock_line(path), "clock per-chunk");
+}
+
 // A pcap of one byte a packet read at half its baud: the bytes come twice as fast as 9600
 // carries them. That is the problem, first and alone (an absent slave's waits until the
 // settings read the bus), in the statistics and in --stats; at the line's baud, the slave's.

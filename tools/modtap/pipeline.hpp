@@ -150,7 +150,7 @@ class Pipeline {
   // modtap top's records, read under shared_statistics()'s lock.
   top::TopFeed* top_feed() { return top_feed_.get(); }
   // A read from the source, before its bytes are framed: its pace says whether the line is
-  // faster than the settings modtap was given. Only for sources timed per read.
+  // faster than the settings modtap was given. Only for sources with a clock (per read, per byte).
   void on_read(const Chunk& chunk);
   const ChunkPace& pace() const { return pace_; }
   // The problems the statistics and the evidence beside them show (none without statistics).

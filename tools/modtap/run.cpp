@@ -176,7 +176,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
       stopped_by = autostop_met(autostop, chunk.t_ns - *first_ns, session.pcapng_bytes());
       if (stopped_by) break;
       if (progress) progress->update(*source->file_position());
-      if (source->clock() == ClockQuality::per_chunk) session.pipeline().on_read(chunk);
+      if (source->clock() != ClockQuality::none) session.pipeline().on_read(chunk);
       if (session.keeps_raw()) session.keep_raw(chunk, bus.between_frames());
       bus.push(chunk);
       if (piped) session.flush_output();
