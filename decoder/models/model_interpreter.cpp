@@ -7,8 +7,8 @@
 
 namespace modtap {
 
-std::map<uint8_t, int64_t> model_timeouts(const ModelChoice& choice) {
-  std::map<uint8_t, int64_t> timeouts;
+SlaveTimeouts model_timeouts(const ModelChoice& choice) {
+  SlaveTimeouts timeouts{};
   for (unsigned slave = 1; slave <= 255; ++slave) {
     const auto it = choice.by_slave.find(static_cast<uint8_t>(slave));
     const DeviceModel* model = it != choice.by_slave.end() ? it->second : choice.bus;
@@ -19,10 +19,12 @@ std::map<uint8_t, int64_t> model_timeouts(const ModelChoice& choice) {
 }
 
 ModelInterpreter::ModelInterpreter(std::vector<const DeviceModel*> known, ModelChoice choice,
-                                   ClockQuality clock, RecordSink& next, bool list_unnamed)
+                                   ClockQuality clock, RecordSink& next, bool list_unnamed,
+                                   SlaveTimeouts* timeouts)
     : known_(std::move(known)),
       choice_(std::move(choice)),
       exact_clock_(clock == ClockQuality::per_byte),
+      timeouts_(timeouts),
       next_(next) {
   meaning_.lists_unnamed = list_unnamed;
 }
@@ -77,6 +79,7 @@ void ModelInterpreter::identify(const Frame& frame) {
       text += fmt::format(", but is decoded as {}", chosen ? chosen->name : "nothing");
     } else {
       identified_[slave] = model;
+      if (timeouts_) (*timeouts_)[slave] = model->response_timeout_ns.value_or(0);
       interpret(*model, frame, meaning_);
       text += "; decoded as such from here on";
     }

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "decoder/models/register_meaning.hpp"
+#include "decoder/protocol/matcher.hpp"
 #include "decoder/protocol/record_sink.hpp"
 
 namespace modtap {
@@ -15,17 +16,19 @@ struct ModelChoice {
   std::map<uint8_t, const DeviceModel*> by_slave;  // --model SLAVE=MODEL
 };
 
-// The time-out each slave's model sets (N3: 400 ms), for the matcher; slaves whose model sets
-// none are left out.
-std::map<uint8_t, int64_t> model_timeouts(const ModelChoice& choice);
+// The time-out each slave's model sets (N3: 400 ms), for the matcher; 0 for slaves whose model
+// sets none.
+SlaveTimeouts model_timeouts(const ModelChoice& choice);
 
 class ModelInterpreter final : public RecordSink {
  public:
   // `known` are the models whose identification rule may match the traffic; `clock` is the
   // source's, which says whether a turnaround is timed well enough to hold against a manual.
   // `list_unnamed`: see Meaning::lists_unnamed.
+  // `timeouts`: the matcher's table of the slaves' own time-outs, given a slave's model's when
+  // it identifies itself (none: the user told the time-out, which stands for every slave).
   ModelInterpreter(std::vector<const DeviceModel*> known, ModelChoice choice, ClockQuality clock,
-                   RecordSink& next, bool list_unnamed = true);
+                   RecordSink& next, bool list_unnamed = true, SlaveTimeouts* timeouts = nullptr);
 
   void on_frame(const Frame& frame) override;
   void on_noise(const Noise& noise) override { next_.on_noise(noise); }
@@ -40,6 +43,7 @@ class ModelInterpreter final : public RecordSink {
   std::vector<const DeviceModel*> known_;
   ModelChoice choice_;
   bool exact_clock_;
+  SlaveTimeouts* timeouts_;
   std::map<uint8_t, const DeviceModel*> identified_;
   RecordSink& next_;
   Meaning meaning_;

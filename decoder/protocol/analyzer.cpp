@@ -96,7 +96,7 @@ MatcherOptions matcher_options(const AnalyzerOptions& o) {
   MatcherOptions m;
   m.timeout_ns = o.timeout_ns;
   m.timeout_told = o.timeout_told;
-  for (const auto& [slave, timeout] : o.slave_timeout_ns) m.slave_timeout_ns[slave] = timeout;
+  m.slave_timeout_ns = o.slave_timeout_ns;
   m.t35_ns = o.format.t35_ns();
   m.timed = o.clock != ClockQuality::none;
   m.exact_clock = o.clock == ClockQuality::per_byte;

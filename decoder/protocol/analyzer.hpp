@@ -34,7 +34,7 @@ struct AnalyzerOptions {
   // The master's time-out is timeout_ns as the user told it (--timeout), not a default: no
   // retry comes before it. A slave's model time-out is told for that slave.
   bool timeout_told = false;
-  std::map<uint8_t, int64_t> slave_timeout_ns;  // slaves whose model sets their own time-out
+  const SlaveTimeouts* slave_timeout_ns = nullptr;  // those slaves' whose model sets their own
   int64_t ascii_char_timeout_ns = 1'000'000'000;
   int64_t chunk_jitter_ns = default_read_jitter_ns;
   // Told the readings the RTU framer weighs at each start (--explain); not the mode trials'.

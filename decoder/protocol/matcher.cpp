@@ -36,7 +36,7 @@ inline void Matcher::remember(Pending& p, const Frame& frame) const {
   p.channel = frame.channel;
   p.end_ns = frame.end_ns;
   p.slave = frame.slave();
-  const int64_t own = options_.slave_timeout_ns[p.slave];
+  const int64_t own = options_.slave_timeout_ns ? (*options_.slave_timeout_ns)[p.slave] : 0;
   p.timeout_ns = own ? own : options_.timeout_ns;
   p.timeout_told = own || options_.timeout_told;
   p.adu_size = static_cast<uint16_t>(frame.adu.size());

@@ -15,11 +15,15 @@
 
 namespace modtap {
 
+// Each slave's own time-out, where its device model gives one (0: the bus's), read at each
+// request: the model stage adds a slave's when the slave identifies itself.
+using SlaveTimeouts = std::array<int64_t, 256>;
+
 struct MatcherOptions {
   int64_t timeout_ns = 1'000'000'000;
   bool timeout_told = false;  // timeout_ns is the master's, told: it sends nothing again sooner
-  std::array<int64_t, 256> slave_timeout_ns{};  // a slave's own time-out (told); 0: timeout_ns
-  int64_t t35_ns = 0;                           // below this a response counts as a fast turnaround
+  const SlaveTimeouts* slave_timeout_ns = nullptr;  // a slave's own (told); none or 0: timeout_ns
+  int64_t t35_ns = 0;        // below this a response counts as a fast turnaround
   bool timed = true;         // false when the source has no clock: no latency, no silence
   bool exact_clock = false;  // latencies are exact enough to judge turnaround
   // How late a clock that stamps reads, not bytes, may put a frame: a read that also holds the

@@ -462,6 +462,39 @@ TEST(Cli, AFindingsFirstRecordsNameEachRecordOnce) {
       << json;
 }
 
+// A slave that identifies itself as a model with a time-out of its own is waited for as long
+// as that model says from then on, as a slave given the model with --model is.
+TEST(Cli, AnIdentifiedSlaveIsWaitedForAsItsModelSays) {
+  const auto dir = std::filesystem::temp_directory_path() / "modtap-meter-models";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "meter.yaml") << "model: meter\ntitle: A meter\nsource: a test\n"
+                                       "identify: {address: 0x0010, value: 0x1234}\n"
+                                       "timeout: {response_ms: 50}\n"
+                                       "registers:\n  - {address: 0x0010, name: meter_id}\n";
+  const auto path = (std::filesystem::temp_directory_path() / "modtap-meter.pcap").string();
+  {
+    modtap::captures::PcapChunkWriter writer(path, 147);
+    const auto put = [&](int64_t t_ms, std::vector<uint8_t> body) {
+      const uint16_t crc = modtap::crc16(body);
+      body.push_back(static_cast<uint8_t>(crc & 0xFF));
+      body.push_back(static_cast<uint8_t>(crc >> 8));
+      writer.write({0, 1'700'000'000'000'000'000 + t_ms * 1'000'000, body});
+    };
+    const std::vector<uint8_t> ask{0x05, 0x03, 0x00, 0x10, 0x00, 0x01};
+    put(0, ask);
+    put(10, {0x05, 0x03, 0x02, 0x12, 0x34});  // identifies as meter
+    put(300, ask);                            // unanswered
+    put(700, {0x06, 0x03, 0x00, 0x00, 0x00, 0x01});
+    put(710, {0x06, 0x03, 0x02, 0x00, 0x07});
+  }
+  const Outcome r = run("-r " + path + " --models-dir " + dir.string() + " -Y 'slave == 5'");
+  ASSERT_EQ(r.status, 0) << ::testing::PrintToString(r.lines);
+  EXPECT_THAT(r.lines, ::testing::Contains(::testing::HasSubstr("identifies as meter")));
+  EXPECT_THAT(r.lines, ::testing::Contains(::testing::MatchesRegex(
+                           "-  +0\\.35[0-9]+ TIMEOUT request #3 slave 5 .*\\(silence\\)")))
+      << ::testing::PrintToString(r.lines);
+}
+
 // A status register's meaning beside its number; -t ad, the date and time its name promises.
 TEST(Cli, CsvGivesAnEnumerationsTextAndTheDateWithTad) {
   const std::string drives = std::string("-r ") + MODTAP_SAMPLES +

@@ -64,9 +64,9 @@ def expected(records):
     first = collections.defaultdict(list)
     for r in records:  # frames and noise both carry findings
         for name in r.get("findings", []):
-            findings[name] += 1
-            if len(first[name]) < 5:
-                first[name].append(r["index"])
+            findings[name] += 1  # a model's finding counts for each register that shows it
+            if len(first[name]) < 5 and r["index"] not in first[name]:
+                first[name].append(r["index"])  # each record once
     e = {
         "frames": len(frames),
         "requests": sum(f["role"] == "request" for f in frames),

@@ -168,7 +168,7 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
   if (needs.meanings || !o.models.empty() || !o.models_dir.empty()) {
     catalog_ = load_models(o);
     choice = catalog_.choose(o.models);
-    if (!o.timeout_given) model_timeouts_ = modtap::model_timeouts(choice);
+    if (!o.timeout_given) slave_timeouts_ = modtap::model_timeouts(choice);
     if (!o.display_filter.empty()) filter(o.display_filter, o.register_base, channels);
   }
   // Every record's time is kept before the filter picks some: the time column counts over the
@@ -176,7 +176,8 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
   if (filter_) clock_stage_ = std::make_unique<ClockStage>(clock_, *filter_);
   if (needs.meanings)
     interpreter_ = std::make_unique<ModelInterpreter>(
-        catalog_.all(), choice, clock, watch_follow(o, before_filter()), needs.unnamed_registers);
+        catalog_.all(), choice, clock, watch_follow(o, before_filter()), needs.unnamed_registers,
+        o.timeout_given ? nullptr : &slave_timeouts_);
   diagnostics_ =
       std::make_unique<BusDiagnostics>(format, clock, after_diagnostics(), read_jitter_ns(o));
   if (!o.write_file.empty()) write_pcapng(o, ring, channels, format, clock);

@@ -165,7 +165,9 @@ class Pipeline {
     return follow_watch_ ? follow_watch_->unseen() : std::vector<std::string>{};
   }
   // The slaves whose model sets a response time-out, unless --timeout was given.
-  const std::map<uint8_t, int64_t>& model_timeouts() const { return model_timeouts_; }
+  // The slaves' own time-outs, as their models give them, for the analyzer: the model stage
+  // adds a slave's as it identifies itself.
+  const SlaveTimeouts& slave_timeouts() const { return slave_timeouts_; }
   // The end of a run: the pcapng file is complete, or its failure is reported.
   void close() {
     if (pcapng_) pcapng_->close();
@@ -202,7 +204,7 @@ class Pipeline {
   std::unique_ptr<FollowWatch> follow_watch_;
   std::unique_ptr<BusDiagnostics> diagnostics_;
   std::unique_ptr<ModelInterpreter> interpreter_;
-  std::map<uint8_t, int64_t> model_timeouts_;
+  SlaveTimeouts slave_timeouts_{};
   std::unique_ptr<output::PcapngFiles> pcapng_;
   std::unique_ptr<RecordLimit> limit_;
   std::unique_ptr<output::MqttPublisher> mqtt_;

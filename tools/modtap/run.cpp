@@ -158,7 +158,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   LineHealth health(&session.records());
   AnalyzerOptions options = analyzer_options(o, source->clock());
   options.format = open.serial;
-  options.slave_timeout_ns = session.model_timeouts();
+  options.slave_timeout_ns = &session.slave_timeouts();
   options.framing_observer = session.explain();
   Analyzer bus(options, source->channels(), health);
   Chunk chunk;
@@ -242,7 +242,7 @@ int listen(const RunOptions& o, const Autostop& autostop, const captures::RingLi
     stopped_by = autostop_met(autostop, now_ns - started_ns, session.pcapng_bytes());
     return stopped_by.has_value();
   };
-  options.analyzer.slave_timeout_ns = session.model_timeouts();
+  options.analyzer.slave_timeout_ns = &session.slave_timeouts();
   // What the traffic says of the settings, for a hint when the run ends, as a file's run gives.
   LineHealth health(&session.records());
   options.on_read = [&](const Chunk& chunk, bool between_frames) {

@@ -46,7 +46,7 @@ class Session {
   output::ExplainSink* explain() const { return pipeline_.explain(); }
   bool limit_reached() const { return pipeline_.limit_reached(); }
   uint64_t pcapng_bytes() const { return pipeline_.pcapng_bytes(); }
-  const std::map<uint8_t, int64_t>& model_timeouts() const { return pipeline_.model_timeouts(); }
+  const SlaveTimeouts& slave_timeouts() const { return pipeline_.slave_timeouts(); }
   // The ports' troubles, counted by the live loop for the metrics.
   output::PortHealth& port_health() { return port_health_; }
 
