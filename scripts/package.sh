@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 export BUILD_DIR=build-package BUILD_TYPE=Release
 export EXTRA_PACKAGES="help2man dpkg-dev lintian libwireshark-dev libglib2.0-dev ${EXTRA_PACKAGES:-}"
-export CMAKE_ARGS="-DCMAKE_INSTALL_PREFIX=/usr ${CMAKE_ARGS:-}"
+export CMAKE_ARGS="-DCMAKE_INSTALL_PREFIX=/usr -DMODTAP_HARDENING=ON ${CMAKE_ARGS:-}"
 bash scripts/setup.sh
 (cd "$BUILD_DIR" && cpack -G DEB >/dev/null)
 deb=$(ls "$BUILD_DIR"/modtap_*.deb)
