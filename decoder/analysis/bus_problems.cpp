@@ -74,14 +74,15 @@ constexpr std::array<ProblemInfo, problem_kind_count> problem_infos{{
 }};
 
 // Thresholds: a handful of events is chance, not a problem (docs/output.md, "problems").
-constexpr uint64_t few = 3;                     // fewer events than this never make a problem
-constexpr uint64_t some = 5;                    // nor fewer than this for a share of requests
-constexpr double missed_share = 0.05;           // intermittent-response from here
-constexpr double missed_share_error = 0.25;     // and an error from here
-constexpr double damaged_share = 0.02;          // corrupted-responses, collisions from here
-constexpr double damaged_share_error = 0.10;    // and an error from here
-constexpr double concentrated = 3.0;            // times the other slaves' share: one slave's
-constexpr double slow_factor = 3.0;             // slow-response: times the others' median...
+constexpr uint64_t few = 3;                   // fewer events than this never make a problem
+constexpr uint64_t some = 5;                  // nor fewer than this for a share of requests
+constexpr double missed_share = 0.05;         // intermittent-response from here
+constexpr double missed_share_error = 0.25;   // and an error from here
+constexpr double damaged_share = 0.02;        // corrupted-responses, collisions from here
+constexpr double damaged_share_error = 0.10;  // and an error from here
+constexpr double by_chance = 1e-3;    // a slave's count this unlikely at the bus's rate is its own
+constexpr double concentrated = 3.0;  // times the other slaves' share: one slave's
+constexpr double slow_factor = 3.0;   // slow-response: times the others' median...
 constexpr int64_t slow_margin_ns = 20'000'000;  // ...and this much more
 constexpr double near_timeout = 0.5;            // or its p95 past this share of the time-out
 constexpr double rejected_share = 0.8;          // rejected-requests: this share of a request
@@ -362,6 +363,9 @@ class Diagnosis {
     });
     latency_medians_.sort();
     for (const auto& [address, s] : evidence_.slaves()) {
+      bus_damaged_ += s.damaged.count;
+      bus_overlapping_ += s.overlapping.count;
+      bus_requests_ += s.requests;
       if (s.requests < some) continue;
       damaged_rates_.add(address, damaged_rate(s));
       missed_rates_.add(address, share(s.timeouts.count, s.requests));
@@ -454,18 +458,30 @@ class Diagnosis {
   }
 
   // A slave that answers none of its requests, or fewer than a few and one in a hundred at
-  // most (a record read as its answer that was none): silent, not intermittent.
+  // most (a record read as its answer that was none): silent, not intermittent. Junk now and
+  // then where its answer would be is the line's noise, not the device: a device whose answers
+  // are junk sends them to most requests (wrong-baud-device, corrupted-responses).
   bool no_response(uint8_t address, const Slave& s) {
-    const uint64_t came = answered(s);
-    if (s.requests < few || s.timeouts.count < few || came >= few || 100 * came > s.requests)
+    const uint64_t came = s.answers + s.late.count;
+    const uint64_t junk = s.damaged.count + s.overlapping.count;
+    if (s.requests < few || s.timeouts.count < few || came >= few || 100 * came > s.requests ||
+        2 * junk >= s.requests)
       return false;
     Problem& p = add(ProblemKind::no_response, address, Severity::error,
                      s.first_request_ns.value_or(0), s.timeouts.first);
-    p.evidence = {{"requests", s.requests}, {"timeouts", s.timeouts.count}, {"answered", came}};
+    p.evidence = {{"requests", s.requests},
+                  {"timeouts", s.timeouts.count},
+                  {"answered", came},
+                  {"junk", junk}};
     p.text = came ? fmt::format("{} almost never answers: {} of {} requests timed out, {} answered",
                                 who(address, s), s.timeouts.count, s.requests, came)
-                  : fmt::format("{} never answers: {} requests, all timed out", who(address, s),
-                                s.requests);
+             : s.timeouts.count == s.requests
+                 ? fmt::format("{} never answers: {} requests, all timed out", who(address, s),
+                               s.requests)
+                 : fmt::format("{} never answers: {} requests, {} timed out", who(address, s),
+                               s.requests, s.timeouts.count);
+    if (junk)
+      p.text += fmt::format("; {} brought only junk where its answer would be (line noise)", junk);
     return true;
   }
 
@@ -636,6 +652,25 @@ class Diagnosis {
     p.text += fmt::format(" where the master waits {:.0f} ms", options_.timeout_ns / 1e6);
   }
 
+  // The rest of the bus's share of its requests that `others_events` befell.
+  double others_rate(uint64_t others_events, const Slave& s) const {
+    return share(others_events, bus_requests_ - s.requests);
+  }
+
+  // Whether `count` of a slave's `requests` are more than chance gives at the rest of the bus's
+  // rate: a line's noise or a second master's collisions fall on every device alike, and one of
+  // forty gets a few more by chance alone (the Poisson tail of its expected count); a faulty
+  // device's stand out.
+  static bool beyond_chance(uint64_t count, uint64_t requests, double others_rate) {
+    const double expected = others_rate * static_cast<double>(requests);
+    double term = std::exp(-expected), below = 0;
+    for (uint64_t k = 0; k < count; ++k) {
+      below += term;
+      term *= expected / static_cast<double>(k + 1);
+    }
+    return 1 - below < by_chance;
+  }
+
   // Each slave's share of damaged answers, for telling one bad device from a bad line.
   double damaged_rate(const Slave& s) const { return share(s.damaged.count, s.requests); }
   double others_damaged_rate(uint8_t address) const {
@@ -647,7 +682,9 @@ class Diagnosis {
   void damaged_answers(uint8_t address, const Slave& s) {
     if (wrong_baud_device(address, s)) return;
     const double overlap_rate = share(s.overlapping.count, s.requests);
-    if (s.overlapping.count >= few && overlap_rate >= damaged_share) {
+    if (s.overlapping.count >= few && overlap_rate >= damaged_share &&
+        beyond_chance(s.overlapping.count, s.requests,
+                      others_rate(bus_overlapping_ - s.overlapping.count, s))) {
       Problem& p = add(ProblemKind::collisions, address, Severity::error, *s.overlapping.first_ns,
                        s.overlapping.first);
       p.evidence = {{"overlapping_answers", s.overlapping.count}, {"requests", s.requests}};
@@ -661,7 +698,9 @@ class Diagnosis {
     const double rate = damaged_rate(s);
     if (s.damaged.count < some || rate < damaged_share) return;
     const double others = others_damaged_rate(address);
-    if (rate < concentrated * others) return;
+    if (rate < concentrated * others ||
+        !beyond_chance(s.damaged.count, s.requests, others_rate(bus_damaged_ - s.damaged.count, s)))
+      return;
     Problem& p = add(ProblemKind::corrupted_responses, address,
                      rate >= damaged_share_error ? Severity::error : Severity::warning,
                      *s.damaged.first_ns, s.damaged.first);
@@ -954,6 +993,7 @@ class Diagnosis {
   }
 
   MedianOfOthers latency_medians_, damaged_rates_, missed_rates_;
+  uint64_t bus_damaged_ = 0, bus_overlapping_ = 0, bus_requests_ = 0;  // every slave's, summed
   std::array<bool, 256> damage_explained_{};  // slaves whose bad checks a problem of theirs tells
   const BusStatistics& statistics_;
   const ProblemEvidence& evidence_;

@@ -1,11 +1,14 @@
 #include "tools/top/top_screen.hpp"
 
 #include <algorithm>
+#include <cctype>
+#include <cstdio>
 #include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 namespace modtap::top {
@@ -38,7 +41,7 @@ Snapshot bus() {
   s.slaves = {row(1, 100, 0), row(2, 100, 3), row(3, 100, 100)};
   s.slaves[2].problem = "no-response";
   s.slaves[2].severity = Severity::error;
-  s.problems = {{Severity::error, 0, "Slave 3 never answers: 100 requests, all timed out"}};
+  s.problems = {{Severity::error, 0, "Slave 3 never answers: 100 requests, all timed out", 3}};
   for (int i = 0; i < 50; ++i) s.transactions.push_back("line " + std::to_string(i));
   return s;
 }
@@ -139,6 +142,62 @@ TEST(TopScreen, TheCursorsRowStaysOnScreenInALongTable) {
                                      [](const ScreenLine& l) { return l.look == Look::selected; });
   ASSERT_NE(selected, lines.end());
   EXPECT_EQ(selected->text.rfind("   60 ", 0), 0u) << selected->text;
+}
+
+// At 80x24 a table of 60 slaves shows some: a line says how many more there are, on which side,
+// and the arrow keys bring them.
+TEST(TopScreen, RowsThatDoNotFitAreCountedAboveAndBelow) {
+  Snapshot s = bus();
+  s.slaves.clear();
+  for (uint8_t a = 1; a <= 60; ++a) s.slaves.push_back(row(a, 10, 0));
+  ViewState view;
+  for (const size_t cursor : {size_t{0}, size_t{30}, size_t{59}}) {
+    view.cursor = cursor;
+    const auto lines = lay_out(s, view, 80, 24);
+    size_t rows = 0;
+    for (const auto& line : lines)
+      rows += line.text.rfind("   ", 0) == 0 && line.text.size() > 5 &&
+              std::isdigit(static_cast<unsigned char>(line.text[4]));
+    const ScreenLine* more = nullptr;
+    for (const auto& line : lines)
+      if (line.text.find(" more slaves: ") != std::string::npos) more = &line;
+    ASSERT_NE(more, nullptr);
+    int above = -1, below = -1, hidden = -1;
+    ASSERT_EQ(std::sscanf(more->text.c_str(), " %d more slaves: %d above, %d below", &hidden,
+                          &above, &below),
+              3)
+        << more->text;
+    EXPECT_EQ(static_cast<size_t>(hidden) + rows, 60u) << more->text;
+    EXPECT_EQ(above + below, hidden);
+    EXPECT_EQ(above == 0, cursor == 0) << more->text;
+    EXPECT_EQ(below == 0, cursor == 59) << more->text;
+  }
+  // All of them fit on a tall terminal: no such line.
+  for (const auto& line : lay_out(s, view, 80, 200))
+    EXPECT_EQ(line.text.find(" more slaves: "), std::string::npos);
+}
+
+// More problems than fit: the count of the others, and the cursor's slave's own first.
+TEST(TopScreen, TheCursorsSlavesProblemsComeFirstAndTheRestAreCounted) {
+  Snapshot s = bus();
+  s.problems.clear();
+  for (uint8_t a = 1; a <= 3; ++a)
+    for (int k = 0; k < 4; ++k)
+      s.problems.push_back({Severity::warning, 0, fmt::format("Slave {} problem {}", a, k), a});
+  ViewState view;
+  view.cursor = 2;  // slave 3
+  const auto lines = lay_out(s, view, 80, 24);
+  const auto heading = std::find_if(lines.begin(), lines.end(), [](const ScreenLine& l) {
+    return l.text.rfind("problems (12)", 0) == 0;
+  });
+  ASSERT_NE(heading, lines.end());
+  EXPECT_EQ(heading[1].text.rfind("  Slave 3 problem 0", 0), 0u) << heading[1].text;
+  const auto more = std::find_if(heading, lines.end(), [](const ScreenLine& l) {
+    return l.text.rfind("  +", 0) == 0 && l.text.find(" more ") != std::string::npos;
+  });
+  ASSERT_NE(more, lines.end());
+  const size_t shown = static_cast<size_t>(more - heading) - 1;
+  EXPECT_EQ(more->text.rfind(fmt::format("  +{} more", 12 - shown), 0), 0u) << more->text;
 }
 
 TEST(TopScreen, AChosenSlaveShowsItsRegistersAndTransactions) {

@@ -202,20 +202,40 @@ void add_table(Lines& out, const Snapshot& s, const ViewState& view, size_t room
     out.add("  no slave seen yet", Look::dim);
     return;
   }
+  // Rows that do not fit are said, on a line of their own, above or below those shown.
+  const size_t rows = s.slaves.size() <= room ? room : std::max<size_t>(1, room - 1);
   const size_t cursor = std::min(view.cursor, s.slaves.size() - 1);
-  const size_t first = cursor >= room ? cursor - room + 1 : 0;
-  for (size_t i = first; i < s.slaves.size() && i < first + room; ++i) {
+  const size_t first = cursor >= rows ? cursor - rows + 1 : 0;
+  const size_t last = std::min(s.slaves.size(), first + rows);
+  for (size_t i = first; i < last; ++i) {
     const bool selected = i == cursor;
     out.add(table_line(&s.slaves[i], view.sort, s.now_ns, out.width),
             selected ? Look::selected : look_of(s.slaves[i]));
   }
+  if (first > 0 || last < s.slaves.size())
+    out.add(fmt::format("  {} more slaves: {} above, {} below (up/down)",
+                        s.slaves.size() - (last - first), first, s.slaves.size() - last),
+            Look::dim);
 }
 
-void add_problems(Lines& out, const Snapshot& s, size_t room) {
+// The problems of the slave the cursor is on first, so the arrow keys bring any slave's into
+// view; then the others, newest first. Those that do not fit are counted.
+void add_problems(Lines& out, const Snapshot& s, const ViewState& view, size_t room) {
   out.add(fmt::format("problems ({})", s.problems.size()), Look::heading);
   if (s.problems.empty()) out.add("  none seen", Look::dim);
-  for (size_t i = 0; i < s.problems.size() && i < room; ++i)
-    out.add("  " + s.problems[i].text, look_of(s.problems[i].severity));
+  std::vector<const ProblemLine*> order;
+  for (const ProblemLine& p : s.problems) order.push_back(&p);
+  if (!s.slaves.empty()) {
+    const uint8_t on = s.slaves[std::min(view.cursor, s.slaves.size() - 1)].address;
+    std::stable_partition(order.begin(), order.end(),
+                          [on](const ProblemLine* p) { return p->slave == on; });
+  }
+  const size_t shown = order.size() <= room ? order.size() : std::max<size_t>(1, room - 1);
+  for (size_t i = 0; i < shown; ++i) out.add("  " + order[i]->text, look_of(order[i]->severity));
+  if (shown < order.size())
+    out.add(fmt::format("  +{} more (up/down on a slave's row shows its own first)",
+                        order.size() - shown),
+            Look::dim);
 }
 
 void add_panel(Lines& out, const Snapshot& s, const ViewState& view) {
@@ -297,7 +317,7 @@ std::vector<ScreenLine> lay_out(const Snapshot& s, const ViewState& view, size_t
   } else {
     const size_t body = out.left();
     add_table(out, s, view, std::max<size_t>(2, body * 2 / 5));
-    add_problems(out, s, std::max<size_t>(1, body / 5));
+    add_problems(out, s, view, std::max<size_t>(1, body / 5));
     add_panel(out, s, view);
   }
   while (out.lines.size() < out.height) out.add("");

@@ -47,6 +47,7 @@ struct ProblemLine {
   Severity severity = Severity::warning;
   int64_t since_ns = 0;
   std::string text;
+  std::optional<uint8_t> slave;  // none: the bus's
 };
 
 // A register's last value; for a followed one, its values at the snapshots before.

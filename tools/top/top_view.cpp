@@ -400,7 +400,8 @@ Snapshot TopView::take(bool refresh) {
   sources_.shared.read([&] {
     fill_numbers(s, refresh);
     const auto problems = sources_.problems();
-    for (const Problem& p : problems) s.problems.push_back({p.severity, p.since_ns, p.text});
+    for (const Problem& p : problems)
+      s.problems.push_back({p.severity, p.since_ns, p.text, p.slave});
     std::stable_sort(s.problems.begin(), s.problems.end(),
                      [](const auto& a, const auto& b) { return a.since_ns > b.since_ns; });
     const auto& evidence = sources_.evidence.slaves();
