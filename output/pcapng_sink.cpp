@@ -177,7 +177,11 @@ class CommentFields {
   template <FieldId id>
   void micros(FieldTag<id>, int64_t ns) {
     put_key(field_info(id).name);
-    put_microseconds(out_, ns);
+    if (defaults_.resolution_ns >= 1000) {
+      put_int(out_, (ns + 500) / 1000);  // no digits the clock cannot tell
+    } else {
+      put_microseconds(out_, ns);
+    }
   }
   // The frame's own findings, one key each; a model's come as note lines.
   template <FieldId id>
@@ -274,9 +278,10 @@ std::string noise_comment(const Noise& n, const CommentDefaults& defaults) {
   return fmt::to_string(out);
 }
 
-void append_timeout_comment(fmt::memory_buffer& out, const Timeout& timeout) {
+void append_timeout_comment(fmt::memory_buffer& out, const Timeout& timeout,
+                            const CommentDefaults& defaults) {
   if (!timeout.timed_out()) return;  // the capture ended first: nothing to say on the request
-  CommentFields fields(out, {}, {});
+  CommentFields fields(out, defaults, {});
   walk_fields(timeout, fields);
 }
 
@@ -338,7 +343,8 @@ void PcapngSink::on_frame(const Frame& frame) {
   if (frame.request) writer_.release(*frame.request);  // its outcome is known now
   comment_.clear();
   const DeviceModel*& model = model_of_address_[frame.raw.empty() ? 0 : frame.raw[0]];
-  append_frame_comment(comment_, frame, {last_index_, role_of(direction), options_.char_ns, model});
+  append_frame_comment(comment_, frame,
+                       {last_index_, role_of(direction), options_.char_ns, model, resolution_ns()});
   last_index_ = frame.index;
   model = frame.meaning ? frame.meaning->model : nullptr;
   std::span<const uint8_t> data = frame.raw;
@@ -362,7 +368,8 @@ void PcapngSink::on_noise(const Noise& noise) {
   std::span<const uint8_t> data = noise.raw;
   if (options_.link == PcapngLink::exported_pdu) data = exported_pdu("data", true, noise.raw);
   comment_.clear();
-  append_noise_comment(comment_, noise, {last_index_, Role::unknown, options_.char_ns});
+  append_noise_comment(comment_, noise,
+                       {last_index_, Role::unknown, options_.char_ns, nullptr, resolution_ns()});
   last_index_ = noise.index;
   writer_.write_packet(interface, noise.t_ns, data, captures::PacketDirection::unknown,
                        {comment_.data(), comment_.size()});
@@ -371,7 +378,7 @@ void PcapngSink::on_noise(const Noise& noise) {
 void PcapngSink::on_timeout(const Timeout& timeout) {
   if (timeout.timed_out()) {  // not when the capture merely ended first
     comment_.clear();
-    append_timeout_comment(comment_, timeout);
+    append_timeout_comment(comment_, timeout, {0, Role::unknown, 0, nullptr, resolution_ns()});
     writer_.extend_comment(timeout.request, {comment_.data(), comment_.size()});
   }
   writer_.release(timeout.request);

@@ -59,6 +59,7 @@ class PcapngSink final : public RecordSink {
 
  private:
   uint32_t interface_for(uint16_t channel);
+  int64_t resolution_ns() const { return options_.clock == ClockQuality::per_byte ? 1 : 1000; }
   std::span<const uint8_t> exported_pdu(std::string_view protocol, bool from_master,
                                         std::span<const uint8_t> payload);
 
@@ -114,6 +115,9 @@ struct CommentDefaults {
   Role role = Role::unknown;  // the role the packet's direction says
   int64_t char_ns = 0;        // a character's time on the line: a record lasts its bytes times this
   const DeviceModel* model = nullptr;  // the model the last frame of this address was read with
+  // What the source's clock can tell: latencies and waits are written to it, whole microseconds
+  // where it stamps reads or packets, nanoseconds where it times each byte (a logic analyzer).
+  int64_t resolution_ns = 1;
 };
 
 // What modtap says of each interface it writes: the time convention (pcapng_format.hpp),
@@ -130,7 +134,8 @@ void append_noise_comment(fmt::memory_buffer& out, const Noise& noise,
                           const CommentDefaults& defaults);
 // What a time-out adds to its request's comment: " waited_us=... timeout=REASON"; nothing
 // where the capture ended before the request's time ran out.
-void append_timeout_comment(fmt::memory_buffer& out, const Timeout& timeout);
+void append_timeout_comment(fmt::memory_buffer& out, const Timeout& timeout,
+                            const CommentDefaults& defaults = {});
 
 }  // namespace modtap::output
 

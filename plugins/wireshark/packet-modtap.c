@@ -34,6 +34,7 @@ static dissector_handle_t modbus_handle;
 static int hf_index = -1, hf_mode = -1, hf_role = -1, hf_check = -1, hf_expected_check = -1;
 static int hf_request = -1, hf_latency = -1, hf_slave = -1, hf_fc = -1, hf_function = -1;
 static int hf_exception = -1, hf_exception_name = -1, hf_timeout = -1, hf_waited = -1;
+static int hf_no_response = -1;
 static int hf_finding = -1, hf_noise = -1, hf_data = -1, hf_lrc = -1, hf_model = -1;
 static int hf_register = -1, hf_register_addr = -1, hf_register_name = -1;
 static int hf_register_value = -1, hf_note = -1;
@@ -253,6 +254,11 @@ static void add_verdicts(proto_tree* tree, packet_info* pinfo, tvbuff_t* tvb, co
     expert_add_info_format(pinfo, item, &ei_timeout, "No response (%s) after %.1f ms", v->timeout,
                            waited / 1000);
     if (v->waited_us) proto_tree_add_double(tree, hf_waited, tvb, 0, 0, waited);
+    /* What the Findings column shows a person: the time-out and the time waited. */
+    proto_tree_add_string(tree, hf_no_response, tvb, 0, 0,
+                          v->waited_us
+                              ? wmem_strdup_printf(pinfo->pool, "timeout %.1f ms", waited / 1000)
+                              : "timeout");
   }
   for (int i = 0; i < v->finding_count; ++i) {
     proto_item* item = proto_tree_add_string(tree, hf_finding, tvb, 0, 0, v->findings[i]);
@@ -451,6 +457,7 @@ static void proto_register_modtap(void) {
       FIELD(hf_exception_name, "exception_name", "Exception", FT_STRING, BASE_NONE, NULL),
       FIELD(hf_timeout, "timeout", "Timed out", FT_STRING, BASE_NONE, NULL),
       FIELD(hf_waited, "waited_us", NULL, FT_DOUBLE, BASE_NONE, NULL),
+      FIELD(hf_no_response, "no_response", "No response", FT_STRING, BASE_NONE, NULL),
       FIELD(hf_finding, "finding", "Finding", FT_STRING, BASE_NONE, NULL),
       FIELD(hf_noise, "noise", "Noise", FT_STRING, BASE_NONE, NULL),
       FIELD(hf_data, "ascii.data", "Data", FT_BYTES, BASE_NONE, NULL),

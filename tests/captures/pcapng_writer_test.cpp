@@ -238,7 +238,7 @@ TEST(PcapngSink, ATimeOutJoinsTheCommentsFirstLineAheadOfTheModelsNotes) {
     sink.finish();
     writer.close();
   }
-  EXPECT_NE(file_text(path).find("modtap index=1 duration_ns=0 model=drive waited_us=1000000.000 "
+  EXPECT_NE(file_text(path).find("modtap index=1 duration_ns=0 model=drive waited_us=1000000 "
                                  "timeout=silence\nnote unmapped-register: 0000H is in none"),
             std::string::npos)
       << file_text(path);
@@ -282,6 +282,28 @@ TEST(PcapngSink, ACommentsKeysAreTheFieldRegistrysNames) {
 
 // A request that timed out says so in its own comment: the sink holds it, and what follows it,
 // until its outcome is known, and writes everything in order.
+// A latency or a wait has no more digits than the clock tells: microseconds where a packet's or
+// a read's time stamp is the clock, nanoseconds where each byte is timed.
+TEST(PcapngSink, TimesAreWrittenToTheClocksResolution) {
+  const auto response = hex("01 03 02 00 07 f9 86");
+  Frame f;
+  f.index = 2;
+  f.role = Role::response;
+  f.raw = f.adu = response;
+  f.check_ok = true;
+  f.request = 1;
+  f.latency_ns = 6'877'084;
+  output::CommentDefaults defaults{1, Role::response, 0};
+  const auto latency = [&] {
+    const std::string comment = output::frame_comment(f, defaults);
+    return comment.substr(comment.find(" latency_us="));
+  };
+  defaults.resolution_ns = 1000;
+  EXPECT_EQ(latency(), " latency_us=6877");
+  defaults.resolution_ns = 1;
+  EXPECT_EQ(latency(), " latency_us=6877.084");
+}
+
 TEST(PcapngSink, ARequestThatTimedOutSaysSoAndOrderIsKept) {
   const auto path = temp_path("modtap-timeout-test.pcapng");
   const std::vector<ChannelInfo> channels{{"bus", ChannelRole::bus}};
@@ -327,7 +349,8 @@ TEST(PcapngSink, ARequestThatTimedOutSaysSoAndOrderIsKept) {
     std::ifstream in(path, std::ios::binary);
     return std::string(std::istreambuf_iterator<char>(in), {});
   }();
-  EXPECT_NE(file.find("modtap index=1 duration_ns=0 waited_us=1000000.123 timeout=silence"),
+  // A packet's time stamp tells microseconds: the wait is written to them.
+  EXPECT_NE(file.find("modtap index=1 duration_ns=0 waited_us=1000000 timeout=silence"),
             std::string::npos);
   EXPECT_EQ(file.find("timeout=", file.find("index=4 ")), std::string::npos);
   std::filesystem::remove(path);

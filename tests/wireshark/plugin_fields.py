@@ -23,6 +23,7 @@ MODTAP, BUSGEN, PLUGIN, WORK = sys.argv[1:5]
 # What a packet says that no record field does, and why.
 PLUGIN_OWN = {
     "timeout": "a request's outcome, in the request's own packet (a record of its own in JSON)",
+    "no_response": "a time-out as the Findings column says it to a person: 'timeout 197.7 ms'",
     "noise": "a noise packet's reason (JSON's `reason` of a noise record)",
     "ascii": "Modbus ASCII's own framing: data and LRC, which Wireshark has no dissector for",
     "expert": "the expert infos Wireshark lists among the fields (modtap.expert.bad_check ...)",

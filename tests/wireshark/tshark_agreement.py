@@ -12,6 +12,7 @@ at all: every frame classified, and Wireshark's CRC verdict equal to modtap's.
 Usage: tshark_agreement.py MODTAP BUSGEN PLUGIN SAMPLES_DIR WORK_DIR
 """
 import json
+import re
 import os
 import subprocess
 import sys
@@ -161,6 +162,14 @@ def profile_columns():
         columns = f" {r['role']} {r['slave']} {r['function']} "
         check("profile", columns in line, f"frame {r['index']}: {line!r} lacks {columns!r}")
     check("profile", len(lines) == 50, f"{len(lines)} lines")
+    # A time-out reads in the Findings column as a person says it, with the time waited.
+    waits = [f"timeout {r['waited_us'] / 1000:.1f} ms"
+             for r in modtap_records(os.path.join(WORK, "frames.pcap"), []) if r["type"] == "timeout"]
+    shown = run(as_user([TSHARK, "-n", "-C", "modtap", "-r", pcapng, "-Y", "modtap.no_response"],
+                        HOME)).splitlines()
+    check("profile", waits and len(shown) == len(waits), f"{len(shown)} time-outs shown, {len(waits)} in JSON")
+    for wait, line in zip(waits, shown):
+        check("profile", re.search(f"[ ,]{re.escape(wait)} ", line), f"{line!r} lacks {wait!r}")
     exported = os.path.join(WORK, "frames-exported.pcapng")
     text = run(as_user([TSHARK, "-n", "-C", "modtap", "-r", exported], HOME))
     check("profile", "Unable to classify" not in text and " Query: " in text,
