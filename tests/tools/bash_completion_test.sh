@@ -65,21 +65,17 @@ expect "modtap --for" --format
 expect "modtap --models" --models-dir
 offers "modtap -" --read --interface -t -c
 
-# Every option --help gives choices (TEXT:{a,b,c}) completes to exactly those; --baud to its
-# {auto} and the usual rates.
-choice_lines=$(grep -E '^  -[^ ]* [A-Z]+:\(?\{' <<<"$help")
-[ "$(wc -l <<<"$choice_lines")" -ge 9 ] || fail "found too few options with choices in --help"
+# Every option --help gives choices ({a,b,c}) completes to exactly those; --baud (BAUD|auto)
+# to auto and the usual rates.
+choice_lines=$(grep -E '^  -[^ ]* \{' <<<"$help")
+[ "$(wc -l <<<"$choice_lines")" -ge 8 ] || fail "found too few options with choices in --help"
 while read -r opts type _; do
   choices=${type#*\{} choices=${choices%%\}*}
   IFS=, read -ra choices <<<"$choices"
-  for name in ${opts//,/ }; do
-    if [ "$name" = --baud ]; then
-      offers "modtap --baud " "${choices[@]}" 9600 19200 115200
-    else
-      expect "modtap $name " "${choices[@]}"
-    fi
-  done
+  for name in ${opts//,/ }; do expect "modtap $name " "${choices[@]}"; done
 done <<<"$choice_lines"
+grep -qE '^  --baud BAUD\|auto ' <<<"$help" || fail "--help does not say --baud takes BAUD or auto"
+offers "modtap --baud " auto 9600 19200 115200
 offers "modtap --format " pcapng
 expect "modtap --format pcap" pcap pcapng
 expect "modtap --format=pcap" pcap pcapng

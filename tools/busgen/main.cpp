@@ -10,6 +10,7 @@
 #include "captures/hexlog_writer.hpp"
 #include "captures/pcap_chunk_writer.hpp"
 #include "tools/busgen/bus_simulator.hpp"
+#include "tools/help_format.hpp"
 
 namespace {
 
@@ -43,6 +44,7 @@ int write(const busgen::BusCapture& capture, const std::string& format, busgen::
 
 int main(int argc, char** argv) {
   CLI::App app{"modtap-bus-simulator: simulated Modbus RTU traffic as a capture file"};
+  app.formatter(std::make_shared<modtap::tools::HelpFormatter>());
   app.set_version_flag("--version", std::string("modtap-bus-simulator ") + MODTAP_VERSION);
   busgen::BusOptions o;
   std::string out = "-", format = "raw", delivery_name = "frames";
@@ -60,7 +62,7 @@ int main(int argc, char** argv) {
                  "Poll slaves 1 to N in turn, as a PLC's scan list does (default: each request to "
                  "a slave picked at random from 1-247)")
       ->check(CLI::Range(1, 247));
-  app.add_option("-o,--output", out, "Output file (- for stdout, raw only)");
+  app.add_option("-o,--output", out, "Output file (- for stdout, raw only)")->type_name("FILE");
   bool faults = false, ascii = false;
   app.add_flag("--faults", faults,
                "What real buses add: glitches, line noise, requests broken off and sent again, "
@@ -80,7 +82,8 @@ int main(int argc, char** argv) {
                  "half-baud (set to half the line's baud: its answers read as junk), "
                  "restarts=TIME (silent 5 s of every TIME), slow-block=START+COUNT (read every "
                  "cycle, answered after 60 ms); "
-                 "e.g. 2:slow=131ms 6:missing-block=0400H+4");
+                 "e.g. 2:slow=131ms 6:missing-block=0400H+4")
+      ->type_name("ADDR:FAULT");
   app.add_flag("--ascii", ascii, "Modbus ASCII instead of RTU (7E1)");
   CLI11_PARSE(app, argc, argv);
   try {

@@ -18,6 +18,7 @@
 #include "decoder/protocol/field_registry.hpp"
 #include "decoder/protocol/nearest_name.hpp"
 #include "output/csv_sink.hpp"
+#include "tools/help_format.hpp"
 #include "tools/modtap/capture_conditions.hpp"
 #include "tools/modtap/enum_option.hpp"
 #include "tools/modtap/model_catalog.hpp"
@@ -144,11 +145,15 @@ struct Command {
 // while running and which records to show; how to read the line; then the subcommands.
 void add_input_options(CLI::App& app, RunOptions& o, Command& command) {
   auto* read = app.add_option("-r,--read", o.read_file,
-                              "Capture file to read; - for standard input or a pipe");
-  app.add_option("capture", command.named_capture, "The capture file, as with -r")->excludes(read);
+                              "Capture file to read; - for standard input or a pipe")
+                   ->type_name("FILE");
+  app.add_option("capture", command.named_capture, "The capture file, as with -r")
+      ->type_name("FILE")
+      ->excludes(read);
   auto* listen_on = app.add_option("-i,--interface", o.interfaces,
                                    "Serial port to listen on (read-only): PATH, or master=PATH and "
-                                   "slave=PATH for a tap that splits the directions");
+                                   "slave=PATH for a tap that splits the directions")
+                        ->type_name("PORT");
   read->excludes(listen_on);
   command.reconnect =
       app.add_flag("--reconnect", o.reconnect, "Wait for an unplugged port to come back");
@@ -164,17 +169,22 @@ void add_output_options(CLI::App& app, RunOptions& o, Command& command) {
                              "values over time), none (default: text, or none with -w)");
   app.add_option("--follow", o.follow,
                  "With -T csv (implied): the registers to follow, by name or address: "
-                 "frequency_command,2503H");
-  app.add_option("-w,--write", o.write_file, "Write every frame and noise record as pcapng");
+                 "frequency_command,2503H")
+      ->type_name("REGISTERS");
+  app.add_option("-w,--write", o.write_file, "Write every frame and noise record as pcapng")
+      ->type_name("FILE");
   app.add_option("--save-raw", o.save_raw,
                  "Keep every read as it came, with its time, to read again with other settings: "
-                 "FILE.pcapng, or a timed hex log for any other name");
+                 "FILE.pcapng, or a timed hex log for any other name")
+      ->type_name("FILE");
   app.add_option("--stats", o.stats_file,
                  "Write the statistics as one JSON object at the end of the run (also after "
-                 "Ctrl-C, and marked incomplete when the input breaks off)");
+                 "Ctrl-C, and marked incomplete when the input breaks off)")
+      ->type_name("FILE");
   app.add_option("--report", o.report_file,
                  "Write a report a customer can read (one HTML file with charts; with --follow, "
-                 "those registers over time) at the end of the run, as --stats");
+                 "those registers over time) at the end of the run, as --stats")
+      ->type_name("FILE.html");
   tools::add_enum_option(
       app, "--register-base", o.register_base,
       "How text, CSV, statistics and the report number registers: hex (2502H, as the "
@@ -184,33 +194,42 @@ void add_output_options(CLI::App& app, RunOptions& o, Command& command) {
 
 // Metrics for Prometheus and MQTT: what a run that stays on a bus serves while it runs.
 void add_monitoring_options(CLI::App& app, RunOptions& o) {
-  auto* metrics = app.add_option(
-      "--metrics", o.metrics_address,
-      "Serve bus-health metrics for Prometheus on http://ADDR:PORT/metrics while running "
-      "(ADDR:PORT, [IPV6]:PORT, or :PORT for every interface)");
+  auto* metrics =
+      app.add_option(
+             "--metrics", o.metrics_address,
+             "Serve bus-health metrics for Prometheus on http://ADDR:PORT/metrics while running "
+             "(ADDR:PORT, [IPV6]:PORT, or :PORT for every interface)")
+          ->type_name("[ADDR]:PORT");
   app.add_option("--metrics-web-config", o.metrics_web_config,
                  "HTTPS and users with bcrypt passwords for --metrics, in the Prometheus "
                  "exporter toolkit's web configuration format (docs/monitoring.md)")
+      ->type_name("FILE")
       ->needs(metrics);
-  auto* mqtt = app.add_option(
-      "--mqtt", o.mqtt_url,
-      "Publish register values (retained, on change), a health summary and an "
-      "online/offline status to an MQTT broker: mqtt://[USER@]HOST[:PORT]/PREFIX, or "
-      "mqtts:// over TLS (docs/monitoring.md)");
+  auto* mqtt =
+      app.add_option(
+             "--mqtt", o.mqtt_url,
+             "Publish register values (retained, on change), a health summary and an "
+             "online/offline status to an MQTT broker: mqtt://[USER@]HOST[:PORT]/PREFIX, or "
+             "mqtts:// over TLS (docs/monitoring.md)")
+          ->type_name("URL");
   app.add_option("--mqtt-password-file", o.mqtt_password_file,
                  "The MQTT password, from the file's first line (or MODTAP_MQTT_PASSWORD): "
                  "never on the command line, where every local user sees it")
+      ->type_name("FILE")
       ->needs(mqtt);
   app.add_option("--mqtt-ca", o.mqtt_tls.ca_file,
                  "For mqtts://: the CA certificate (PEM) that signs the broker's (default: the "
                  "system's CA store)")
+      ->type_name("FILE")
       ->needs(mqtt);
   auto* mqtt_cert = app.add_option("--mqtt-cert", o.mqtt_tls.cert_file,
                                    "For mqtts://: modtap's client certificate (PEM), where the "
                                    "broker asks for one")
+                        ->type_name("FILE")
                         ->needs(mqtt);
   app.add_option("--mqtt-key", o.mqtt_tls.key_file,
                  "For mqtts://: the client certificate's private key (PEM)")
+      ->type_name("FILE")
       ->needs(mqtt_cert);
   app.add_flag("--mqtt-insecure", o.mqtt_tls.insecure,
                "For mqtts:// in tests only: do not check the broker's name against its "
@@ -219,10 +238,12 @@ void add_monitoring_options(CLI::App& app, RunOptions& o) {
   app.add_option("--mqtt-interval", o.mqtt_interval_s,
                  "Seconds: a register at most this often, the health summary this often "
                  "(at least 1 s); 0 sends every change at once (default 10)")
+      ->type_name("SECONDS")
       ->check(CLI::NonNegativeNumber)
       ->needs(mqtt);
   app.add_option("--mqtt-bus", o.mqtt_bus,
                  "The topic level naming the bus (default: the port's or capture's name)")
+      ->type_name("NAME")
       ->needs(mqtt);
   app.add_flag("--mqtt-discovery{homeassistant}", o.mqtt_discovery,
                "Announce each register to Home Assistant (--mqtt-discovery=PREFIX for another "
@@ -241,6 +262,7 @@ void add_record_options(CLI::App& app, RunOptions& o, Command& command) {
   app.add_option("--explain", o.explain,
                  "Print record INDEX and why the RTU framer cut there: each reading it weighed "
                  "at the record's first byte and the evidence that decided (with -r)")
+      ->type_name("INDEX")
       ->check(tools::positive("needs a record's index, from 1"));
   tools::add_enum_option(app, "-t", o.time_format,
                          "Text time column: r (since the capture's first record), a (local time "
@@ -248,16 +270,19 @@ void add_record_options(CLI::App& app, RunOptions& o, Command& command) {
                          "or not), dd (since the line shown before)");
   app.add_option("-Y,--display-filter", o.display_filter,
                  "Only records that match, in every output: 'slave == 3 && fc == 6', "
-                 "'latency_us > 50000', 'finding', 'register.name == \"fault\"' (docs/output.md)");
+                 "'latency_us > 50000', 'finding', 'register.name == \"fault\"' (docs/output.md)")
+      ->type_name("FILTER");
   app.add_option("-c", o.max_records,
                  "Stop after this many records read: frames and noise (time-outs do not count)")
       ->check(tools::positive("needs at least 1"));
   app.add_option("-a,--autostop", o.autostop,
                  "Stop after duration:SECONDS (capture time of a file, wall time on a port), "
-                 "filesize:KB (the -w files), or frames:N; repeatable, the first reached wins");
+                 "filesize:KB (the -w files), or frames:N; repeatable, the first reached wins")
+      ->type_name("CONDITION");
   app.add_option("-b,--ring-buffer", o.ring_buffer,
                  "Write -w and --save-raw as a ring of files, named as dumpcap names them: a "
-                 "new file after duration:SECONDS or filesize:KB, keeping the newest files:N");
+                 "new file after duration:SECONDS or filesize:KB, keeping the newest files:N")
+      ->type_name("CONDITION");
   app.add_flag("-q,--quiet", o.quiet,
                "No line per frame: only what the run adds up to (-T stats, --stats)");
 }
@@ -268,21 +293,26 @@ void add_analysis_options(CLI::App& app, RunOptions& o, Command& command) {
   command.probe_time =
       app.add_option("--probe-time", o.probe_s,
                      "With --baud auto on a port: seconds to listen under each setting")
+          ->type_name("SECONDS")
           ->check(tools::positive("needs a number of seconds above 0"));
   command.timeout = app.add_option("--timeout", o.timeout_s,
                                    "Seconds of silence before a request times out (1, or what the "
                                    "slave's model says)")
+                        ->type_name("SECONDS")
                         ->check(tools::positive("needs a number of seconds above 0"));
   app.add_option("--ascii-timeout", o.ascii_timeout_s, "ASCII inter-character time-out, seconds")
+      ->type_name("SECONDS")
       ->check(tools::positive("needs a number of seconds above 0"));
   app.add_option("--chunk-jitter", o.jitter_ms,
                  "For sources timed per read: milliseconds an adapter may hold bytes back")
+      ->type_name("MS")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--sigrok-channels", o.sigrok_channels,
-                 "sigrok lines: tx=NAME,rx=NAME (the master's transmit and receive) or bus=NAME");
+                 "sigrok lines: tx=NAME,rx=NAME (the master's transmit and receive) or bus=NAME")
+      ->type_name("LINES");
   app.add_flag("--sigrok-invert", o.sigrok_invert, "The sigrok lines have inverted levels");
-  app.add_option("--models-dir", o.models_dir,
-                 "A folder of the user's model files (*.yaml, *.yml)");
+  app.add_option("--models-dir", o.models_dir, "A folder of the user's model files (*.yaml, *.yml)")
+      ->type_name("DIR");
 }
 
 void add_subcommands(CLI::App& app, RunOptions& o, Command& command) {
@@ -293,7 +323,9 @@ void add_subcommands(CLI::App& app, RunOptions& o, Command& command) {
   command.models = app.add_subcommand("models", "List the device models, or check a model file");
   command.models->fallthrough();  // `modtap models --models-dir DIR` lists the user's models too
   command.check = command.models->add_subcommand("check", "Validate model files");
-  command.check->add_option("FILE", command.check_files, "Model files (YAML)")->required();
+  command.check->add_option("FILE", command.check_files, "Model files (YAML)")
+      ->type_name("FILE")
+      ->required();
   command.top = app.add_subcommand(
       "top",
       "A live view of the bus on the terminal: the slaves, their rates and latencies, the "
@@ -302,11 +334,13 @@ void add_subcommands(CLI::App& app, RunOptions& o, Command& command) {
   command.top->fallthrough();  // modtap's options, `modtap top -i PORT --baud auto`
   command.speed =
       command.top->add_option("--speed", o.top_speed, "With -r: replay this many times faster")
+          ->type_name("TIMES")
           ->check(tools::positive("needs a number above 0"));
   command.top->footer(
       "modtap's options apply: -i, -r, --baud, --parity, --model, --follow, -Y, -t, --stats, "
       "--report, -w, --metrics, --mqtt (modtap --help)");
-  command.top->add_option("capture", command.named_capture, "The capture file, as with -r");
+  command.top->add_option("capture", command.named_capture, "The capture file, as with -r")
+      ->type_name("FILE");
 }
 
 // What options left at their defaults mean beside the others given: -w alone writes nothing
@@ -416,6 +450,7 @@ int run_command(RunOptions& o, const Command& command) {
 
 int main(int argc, char** argv) {
   CLI::App app{"modtap: a passive analyzer for Modbus RTU and ASCII on serial lines"};
+  app.formatter(std::make_shared<tools::HelpFormatter>());
   RunOptions o;
   Command command;
   add_input_options(app, o, command);

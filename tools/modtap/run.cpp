@@ -282,14 +282,16 @@ void add_line_options(CLI::App& app, RunOptions& o) {
            if (text != "auto") o.baud = static_cast<uint32_t>(std::stoul(text));
          },
          "Baud rate, or auto to tell it from the traffic (default 19200)")
-      ->check(CLI::IsMember({"auto"}) | CLI::Range(50u, 4'000'000u));
+      ->check(CLI::IsMember({"auto"}) | CLI::Range(50u, 4'000'000u))
+      ->type_name("BAUD|auto");
   add_enum_or_auto_option(app, "--parity", o.parity, "Parity: none, even (default), odd, or auto");
   app.add_option("--stop-bits", o.stop_bits, "Stop bits (default 1)")
       ->check(CLI::IsMember({1u, 2u}));
   app.add_option("--data-bits", o.data_bits, "Data bits (default 8 for RTU, 7 for ASCII)")
       ->check(CLI::IsMember({7u, 8u}));
   app.add_option("--model", o.models,
-                 "Device model for the bus (MODEL) or one slave (SLAVE=MODEL); repeatable");
+                 "Device model for the bus (MODEL) or one slave (SLAVE=MODEL); repeatable")
+      ->type_name("[SLAVE=]MODEL");
 }
 
 }  // namespace modtap::tools
