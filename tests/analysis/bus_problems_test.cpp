@@ -227,6 +227,15 @@ TEST(BusProblems, OneCauseIsOneProblemWhateverTheSeedAndClock) {
        0,
        false,
        700'000'000},
+      // A burst that falls in an absent slave's answer time is the line's junk, not its answer.
+      {{"3:absent"}, 0, {{"noise-bursts", -1}, {"no-response", 3}}, 0, 0, false, 700'000'000},
+      {{"5:restarts=20s"},
+       0,
+       {{"noise-bursts", -1}, {"device-restarts", 5}},
+       0,
+       0,
+       false,
+       700'000'000},
   };
   for (const Case& c : cases)
     for (uint64_t seed = 30; seed < 36; ++seed)
