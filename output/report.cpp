@@ -439,9 +439,9 @@ void append_latency(fmt::memory_buffer& out, const BusStatistics& s) {
   for (const auto& [address, slave] : slaves) {
     const Histogram& h = slave->latency_ns;
     const uint64_t answers = slave->counts.answered_in_time();
+    const std::string key = fmt::format("slaves.{}.latency_us.", address);
     const auto stat = [&](std::string_view name, std::string shown, double scale) {
-      stat_element(out, "span", {}, fmt::format("slaves.{}.latency_us.{}", address, name), shown,
-                   scale);
+      stat_element(out, "span", {}, key + std::string(name), shown, scale);
     };
     fmt::format_to(put, "<figure><figcaption>slave {}: ", address);
     stat("count", fmt::format("{}", h.count()), 1);
