@@ -21,7 +21,7 @@ class RawReader final : public ChunkSource {
 
  private:
   std::string path_;
-  std::unique_ptr<FILE, int (*)(FILE*)> file_;
+  std::unique_ptr<FILE, int (*)(FILE*)> file_;  // read with read(2), never through stdio
   std::vector<uint8_t> block_;
   uint64_t offset_ = 0;
   std::vector<ChannelInfo> channels_;
