@@ -202,7 +202,7 @@ Matcher::CopyJudgement Matcher::judge_copy(const Frame& frame) const {
   const bool timed = options_.timed;
   Margin against_retry{RunnerUp::retry};
   if (against_retry.tell(Feature::too_soon_for_retry,
-                         timed && waited < answered_within_ns(*pending_)))
+                         timed && too_soon_for_retry(*pending_, waited)))
     return {Copy::response, against_retry};
   Margin against_echo{RunnerUp::echo};
   if (against_echo.tell(Feature::late_as_a_retry,
@@ -350,7 +350,7 @@ const Matcher::Pending* Matcher::copied_in_doubt(const Frame& frame) const {
   const Pending* request = pending_matches(frame) ? pending_ : overdue_open_ ? &overdue_ : nullptr;
   // Most copies of the pending request are its echo, in the time an answer takes.
   if (!request ||
-      (request == pending_ && frame.t_ns - request->end_ns < answered_within_ns(*request)))
+      (request == pending_ && too_soon_for_retry(*request, frame.t_ns - request->end_ns)))
     return nullptr;
   if (!copies(frame, *request)) return nullptr;
   if (request != pending_ &&

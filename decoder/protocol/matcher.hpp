@@ -61,7 +61,7 @@ class Matcher {
     const uint8_t slave = frame.slave();
     if (pending_ && pending_->slave == slave) {
       const int64_t waited = frame.t_ns - pending_->end_ns;
-      return waited >= answered_within_ns(*pending_) || waited > pending_->timeout_ns;
+      return !too_soon_for_retry(*pending_, waited) || waited > pending_->timeout_ns;
     }
     return overdue_open_ && overdue_.slave == slave;
   }
@@ -127,6 +127,13 @@ class Matcher {
   // off; its slave's answer still comes in the slave's own time (answer_time_ns).
   int64_t answered_within_ns(const Pending& request) const {
     return std::max(answer_time_ns(request.slave), told_wait_ns(request));
+  }
+  // Whether a copy `waited_ns` after its request came before the master's retry could: in the
+  // time its answer takes, and sooner than the master's own retries have come (where its
+  // time-out is not told: a told one stands).
+  bool too_soon_for_retry(const Pending& request, int64_t waited_ns) const {
+    return waited_ns < answered_within_ns(request) &&
+           (request.timeout_told || !as_late_as_a_retry(waited_ns));
   }
   int64_t told_wait_ns(const Pending& request) const {
     return request.timeout_told ? request.timeout_ns - options_.clock_lag_ns : 0;

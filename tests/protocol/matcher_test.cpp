@@ -264,6 +264,31 @@ TEST(Matcher, TheMastersRetryIntervalFromReadsTellsAnEchoFromARetry) {
   EXPECT_EQ(frames[7].request, frames[6].index);
 }
 
+// Slave 5 answers in 150 ms, so a slave not heard yet might take as long. But the master has
+// shown it sends a read again 112 ms after it: a copy of slave 2's write that late is as late
+// as its retries come, so it may be one, and the echo right after it says it was.
+TEST(Matcher, NoCopyAsLateAsTheMastersRetriesIsTooSoonForOneWhateverASlowSlaveTaught) {
+  const auto read = hex("01 03 00 00 00 01 84 0a"), answer = hex("01 03 02 00 05 78 47");
+  const auto write = hex("02 06 00 01 00 03 98 38");
+  const auto frames = analyze_reads({{hex("05 03 00 00 00 01 85 8e"), 0},
+                                     {hex("05 03 02 00 05 89 87"), 150},
+                                     {read, 300},
+                                     {answer, 310},
+                                     {read, 500},
+                                     {read, 612},  // its retry
+                                     {answer, 620},
+                                     {write, 800},
+                                     {write, 912},  // as late as a retry
+                                     {write, 920}})
+                          .frames();
+  ASSERT_EQ(frames.size(), 10u);
+  EXPECT_TRUE(frames[5].findings & finding_retry);
+  EXPECT_EQ(frames[8].role, Role::request);
+  EXPECT_TRUE(frames[8].findings & finding_retry);
+  EXPECT_EQ(frames[9].role, Role::response);
+  EXPECT_EQ(frames[9].request, frames[8].index);
+}
+
 TEST(Matcher, AnEchoCopyLongAfterTheSlavesTurnaroundIsARetry) {
   // Slave 1 answers a read in 5 ms; then a write goes unanswered and the master, after its
   // 100 ms time-out, sends it again, byte for byte what the echo would have been.
