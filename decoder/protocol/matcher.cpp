@@ -222,6 +222,19 @@ void Matcher::learn_retry_interval(const Frame& retry, const Pending& first) {
     retry_interval_ns_ = interval;
 }
 
+// What a slave not heard yet is taken to need to answer: the middle of the slaves' longest
+// turnarounds (the slower, of two in the middle), not the slowest. One slow device, or one that
+// answers past the master's time-out, says nothing of the others, and taken for all it makes
+// every other slave's retry, until that slave answers once, read as its answer.
+void Matcher::learn_bus_turnaround() {
+  std::array<int64_t, 256> learned{};
+  const auto last = std::copy_if(turnaround_ns_.begin(), turnaround_ns_.end(), learned.begin(),
+                                 [](int64_t ns) { return ns > 0; });
+  const auto middle = learned.begin() + (last - learned.begin()) / 2;
+  std::nth_element(learned.begin(), middle, last);
+  bus_turnaround_ns_ = *middle;
+}
+
 // Whether a copy this long after its request is as late as the master's retries come, allowing
 // for how late the clock may stamp it.
 bool Matcher::as_late_as_a_retry(int64_t waited_ns) const {

@@ -121,7 +121,7 @@ class Matcher {
   static bool may_answer(const Frame& frame, const Pending& request);
   // How soon after its request a copy of it can only be the answer, and from when it may be
   // the master's retry (from when it can only be one, once a turnaround is learned). The first:
-  // twice the longest turnaround seen (the slave's, else the bus's) and 20 ms; with nothing
+  // twice the longest turnaround seen (the slave's, else the bus's middle) and 20 ms; with nothing
   // learned, 50 ms, the shortest time-out masters use. A master told to wait (--timeout, a
   // model's time-out) sends nothing again before its time-out, less what the clock may take
   // off; its slave's answer still comes in the slave's own time (answer_time_ns).
@@ -152,9 +152,11 @@ class Matcher {
   void learn_retry_interval(const Frame& retry, const Pending& first);
   bool as_late_as_a_retry(int64_t waited_ns) const;
   void learn_turnaround(uint8_t slave, int64_t latency_ns) {
-    turnaround_ns_[slave] = std::max(turnaround_ns_[slave], latency_ns);
-    bus_turnaround_ns_ = std::max(bus_turnaround_ns_, latency_ns);
+    if (latency_ns <= turnaround_ns_[slave]) return;
+    turnaround_ns_[slave] = latency_ns;
+    learn_bus_turnaround();
   }
+  void learn_bus_turnaround();
 
   Role decide_role(const Frame& frame, ChannelRole channel_role,
                    const CopyJudgement& judgement) const;
@@ -198,7 +200,8 @@ class Matcher {
   std::optional<AmbiguousEcho> ambiguous_echo_;  // the last frame, where it was one
   Expectation expectation_;  // what pending_ means to a framer, kept in step with it
   uint64_t timed_answers_ = 0, early_answers_ = 0;
-  // The longest turnaround seen per slave, and on the bus, from pairs no retry could fake.
+  // The longest turnaround seen per slave, from pairs no retry could fake; and what a slave not
+  // heard yet is taken to need: the middle of those (learn_bus_turnaround).
   std::array<int64_t, 256> turnaround_ns_{};
   int64_t bus_turnaround_ns_ = 0;
   int64_t retry_interval_ns_ = 0;  // the shortest seen from a request's end to its retry

@@ -289,6 +289,30 @@ TEST(Matcher, NoCopyAsLateAsTheMastersRetriesIsTooSoonForOneWhateverASlowSlaveTa
   EXPECT_EQ(frames[9].request, frames[8].index);
 }
 
+// Slaves 1, 3 and 4 answer in 10 ms, slave 5 in 150 ms. Slave 2, not heard yet, is taken to
+// answer as the middle of them does, not as the slowest: a copy of its write 112 ms on is past
+// its answer's time, the master's retry, and the echo right after it answers that.
+TEST(Matcher, ASlaveNotHeardYetIsTakenToAnswerAsTheMiddleOfTheBusNotTheSlowest) {
+  const auto write = hex("02 06 00 01 00 03 98 38");
+  const auto frames = analyze_reads({{hex("05 03 00 00 00 01 85 8e"), 0},
+                                     {hex("05 03 02 00 05 89 87"), 150},
+                                     {hex("01 03 00 00 00 01 84 0a"), 300},
+                                     {hex("01 03 02 00 05 78 47"), 310},
+                                     {hex("03 03 00 00 00 01 85 e8"), 400},
+                                     {hex("03 03 02 00 05 01 87"), 410},
+                                     {hex("04 03 00 00 00 01 84 5f"), 500},
+                                     {hex("04 03 02 00 05 b4 47"), 510},
+                                     {write, 800},
+                                     {write, 912},
+                                     {write, 920}})
+                          .frames();
+  ASSERT_EQ(frames.size(), 11u);
+  EXPECT_EQ(frames[9].role, Role::request);
+  EXPECT_TRUE(frames[9].findings & finding_retry);
+  EXPECT_EQ(frames[10].role, Role::response);
+  EXPECT_EQ(frames[10].request, frames[9].index);
+}
+
 TEST(Matcher, AnEchoCopyLongAfterTheSlavesTurnaroundIsARetry) {
   // Slave 1 answers a read in 5 ms; then a write goes unanswered and the master, after its
   // 100 ms time-out, sends it again, byte for byte what the echo would have been.
