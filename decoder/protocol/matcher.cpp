@@ -222,17 +222,29 @@ void Matcher::learn_retry_interval(const Frame& retry, const Pending& first) {
     retry_interval_ns_ = interval;
 }
 
-// What a slave not heard yet is taken to need to answer: the middle of the slaves' longest
-// turnarounds (the slower, of two in the middle), not the slowest. One slow device, or one that
-// answers past the master's time-out, says nothing of the others, and taken for all it makes
-// every other slave's retry, until that slave answers once, read as its answer.
-void Matcher::learn_bus_turnaround() {
-  std::array<int64_t, 256> learned{};
-  const auto last = std::copy_if(turnaround_ns_.begin(), turnaround_ns_.end(), learned.begin(),
-                                 [](int64_t ns) { return ns > 0; });
-  const auto middle = learned.begin() + (last - learned.begin()) / 2;
-  std::nth_element(learned.begin(), middle, last);
-  bus_turnaround_ns_ = *middle;
+// A slave's longest turnaround grows; the slaves' are kept in order, so that what a slave not
+// heard yet is taken to need is their middle (the slower, of two in the middle), not the
+// slowest: one slow device, or one that answers past the master's time-out, says nothing of the
+// others, and taken for all it made every other slave's retry, until that slave answered once,
+// read as its answer.
+void Matcher::learn_turnaround(uint8_t slave, int64_t latency_ns) {
+  int64_t& longest = turnaround_ns_[slave];
+  if (latency_ns <= longest) return;
+  int64_t* first = ordered_turnarounds_.data();
+  int64_t* last = first + slaves_timed_;
+  int64_t* old = first;
+  if (longest) {
+    old = std::lower_bound(first, last, longest);
+  } else {  // a slave timed for the first time: its 0 sorts first
+    std::move_backward(first, last, last + 1);
+    ++last;
+    ++slaves_timed_;
+  }
+  // The old figure out, the ones between it and the new one down a place, the new one in.
+  int64_t* place = std::upper_bound(old + 1, last, latency_ns);
+  std::move(old + 1, place, old);
+  *(place - 1) = latency_ns;
+  longest = latency_ns;
 }
 
 // Whether a copy this long after its request is as late as the master's retries come, allowing

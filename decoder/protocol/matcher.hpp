@@ -147,16 +147,14 @@ class Matcher {
   int64_t answer_over_ns(uint8_t slave) const;
   int64_t retry_from_ns(const Pending& request) const;
   int64_t turnaround_learned(uint8_t slave) const {
-    return turnaround_ns_[slave] ? turnaround_ns_[slave] : bus_turnaround_ns_;
+    return turnaround_ns_[slave] ? turnaround_ns_[slave] : bus_turnaround();
   }
   void learn_retry_interval(const Frame& retry, const Pending& first);
   bool as_late_as_a_retry(int64_t waited_ns) const;
-  void learn_turnaround(uint8_t slave, int64_t latency_ns) {
-    if (latency_ns <= turnaround_ns_[slave]) return;
-    turnaround_ns_[slave] = latency_ns;
-    learn_bus_turnaround();
+  void learn_turnaround(uint8_t slave, int64_t latency_ns);
+  int64_t bus_turnaround() const {
+    return slaves_timed_ ? ordered_turnarounds_[slaves_timed_ / 2] : 0;
   }
-  void learn_bus_turnaround();
 
   Role decide_role(const Frame& frame, ChannelRole channel_role,
                    const CopyJudgement& judgement) const;
@@ -201,9 +199,10 @@ class Matcher {
   Expectation expectation_;  // what pending_ means to a framer, kept in step with it
   uint64_t timed_answers_ = 0, early_answers_ = 0;
   // The longest turnaround seen per slave, from pairs no retry could fake; and what a slave not
-  // heard yet is taken to need: the middle of those (learn_bus_turnaround).
+  // heard yet is taken to need: the middle of those (bus_turnaround), kept in order.
   std::array<int64_t, 256> turnaround_ns_{};
-  int64_t bus_turnaround_ns_ = 0;
+  std::array<int64_t, 256> ordered_turnarounds_{};  // the first slaves_timed_ hold them, rising
+  uint16_t slaves_timed_ = 0;
   int64_t retry_interval_ns_ = 0;  // the shortest seen from a request's end to its retry
 
   void set_pending(Pending* pending);
