@@ -4,6 +4,8 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstdlib>
+#include <string_view>
 
 #include <fmt/compile.h>
 #include <fmt/format.h>
@@ -26,6 +28,32 @@ std::span<const uint16_t> words_of(std::span<const uint8_t> bytes, WordBuffer& b
 int decimals_of(double scale) {
   if (scale <= 0 || scale >= 1) return 0;
   return std::clamp(static_cast<int>(std::lround(-std::log10(scale))), 0, 9);
+}
+
+// The digits after the point of the shortest text that reads back as the same float: a float
+// register holds about seven significant digits, whatever its scale (12.53 A, a power factor of
+// 0.952), and shows them, not one more (12.529999732971191).
+int float_decimals(float value) {
+  if (!std::isfinite(value)) return 0;
+  std::array<char, 32> buffer;
+  const auto end = fmt::format_to(buffer.data(), "{}", value);
+  std::string_view text(buffer.data(), static_cast<size_t>(end - buffer.data()));
+  int exponent = 0;  // fmt writes 1.2e-07 for the smallest and largest
+  if (const size_t e = text.find('e'); e != std::string_view::npos) {
+    exponent = std::atoi(text.data() + e + 1);
+    text = text.substr(0, e);
+  }
+  const size_t point = text.find('.');
+  const int digits =
+      point == std::string_view::npos ? 0 : static_cast<int>(text.size() - point - 1);
+  return std::clamp(digits - exponent, 0, 15);
+}
+
+// Digits after the point a value shows: those its scale implies for a whole number; a float's
+// own for a float, scaled.
+int decimals_of(const RegisterDef& def, double value) {
+  return def.type == ValueType::f32 ? float_decimals(static_cast<float>(value))
+                                    : decimals_of(def.scale);
 }
 
 double bcd_value(uint32_t raw) {
@@ -167,7 +195,7 @@ void decode_span(const DeviceModel& model, Table table, uint16_t start,
       ++i;
     }
     v.value = typed_value(*def, v.raw) * def->scale + def->offset;
-    v.decimals = decimals_of(def->scale);
+    v.decimals = decimals_of(*def, v.value);
     v.code = def->type == ValueType::code;
     if (def->values) {
       if (auto it = def->values->find(enum_key(*def, v.raw)); it != def->values->end())

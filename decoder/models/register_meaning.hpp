@@ -26,7 +26,7 @@ struct RegisterValue {
   std::string_view label;  // the manual's words
   uint32_t raw = 0;        // the register, or both words of a 32-bit value
   double value = 0;        // raw, signed by type, scaled and offset
-  int decimals = 0;        // digits after the point that the scale implies
+  int decimals = 0;        // digits after the point: the scale's, or a float's own
   std::string_view unit;
   std::string_view text;  // an enum's meaning, the set bits' names, or a string register's text
   bool code = false;      // shown in hex as the manual writes it (0106H)

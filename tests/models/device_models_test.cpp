@@ -882,6 +882,36 @@ TEST(ModelTypes, MultiWordStringBcdAndOffsetValuesDecode) {
   EXPECT_DOUBLE_EQ(out[7].value, 0xBEEF);
 }
 
+// A float shows the digits it holds, whatever its scale: 12.53 A is not 13, nor 12.529999...
+TEST(ModelTypes, AFloatShowsItsOwnDigitsNotTheScales) {
+  const DeviceModel model = parse_model(
+      "model: floats\n"
+      "registers:\n"
+      "  - {address: 0, name: current, type: f32, unit: A}\n"
+      "  - {address: 2, name: power_factor, type: f32}\n"
+      "  - {address: 4, name: power, type: f32, scale: 0.1, unit: kW}\n"
+      "  - {address: 6, name: setpoint, type: f32, order: low_first}\n"
+      "  - {address: 8, name: leakage, type: f32, unit: A}\n"
+      "  - {address: 10, name: count, type: u16, scale: 0.01}\n",
+      "floats.yaml");
+  const std::vector<uint16_t> words = {0x4148, 0x7AE1,  // 12.53f
+                                       0x3F73, 0xB646,  // 0.952f
+                                       0x449C, 0xA000,  // 1253.0f x 0.1
+                                       0x0000, 0xBF00,  // -0.5f, low word first
+                                       0x38FB, 0xA882,  // 0.00012f
+                                       0x04D2};         // 1234 x 0.01
+  Meaning meaning;
+  decode_registers(model, Table::holding, 0, words, meaning);
+  std::vector<std::string> shown;
+  for (const RegisterValue& reg : meaning.registers) {
+    fmt::memory_buffer out;
+    append_number(out, reg.value, reg.decimals);
+    shown.push_back(fmt::to_string(out));
+  }
+  EXPECT_EQ(shown,
+            (std::vector<std::string>{"12.53", "0.952", "125.3", "-0.5", "0.00012", "12.34"}));
+}
+
 TEST(ModelTypes, AValueCutShortByTheFrameDecodesAsItsRawWord) {
   const DeviceModel model =
       parse_model("model: t\nregisters:\n  - {address: 0, name: energy, type: u32}\n", "t.yaml");
