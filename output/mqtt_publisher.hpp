@@ -78,7 +78,7 @@ class MqttPublisher final : public RecordSink {
     const DeviceModel* model = nullptr;
     LastValue value;  // the latest the bus carried
     std::optional<int64_t> sent_ns;
-    uint32_t sent_raw = 0;  // what was sent then
+    uint64_t sent_raw = 0;  // what was sent then
     std::string sent_text;
     bool held = false;  // changed since it was last sent
   };

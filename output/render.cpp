@@ -298,7 +298,7 @@ void append_register_keys(fmt::memory_buffer& out, const RegisterValue& reg) {
     put(out, ",\"raw\":");
   }
   const size_t raw_at = out.size();
-  put_int(out, reg.raw);
+  put_uint(out, reg.raw);
   const size_t raw_end = out.size();
   put(out, ",\"value\":");
   // Unscaled, as most are: the raw digits again.

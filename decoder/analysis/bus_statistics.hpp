@@ -74,7 +74,7 @@ struct LastValue {
   std::string name, unit, text;
   double value = 0;
   int decimals = 0;
-  uint32_t raw = 0;
+  uint64_t raw = 0;
   int64_t t_ns = 0;
   // Over the capture: how often it was carried, how often its value differed from the one
   // before, and the range of its finite values (a drive's parameter holds one; a measurement

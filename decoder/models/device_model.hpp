@@ -17,7 +17,22 @@
 namespace modtap {
 
 // `code`: a 16-bit value the manual writes in hex (an identifying code, 0106H), shown so.
-enum class ValueType : uint8_t { u16, s16, u32, s32, f32, bcd, string, code, raw };
+enum class ValueType : uint8_t { u16, s16, u32, s32, f32, u64, s64, bcd, string, code, raw };
+
+// The registers a number of the type spans, where the type fixes them (0: the model's `words`).
+constexpr uint16_t words_of_type(ValueType type) {
+  switch (type) {
+    case ValueType::u32:
+    case ValueType::s32:
+    case ValueType::f32:
+      return 2;
+    case ValueType::u64:
+    case ValueType::s64:
+      return 4;
+    default:
+      return 0;
+  }
+}
 enum class Access : uint8_t { read, write, read_write };
 enum class WordOrder : uint8_t { high_first, low_first };
 

@@ -397,8 +397,15 @@ class ModelReader {
     if (map["bits"]) read_bits(map["bits"], def);
     if (map["fault"]) def.fault = read_flag(map["fault"]);
     if (def.name.empty() && !def.reserved) problems_.add(node, "a register needs a name");
-    if (def.type == ValueType::u32 || def.type == ValueType::s32 || def.type == ValueType::f32)
-      def.words = 2;
+    if (const uint16_t words = words_of_type(def.type)) {
+      if (map["words"] && def.words != words)
+        problems_.add(map["words"],
+                      fmt::format("the type spans {} registers, not {}", words, def.words));
+      def.words = words;
+    }
+    const bool number = def.type != ValueType::string && def.type != ValueType::raw;
+    if (number && def.words > 4)
+      problems_.add(map["words"], "a number spans at most 4 registers (64 bits): a string any");
     for (unsigned address = def.address; address <= last; ++address) {
       RegisterDef one = def;
       one.address = static_cast<uint16_t>(address);
@@ -414,6 +421,8 @@ class ModelReader {
                  {"u32", ValueType::u32},
                  {"s32", ValueType::s32},
                  {"f32", ValueType::f32},
+                 {"u64", ValueType::u64},
+                 {"s64", ValueType::s64},
                  {"bcd", ValueType::bcd},
                  {"string", ValueType::string},
                  {"code", ValueType::code},

@@ -56,20 +56,24 @@ int decimals_of(const RegisterDef& def, double value) {
                                     : decimals_of(def.scale);
 }
 
-double bcd_value(uint32_t raw) {
+double bcd_value(uint64_t raw) {
   double value = 0;
   for (int shift = 28; shift >= 0; shift -= 4) value = value * 10 + ((raw >> shift) & 0xF);
   return value;
 }
 
-double typed_value(const RegisterDef& def, uint32_t raw) {
+double typed_value(const RegisterDef& def, uint64_t raw) {
   switch (def.type) {
     case ValueType::s16:
       return static_cast<int16_t>(raw);
     case ValueType::s32:
       return static_cast<int32_t>(raw);
     case ValueType::f32:
-      return std::bit_cast<float>(raw);
+      return std::bit_cast<float>(static_cast<uint32_t>(raw));
+    case ValueType::s64:
+      return static_cast<double>(static_cast<int64_t>(raw));
+    case ValueType::u64:
+      return static_cast<double>(raw);
     case ValueType::bcd:
       return bcd_value(raw);
     default:
@@ -86,11 +90,11 @@ std::string string_text(std::span<const uint16_t> words) {
 }
 
 // "Run, Reverse, S1": each field's meaning for its current value, or its name when set.
-std::string bits_text(const RegisterDef& def, uint32_t raw) {
+std::string bits_text(const RegisterDef& def, uint64_t raw) {
   std::string text;
   for (const BitField& field : def.bits) {
-    const uint32_t mask = field.width >= 32 ? ~0u : (1u << field.width) - 1;
-    const uint32_t value = (raw >> field.lsb) & mask;
+    const uint64_t mask = field.width >= 64 ? ~uint64_t{0} : (uint64_t{1} << field.width) - 1;
+    const auto value = static_cast<uint32_t>((raw >> field.lsb) & mask);
     std::string part;
     if (auto it = field.values.find(value); it != field.values.end()) {
       part = it->second;
@@ -107,13 +111,16 @@ std::string bits_text(const RegisterDef& def, uint32_t raw) {
 }
 
 // Named values are written as the manual does, signed for signed registers (-1: "no fault").
-int64_t enum_key(const RegisterDef& def, uint32_t raw) {
+int64_t enum_key(const RegisterDef& def, uint64_t raw) {
   return static_cast<int64_t>(typed_value(def, raw));
 }
 
-uint32_t combine(const RegisterDef& def, uint16_t first, uint16_t second) {
-  return def.order == WordOrder::high_first ? (uint32_t{first} << 16 | second)
-                                            : (uint32_t{second} << 16 | first);
+// The words of a value that spans several, as one number: the first the highest, or the lowest.
+uint64_t combine(const RegisterDef& def, std::span<const uint16_t> words) {
+  uint64_t raw = 0;
+  for (size_t k = 0; k < words.size(); ++k)
+    raw = raw << 16 | words[def.order == WordOrder::high_first ? k : words.size() - 1 - k];
+  return raw;
 }
 
 // `reported`: the device says the value (a read's answer), the master did not write it.
@@ -190,9 +197,9 @@ void decode_span(const DeviceModel& model, Table table, uint16_t start,
       out.push_back(v);
       continue;
     }
-    if (def->words == 2 && i + 1 < words.size()) {
-      v.raw = combine(*def, words[i], words[i + 1]);
-      ++i;
+    if (def->words > 1 && i + def->words <= words.size()) {
+      v.raw = combine(*def, words.subspan(i, def->words));
+      i += def->words - 1u;
     }
     v.value = typed_value(*def, v.raw) * def->scale + def->offset;
     v.decimals = decimals_of(*def, v.value);

@@ -24,7 +24,7 @@ struct RegisterValue {
   uint16_t address = 0;
   std::string_view name;   // empty for a register the model does not know
   std::string_view label;  // the manual's words
-  uint32_t raw = 0;        // the register, or both words of a 32-bit value
+  uint64_t raw = 0;        // the register, or all the words of a 32- or 64-bit value
   double value = 0;        // raw, signed by type, scaled and offset
   int decimals = 0;        // digits after the point: the scale's, or a float's own
   std::string_view unit;

@@ -912,6 +912,41 @@ TEST(ModelTypes, AFloatShowsItsOwnDigitsNotTheScales) {
             (std::vector<std::string>{"12.53", "0.952", "125.3", "-0.5", "0.00012", "12.34"}));
 }
 
+// An inverter's energy and running-time counters span four registers.
+TEST(ModelTypes, SixtyFourBitValuesSpanFourRegistersInEitherOrder) {
+  const DeviceModel model = parse_model(
+      "model: inverter\n"
+      "registers:\n"
+      "  - {address: 0, name: energy, type: u64, scale: 0.001, unit: kWh}\n"
+      "  - {address: 4, name: balance, type: s64, order: low_first, unit: Wh}\n"
+      "  - {address: 8, name: after, type: u16}\n",
+      "inverter.yaml");
+  EXPECT_EQ(model.registers.at({Table::holding, 0}).words, 4);
+  const std::vector<uint16_t> words = {0x0000, 0x0001, 0x0000, 0x0000,  // 2^32
+                                       0xFFFE, 0xFFFF, 0xFFFF, 0xFFFF,  // -2, low word first
+                                       0x002A};
+  Meaning meaning;
+  decode_registers(model, Table::holding, 0, words, meaning);
+  const std::vector<RegisterValue>& out = meaning.registers;
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_EQ(out[0].raw, uint64_t{1} << 32);
+  EXPECT_DOUBLE_EQ(out[0].value, 4294967.296);
+  EXPECT_EQ(out[0].decimals, 3);
+  EXPECT_EQ(out[1].raw, ~uint64_t{1});
+  EXPECT_DOUBLE_EQ(out[1].value, -2);
+  EXPECT_EQ(out[2].address, 8);
+  EXPECT_DOUBLE_EQ(out[2].value, 42);
+  for (const char* type : {"u16, words: 5", "u32, words: 4", "s64, words: 2"})
+    EXPECT_THROW(
+        parse_model(
+            fmt::format("model: x\nregisters:\n  - {{address: 0, name: a, type: {}}}\n", type),
+            "x.yaml"),
+        ModelError)
+        << type;
+  EXPECT_NO_THROW(parse_model(
+      "model: x\nregisters:\n  - {address: 0, name: a, type: u32, words: 2}\n", "x.yaml"));
+}
+
 TEST(ModelTypes, AValueCutShortByTheFrameDecodesAsItsRawWord) {
   const DeviceModel model =
       parse_model("model: t\nregisters:\n  - {address: 0, name: energy, type: u32}\n", "t.yaml");
