@@ -8,24 +8,25 @@
 #include <span>
 #include <string>
 
+#include "captures/tap_port.hpp"
 #include "decoder/protocol/serial_format.hpp"
 
 namespace modtap::captures {
 
-class SerialPort {
+class SerialPort final : public TapPort {
  public:
   // Throws CaptureError naming the port: missing, busy (another program holds it), not a tty.
   SerialPort(const std::string& path, const SerialFormat& format);
-  ~SerialPort();
+  ~SerialPort() override;
   SerialPort(const SerialPort&) = delete;
   SerialPort& operator=(const SerialPort&) = delete;
 
-  int fd() const { return fd_; }
+  int fd() const override { return fd_; }
   const std::string& path() const { return path_; }
   // Bytes that arrived, 0 if none yet. Throws CaptureError when the port is gone (unplugged).
-  size_t read(std::span<uint8_t> into);
+  size_t read(std::span<uint8_t> into) override;
   // How the port's time stamps can be trusted: low-latency mode, the FTDI latency timer.
-  const std::string& clock_note() const { return clock_note_; }
+  const std::string& clock_note() const override { return clock_note_; }
 
  private:
   void configure(const SerialFormat& format);

@@ -12,13 +12,14 @@
 #include <fmt/format.h>
 
 #include "captures/chunk_source.hpp"
-#include "captures/serial_port.hpp"
+#include "captures/tap_port.hpp"
 #include "decoder/protocol/format_probe.hpp"
 
 namespace modtap::live {
 namespace {
 
-using captures::SerialPort;
+using captures::open_tap;
+using captures::TapPort;
 
 std::atomic<bool> stop_requested{false};
 
@@ -82,6 +83,14 @@ PortSpec parse_port(const std::string& spec) {
 ProbeResult probe_ports(const std::vector<PortSpec>& specs, const LiveOptions& options,
                         std::optional<uint32_t> baud, std::optional<Parity> parity,
                         int64_t window_ns, const std::atomic<bool>& stop) {
+  // A device server's own port sets the line's settings, and its bytes read the same whatever
+  // modtap is told: nothing to listen for.
+  for (const auto& spec : specs)
+    if (captures::is_network_tap(spec.path))
+      throw captures::CaptureError(fmt::format(
+          "{}: --baud auto and --parity auto cannot tell a device server's settings, which its "
+          "own port sets: give --baud and --parity as the server has them",
+          spec.path));
   const auto& base = options.analyzer.format;
   std::vector<FormatTrial> trials;
   std::vector<std::vector<ReadBytes>> reads;
@@ -89,8 +98,8 @@ ProbeResult probe_ports(const std::vector<PortSpec>& specs, const LiveOptions& o
   for (const auto& spec : specs) channels.push_back({spec.name, spec.role});
   for (const auto& format : candidate_formats(baud, parity, base.data_bits, base.stop_bits)) {
     if (stop) break;
-    std::vector<std::unique_ptr<SerialPort>> ports;
-    for (const auto& spec : specs) ports.push_back(std::make_unique<SerialPort>(spec.path, format));
+    std::vector<std::unique_ptr<TapPort>> ports;
+    for (const auto& spec : specs) ports.push_back(open_tap(spec.path, format));
     AnalyzerOptions analyzer = options.analyzer;
     analyzer.format = format;
     analyzer.clock = ClockQuality::per_chunk;
@@ -151,10 +160,10 @@ void request_stop() {
 
 int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options, RecordSink& sink,
              const std::atomic<bool>& stop) {
-  std::vector<std::unique_ptr<SerialPort>> ports;
+  std::vector<std::unique_ptr<TapPort>> ports;
   std::vector<ChannelInfo> channels;
   for (const auto& spec : specs) {
-    ports.push_back(std::make_unique<SerialPort>(spec.path, options.analyzer.format));
+    ports.push_back(open_tap(spec.path, options.analyzer.format));
     channels.push_back({spec.name, spec.role});
     if (options.announce)
       fmt::print(stderr, "modtap: listening on {} at {}, mode {} ({})\n", spec.path,
@@ -199,7 +208,7 @@ int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options, Rec
       for (size_t i = 0; i < ports.size() && !stop; ++i) {
         while (!stop) {
           try {
-            ports[i] = std::make_unique<SerialPort>(specs[i].path, options.analyzer.format);
+            ports[i] = open_tap(specs[i].path, options.analyzer.format);
             fmt::print(stderr, "modtap: {} is back\n", specs[i].path);
             if (options.on_port_event) options.on_port_event(PortEvent::came_back);
             break;

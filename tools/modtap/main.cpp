@@ -14,6 +14,7 @@
 #include <CLI/CLI.hpp>
 
 #include "captures/output_file.hpp"
+#include "captures/tap_port.hpp"
 #include "decoder/filter/display_filter.hpp"
 #include "decoder/protocol/field_registry.hpp"
 #include "decoder/protocol/nearest_name.hpp"
@@ -133,6 +134,7 @@ struct Command {
   CLI::Option* dlt = nullptr;
   CLI::Option* reconnect = nullptr;
   CLI::Option* probe_time = nullptr;
+  CLI::Option* chunk_jitter = nullptr;
   CLI::App* fields = nullptr;
   CLI::App* models = nullptr;
   CLI::App* check = nullptr;
@@ -152,11 +154,13 @@ void add_input_options(CLI::App& app, RunOptions& o, Command& command) {
       ->excludes(read);
   auto* listen_on = app.add_option("-i,--interface", o.interfaces,
                                    "Serial port to listen on (read-only): PATH, or master=PATH and "
-                                   "slave=PATH for a tap that splits the directions")
+                                   "slave=PATH for a tap that splits the directions; or a device "
+                                   "server's stream, tcp://HOST:PORT")
                         ->type_name("PORT");
   read->excludes(listen_on);
   command.reconnect =
-      app.add_flag("--reconnect", o.reconnect, "Wait for an unplugged port to come back");
+      app.add_flag("--reconnect", o.reconnect,
+                   "Wait for an unplugged port or a dropped connection to come back");
   tools::add_enum_option(app, "--format", o.format, "Capture format",
                          {{"pcapng", captures::Format::pcap}});
 }
@@ -303,10 +307,12 @@ void add_analysis_options(CLI::App& app, RunOptions& o, Command& command) {
   app.add_option("--ascii-timeout", o.ascii_timeout_s, "ASCII inter-character time-out, seconds")
       ->type_name("SECONDS")
       ->check(tools::positive("needs a number of seconds above 0"));
-  app.add_option("--chunk-jitter", o.jitter_ms,
-                 "For sources timed per read: milliseconds an adapter may hold bytes back")
-      ->type_name("MS")
-      ->check(CLI::NonNegativeNumber);
+  command.chunk_jitter =
+      app.add_option("--chunk-jitter", o.jitter_ms,
+                     "For sources timed per read: milliseconds an adapter or a device server may "
+                     "hold bytes back (30; 100 for tcp://)")
+          ->type_name("MS")
+          ->check(CLI::NonNegativeNumber);
   app.add_option("--sigrok-channels", o.sigrok_channels,
                  "sigrok lines: tx=NAME,rx=NAME (the master's transmit and receive) or bus=NAME")
       ->type_name("LINES");
@@ -350,6 +356,10 @@ void settle_implied(RunOptions& o, const Command& command) {
   if (o.display_filter.find_first_not_of(" \t\r\n") == std::string::npos) o.display_filter.clear();
   if (!command.named_capture.empty()) o.read_file = command.named_capture;
   o.timeout_given = command.timeout->count() > 0;
+  const bool network = std::any_of(o.interfaces.begin(), o.interfaces.end(), [](const auto& spec) {
+    return captures::is_network_tap(spec.substr(spec.find('=') + 1));
+  });
+  if (network && command.chunk_jitter->count() == 0) o.jitter_ms = captures::network_read_jitter_ms;
   if (!o.write_file.empty() && command.output->count() == 0) o.output = OutputKind::none;
   if (!o.follow.empty() && command.output->count() == 0)
     o.output = o.report_file.empty() ? OutputKind::csv : OutputKind::text;
