@@ -319,6 +319,11 @@ void append_register_keys(fmt::memory_buffer& out, const RegisterValue& reg) {
   optional_string(reg.text);
 }
 
+std::string clock_text(ClockQuality clock, int64_t read_lag_ns) {
+  if (clock != ClockQuality::per_chunk || read_lag_ns <= 0) return std::string(to_string(clock));
+  return fmt::format("{}, a read up to {:g} ms late", to_string(clock), read_lag_ns / 1e6);
+}
+
 void put_function_label(fmt::memory_buffer& out, uint8_t fc) {
   put(out, function_label(fc));
 }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <string_view>
 
 #include <fmt/compile.h>
@@ -48,6 +49,10 @@ struct FunctionLabel {
   uint8_t fc;
 };
 void put_function_label(fmt::memory_buffer& out, uint8_t fc);
+
+// "per-chunk, a read up to 30 ms late": how the source timed its bytes, and for a clock per read
+// how late it may stamp one, below which its latencies and gaps say nothing.
+std::string clock_text(ClockQuality clock, int64_t read_lag_ns);
 
 // "1 bad check", "2 bad checks": a count with its noun in the number it takes.
 inline std::string counted(uint64_t n, std::string_view one, std::string_view many) {

@@ -137,7 +137,8 @@ void append_head(fmt::memory_buffer& out, const BusStatistics& s, const ReportIn
                  "<p class=\"meta\">",
                  style);
   append_html(out, info.capture);
-  fmt::format_to(put, " · {} · clock {}", describe(s.format()), to_string(s.clock()));
+  fmt::format_to(put, " · {} · clock {}", describe(s.format()),
+                 clock_text(s.clock(), s.read_lag_ns()));
   if (s.dated())
     fmt::format_to(put, " · {} to {} UTC", clock_time(*s.first_t_ns), clock_time(*s.last_t_ns));
   out.append(std::string_view("</p>\n"));

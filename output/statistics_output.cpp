@@ -40,7 +40,7 @@ void print_span(Output& out, const BusStatistics& s) {
     const auto first = static_cast<std::time_t>(seconds_and_micros(*s.first_t_ns).second);
     out.print(" from {:%Y-%m-%d %H:%M:%S} UTC", fmt::gmtime(first));
   }
-  out.print(", {}, clock {}\n", describe(s.format()), to_string(s.clock()));
+  out.print(", {}, clock {}\n", describe(s.format()), clock_text(s.clock(), s.read_lag_ns()));
 }
 
 void print_breakdown(Output& out, const char* const* names, std::span<const uint64_t> counts) {
@@ -385,8 +385,9 @@ void append_statistics_json(fmt::memory_buffer& out, const BusStatistics& s,
                             std::span<const Problem> problems, bool complete) {
   auto put = fmt::appender(out);
   fmt::format_to(put,
-                 "{{\"complete\":{},\"clock\":\"{}\",\"serial\":\"{}\",\"problems\":", complete,
-                 to_string(s.clock()), describe(s.format()));
+                 "{{\"complete\":{},\"clock\":\"{}\",\"read_lag_ms\":{},\"serial\":\"{}\","
+                 "\"problems\":",
+                 complete, to_string(s.clock()), s.read_lag_ns() / 1e6, describe(s.format()));
   append_problems_json(out, problems);
   if (s.first_t_ns) {
     fmt::format_to(put, ",\"first_t_ns\":{},\"last_t_ns\":{}", *s.first_t_ns, *s.last_t_ns);

@@ -169,6 +169,10 @@ class BusStatistics final : public RecordSink {
   std::optional<double> bus_load() const;
   const SerialFormat& format() const { return format_; }
   ClockQuality clock() const { return clock_; }
+  // How late a clock per read may stamp a byte (--chunk-jitter; a device server's packets:
+  // docs/live.md): what its latencies and gaps cannot tell apart. 0 for other clocks.
+  int64_t read_lag_ns() const { return clock_ == ClockQuality::per_chunk ? read_lag_ns_ : 0; }
+  void set_read_lag(int64_t ns) { read_lag_ns_ = ns; }
 
  private:
   SlaveStatistics& slave(uint8_t address);
@@ -184,6 +188,7 @@ class BusStatistics final : public RecordSink {
 
   SerialFormat format_;
   ClockQuality clock_;
+  int64_t read_lag_ns_ = 0;
   bool data_bits_from_mode_;
   std::map<uint8_t, std::unique_ptr<SlaveStatistics>> addresses_;
   std::array<std::optional<int64_t>, 256> last_request_ns_{};

@@ -228,7 +228,10 @@ TEST(Cli, StatsFileIsJsonBesideTheTextOutput) {
   std::stringstream json;
   json << file.rdbuf();
   EXPECT_EQ(
-      json.str().rfind("{\"complete\":true,\"clock\":\"per-byte\",\"serial\":\"19200 8E1\"", 0), 0u)
+      json.str().rfind(
+          "{\"complete\":true,\"clock\":\"per-byte\",\"read_lag_ms\":0,\"serial\":\"19200 8E1\"",
+          0),
+      0u)
       << json.str();
   EXPECT_NE(json.str().find("\"frames\":30,\"requests\":15,\"responses\":15"), std::string::npos);
   EXPECT_NE(json.str().find("\"slaves\":[{\"slave\":1,\"requests\":15,"), std::string::npos);
@@ -688,11 +691,14 @@ TEST(Cli, APcapOfOneByteAPacketIsAClockPerByte) {
   using modtap::busgen::Delivery;
   const auto clock_line = [](const std::string& capture) {
     for (const auto& line : run("-r " + capture + " -T stats").lines)
-      if (line.rfind("capture ", 0) == 0) return line.substr(line.rfind(", ") + 2);
+      if (line.rfind("capture ", 0) == 0) return line.substr(line.find("clock "));
     return std::string();
   };
   EXPECT_EQ(clock_line(faulty_bus("modtap-bytes.pcap", {}, Delivery::per_byte)), "clock per-byte");
-  EXPECT_EQ(clock_line(faulty_bus("modtap-frames.pcap", {})), "clock per-chunk");
+  EXPECT_EQ(clock_line(faulty_bus("modtap-frames.pcap", {})),
+            "clock per-chunk, a read up to 30 ms late");
+  EXPECT_EQ(clock_line(faulty_bus("modtap-frames.pcap", {}) + " --chunk-jitter 8"),
+            "clock per-chunk, a read up to 8 ms late");
   // The same bytes, one a packet, but each USB read's bytes stamped a microsecond apart.
   const auto path = (std::filesystem::temp_directory_path() / "modtap-read-bytes.pcap").string();
   {
@@ -704,7 +710,7 @@ TEST(Cli, APcapOfOneByteAPacketIsAClockPerByte) {
                       1'700'000'000'000'000'000 + r * 16'000'000 + static_cast<int64_t>(i) * 1000,
                       {read.data() + i, 1}});
   }
-  EXPECT_EQ(clock_line(path), "clock per-chunk");
+  EXPECT_EQ(clock_line(path), "clock per-chunk, a read up to 30 ms late");
 }
 
 // A pcap of one byte a packet read at half its baud: the bytes come twice as fast as 9600
