@@ -9,8 +9,10 @@ Over either, modtap must find every frame with its role, as from the log itself,
 nothing: the TCP server and the pty's other side check that no byte comes back. A refused and
 an unknown server are one clear line each; a server that goes away ends the run with the
 connection named, or under --reconnect is waited for and read again when it is back.
+Wireshark's extcap captures from the packing server too (its interface modtap:remote, the
+server given as an option), and its pcapng reads back to every frame.
 
-Usage: network_tap.py MODTAP BUS_SIMULATOR WORK_DIR
+Usage: network_tap.py MODTAP BUS_SIMULATOR EXTCAP WORK_DIR
 """
 import json
 import os
@@ -26,7 +28,7 @@ import tty
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
 from modbus import replay, simulated_blocks, wait_until_open  # noqa: E402
 
-MODTAP, SIMULATOR, WORK = sys.argv[1:4]
+MODTAP, SIMULATOR, EXTCAP, WORK = sys.argv[1:5]
 LINE = ["--baud", "19200", "--parity", "none"]
 failures = []
 
@@ -99,6 +101,31 @@ def packed_server(truth, data):
     check("packed", "the connection is gone: the server closed it" in run.stderr,
           f"the end is said: {run.stderr!r}")
     check("packed", server.received == b"", f"modtap sent {server.received!r}")
+
+
+def through_extcap(truth, data):
+    listed = subprocess.run([EXTCAP, "--extcap-interfaces"], capture_output=True, text=True).stdout
+    check("extcap", "{value=modtap:remote}" in listed, f"no remote interface in {listed!r}")
+    config = subprocess.run([EXTCAP, "--extcap-config", "--extcap-interface", "modtap:remote"],
+                            capture_output=True, text=True).stdout
+    check("extcap", "{call=--server}" in config, f"no server option in {config!r}")
+    server = PackingServer(data)
+    server.start()
+    fifo = os.path.join(WORK, "extcap.fifo")
+    if os.path.exists(fifo):
+        os.unlink(fifo)
+    os.mkfifo(fifo)
+    pcapng = os.path.join(WORK, "extcap.pcapng")
+    extcap = subprocess.Popen([EXTCAP, "--capture", "--extcap-interface", "modtap:remote",
+                               "--server", f"tcp://127.0.0.1:{server.port}", "--fifo", fifo,
+                               *LINE], stderr=subprocess.PIPE, text=True)
+    with open(fifo, "rb") as source, open(pcapng, "wb") as sink:
+        shutil.copyfileobj(source, sink)
+    extcap.wait(30)
+    server.join(10)
+    read_back = subprocess.run([MODTAP, "-r", pcapng, "-T", "json"], capture_output=True, text=True)
+    compare("extcap", truth, frames_of(read_back.stdout))
+    check("extcap", server.received == b"", f"the extcap sent {server.received!r}")
 
 
 def bad_servers():
@@ -207,6 +234,7 @@ def main():
     blocks = simulated_blocks(log)
     data = b"".join(bytes(block) for _, block in blocks)
     packed_server(truth, data)
+    through_extcap(truth, data)
     bad_servers()
     if shutil.which("ser2net"):
         through_ser2net(blocks, truth)

@@ -1,4 +1,5 @@
-// modtap-extcap: lets Wireshark capture from a serial port through modtap's framer.
+// modtap-extcap: lets Wireshark capture from a serial port, or from a bus behind a serial
+// device server (tcp://HOST:PORT, docs/live.md), through modtap's framer.
 // Wireshark runs it with --extcap-interfaces, --extcap-dlts, --extcap-config, and
 // --capture --fifo PATH; it writes pcapng (DLT_USER0 with modtap's verdicts) to the FIFO.
 #include <dirent.h>
@@ -12,6 +13,7 @@
 #include <CLI/CLI.hpp>
 
 #include "captures/output_file.hpp"
+#include "captures/tap_port.hpp"
 #include "tools/modtap/model_catalog.hpp"
 #include "tools/modtap/run.hpp"
 
@@ -20,6 +22,8 @@ namespace {
 using namespace modtap;
 
 constexpr const char* prefix = "modtap:";
+// The interface of a bus behind a device server, whose address the capture's options give.
+constexpr const char* remote = "modtap:remote";
 
 // USB and on-board serial ports, plus any listed in MODTAP_EXTCAP_PORTS (colon-free paths,
 // comma-separated), e.g. a pseudo-terminal under test.
@@ -49,10 +53,18 @@ void print_interfaces() {
   for (const auto& port : serial_ports())
     fmt::print("interface {{value={}{}}}{{display=Modbus serial (modtap): {}}}\n", prefix, port,
                port);
+  fmt::print("interface {{value={}}}{{display=Modbus serial behind a device server (modtap)}}\n",
+             remote);
 }
 
-void print_config(const tools::ModelCatalog& catalog) {
+void print_config(const tools::ModelCatalog& catalog, bool device_server) {
   int n = 0;
+  if (device_server)
+    fmt::print(
+        "arg {{number={}}}{{call=--server}}{{display=Device server}}{{type=string}}"
+        "{{required=true}}{{validation=^tcp://.+:[0-9]+$}}{{tooltip=tcp://HOST:PORT of ser2net, "
+        "an NPort or another server in TCP-server mode; baud and parity as its port has them}}\n",
+        n++);
   auto selector = [&](const char* call, const char* display, const char* fallback,
                       std::initializer_list<const char*> values) {
     fmt::print("arg {{number={}}}{{call=--{}}}{{display={}}}{{type=selector}}\n", n, call, display);
@@ -81,7 +93,7 @@ int main(int argc, char** argv) {
   CLI::App app{"modtap-extcap: modtap's serial Modbus capture for Wireshark"};
   app.allow_extras();  // Wireshark may add options of its own in later versions
   bool interfaces = false, dlts = false, config = false, capture = false;
-  std::string interface, fifo, version, filter;
+  std::string interface, fifo, version, filter, server;
   tools::RunOptions run;
   run.models = {"generic"};
   app.add_flag("--extcap-interfaces", interfaces);
@@ -92,6 +104,7 @@ int main(int argc, char** argv) {
   app.add_option("--extcap-version", version);
   app.add_option("--extcap-capture-filter", filter);
   app.add_option("--fifo", fifo);
+  app.add_option("--server", server);
   tools::add_line_options(app, run);  // as modtap's, with the same checks
   CLI11_PARSE(app, argc, argv);
 
@@ -110,7 +123,7 @@ int main(int argc, char** argv) {
   if (config) {
     tools::ModelCatalog catalog;
     catalog.load_builtin();
-    print_config(catalog);
+    print_config(catalog, interface == remote);
     return 0;
   }
   if (!capture || fifo.empty()) {
@@ -120,6 +133,15 @@ int main(int argc, char** argv) {
   // Wireshark's capture is modtap's `-i PORT -w FIFO`, quietly: Wireshark reads anything on
   // standard error as an error.
   run.interfaces = {interface.substr(std::string(prefix).size())};
+  if (interface == remote) {
+    if (!captures::is_network_tap(server)) {
+      fmt::print(stderr, "modtap-extcap: the device server is tcp://HOST:PORT, not \"{}\"\n",
+                 server);
+      return 1;
+    }
+    run.interfaces = {server};
+    run.jitter_ms = captures::network_read_jitter_ms;
+  }
   run.write_file = fifo;
   run.output = tools::OutputKind::none;
   run.announce = false;
