@@ -8,6 +8,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <memory>
@@ -15,11 +16,13 @@
 #include <fmt/format.h>
 
 #include "captures/chunk_source.hpp"
+#include "decoder/protocol/format_probe.hpp"
 
 namespace modtap::captures {
 namespace {
 
 constexpr std::string_view tcp_scheme = "tcp://";
+constexpr std::string_view rfc2217_scheme = "rfc2217://";
 constexpr int connect_timeout_ms = 5000;
 
 struct HostPort {
@@ -28,17 +31,19 @@ struct HostPort {
 
 // HOST:PORT after the scheme; an IPv6 host in brackets ([::1]:2000).
 HostPort split_host_port(const std::string& url) {
-  const std::string rest = url.substr(tcp_scheme.size());
+  const std::string rest = url.substr(url.find("://") + 3);
   const bool bracketed = rest.starts_with('[');
   const size_t close = bracketed ? rest.find(']') : std::string::npos;
   const size_t colon =
       bracketed ? (close == std::string::npos ? close : rest.find(':', close)) : rest.rfind(':');
   if (colon == std::string::npos || colon + 1 == rest.size())
-    throw CaptureError(fmt::format("{}: a device server is tcp://HOST:PORT", url));
+    throw CaptureError(
+        fmt::format("{}: a device server is tcp://HOST:PORT or rfc2217://HOST:PORT", url));
   HostPort hp{bracketed ? rest.substr(1, close - 1) : rest.substr(0, colon),
               rest.substr(colon + 1)};
   if (hp.host.empty() || hp.port.find_first_not_of("0123456789") != std::string::npos)
-    throw CaptureError(fmt::format("{}: a device server is tcp://HOST:PORT", url));
+    throw CaptureError(
+        fmt::format("{}: a device server is tcp://HOST:PORT or rfc2217://HOST:PORT", url));
   return hp;
 }
 
@@ -90,10 +95,14 @@ void notice_cuts(int fd) {
 }  // namespace
 
 bool is_network_tap(std::string_view path) {
-  return path.starts_with(tcp_scheme);
+  return path.starts_with(tcp_scheme) || sets_server_port(path);
 }
 
-NetworkTap::NetworkTap(const std::string& url)
+bool sets_server_port(std::string_view path) {
+  return path.starts_with(rfc2217_scheme);
+}
+
+NetworkTap::NetworkTap(const std::string& url, const SerialFormat& format)
     : url_(url),
       clock_note_(
           "time stamped per network packet as it arrives, after the server's packing and the "
@@ -110,6 +119,39 @@ NetworkTap::NetworkTap(const std::string& url)
   for (const addrinfo* a = found; a && fd_ < 0; a = a->ai_next) fd_ = connect_to(a, error);
   if (fd_ < 0) throw CaptureError(fmt::format("{}: cannot connect: {}", url, std::strerror(error)));
   notice_cuts(fd_);
+  if (sets_server_port(url)) {
+    telnet_.emplace();
+    send_commands(ComPortOption::opening(format));
+  }
+}
+
+// Telnet's commands to an RFC 2217 server, never a data byte; a few dozen bytes, which a
+// connected socket takes at once (a second at most).
+void NetworkTap::send_commands(std::span<const uint8_t> commands) {
+  while (!commands.empty()) {
+    const ssize_t n = ::send(fd_, commands.data(), commands.size(), MSG_NOSIGNAL);
+    if (n > 0) {
+      commands = commands.subspan(static_cast<size_t>(n));
+      continue;
+    }
+    pollfd p{fd_, POLLOUT, 0};
+    if ((n < 0 && errno != EAGAIN && errno != EINTR) || ::poll(&p, 1, 1000) != 1)
+      throw CaptureError(
+          fmt::format("{}: cannot set the server's port: {}", url_, std::strerror(errno)));
+  }
+}
+
+std::optional<std::string> NetworkTap::take_notice() {
+  if (!telnet_) return std::nullopt;
+  if (telnet_->refused() && !settings_told_) {
+    settings_told_ = true;
+    return "the server refuses RFC 2217: its port keeps the settings it has";
+  }
+  const ReportedSettings& r = telnet_->reported();
+  if (settings_told_ || !r.baud || !r.data_bits || !r.parity || !r.stop_bits) return std::nullopt;
+  settings_told_ = true;
+  return fmt::format("the server set its port to {}",
+                     describe(SerialFormat{*r.baud, *r.data_bits, *r.parity, *r.stop_bits}));
 }
 
 NetworkTap::~NetworkTap() {
@@ -118,6 +160,15 @@ NetworkTap::~NetworkTap() {
 
 size_t NetworkTap::read(std::span<uint8_t> into) {
   const ssize_t n = ::recv(fd_, into.data(), into.size(), MSG_DONTWAIT);
+  if (n > 0 && telnet_) {
+    // Telnet's commands out, its doubled 0xFF undone: what is left is the line's bytes.
+    received_.clear();
+    replies_.clear();
+    telnet_->take(into.first(static_cast<size_t>(n)), received_, replies_);
+    if (!replies_.empty()) send_commands(replies_);
+    std::copy(received_.begin(), received_.end(), into.begin());
+    return received_.size();
+  }
   if (n > 0) return static_cast<size_t>(n);
   if (n < 0 && (errno == EAGAIN || errno == EINTR)) return 0;
   throw CaptureError(fmt::format("{}: the connection is gone: {}", url_,

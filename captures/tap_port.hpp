@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -23,10 +24,15 @@ class TapPort {
   virtual size_t read(std::span<uint8_t> into) = 0;
   // How its time stamps can be trusted, for the start-up line.
   virtual const std::string& clock_note() const = 0;
+  // Something the port learned that the user should hear once (a device server's report of the
+  // settings it set its port to), or nothing.
+  virtual std::optional<std::string> take_notice() { return std::nullopt; }
 };
 
-// tcp://HOST:PORT, the raw byte stream of a device server in TCP-server mode.
+// tcp://HOST:PORT, the raw byte stream of a device server in TCP-server mode, or
+// rfc2217://HOST:PORT, a Telnet COM-PORT-OPTION server whose port modtap sets.
 bool is_network_tap(std::string_view path);
+bool sets_server_port(std::string_view path);  // rfc2217://
 
 // How late a device server's packet may bring a byte, where --chunk-jitter is not given: it
 // packs what its port read for up to some tens of milliseconds (an NPort's force-transmit time,

@@ -21,6 +21,7 @@ import signal
 import socket
 import subprocess
 import sys
+import termios
 import threading
 import time
 import tty
@@ -140,13 +141,14 @@ def bad_servers():
 
 
 class Ser2net:
-    """ser2net 4 serving `pty_path` at 19200 8N1 as a raw TCP server on `port`."""
+    """ser2net 4 serving `pty_path` at 19200 8N1 on `port`, as a raw TCP server or, with
+    `accepter="telnet(rfc2217),tcp"`, as an RFC 2217 server whose client sets the port."""
 
-    def __init__(self, pty_path, port):
+    def __init__(self, pty_path, port, accepter="tcp"):
         self.config = os.path.join(WORK, "ser2net.yaml")
         with open(self.config, "w") as f:
             f.write("%YAML 1.1\n---\nconnection: &bus\n"
-                    f"    accepter: tcp,127.0.0.1,{port}\n"
+                    f"    accepter: {accepter},127.0.0.1,{port}\n"
                     f"    connector: serialdev,{pty_path},19200n81,local\n")
         self.port = port
         self.start()
@@ -223,6 +225,40 @@ def through_ser2net(blocks, truth):
     os.close(slave)
 
 
+def through_rfc2217(blocks, truth):
+    """modtap sets the server's port to 9600 8N1 (ser2net's own setting is 19200) and reads the
+    line's bytes out of the Telnet stream."""
+    master, slave = os.openpty()
+    tty.setraw(master)
+    tty.setraw(slave)
+    pty_path = os.ttyname(slave)
+    server = Ser2net(pty_path, free_port(), "telnet(rfc2217),tcp")
+    out_path, err_path = os.path.join(WORK, "rfc2217.jsonl"), os.path.join(WORK, "rfc2217.err")
+    with open(out_path, "w") as out_file, open(err_path, "w") as err_file:
+        modtap = subprocess.Popen([MODTAP, "-i", f"rfc2217://127.0.0.1:{server.port}", "--baud",
+                                   "9600", "--parity", "none", "-T", "json"], stdout=out_file,
+                                  stderr=err_file)
+    try:
+        check("rfc2217", wait_until_open(server.process, pty_path), "ser2net never opened the pty")
+        deadline = time.time() + 10
+        while time.time() < deadline and termios.tcgetattr(slave)[4] != termios.B9600:
+            time.sleep(0.05)
+        check("rfc2217", termios.tcgetattr(slave)[4] == termios.B9600,
+              "the server's port was not set to 9600 baud")
+        replay(blocks, [master])
+        time.sleep(0.5)
+    finally:
+        modtap.send_signal(signal.SIGINT)
+        modtap.wait(30)
+        server.stop()
+    out, err = open(out_path).read(), open(err_path).read()
+    compare("rfc2217", truth, frames_of(out))
+    check("rfc2217", "the server set its port to 9600 8N1" in err, f"says the port's settings: {err!r}")
+    nothing_came_back("rfc2217", master)
+    os.close(master)
+    os.close(slave)
+
+
 def main():
     os.makedirs(WORK, exist_ok=True)
     log = os.path.join(WORK, "bus.log")
@@ -238,6 +274,7 @@ def main():
     bad_servers()
     if shutil.which("ser2net"):
         through_ser2net(blocks, truth)
+        through_rfc2217(blocks, truth)
     else:
         failures.append("ser2net: not installed (the README's test command installs it)")
     for failure in failures:

@@ -62,8 +62,9 @@ void print_config(const tools::ModelCatalog& catalog, bool device_server) {
   if (device_server)
     fmt::print(
         "arg {{number={}}}{{call=--server}}{{display=Device server}}{{type=string}}"
-        "{{required=true}}{{validation=^tcp://.+:[0-9]+$}}{{tooltip=tcp://HOST:PORT of ser2net, "
-        "an NPort or another server in TCP-server mode; baud and parity as its port has them}}\n",
+        "{{required=true}}{{validation=^(tcp|rfc2217)://.+:[0-9]+$}}{{tooltip=tcp://HOST:PORT of "
+        "ser2net, an NPort or another server in TCP-server mode, baud and parity as its port "
+        "has them; rfc2217://HOST:PORT of one that takes RFC 2217, its port set to them}}\n",
         n++);
   auto selector = [&](const char* call, const char* display, const char* fallback,
                       std::initializer_list<const char*> values) {
@@ -135,7 +136,9 @@ int main(int argc, char** argv) {
   run.interfaces = {interface.substr(std::string(prefix).size())};
   if (interface == remote) {
     if (!captures::is_network_tap(server)) {
-      fmt::print(stderr, "modtap-extcap: the device server is tcp://HOST:PORT, not \"{}\"\n",
+      fmt::print(stderr,
+                 "modtap-extcap: the device server is tcp://HOST:PORT or rfc2217://HOST:PORT, "
+                 "not \"{}\"\n",
                  server);
       return 1;
     }

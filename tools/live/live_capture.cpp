@@ -86,10 +86,11 @@ ProbeResult probe_ports(const std::vector<PortSpec>& specs, const LiveOptions& o
   // A device server's own port sets the line's settings, and its bytes read the same whatever
   // modtap is told: nothing to listen for.
   for (const auto& spec : specs)
-    if (captures::is_network_tap(spec.path))
+    if (captures::is_network_tap(spec.path) && !captures::sets_server_port(spec.path))
       throw captures::CaptureError(fmt::format(
           "{}: --baud auto and --parity auto cannot tell a device server's settings, which its "
-          "own port sets: give --baud and --parity as the server has them",
+          "own port sets: give --baud and --parity as the server has them, or reach it as "
+          "rfc2217:// where it takes RFC 2217",
           spec.path));
   const auto& base = options.analyzer.format;
   std::vector<FormatTrial> trials;
@@ -196,6 +197,8 @@ int run_live(const std::vector<PortSpec>& specs, const LiveOptions& options, Rec
         if (!(fds[i].revents & (POLLIN | POLLHUP | POLLERR))) continue;
         const size_t n = ports[i]->read(buffer);
         if (n) take({static_cast<uint16_t>(i), now_ns(), {buffer.data(), n}});
+        if (const auto notice = ports[i]->take_notice(); notice && options.announce)
+          fmt::print(stderr, "modtap: {}: {}\n", specs[i].path, *notice);
       }
     } catch (const captures::CaptureError& e) {
       fmt::print(stderr, "modtap: {}\n", e.what());

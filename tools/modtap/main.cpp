@@ -155,7 +155,8 @@ void add_input_options(CLI::App& app, RunOptions& o, Command& command) {
   auto* listen_on = app.add_option("-i,--interface", o.interfaces,
                                    "Serial port to listen on (read-only): PATH, or master=PATH and "
                                    "slave=PATH for a tap that splits the directions; or a device "
-                                   "server's stream, tcp://HOST:PORT")
+                                   "server's stream, tcp://HOST:PORT, or rfc2217://HOST:PORT "
+                                   "to set its port too")
                         ->type_name("PORT");
   read->excludes(listen_on);
   command.reconnect =
