@@ -188,20 +188,39 @@ def nothing_came_back(name, master_fd):
     check(name, back == b"", f"the pty's other side received {back!r}")
 
 
-def through_ser2net(blocks, truth):
+def behind_ser2net(name, accepter, scheme, args, play):
+    """Serves a fresh pty with ser2net (`accepter`) and runs modtap on it with `args` while
+    `play(server, master_fd, slave_fd, pty_path)` writes the bus; then Ctrl-C. Checks that
+    nothing came back to the pty; returns modtap's records, its messages and its exit status."""
     master, slave = os.openpty()
     tty.setraw(master)
     tty.setraw(slave)
     pty_path = os.ttyname(slave)
-    server = Ser2net(pty_path, free_port())
-    halves = [blocks[:len(blocks) // 2], blocks[len(blocks) // 2:]]
+    server = Ser2net(pty_path, free_port(), accepter)
     # Into files, not pipes read at the end: a full pipe would stop modtap's reading.
-    out_path, err_path = os.path.join(WORK, "ser2net.jsonl"), os.path.join(WORK, "ser2net.err")
+    out_path, err_path = os.path.join(WORK, name + ".jsonl"), os.path.join(WORK, name + ".err")
     with open(out_path, "w") as out_file, open(err_path, "w") as err_file:
-        modtap = subprocess.Popen([MODTAP, "-i", f"tcp://127.0.0.1:{server.port}", *LINE, "-T",
-                                   "json", "--reconnect"], stdout=out_file, stderr=err_file)
+        modtap = subprocess.Popen([MODTAP, "-i", f"{scheme}://127.0.0.1:{server.port}", *args,
+                                   "-T", "json"], stdout=out_file, stderr=err_file)
     try:
-        check("ser2net", wait_until_open(server.process, pty_path), "ser2net never opened the pty")
+        check(name, wait_until_open(server.process, pty_path), "ser2net never opened the pty")
+        play(server, master, slave, pty_path)
+        time.sleep(0.5)
+    finally:
+        modtap.send_signal(signal.SIGINT)
+        modtap.wait(30)
+        server.stop()
+    nothing_came_back(name, master)
+    os.close(master)
+    os.close(slave)
+    return open(out_path).read(), open(err_path).read(), modtap.returncode
+
+
+def through_ser2net(blocks, truth):
+    """A raw TCP server, stopped and started again halfway under --reconnect."""
+    halves = [blocks[:len(blocks) // 2], blocks[len(blocks) // 2:]]
+
+    def play(server, master, _slave, pty_path):
         replay(halves[0], [master])
         time.sleep(0.5)
         server.stop()
@@ -210,53 +229,31 @@ def through_ser2net(blocks, truth):
         check("ser2net", wait_until_open(server.process, pty_path),
               "modtap did not connect again under --reconnect")
         replay(halves[1], [master])
-        time.sleep(0.5)
-    finally:
-        modtap.send_signal(signal.SIGINT)
-        modtap.wait(30)
-        server.stop()
-    out, err = open(out_path).read(), open(err_path).read()
+
+    out, err, status = behind_ser2net("ser2net", "tcp", "tcp", [*LINE, "--reconnect"], play)
     compare("ser2net", truth, frames_of(out))
-    check("ser2net", modtap.returncode == 0, f"Ctrl-C ends the run with 0: {modtap.returncode}")
+    check("ser2net", status == 0, f"Ctrl-C ends the run with 0: {status}")
     for said in ("the connection is gone", "waiting for the port to come back", "is back"):
         check("ser2net", said in err, f"says {said!r}: {err!r}")
-    nothing_came_back("ser2net", master)
-    os.close(master)
-    os.close(slave)
 
 
 def through_rfc2217(blocks, truth):
     """modtap sets the server's port to 9600 8N1 (ser2net's own setting is 19200) and reads the
     line's bytes out of the Telnet stream."""
-    master, slave = os.openpty()
-    tty.setraw(master)
-    tty.setraw(slave)
-    pty_path = os.ttyname(slave)
-    server = Ser2net(pty_path, free_port(), "telnet(rfc2217),tcp")
-    out_path, err_path = os.path.join(WORK, "rfc2217.jsonl"), os.path.join(WORK, "rfc2217.err")
-    with open(out_path, "w") as out_file, open(err_path, "w") as err_file:
-        modtap = subprocess.Popen([MODTAP, "-i", f"rfc2217://127.0.0.1:{server.port}", "--baud",
-                                   "9600", "--parity", "none", "-T", "json"], stdout=out_file,
-                                  stderr=err_file)
-    try:
-        check("rfc2217", wait_until_open(server.process, pty_path), "ser2net never opened the pty")
+
+    def play(_server, master, slave, _pty_path):
         deadline = time.time() + 10
         while time.time() < deadline and termios.tcgetattr(slave)[4] != termios.B9600:
             time.sleep(0.05)
         check("rfc2217", termios.tcgetattr(slave)[4] == termios.B9600,
               "the server's port was not set to 9600 baud")
         replay(blocks, [master])
-        time.sleep(0.5)
-    finally:
-        modtap.send_signal(signal.SIGINT)
-        modtap.wait(30)
-        server.stop()
-    out, err = open(out_path).read(), open(err_path).read()
+
+    out, err, _ = behind_ser2net("rfc2217", "telnet(rfc2217),tcp", "rfc2217",
+                                 ["--baud", "9600", "--parity", "none"], play)
     compare("rfc2217", truth, frames_of(out))
-    check("rfc2217", "the server set its port to 9600 8N1" in err, f"says the port's settings: {err!r}")
-    nothing_came_back("rfc2217", master)
-    os.close(master)
-    os.close(slave)
+    check("rfc2217", "the server set its port to 9600 8N1" in err,
+          f"says the port's settings: {err!r}")
 
 
 def main():
