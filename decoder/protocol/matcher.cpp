@@ -262,9 +262,13 @@ int64_t Matcher::answer_over_ns(uint8_t slave) const {
 }
 
 // From when the master may send again: past its slave's answer time, and past its time-out
-// where told.
+// where told; where not, no later than its own retries have come, less what the clock may
+// take off (as the matcher judges a copy: too_soon_for_retry), so that the framer too reads a
+// copy that late as the master's.
 int64_t Matcher::retry_from_ns(const Pending& request) const {
-  return std::max(answer_over_ns(request.slave), told_wait_ns(request));
+  const int64_t from = std::max(answer_over_ns(request.slave), told_wait_ns(request));
+  if (request.timeout_told || !retry_interval_ns_) return from;
+  return std::min(from, retry_interval_ns_ - options_.clock_lag_ns);
 }
 
 bool Matcher::pending_matches(const Frame& frame) const {

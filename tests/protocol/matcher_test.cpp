@@ -313,6 +313,32 @@ TEST(Matcher, ASlaveNotHeardYetIsTakenToAnswerAsTheMiddleOfTheBusNotTheSlowest) 
   EXPECT_EQ(frames[10].request, frames[9].index);
 }
 
+// Slave 5 answers FC07 in 205 ms; the master has shown it sends a read again 112 ms after it.
+// A copy of FC07's 4-byte request 120 ms on is as late as the master's retries: the framer too
+// reads it as the master's request, whole, not as slave 5's 5-byte answer cut short.
+TEST(Matcher, TheFramerReadsACopyAsLateAsTheMastersRetriesAsItsRequest) {
+  const auto status = hex("05 07 43 22"), status_answer = hex("05 07 00 63 f1");
+  const auto read = hex("01 03 00 00 00 01 84 0a"), answer = hex("01 03 02 00 05 78 47");
+  const auto frames = analyze_reads({{status, 0},
+                                     {status_answer, 205},
+                                     {read, 500},
+                                     {answer, 510},
+                                     {read, 700},
+                                     {read, 812},  // its retry
+                                     {answer, 820},
+                                     {status, 1000},
+                                     {status, 1120},  // as late as a retry
+                                     {status_answer, 1325},
+                                     {read, 1340}})
+                          .frames();
+  ASSERT_EQ(frames.size(), 11u);
+  EXPECT_TRUE(frames[8].check_ok);
+  EXPECT_EQ(frames[8].role, Role::request);
+  EXPECT_TRUE(frames[8].findings & finding_retry);
+  EXPECT_EQ(frames[9].role, Role::response);
+  EXPECT_EQ(frames[9].request, frames[8].index);
+}
+
 TEST(Matcher, AnEchoCopyLongAfterTheSlavesTurnaroundIsARetry) {
   // Slave 1 answers a read in 5 ms; then a write goes unanswered and the master, after its
   // 100 ms time-out, sends it again, byte for byte what the echo would have been.
