@@ -1,5 +1,8 @@
 #include "captures/com_port_option.hpp"
 
+#include <algorithm>
+#include <array>
+
 namespace modtap::captures {
 namespace {
 
@@ -9,9 +12,12 @@ constexpr uint8_t binary = 0, com_port = 44;
 // COM-PORT-OPTION's commands, client to server; the server answers each plus 100.
 constexpr uint8_t set_baud = 1, set_data_size = 2, set_parity = 3, set_stop_size = 4;
 constexpr uint8_t server_reply = 100;
+// SET-PARITY's values 1, 2 and 3 (mark and space, 4 and 5, no Modbus line uses).
+constexpr std::array<Parity, 3> parity_of_value = {Parity::none, Parity::odd, Parity::even};
 
-constexpr uint8_t parity_code(Parity p) {
-  return p == Parity::none ? 1 : p == Parity::odd ? 2 : 3;
+constexpr uint8_t parity_value(Parity p) {
+  return static_cast<uint8_t>(1 + std::find(parity_of_value.begin(), parity_of_value.end(), p) -
+                              parity_of_value.begin());
 }
 
 // A subnegotiation: IAC SB COM-PORT-OPTION command value... IAC SE, a value's 0xFF doubled.
@@ -32,7 +38,7 @@ std::vector<uint8_t> ComPortOption::opening(const SerialFormat& f) {
                           static_cast<uint8_t>(f.baud >> 8), static_cast<uint8_t>(f.baud)};
   put_sub(out, set_baud, baud);
   put_sub(out, set_data_size, std::span<const uint8_t>(&f.data_bits, 1));
-  const uint8_t parity = parity_code(f.parity);
+  const uint8_t parity = parity_value(f.parity);
   put_sub(out, set_parity, std::span<const uint8_t>(&parity, 1));
   put_sub(out, set_stop_size, std::span<const uint8_t>(&f.stop_bits, 1));
   return out;
@@ -102,7 +108,7 @@ void ComPortOption::on_subnegotiation() {
         uint32_t{sub_[2]} << 24 | uint32_t{sub_[3]} << 16 | uint32_t{sub_[4]} << 8 | sub_[5];
   if (command == server_reply + set_data_size) reported_.data_bits = value;
   if (command == server_reply + set_parity && value >= 1 && value <= 3)
-    reported_.parity = value == 1 ? Parity::none : value == 2 ? Parity::odd : Parity::even;
+    reported_.parity = parity_of_value[value - 1u];
   if (command == server_reply + set_stop_size) reported_.stop_bits = value == 2 ? 2 : 1;
 }
 

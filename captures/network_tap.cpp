@@ -1,6 +1,5 @@
 #include "captures/network_tap.hpp"
 
-#include <fcntl.h>
 #include <netdb.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
@@ -36,12 +35,13 @@ HostPort split_host_port(const std::string& url) {
   const size_t close = bracketed ? rest.find(']') : std::string::npos;
   const size_t colon =
       bracketed ? (close == std::string::npos ? close : rest.find(':', close)) : rest.rfind(':');
-  if (colon == std::string::npos || colon + 1 == rest.size())
-    throw CaptureError(
-        fmt::format("{}: a device server is tcp://HOST:PORT or rfc2217://HOST:PORT", url));
-  HostPort hp{bracketed ? rest.substr(1, close - 1) : rest.substr(0, colon),
-              rest.substr(colon + 1)};
-  if (hp.host.empty() || hp.port.find_first_not_of("0123456789") != std::string::npos)
+  HostPort hp;
+  if (colon != std::string::npos) {
+    hp.host = bracketed ? rest.substr(1, close - 1) : rest.substr(0, colon);
+    hp.port = rest.substr(colon + 1);
+  }
+  if (hp.host.empty() || hp.port.empty() ||
+      hp.port.find_first_not_of("0123456789") != std::string::npos)
     throw CaptureError(
         fmt::format("{}: a device server is tcp://HOST:PORT or rfc2217://HOST:PORT", url));
   return hp;
@@ -119,9 +119,13 @@ NetworkTap::NetworkTap(const std::string& url, const SerialFormat& format)
   for (const addrinfo* a = found; a && fd_ < 0; a = a->ai_next) fd_ = connect_to(a, error);
   if (fd_ < 0) throw CaptureError(fmt::format("{}: cannot connect: {}", url, std::strerror(error)));
   notice_cuts(fd_);
-  if (sets_server_port(url)) {
-    telnet_.emplace();
+  if (!sets_server_port(url)) return;
+  telnet_.emplace();
+  try {
     send_commands(ComPortOption::opening(format));
+  } catch (...) {
+    ::close(fd_);  // no destructor runs for a constructor that throws: --reconnect retries
+    throw;
   }
 }
 
