@@ -79,6 +79,14 @@ void CsvSink::time(int64_t t_ns) {
 void CsvSink::on_frame(const Frame& frame) {
   see(frame.t_ns);
   if (!states_values(frame)) return;
+  if (!may_identify_) return write_rows(frame);
+  const SlaveNaming& naming = naming_of(frame);
+  if (held_.empty() && naming.state == SlaveNaming::State::settled) return write_rows(frame);
+  hold(frame);
+  release();
+}
+
+void CsvSink::write_rows(const Frame& frame) {
   const RecordFields f = gather_fields(frame, no_pdu_fields);
   auto& buf = out_.buffer();
   for (const RegisterValue& reg : f.registers) {
@@ -95,6 +103,67 @@ void CsvSink::on_frame(const Frame& frame) {
     buf.push_back('\n');
   }
   out_.end_record();
+}
+
+void CsvSink::hold_until_identified(std::function<bool(uint8_t)> may_identify) {
+  may_identify_ = std::move(may_identify);
+}
+
+// A slave identifies itself where its frame comes read through another model than its frames
+// before (only the model stage's identification changes a slave's model, no --model naming
+// it): the frames it holds are read through that model, from the first on.
+const CsvSink::SlaveNaming& CsvSink::naming_of(const Frame& frame) {
+  using State = SlaveNaming::State;
+  SlaveNaming& naming = naming_[frame.slave()];
+  if (naming.state == State::unseen) {
+    naming.state = may_identify_(frame.slave()) ? State::waiting : State::settled;
+    naming.model = frame.meaning->model;
+  }
+  if (naming.state != State::waiting) return naming;
+  if (frame.meaning->model != naming.model) {
+    for (HeldFrame& held : held_)
+      if (held.frame.slave() == frame.slave()) held.model = frame.meaning->model;
+    naming.state = State::settled;
+  } else if (++naming.answers >= answers_to_identify) {
+    naming.state = State::settled;
+  }
+  return naming;
+}
+
+void CsvSink::hold(const Frame& frame) {
+  HeldFrame& held =
+      held_.emplace_back(HeldFrame{frame,
+                                   frame.meaning->model,
+                                   {frame.adu.begin(), frame.adu.end()},
+                                   {frame.request_pdu.begin(), frame.request_pdu.end()}});
+  held.frame.adu = held.adu;
+  held.frame.request_pdu = held.request_pdu;
+  held.frame.raw = {};
+  held.frame.meaning = nullptr;
+  held.frame.decoded = nullptr;
+  // The oldest waits no longer than the hold's room allows: its slave is settled as it reads.
+  while (held_.size() > max_held) {
+    naming_[held_.front().frame.slave()].state = SlaveNaming::State::settled;
+    release();
+  }
+}
+
+// Writes the held frames from the oldest on, while their slave's naming is settled.
+void CsvSink::release() {
+  while (!held_.empty()) {
+    HeldFrame& held = held_.front();
+    if (naming_[held.frame.slave()].state != SlaveNaming::State::settled) return;
+    interpret(*held.model, held.frame, reread_);
+    held.frame.meaning = &reread_;
+    write_rows(held.frame);
+    held_.pop_front();
+  }
+}
+
+void CsvSink::finish() {
+  for (SlaveNaming& naming : naming_)
+    if (naming.state == SlaveNaming::State::waiting) naming.state = SlaveNaming::State::settled;
+  release();
 }
 
 }  // namespace modtap::output

@@ -4,6 +4,9 @@
 // row (its values are the request's).
 #pragma once
 
+#include <array>
+#include <deque>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -45,9 +48,44 @@ class CsvSink final : public RecordSink {
   void on_noise(const Noise& noise) override { see(noise.t_ns); }
   void on_timeout(const Timeout& timeout) override { see(timeout.t_ns); }
 
+  // Reading a file, where no one waits for a row: the rows of a slave that `may_identify`
+  // (one no --model names) wait until it identifies itself, so that they are named from its
+  // first row, or until its answers show it does not: a master reads a device's
+  // identification with its first requests. Every row after a held one waits too, so the file
+  // stays in time order. At most `max_held` frames wait.
+  void hold_until_identified(std::function<bool(uint8_t)> may_identify);
+  // The end of the records: the rows still held are written, in the reading they have.
+  void finish();
+
+  // How many answers stating values a slave gives before it is taken not to identify itself.
+  static constexpr unsigned answers_to_identify = 8;
+  static constexpr size_t max_held = 8192;
+
  private:
   void see(int64_t t_ns) { clock_.see(t_ns); }
   void time(int64_t t_ns);
+  void write_rows(const Frame& frame);
+
+  // A slave's naming, as the hold sees it: whether its rows may still be named, and by whom.
+  struct SlaveNaming {
+    enum class State : uint8_t { unseen, waiting, settled } state = State::unseen;
+    unsigned answers = 0;
+    const DeviceModel* model = nullptr;  // what its frames came read through
+  };
+  // A frame that waits, with its bytes: re-read through its slave's model when written.
+  struct HeldFrame {
+    Frame frame;
+    const DeviceModel* model;  // its slave's, as it settles
+    std::vector<uint8_t> adu, request_pdu;
+  };
+  const SlaveNaming& naming_of(const Frame& frame);
+  void hold(const Frame& frame);
+  void release();
+
+  std::function<bool(uint8_t)> may_identify_;  // empty: no rows are held
+  std::array<SlaveNaming, 256> naming_{};
+  std::deque<HeldFrame> held_;
+  Meaning reread_;  // a held frame's reading, as it is written
 
   Output& out_;
   std::vector<FollowedRegister> follow_;

@@ -498,6 +498,53 @@ TEST(Cli, AnIdentifiedSlaveIsWaitedForAsItsModelSays) {
       << ::testing::PrintToString(r.lines);
 }
 
+// Read from a file, a slave's rows before it identifies itself are named by the model it
+// identifies as, as its rows after are; another slave's rows keep their place in time.
+TEST(Cli, CsvNamesASlavesRowsFromBeforeItIdentifiesItself) {
+  const auto dir = std::filesystem::temp_directory_path() / "modtap-naming-models";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "meter.yaml") << "model: meter\ntitle: A meter\nsource: a test\n"
+                                       "identify: {address: 0x0010, value: 0x1234}\n"
+                                       "registers:\n  - {address: 0x0010, name: meter_id}\n"
+                                       "  - {address: 0x0011, name: power, unit: W}\n";
+  const auto path = (std::filesystem::temp_directory_path() / "modtap-naming.pcap").string();
+  {
+    modtap::captures::PcapChunkWriter writer(path, 147);
+    int64_t t_ms = 0;
+    const auto put = [&](std::vector<uint8_t> body) {
+      const uint16_t crc = modtap::crc16(body);
+      body.push_back(static_cast<uint8_t>(crc & 0xFF));
+      body.push_back(static_cast<uint8_t>(crc >> 8));
+      writer.write({0, 1'700'000'000'000'000'000 + t_ms * 1'000'000, body});
+      t_ms += 50;
+    };
+    put({0x05, 0x03, 0x00, 0x11, 0x00, 0x01});
+    put({0x05, 0x03, 0x02, 0x00, 0x64});  // power, before slave 5 says what it is
+    put({0x06, 0x03, 0x00, 0x00, 0x00, 0x01});
+    put({0x06, 0x03, 0x02, 0x00, 0x07});
+    put({0x05, 0x03, 0x00, 0x10, 0x00, 0x02});
+    put({0x05, 0x03, 0x04, 0x12, 0x34, 0x00, 0x65});  // identifies as meter
+    put({0x06, 0x03, 0x00, 0x00, 0x00, 0x01});
+    put({0x06, 0x03, 0x02, 0x00, 0x08});
+  }
+  const std::string read = "-r " + path + " --models-dir " + dir.string();
+  const Outcome all = run(read + " -T csv");
+  ASSERT_EQ(all.status, 0) << ::testing::PrintToString(all.lines);
+  std::vector<std::string> rows;  // without the time column
+  for (const std::string& line : all.lines) rows.push_back(line.substr(line.find(',') + 1));
+  EXPECT_EQ(rows, (std::vector<std::string>{"slave,address,name,value,unit,raw,text",
+                                            "5,0011H,power,100,W,100,", "6,0000H,,7,,7,",
+                                            "5,0010H,meter_id,4660,,4660,",
+                                            "5,0011H,power,101,W,101,", "6,0000H,,8,,8,"}));
+  const Outcome power = run(read + " --follow power");
+  ASSERT_EQ(power.lines.size(), 3u) << ::testing::PrintToString(power.lines);
+  EXPECT_THAT(power.lines[1], ::testing::EndsWith(",5,0011H,power,100,W,100,"));
+  EXPECT_THAT(power.lines[2], ::testing::EndsWith(",5,0011H,power,101,W,101,"));
+  // Named with --model, the slave's rows are as they come; a slave 6 given one is not held.
+  const Outcome told = run(read + " -T csv --model 5=meter");
+  EXPECT_EQ(told.lines, all.lines);
+}
+
 // A status register's meaning beside its number; -t ad, the date and time its name promises.
 TEST(Cli, CsvGivesAnEnumerationsTextAndTheDateWithTad) {
   const std::string drives = std::string("-r ") + MODTAP_SAMPLES +

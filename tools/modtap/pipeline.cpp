@@ -133,6 +133,7 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
                    ClockQuality clock)
     : terminal_(make_sink(o, out, channels, clock_, clock)), pace_(format) {
   if (o.explain) explain_ = static_cast<output::ExplainSink*>(terminal_.get());
+  if (o.output == OutputKind::csv) csv_ = static_cast<output::CsvSink*>(terminal_.get());
   fan_out_.add(*terminal_);
   const Needs needs = needs_of(o);
   if (needs.statistics) {
@@ -169,6 +170,9 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
   if (needs.meanings || !o.models.empty() || !o.models_dir.empty()) {
     catalog_ = load_models(o);
     choice = catalog_.choose(o.models);
+    const auto models = catalog_.all();
+    if (std::any_of(models.begin(), models.end(), [](auto* m) { return m->identification; }))
+      may_identify_ = [named = choice.by_slave](uint8_t slave) { return !named.count(slave); };
     if (!o.timeout_given) slave_timeouts_ = modtap::model_timeouts(choice);
     if (!o.display_filter.empty()) filter(o.display_filter, o.register_base, channels);
   }
@@ -219,6 +223,10 @@ void Pipeline::feed_top(const RunOptions& o, const std::vector<ChannelInfo>& cha
   top_feed_ =
       std::make_unique<top::TopFeed>(channels, text, pcapng_options(o, format, clock), filter_for);
   health_.add(*top_feed_);
+}
+
+void Pipeline::hold_rows_until_identified() {
+  if (csv_ && may_identify_) csv_->hold_until_identified(may_identify_);
 }
 
 void Pipeline::on_read(const Chunk& chunk) {

@@ -168,6 +168,13 @@ class Pipeline {
   // The slaves' own time-outs, as their models give them, for the analyzer: the model stage
   // adds a slave's as it identifies itself.
   const SlaveTimeouts& slave_timeouts() const { return slave_timeouts_; }
+  // -T csv on a file: the rows of a slave that may identify itself wait until it does
+  // (CsvSink::hold_until_identified).
+  void hold_rows_until_identified();
+  // The records are all in: the rows still held are written.
+  void end_of_records() {
+    if (csv_) csv_->finish();
+  }
   // The end of a run: the pcapng file is complete, or its failure is reported.
   void close() {
     if (pcapng_) pcapng_->close();
@@ -190,6 +197,10 @@ class Pipeline {
   FanOut fan_out_;
   std::unique_ptr<RecordSink> terminal_;
   output::ExplainSink* explain_ = nullptr;  // terminal_, with --explain
+  output::CsvSink* csv_ = nullptr;          // terminal_, with -T csv
+  // Whether a slave may identify itself as a model: no --model names it, and a loaded model
+  // has an identification rule. Empty where none may.
+  std::function<bool(uint8_t)> may_identify_;
   std::unique_ptr<BusStatistics> statistics_;
   std::unique_ptr<ProblemEvidence> evidence_;
   std::unique_ptr<output::CitedRecords> cited_;  // in front of the evidence, with --report

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "captures/piped_input.hpp"
 #include "output/mosquitto_broker.hpp"
 #include "output/mqtt_publisher.hpp"
 #include "output/report.hpp"
@@ -164,6 +165,8 @@ Session::Session(const RunOptions& o, const captures::RingLimits& ring, const Se
       out_(standard_output_),
       pipeline_(o, ring, out_, source.channels, source.format, source.clock) {
   out_.set_line_buffered(source.live);
+  // A file read through gives no row to anyone waiting for it: rows may wait for a name.
+  if (!source.live && !captures::is_piped(o.read_file)) pipeline_.hold_rows_until_identified();
   if (time_format_for(o, source.clock) != o.time_format)
     fmt::print(stderr,
                "modtap: warning: {} has no clock (raw bytes): the time column counts seconds "
@@ -183,6 +186,7 @@ void Session::tick(int64_t now_ns) {
 }
 
 void Session::finish(bool complete, const std::string& stopped_by) {
+  pipeline_.end_of_records();
   metrics_.reset();
   if (mqtt_) mqtt_->finish();
   summarise(o_, out_, pipeline_, complete);
