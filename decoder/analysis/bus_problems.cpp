@@ -160,6 +160,10 @@ void ProblemEvidence::on_frame(const Frame& frame) {
     if (frame.findings & finding_late_response) on_late_answer(frame);
     return;
   }
+  // The answer to a request before the last: another request cut in while it was due, sooner
+  // than a master waits (the matcher sets such a request aside): a second master's.
+  if (frame.check_ok && *frame.request < last_request_)
+    note(interruptions_, frame.t_ns, frame.index);
   Slave& slave = slaves_[frame.device()];
   // A copy that may be the master's retry as well as the echo is no answer to count on.
   if (frame.findings & finding_ambiguous_echo) return;
@@ -196,6 +200,7 @@ void ProblemEvidence::count_length(const Frame& frame) {
 
 void ProblemEvidence::on_request(const Frame& frame) {
   ++requests_seen_;
+  last_request_ = frame.index;
   after_request_ = true;
   request_end_ns_ = frame.end_ns;
   awaited_ = nullptr;
@@ -236,15 +241,6 @@ void ProblemEvidence::on_answer(const Frame& frame, Slave& slave) {
 
 void ProblemEvidence::on_late_answer(const Frame& frame) {
   Slave& slave = slaves_[frame.slave()];
-  // The answer to a request another request cut short sooner than a master waits: it came,
-  // after another master's exchange; no time-out of the slave's.
-  if (frame.request && interrupted_ && frame.request == interrupted_->first) {
-    note(interruptions_, interrupted_->second, frame.index);
-    interrupted_.reset();
-    if (slave.timeouts.count) --slave.timeouts.count;
-    ++slave.answers;
-    return heard(slave, frame.t_ns);
-  }
   note(slave.late, frame.t_ns, frame.index);
   heard(slave, frame.t_ns);  // it is there, only slow
   if (!frame.latency_ns) return;
@@ -311,10 +307,6 @@ void ProblemEvidence::on_timeout(const Timeout& timeout) {
   awaited_ = nullptr;
   if (!timeout.timed_out() || timeout.slave == 0) return;
   Slave& slave = slaves_[timeout.slave];
-  const bool cut_short =
-      timeout.reason == TimeoutReason::next_request && timeout.waited_ns < master_waits_ns_;
-  interrupted_.reset();
-  if (cut_short) interrupted_ = {timeout.request, timeout.t_ns};
   note(slave.timeouts, timeout.t_ns, timeout.request);
   if (slave.silent_timeouts++ == 0) {
     slave.silent_since_ns = timeout.t_ns - timeout.waited_ns;

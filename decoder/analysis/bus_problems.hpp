@@ -64,10 +64,6 @@ struct Problem {
 // What the records show beyond the statistics' counts, per slave. A sink beside the statistics.
 class ProblemEvidence final : public RecordSink {
  public:
-  // `master_timeout_ns`: the master's time-out, where the user told it.
-  explicit ProblemEvidence(std::optional<int64_t> master_timeout_ns = std::nullopt)
-      : master_waits_ns_(
-            std::min(master_timeout_ns.value_or(shortest_timeout_ns), shortest_timeout_ns)) {}
   static constexpr size_t kept_records = 5;
   static constexpr size_t kept_requests = 4096;  // distinct requests watched for rejection
 
@@ -141,12 +137,10 @@ class ProblemEvidence final : public RecordSink {
   const Events& bad_requests() const { return bad_requests_; }  // bad checks no answer explains
   const Events& master_glitches() const { return master_glitches_; }
   uint64_t requests_seen() const { return requests_seen_; }
-  // Requests that came while another request's answer was due, sooner than any master's
-  // time-out (50 ms, the shortest masters use, or the master's own where it was told and is
-  // shorter), and the answer came after them: a second master's, polling on its own. (A master
-  // with a short time-out that moves on from a silent slave gets no answer after.)
+  // Answers to a request another request cut in on while its answer was due, sooner than any
+  // master's time-out (the Matcher sets such a request aside): the second master's requests.
+  // A master with a short time-out that moves on from a silent slave gets no answer after.
   const Events& interruptions() const { return interruptions_; }
-  static constexpr int64_t shortest_timeout_ns = 50'000'000;
   // What of the stream made sense: every byte in a record, those of frames whose check holds.
   uint64_t bytes() const { return bytes_; }
   // When junk came (noise but a turnaround's glitch, a frame whose check fails) and the slave
@@ -197,9 +191,7 @@ class ProblemEvidence final : public RecordSink {
       slave_lengths_{};  // by address: a frame's costs no lookup
   std::vector<std::pair<int64_t, uint8_t>> junk_;
   Events interruptions_;
-  int64_t master_waits_ns_;  // sooner than this, a request is no retry nor next of the master's
-  // The request cut short last, and when: its answer may still come.
-  std::optional<std::pair<uint64_t, int64_t>> interrupted_;
+  uint64_t last_request_ = 0;  // the index of the last good request
   void note_junk(int64_t t_ns, uint8_t slave) {
     if (junk_.size() < kept_junk) junk_.emplace_back(t_ns, slave);
   }

@@ -14,9 +14,10 @@ inline void Matcher::set_pending(Pending* pending) {
   pending_ = pending;
   // With nothing pending, the answer the bus may still get is the late one of the request that
   // timed out last: its bytes are read as that answer first.
-  expectation_ = pending         ? expecting(*pending)
-                 : overdue_open_ ? overdue_expectation_
-                                 : Expectation{};
+  expectation_ = pending             ? expecting(*pending)
+                 : interrupted_open_ ? expecting(interrupted_)
+                 : overdue_open_     ? overdue_expectation_
+                                     : Expectation{};
 }
 
 inline Expectation Matcher::expecting(const Pending& request) const {
@@ -149,6 +150,14 @@ Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role,
   if (answers_overdue(frame) && (in_answer_time(frame.t_ns, channel_role) ||
                                  (frame.fit.response && !copies(frame, overdue_))))
     return Role::response;
+  // The answer to a request another master cut in on, after the other exchange: a copy of it
+  // too soon for its master's retry is its echo. Its slave answers once the line is quiet, so
+  // its time runs from the other exchange's end.
+  if (answers_interrupted(frame) &&
+      (copies(frame, interrupted_)
+           ? options_.timed && too_soon_for_retry(interrupted_, frame.t_ns - resumed_ns_)
+           : frame.fit.response))
+    return Role::response;
   return frame.fit.request ? Role::request : Role::unknown;
 }
 
@@ -277,7 +286,11 @@ bool Matcher::pending_matches(const Frame& frame) const {
 }
 
 void Matcher::on_request(Frame& frame) {
-  if (pending_) expire(frame.t_ns, TimeoutReason::next_request);
+  const bool cut_in = cuts_in(frame);
+  if (pending_ && !cut_in) expire(frame.t_ns, TimeoutReason::next_request);
+  // The slave of a request set aside, asked again, gave up on answering it.
+  if (interrupted_open_ && !cut_in && interrupted_.slave == frame.slave())
+    expire_interrupted(frame.t_ns, TimeoutReason::next_request);
   // A slave ignores a request whose check fails, so it opens no transaction.
   if (!frame.check_ok) return;
   frame.findings |= request_spec_findings(frame.pdu());
@@ -297,14 +310,49 @@ void Matcher::on_request(Frame& frame) {
   unanswered_ = nullptr;
   // The slave asked anew answers the new request, not the one it let time out.
   if (overdue_open_ && overdue_.slave == frame.slave()) overdue_open_ = false;
+  if (cut_in) set_aside();
   Pending& p = slots_[next_slot_];
   next_slot_ ^= 1;
   remember(p, frame);
   set_pending(&p);
 }
 
+bool Matcher::cuts_in(const Frame& frame) const {
+  if (!pending_ || !options_.timed || !frame.check_ok || copies(frame, *pending_)) return false;
+  const int64_t waited = frame.t_ns - pending_->end_ns;
+  const int64_t master_waits =
+      pending_->timeout_told ? told_wait_ns(*pending_) : shortest_master_timeout_ns;
+  // A clock per read may place it before the pending request's end: sooner still.
+  return waited < std::min(master_waits, answer_over_ns(pending_->slave));
+}
+
+// One request set aside at a time: an earlier one still unanswered has timed out by now.
+void Matcher::set_aside() {
+  if (interrupted_open_) expire_interrupted(pending_->end_ns, TimeoutReason::next_request);
+  interrupted_ = *pending_;
+  interrupted_open_ = true;
+  resumed_ns_ = interrupted_.end_ns;
+  set_pending(nullptr);
+}
+
+// The answer to a request set aside, after the exchange that cut in: paired, on time. Its wait
+// holds another exchange, so it teaches nothing of the slave's turnaround; where the clock did
+// not see its start (placed back to back with the other exchange's last byte), it has none.
+void Matcher::interrupted_answer(Frame& frame) {
+  frame.request = interrupted_.index;
+  frame.request_slave = interrupted_.slave;
+  frame.request_pdu = {interrupted_.pdu.data(), interrupted_.size};
+  if (!frame.untimed_start && count_turnaround(frame, interrupted_.end_ns, interrupted_.end_read))
+    frame.latency_ns = frame.t_ns - interrupted_.end_ns;
+  if (frame.check_ok)
+    frame.findings |= check_response_fit({interrupted_.pdu.data(), interrupted_.size}, frame.pdu());
+  interrupted_open_ = false;
+  set_pending(pending_);
+}
+
 void Matcher::on_response(Frame& frame, Copy copy) {
   if (!pending_matches(frame)) {
+    if (answers_interrupted(frame)) return interrupted_answer(frame);
     if (answers_overdue(frame)) return late_answer(frame);
     frame.findings |= finding_unsolicited;
     return;
@@ -332,6 +380,7 @@ void Matcher::on_response(Frame& frame, Copy copy) {
   }
   if (frame.check_ok)
     frame.findings |= check_response_fit({pending_->pdu.data(), pending_->size}, frame.pdu());
+  resumed_ns_ = frame.end_ns;
   set_pending(nullptr);
 }
 
@@ -427,32 +476,50 @@ bool Matcher::count_turnaround(const Frame& frame, int64_t request_end_ns,
 }
 
 void Matcher::advance(int64_t now_ns) {
+  if (interrupted_open_ && options_.timed && now_ns - interrupted_.end_ns > interrupted_.timeout_ns)
+    expire_interrupted(interrupted_.end_ns + interrupted_.timeout_ns, TimeoutReason::silence);
   if (pending_ && options_.timed && now_ns - pending_->end_ns > pending_->timeout_ns)
     expire(pending_->end_ns + pending_->timeout_ns, TimeoutReason::silence);
 }
 
 void Matcher::finish(int64_t end_ns) {
   advance(end_ns);
+  if (interrupted_open_) expire_interrupted(end_ns, TimeoutReason::end_of_capture);
   if (pending_) expire(end_ns, TimeoutReason::end_of_capture);
 }
 
 void Matcher::expire(int64_t now_ns, TimeoutReason reason) {
-  if (pending_->garbled_answer) return set_pending(nullptr);  // it answered, garbled
+  Pending& request = *pending_;
+  resumed_ns_ = now_ns;
+  set_pending(nullptr);
+  time_out(request, now_ns, reason);
+}
+
+void Matcher::expire_interrupted(int64_t now_ns, TimeoutReason reason) {
+  interrupted_open_ = false;
+  time_out(interrupted_, now_ns, reason);
+  set_pending(pending_);
+}
+
+// A request whose wait ran out: overdue from now, its slave's answer late; none where it
+// answered, garbled.
+void Matcher::time_out(Pending& request, int64_t now_ns, TimeoutReason reason) {
+  if (request.garbled_answer) return;
   Timeout t;
-  t.request = pending_->index;
-  t.channel = pending_->channel;
-  t.slave = pending_->slave;
-  t.function = pending_->pdu[0];
+  t.request = request.index;
+  t.channel = request.channel;
+  t.slave = request.slave;
+  t.function = request.pdu[0];
   // A clock that stepped back may put `now` before the request's end: it waited no time.
-  t.t_ns = std::max(now_ns, pending_->end_ns);
-  t.waited_ns = t.t_ns - pending_->end_ns;
+  t.t_ns = std::max(now_ns, request.end_ns);
+  t.waited_ns = t.t_ns - request.end_ns;
   t.reason = reason;
-  pending_->timed_out_in_silence = reason == TimeoutReason::silence;
-  unanswered_ = pending_;
-  overdue_ = *pending_;
+  request.timed_out_in_silence = reason == TimeoutReason::silence;
+  overdue_ = request;
+  unanswered_ = &overdue_;
   overdue_open_ = true;
   overdue_expectation_ = expecting(overdue_);
-  set_pending(nullptr);
+  set_pending(pending_);
   on_timeout_(t);
 }
 

@@ -19,6 +19,10 @@ namespace modtap {
 // request: the model stage adds a slave's when the slave identifies itself.
 using SlaveTimeouts = std::array<int64_t, 256>;
 
+// The shortest time-out masters use: no master sends again sooner while it waits for an
+// answer, so a request that does is another master's.
+inline constexpr int64_t shortest_master_timeout_ns = 50'000'000;
+
 struct MatcherOptions {
   int64_t timeout_ns = 1'000'000'000;
   bool timeout_told = false;  // timeout_ns is the master's, told: it sends nothing again sooner
@@ -139,10 +143,9 @@ class Matcher {
     return request.timeout_told ? request.timeout_ns - options_.clock_lag_ns : 0;
   }
   int64_t answer_time_ns(uint8_t slave) const {
-    constexpr int64_t earliest_retry_ns = 50'000'000;
     constexpr int64_t slack_ns = 20'000'000;
     const int64_t learned = turnaround_learned(slave);
-    return learned ? 2 * learned + slack_ns : earliest_retry_ns;
+    return learned ? 2 * learned + slack_ns : shortest_master_timeout_ns;
   }
   int64_t answer_over_ns(uint8_t slave) const;
   int64_t retry_from_ns(const Pending& request) const;
@@ -174,10 +177,21 @@ class Matcher {
     return overdue_open_ && in_late_answer_time(frame, overdue_) && may_answer(frame, overdue_);
   }
   void late_answer(Frame& frame);
+  // A request sooner after the pending one than its master could have given up on it (its
+  // time-out where told, else the shortest masters use), and sooner than its slave's answer
+  // would be over: another master's, cutting in. The pending request's answer is still due.
+  bool cuts_in(const Frame& frame) const;
+  void set_aside();
+  bool answers_interrupted(const Frame& frame) const {
+    return interrupted_open_ && may_answer(frame, interrupted_);
+  }
+  void interrupted_answer(Frame& frame);
   static bool in_late_answer_time(const Frame& frame, const Pending& request);
   // The request a copy in doubt copies, and whether it is still pending.
   const Pending* copied_in_doubt(const Frame& frame) const;
   void expire(int64_t now_ns, TimeoutReason reason);
+  void expire_interrupted(int64_t now_ns, TimeoutReason reason);
+  void time_out(Pending& request, int64_t now_ns, TimeoutReason reason);
   bool pending_matches(const Frame& frame) const;
   bool awaits_answer(ChannelRole channel_role) const;
   bool in_answer_time(int64_t t_ns, ChannelRole channel_role) const;
@@ -194,7 +208,12 @@ class Matcher {
   // a slave answers after the master has moved on to others.
   Pending overdue_;
   bool overdue_open_ = false;
-  Expectation overdue_expectation_;              // what overdue_ means to a framer, while open
+  Expectation overdue_expectation_;  // what overdue_ means to a framer, while open
+  // The request another master's cut in on, set aside while the other exchange runs: its answer
+  // still due, it times out as a pending request does, or once its slave is asked again.
+  Pending interrupted_;
+  bool interrupted_open_ = false;
+  int64_t resumed_ns_ = 0;  // when the exchange that cut in ended: the line was the slave's again
   std::optional<AmbiguousEcho> ambiguous_echo_;  // the last frame, where it was one
   Expectation expectation_;  // what pending_ means to a framer, kept in step with it
   uint64_t timed_answers_ = 0, early_answers_ = 0;

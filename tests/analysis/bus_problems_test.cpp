@@ -47,7 +47,7 @@ Diagnosed diagnose(const BusOptions& bus, Delivery delivery = Delivery::whole_fr
   if (told) options.timeout_ns = bus.retry_after_ns;
   options.timeout_told = told;
   BusStatistics statistics(bus.format, options.clock);
-  ProblemEvidence evidence(told ? std::optional(bus.retry_after_ns) : std::nullopt);
+  ProblemEvidence evidence;
   FanOut sinks;
   sinks.add(statistics);
   sinks.add(evidence);

@@ -606,6 +606,13 @@ BusOptions bit_errors(uint64_t seed) {
 BusOptions half_baud_devices(uint64_t seed) {
   return one_in_ten(seed, [](auto& f) { f.half_baud = true; });
 }
+// A second master reading its own slave every 0.7 s, its request right after the first
+// master's: both answers come, each paired with its own request, and nothing times out.
+BusOptions second_master(uint64_t seed) {
+  BusOptions o = clean(seed, 3000);
+  o.second_master_period_ns = 700'000'000;
+  return o;
+}
 // Bursts of junk between transactions.
 BusOptions noisy(uint64_t seed) {
   BusOptions o = clean(seed, 3000);
@@ -631,6 +638,7 @@ constexpr FaultKind fault_kinds[] = {{"absent", absent_with_retries, true},
                                      {"biterr", bit_errors, true},
                                      {"noise", noisy, true},
                                      {"halfbaud", half_baud_devices, true},
+                                     {"second_master", second_master, true},
                                      {"late", late_answers, false},
                                      {"late_retries", late_answers_and_retries, false}};
 

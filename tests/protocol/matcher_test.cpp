@@ -119,6 +119,36 @@ TEST(Matcher, ReportsATimeoutWhenTheMasterMovesOn) {
   EXPECT_EQ(timeouts[1].timeout_reason, TimeoutReason::end_of_capture);
 }
 
+// A request sooner after another than any master waits for an answer (50 ms) is a second
+// master's: the first request's answer is still due, and comes after the second's exchange,
+// paired and on time. Had the slave asked first not answered, its request times out once it
+// is asked again; a request as late as a master waits moves on as a master does.
+TEST(Matcher, ARequestCuttingInSoonerThanAMasterWaitsLeavesTheFirstAnswerDue) {
+  const auto first = hex("01 03 00 00 00 01 84 0a"), answer = hex("01 03 02 00 07 f9 86");
+  const auto cutting = hex("c9 03 01 00 00 01 95 be"), its_answer = hex("c9 03 02 00 2a d8 4b");
+  const auto out =
+      analyze_reads({{first, 0}, {cutting, 8}, {its_answer, 16}, {answer, 24}, {first, 300}});
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 5u);
+  EXPECT_EQ(frames[2].request, frames[1].index);
+  EXPECT_EQ(frames[3].role, Role::response);
+  EXPECT_EQ(frames[3].request, frames[0].index);
+  EXPECT_FALSE(frames[3].findings & finding_late_response);
+  ASSERT_EQ(out.timeouts().size(), 1u);  // the last request's, at the end of the capture
+  EXPECT_EQ(out.timeouts()[0].request, frames[4].index);
+
+  const auto unanswered =
+      analyze_reads({{first, 0}, {cutting, 8}, {its_answer, 16}, {first, 300}, {answer, 310}});
+  ASSERT_EQ(unanswered.timeouts().size(), 1u);
+  EXPECT_EQ(unanswered.timeouts()[0].request, unanswered.frames()[0].index);
+  EXPECT_EQ(unanswered.timeouts()[0].timeout_reason, TimeoutReason::next_request);
+  EXPECT_TRUE(unanswered.frames()[3].findings & finding_retry);
+
+  const auto moved_on = analyze_reads({{first, 0}, {cutting, 120}, {its_answer, 128}});
+  ASSERT_EQ(moved_on.timeouts().size(), 1u);
+  EXPECT_EQ(moved_on.timeouts()[0].request, moved_on.frames()[0].index);
+}
+
 TEST(Matcher, MarksBroadcastsAndExpectsNoResponse) {
   const auto out = analyze_untimed(join({"00 06 00 01 00 03 99 da"}));
   const auto frames = out.frames();

@@ -140,8 +140,7 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
     statistics_ = std::make_unique<BusStatistics>(format, clock,
                                                   !o.data_bits && o.mode == ModeChoice::automatic);
     statistics_->set_read_lag(read_jitter_ns(o));
-    evidence_ = std::make_unique<ProblemEvidence>(
-        o.timeout_given ? std::optional(static_cast<int64_t>(o.timeout_s * 1e9)) : std::nullopt);
+    evidence_ = std::make_unique<ProblemEvidence>();
     problem_options_.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
     problem_options_.timeout_told = o.timeout_given;
     problem_options_.pace = &pace_;
