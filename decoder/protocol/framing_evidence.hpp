@@ -68,8 +68,9 @@ inline constexpr auto feature_table = std::to_array<FeatureInfo>({
      "where its answer is due, 2 bytes, by chance 1 time in 65,536"},
     {"too-soon-for-retry", 4,
      "it came before the master's retry could (twice the slave's longest turnaround, or the "
-     "middle of the slaves' for one not heard yet, plus 20 ms; or the master's time-out where "
-     "told, less the clock's lag; a copy of the request as late as the master's own retries "
+     "middle of the slaves' for one not heard yet, plus 20 ms; where told, the master's "
+     "time-out less the clock's lag, however slowly the slave answers; a copy of the request as "
+     "late as the master's own retries "
      "have come never is): taken as 1 in 16, a master with a shorter time-out"},
     {"glitch-odds", 4,
      "the bus shows 0x00 glitches at least 16 times as often as a CRC ends in 0x00 "

@@ -275,8 +275,9 @@ int64_t Matcher::answer_over_ns(uint8_t slave) const {
 // take off (as the matcher judges a copy: too_soon_for_retry), so that the framer too reads a
 // copy that late as the master's.
 int64_t Matcher::retry_from_ns(const Pending& request) const {
-  const int64_t from = std::max(answer_over_ns(request.slave), told_wait_ns(request));
-  if (request.timeout_told || !retry_interval_ns_) return from;
+  if (request.timeout_told) return told_wait_ns(request);
+  const int64_t from = answer_over_ns(request.slave);
+  if (!retry_interval_ns_) return from;
   return std::min(from, retry_interval_ns_ - options_.clock_lag_ns);
 }
 

@@ -128,9 +128,9 @@ class Matcher {
   // twice the longest turnaround seen (the slave's, else the bus's middle) and 20 ms; with nothing
   // learned, 50 ms, the shortest time-out masters use. A master told to wait (--timeout, a
   // model's time-out) sends nothing again before its time-out, less what the clock may take
-  // off; its slave's answer still comes in the slave's own time (answer_time_ns).
+  // off, and may from then on, however slowly its slave answers: an answer that late is late.
   int64_t answered_within_ns(const Pending& request) const {
-    return std::max(answer_time_ns(request.slave), told_wait_ns(request));
+    return request.timeout_told ? told_wait_ns(request) : answer_time_ns(request.slave);
   }
   // Whether a copy `waited_ns` after its request came before the master's retry could: in the
   // time its answer takes, and sooner than the master's own retries have come (where its

@@ -149,6 +149,39 @@ TEST(Matcher, ARequestCuttingInSoonerThanAMasterWaitsLeavesTheFirstAnswerDue) {
   EXPECT_EQ(moved_on.timeouts()[0].request, moved_on.frames()[0].index);
 }
 
+// Told the master's time-out, a copy of the request past it (less what the clock may take off)
+// may be the master's retry however slowly its slave answers: a slave seen to answer in 190 ms
+// of a 200 ms time-out does not make a FC07 retry 205 ms on the answer cut short.
+TEST(Matcher, ToldTheTimeOutACopyPastItMayBeTheRetryWhateverTheSlavesTurnaround) {
+  Collector out;
+  AnalyzerOptions options;
+  options.clock = ClockQuality::per_chunk;
+  options.timeout_ns = 200'000'000;
+  options.timeout_told = true;
+  Analyzer analyzer(options, {{"test", ChannelRole::bus}}, out);
+  const auto read = hex("05 03 00 00 00 01 85 8e"), value = hex("05 03 02 00 09 89 82");
+  const auto status = hex("05 07 43 22"), its_answer = hex("05 07 18 63 fb");
+  const auto push = [&](const std::vector<uint8_t>& bytes, int64_t at_ms) {
+    analyzer.push({0, 1'000'000'000 + at_ms * 1'000'000, {bytes.data(), bytes.size()}});
+  };
+  for (const int64_t cycle : {0, 1000, 2000}) {
+    push(read, cycle);
+    push(value, cycle + 190);
+  }
+  push(status, 3000);
+  push(status, 3205);
+  push(its_answer, 3400);
+  analyzer.finish();
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 9u);
+  EXPECT_EQ(frames[7].role, Role::request);
+  EXPECT_TRUE(frames[7].check_ok);
+  EXPECT_TRUE(frames[7].findings & finding_retry);
+  EXPECT_EQ(frames[8].request, frames[7].index);
+  ASSERT_EQ(out.timeouts().size(), 1u);
+  EXPECT_EQ(out.timeouts()[0].request, frames[6].index);
+}
+
 TEST(Matcher, MarksBroadcastsAndExpectsNoResponse) {
   const auto out = analyze_untimed(join({"00 06 00 01 00 03 99 da"}));
   const auto frames = out.frames();
