@@ -57,6 +57,16 @@ void ExplainSink::on_copy(uint16_t channel, uint64_t offset, const Margin& margi
   if (copies_.size() > kept_copies) copies_.pop_front();
 }
 
+void ExplainSink::on_role(uint16_t channel, uint64_t offset, Role role, RoleReason why) {
+  roles_.push_back({channel, offset, role, why});
+  if (roles_.size() > kept_copies) roles_.pop_front();
+}
+
+void ExplainSink::on_pair(uint16_t channel, uint64_t offset, PairReason how) {
+  pairs_.push_back({channel, offset, how});
+  if (pairs_.size() > kept_copies) pairs_.pop_front();
+}
+
 void ExplainSink::on_edge_byte(uint16_t channel, const EdgeByte& edge) {
   edges_.push_back({channel, edge});
   if (edges_.size() > kept_edges) edges_.pop_front();
@@ -92,6 +102,7 @@ void ExplainSink::explain_frame(const Frame& frame) {
     print_piece_header(frame.channel, frame.offset);
     print_edges(frame.channel, frame.offset, frame.raw.size());
   }
+  print_role(frame);
 }
 
 // What made the piece a damaged frame: the length its structure says, against what came.
@@ -318,6 +329,25 @@ void ExplainSink::print_runner_up(const Margin& margin, std::string_view finding
 
 // A frame that copies the pending request: the slave's echo or the master's retry, as the
 // matcher judged it by its time.
+// The matcher's last word on the frame's role (a held copy is told twice: first as it was held,
+// then as the master's next move showed it).
+void ExplainSink::print_role(const Frame& frame) {
+  const auto given = std::find_if(roles_.rbegin(), roles_.rend(), [&](const RoleGiven& r) {
+    return r.channel == frame.channel && r.offset == frame.offset;
+  });
+  if (given == roles_.rend()) return;
+  out_.print(
+      "  the matcher read it as {}: {}\n",
+      given->role == Role::unknown ? "neither role" : "a " + std::string(to_string(given->role)),
+      to_string(given->why));
+  const auto paired = std::find_if(pairs_.rbegin(), pairs_.rend(), [&](const PairGiven& p) {
+    return p.channel == frame.channel && p.offset == frame.offset;
+  });
+  if (paired == pairs_.rend()) return;
+  out_.print("  paired with {}{}\n", frame.request ? fmt::format("#{}, ", *frame.request) : "",
+             to_string(paired->how));
+}
+
 void ExplainSink::print_copy(const Frame& frame) {
   const auto copy = std::find_if(copies_.rbegin(), copies_.rend(), [&](const Copy& c) {
     return c.channel == frame.channel && c.offset == frame.offset;

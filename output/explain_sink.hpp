@@ -28,6 +28,8 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   void on_start(uint16_t channel, uint64_t offset) override;
   void on_reading(const FramingStep& step) override;
   void on_copy(uint16_t channel, uint64_t offset, const Margin& margin) override;
+  void on_role(uint16_t channel, uint64_t offset, Role role, RoleReason why) override;
+  void on_pair(uint16_t channel, uint64_t offset, PairReason how) override;
   void on_edge_byte(uint16_t channel, const EdgeByte& edge) override;
   void on_piece_header(uint16_t channel, const PieceHeader& header) override;
   void on_frame(const Frame& frame) override;
@@ -66,6 +68,7 @@ class ExplainSink final : public RecordSink, public FramingObserver {
   // A runner-up's lines: what ruled it out, or that it stands and the record says so.
   void print_runner_up(const Margin& margin, std::string_view finding);
   void print_copy(const Frame& frame);
+  void print_role(const Frame& frame);
   // The 0x00s and 0xFFs at the edges of the record's bytes, each read as its own or a glitch.
   void print_edges(uint16_t channel, uint64_t offset, size_t size);
   void print_edge(const EdgeByte& edge);
@@ -110,6 +113,20 @@ class ExplainSink final : public RecordSink, public FramingObserver {
     Margin margin;
   };
   std::deque<Copy> copies_;
+  // The matcher's reasons for the latest frames' roles.
+  struct RoleGiven {
+    uint16_t channel;
+    uint64_t offset;
+    Role role;
+    RoleReason why;
+  };
+  std::deque<RoleGiven> roles_;
+  struct PairGiven {
+    uint16_t channel;
+    uint64_t offset;
+    PairReason how;
+  };
+  std::deque<PairGiven> pairs_;
   // The latest 0x00s and 0xFFs weighed at the edges of unframed bytes.
   struct Edge {
     uint16_t channel;

@@ -582,8 +582,64 @@ struct FramingStep {
   }
 };
 
+// Why the matcher gave a frame its role: the first rule of its table (Matcher::role_rules) that
+// holds, or where the frame's place in an exchange decided apart from the table (a bad check in
+// the answer's time, a held copy the master's next move told).
+enum class RoleReason : uint8_t {
+  master_channel,
+  slave_channel,
+  exception_bit,
+  fits_request_only,
+  fits_response_only,
+  retry,
+  another_request,
+  awaited_answer,
+  overdue_answer,
+  interrupted_answer,
+  fits_request,
+  fits_neither,
+  garbled_answer,
+  held_copy_answer,
+};
+template <>
+struct EnumNames<RoleReason> {
+  static constexpr std::array<std::string_view, 14> names{
+      "it came on the master's channel of a split tap",
+      "it came on the slaves' channel of a split tap",
+      "its function code has the exception bit, which only an answer has",
+      "its structure fits a request and no answer",
+      "its structure fits an answer and no request",
+      "a copy of the pending request, taken for the master's retry (below)",
+      "of the pending request's slave and function, it does not fit as its answer and came past "
+      "the time that answer takes: the master's next request",
+      "of the pending request's slave and function, where its answer is due: that answer",
+      "it answers the request that timed out last, while the master sends nothing: that slave's "
+      "answer, late",
+      "it answers the request another master cut in on, after that master's exchange: paired, on "
+      "time",
+      "it reads as a request as well as an answer, and no request awaits an answer it could be",
+      "it fits neither as a request nor as an answer, and no request awaits it",
+      "its check fails where the pending request's answer is due: that answer, damaged, whatever "
+      "its address or function code says",
+      "a copy of a request held until the master's next move, which showed the master did not "
+      "wait for its answer: the answer"};
+};
+
+// Which request the matcher paired an answer with.
+enum class PairReason : uint8_t { pending, set_aside, overdue, echo_as_retry, none };
+template <>
+struct EnumNames<PairReason> {
+  static constexpr std::array<std::string_view, 5> names{
+      "the pending request",
+      "the request another master's request cut in on, set aside while that exchange ran",
+      "the request that timed out last: the slave answered after the master gave up",
+      "the copy before it, taken for the master's retry: a slave answers once, so the copy "
+      "could not be its echo",
+      "none: no request waits for an answer it could be (unsolicited)"};
+};
+
 // Told each reading the framer weighs at the start of what it emits next, and how the matcher
-// judged a copy of the pending request (--explain).
+// judged a copy of the pending request and gave each frame its role (--explain).
 class FramingObserver {
  public:
   virtual ~FramingObserver() = default;
@@ -593,6 +649,11 @@ class FramingObserver {
   // The matcher's judgement of a frame that copies the pending request, at `offset`: the
   // slave's echo or the master's retry, and what told the runner-up apart.
   virtual void on_copy(uint16_t /*channel*/, uint64_t /*offset*/, const Margin& /*margin*/) {}
+  // The matcher's reason for the role of the frame at `offset`.
+  virtual void on_role(uint16_t /*channel*/, uint64_t /*offset*/, Role /*role*/,
+                       RoleReason /*why*/) {}
+  // The request an answer at `offset` was paired with, as the matcher chose it.
+  virtual void on_pair(uint16_t /*channel*/, uint64_t /*offset*/, PairReason /*how*/) {}
   // How a 0x00 or 0xFF at an edge of unframed bytes was read: their own, or a glitch.
   virtual void on_edge_byte(uint16_t /*channel*/, const EdgeByte& /*edge*/) {}
   // How a piece whose header says a frame of its length was read: a damaged frame, or noise.

@@ -68,7 +68,13 @@ void Matcher::on_frame(Frame& frame, ChannelRole channel_role) {
   if (garbage && in_answer_time(frame.t_ns, channel_role)) return garbled_answer(frame);
   const CopyJudgement judgement = judge_copy(frame);
   const Copy copy = judgement.copy;
-  frame.role = decide_role(frame, channel_role, judgement);
+  const RoleDecision rule = decide_role({frame, channel_role, judgement});
+  frame.role = rule.role;
+  tell_role(frame, rule.why);
+  // --explain: what told echo and retry apart, where both could be and that decided the role.
+  const bool copy_decided = rule.why == RoleReason::retry || rule.why == RoleReason::awaited_answer;
+  if (copy_decided && judgement.margin.runner_up != RunnerUp::none && options_.observer)
+    options_.observer->on_copy(frame.channel, frame.offset, judgement.margin);
   // Right after an echo that may have been a retry, a frame that may answer the same request
   // is as ambiguous as a request, and an answer only a retry leaves room for answers that.
   const auto echo = std::exchange(ambiguous_echo_, std::nullopt);
@@ -101,6 +107,7 @@ void Matcher::on_noise(Noise& noise, ChannelRole channel_role) {
 // slave did answer, garbled: no time-out.
 void Matcher::garbled_answer(Frame& frame) {
   frame.role = Role::response;
+  tell_role(frame, RoleReason::garbled_answer);
   frame.request = pending_->index;
   frame.request_slave = pending_->slave;
   pending_->garbled_answer = true;
@@ -121,44 +128,73 @@ bool Matcher::awaits_answer(ChannelRole channel_role) const {
   return pending_ && channel_role != ChannelRole::master;
 }
 
-Role Matcher::decide_role(const Frame& frame, ChannelRole channel_role,
-                          const CopyJudgement& judgement) const {
-  if (channel_role == ChannelRole::master) return Role::request;
-  if (channel_role == ChannelRole::slave) return Role::response;
-  // The exception bit says response, even on a damaged frame or an unexpected slave.
-  if (frame.is_exception()) return Role::response;
-  if (frame.fit.request && !frame.fit.response) return Role::request;
-  if (frame.fit.response && !frame.fit.request) return Role::response;
-  // Both or neither: an echo, or a frame too damaged to tell. What the bus waits for decides,
-  // unless the frame is the pending request again, or another request of its kind that does
-  // not fit as the answer (a write of other values), sent past the time for its answer: the
-  // master's, after its time-out. A late answer that fits (a FC08 counter, a read of 3 bytes
-  // of coils, as long as their requests) stays the answer.
-  if (pending_matches(frame)) {
-    const Copy copy = judgement.copy;
-    // --explain: what told echo and retry apart, where both could be.
-    if (judgement.margin.runner_up != RunnerUp::none && options_.observer)
-      options_.observer->on_copy(frame.channel, frame.offset, judgement.margin);
-    const bool another_request = copy == Copy::none && frame.check_ok && frame.fit.request &&
-                                 !fits_pending(frame) && past_answer_time(frame);
-    return copy == Copy::retry || another_request ? Role::request : Role::response;
-  }
-  // A frame that answers the request that timed out last is that slave's answer, late: while
-  // the master waits for another slave's answer it sends nothing, and a request that is not the
-  // same again fits as that answer by chance. The same again is told by the master's next move
-  // (Analyzer holds it: copy_in_doubt).
-  if (answers_overdue(frame) && (in_answer_time(frame.t_ns, channel_role) ||
-                                 (frame.fit.response && !copies(frame, overdue_))))
-    return Role::response;
-  // The answer to a request another master cut in on, after the other exchange: a copy of it
-  // too soon for its master's retry is its echo. Its slave answers once the line is quiet, so
-  // its time runs from the other exchange's end.
-  if (answers_interrupted(frame) &&
-      (copies(frame, interrupted_)
-           ? options_.timed && too_soon_for_retry(interrupted_, frame.t_ns - resumed_ns_)
-           : frame.fit.response))
-    return Role::response;
-  return frame.fit.request ? Role::request : Role::unknown;
+// A frame's role: the first rule that holds, in this order. Its port's direction says it on a
+// split tap; the exception bit, or a structure that fits one role only, says it on a bus. Where
+// both fit (an echo) or neither (a frame too damaged to tell), what the bus waits for decides,
+// unless the frame is the pending request again, or another request of its kind that does not
+// fit as the answer (a write of other values), sent past the time for its answer: the master's,
+// after its time-out. A late answer that fits (a FC08 counter, a read of 3 bytes of coils, as
+// long as their requests) stays the answer. A frame that answers the request that timed out
+// last is that slave's answer, late: while the master waits for another slave's answer it
+// sends nothing, and a request that is not the same again fits as that answer by chance (the
+// same again is told by the master's next move: Analyzer holds it, copy_in_doubt).
+inline bool Matcher::has_exception_bit(const RoleCase& c) const {
+  return c.frame.is_exception();  // even on a damaged frame or an unexpected slave
+}
+inline bool Matcher::fits_request_only(const RoleCase& c) const {
+  return c.frame.fit.request && !c.frame.fit.response;
+}
+inline bool Matcher::fits_response_only(const RoleCase& c) const {
+  return c.frame.fit.response && !c.frame.fit.request;
+}
+inline bool Matcher::taken_for_retry(const RoleCase& c) const {
+  return c.judgement.copy == Copy::retry;
+}
+inline bool Matcher::another_request_of_its_kind(const RoleCase& c) const {
+  return pending_matches(c.frame) && c.judgement.copy == Copy::none && c.frame.check_ok &&
+         c.frame.fit.request && !fits_pending(c.frame) && past_answer_time(c.frame);
+}
+inline bool Matcher::of_the_pending_request(const RoleCase& c) const {
+  return pending_matches(c.frame);
+}
+inline bool Matcher::answers_overdue_now(const RoleCase& c) const {
+  return answers_overdue(c.frame) && (in_answer_time(c.frame.t_ns, c.channel) ||
+                                      (c.frame.fit.response && !copies(c.frame, overdue_)));
+}
+// After the other exchange: a copy of the request set aside, too soon for its master's retry,
+// is its echo. Its slave answers once the line is quiet, so its time runs from that exchange's
+// end.
+inline bool Matcher::answers_interrupted_now(const RoleCase& c) const {
+  if (!answers_interrupted(c.frame)) return false;
+  if (!copies(c.frame, interrupted_)) return c.frame.fit.response;
+  return options_.timed && too_soon_for_retry(interrupted_, c.frame.t_ns - resumed_ns_);
+}
+inline bool Matcher::fits_a_request(const RoleCase& c) const {
+  return c.frame.fit.request;
+}
+
+// The rules unrolled at compile time, as the framer's evidence rows are: a role is given to
+// every frame.
+template <Matcher::RoleRule... rules>
+inline Matcher::RoleDecision Matcher::first_holding(const RoleCase& c) const {
+  RoleDecision decision{RoleReason::fits_neither, Role::unknown};
+  (void)(((this->*rules.holds)(c) && (decision = {rules.why, rules.role}, true)) || ...);
+  return decision;
+}
+
+Matcher::RoleDecision Matcher::decide_role(const RoleCase& c) const {
+  return first_holding<
+      RoleRule{RoleReason::master_channel, Role::request, &Matcher::on_master_channel},
+      RoleRule{RoleReason::slave_channel, Role::response, &Matcher::on_slave_channel},
+      RoleRule{RoleReason::exception_bit, Role::response, &Matcher::has_exception_bit},
+      RoleRule{RoleReason::fits_request_only, Role::request, &Matcher::fits_request_only},
+      RoleRule{RoleReason::fits_response_only, Role::response, &Matcher::fits_response_only},
+      RoleRule{RoleReason::retry, Role::request, &Matcher::taken_for_retry},
+      RoleRule{RoleReason::another_request, Role::request, &Matcher::another_request_of_its_kind},
+      RoleRule{RoleReason::awaited_answer, Role::response, &Matcher::of_the_pending_request},
+      RoleRule{RoleReason::overdue_answer, Role::response, &Matcher::answers_overdue_now},
+      RoleRule{RoleReason::interrupted_answer, Role::response, &Matcher::answers_interrupted_now},
+      RoleRule{RoleReason::fits_request, Role::request, &Matcher::fits_a_request}>(c);
 }
 
 bool Matcher::fits(const Frame& frame, const Pending& request) {
@@ -340,6 +376,7 @@ void Matcher::set_aside() {
 // holds another exchange, so it teaches nothing of the slave's turnaround; where the clock did
 // not see its start (placed back to back with the other exchange's last byte), it has none.
 void Matcher::interrupted_answer(Frame& frame) {
+  tell_pair(frame, PairReason::set_aside);
   frame.request = interrupted_.index;
   frame.request_slave = interrupted_.slave;
   frame.request_pdu = {interrupted_.pdu.data(), interrupted_.size};
@@ -356,8 +393,9 @@ void Matcher::on_response(Frame& frame, Copy copy) {
     if (answers_interrupted(frame)) return interrupted_answer(frame);
     if (answers_overdue(frame)) return late_answer(frame);
     frame.findings |= finding_unsolicited;
-    return;
+    return tell_pair(frame, PairReason::none);
   }
+  tell_pair(frame, PairReason::pending);
   frame.request = pending_->index;
   frame.request_slave = pending_->slave;
   frame.request_pdu = {pending_->pdu.data(), pending_->size};
@@ -388,6 +426,7 @@ void Matcher::on_response(Frame& frame, Copy copy) {
 // An answer right after an ambiguous echo, that only an answer can be: no slave answers twice,
 // so the echo was the master's retry, and this answers it.
 void Matcher::answers_retry(Frame& frame, const AmbiguousEcho& echo) {
+  tell_pair(frame, PairReason::echo_as_retry);
   frame.request = echo.index;
   frame.request_slave = echo.request->slave;
   frame.request_pdu = {echo.request->pdu.data(), echo.request->size};
@@ -399,6 +438,7 @@ void Matcher::answers_retry(Frame& frame, const AmbiguousEcho& echo) {
 // time-out): the slave did answer, late. It counts against the master's time-out, not as an
 // answer the master got, and a slave answers once.
 void Matcher::late_answer(Frame& frame) {
+  tell_pair(frame, PairReason::overdue);
   frame.role = Role::response;
   frame.request = overdue_.index;
   frame.request_slave = overdue_.slave;
@@ -459,6 +499,7 @@ bool Matcher::moved_on_after(const Frame& copy, const Frame& next, int64_t decid
 void Matcher::on_late_copy(Frame& frame) {
   ambiguous_echo_.reset();
   frame.role = Role::response;
+  tell_role(frame, RoleReason::held_copy_answer);
   if (pending_matches(frame)) return on_response(frame, Copy::response);
   late_answer(frame);
 }

@@ -159,8 +159,43 @@ class Matcher {
     return slaves_timed_ ? ordered_turnarounds_[slaves_timed_ / 2] : 0;
   }
 
-  Role decide_role(const Frame& frame, ChannelRole channel_role,
-                   const CopyJudgement& judgement) const;
+  // What decides a frame's role: the frame, its port's direction and how a copy of the
+  // pending request was judged.
+  struct RoleCase {
+    const Frame& frame;
+    ChannelRole channel;
+    const CopyJudgement& judgement;
+  };
+  // A rule of the role table: where it holds, the frame has its role, for its reason.
+  struct RoleRule {
+    RoleReason why;
+    Role role;
+    bool (Matcher::*holds)(const RoleCase&) const;
+  };
+  struct RoleDecision {
+    RoleReason why;
+    Role role;
+  };
+  RoleDecision decide_role(const RoleCase& c) const;
+  template <RoleRule... rules>
+  RoleDecision first_holding(const RoleCase& c) const;
+  bool on_master_channel(const RoleCase& c) const { return c.channel == ChannelRole::master; }
+  bool on_slave_channel(const RoleCase& c) const { return c.channel == ChannelRole::slave; }
+  bool has_exception_bit(const RoleCase& c) const;
+  bool fits_request_only(const RoleCase& c) const;
+  bool fits_response_only(const RoleCase& c) const;
+  bool taken_for_retry(const RoleCase& c) const;
+  bool another_request_of_its_kind(const RoleCase& c) const;
+  bool of_the_pending_request(const RoleCase& c) const;
+  bool answers_overdue_now(const RoleCase& c) const;
+  bool answers_interrupted_now(const RoleCase& c) const;
+  bool fits_a_request(const RoleCase& c) const;
+  void tell_role(const Frame& frame, RoleReason why) const {
+    if (options_.observer) options_.observer->on_role(frame.channel, frame.offset, frame.role, why);
+  }
+  void tell_pair(const Frame& frame, PairReason how) const {
+    if (options_.observer) options_.observer->on_pair(frame.channel, frame.offset, how);
+  }
   // Whether the frame fits as the request's answer.
   static bool fits(const Frame& frame, const Pending& request);
   bool fits_pending(const Frame& frame) const { return fits(frame, *pending_); }

@@ -1432,7 +1432,7 @@ TEST(Cli, ExplainSaysASpanRefutedInOneRoleIsRefutedInTheOther) {
                                          "11 06 00 01 00 03 9A 9B 03 00 00 00 01 99 F0"});
   const Outcome r = run("-r " + log + " --explain 2");
   ASSERT_EQ(r.status, 0);
-  ASSERT_EQ(r.lines.size(), 18u) << ::testing::PrintToString(r.lines);
+  ASSERT_EQ(r.lines.size(), 20u) << ::testing::PrintToString(r.lines);
   EXPECT_THAT(r.lines[0], ::testing::HasSubstr("crc BAD (cut)"));
   EXPECT_EQ(r.lines[2], "    response, 8 bytes: refuted, -4 bits");
   EXPECT_THAT(r.lines[4], ::testing::StartsWith("       -20  answer-cut-before-request: "));
@@ -1444,9 +1444,13 @@ TEST(Cli, ExplainSaysASpanRefutedInOneRoleIsRefutedInTheOther) {
   EXPECT_EQ(r.lines[13],
             "  then, no reading holding, the bytes up to the next good frame or silence were one "
             "piece: the awaited answer, whose structure says 8 bytes; 7 came: cut");
-  EXPECT_EQ(r.lines[15], "    #1 bytes 0-7: request, 8 bytes, check ok");
-  EXPECT_EQ(r.lines[16], "    #2 bytes 8-14: this record");
-  EXPECT_EQ(r.lines[17], "    #3 bytes 15-22: request, 8 bytes, check ok");
+  EXPECT_EQ(r.lines[14],
+            "  the matcher read it as a response: its structure fits an answer "
+            "and no request");
+  EXPECT_EQ(r.lines[15], "  paired with #1, the pending request");
+  EXPECT_EQ(r.lines[17], "    #1 bytes 0-7: request, 8 bytes, check ok");
+  EXPECT_EQ(r.lines[18], "    #2 bytes 8-14: this record");
+  EXPECT_EQ(r.lines[19], "    #3 bytes 15-22: request, 8 bytes, check ok");
 }
 
 // A vendor's function code has no length of its own: its end is where a CRC search found one
@@ -1509,7 +1513,7 @@ TEST(Cli, ExplainWeighsAnEndsRunnerUpAndSaysWhenItStands) {
              {"00.000000", "01 41 02 03 10 AD 00 01 03 00 00 00 01 84 0A"});
   const Outcome stands = run("-r " + together + " --explain 1");
   ASSERT_EQ(stands.status, 0);
-  ASSERT_EQ(stands.lines.size(), 12u) << ::testing::PrintToString(stands.lines);
+  ASSERT_EQ(stands.lines.size(), 13u) << ::testing::PrintToString(stands.lines);
   EXPECT_THAT(stands.lines[0], ::testing::HasSubstr("crc ok [ambiguous-end]"));
   EXPECT_EQ(stands.lines[2], "    request, 6 bytes: kept, +16 bits");
   EXPECT_THAT(stands.lines[4], ::testing::StartsWith("              confirmed, 8 bits of the "
@@ -1520,7 +1524,7 @@ TEST(Cli, ExplainWeighsAnEndsRunnerUpAndSaysWhenItStands) {
   EXPECT_EQ(stands.lines[7],
             "              stands: nothing in the bytes or their times tells the two apart (0 of "
             "4 bits): ambiguous-end");
-  EXPECT_EQ(stands.lines[11], "    #2 bytes 6-6: noise (glitch), 1 byte");
+  EXPECT_EQ(stands.lines[12], "    #2 bytes 6-6: noise (glitch), 1 byte");
 }
 
 // A copy of the pending request is its slave's echo or the master's retry, and --explain says
@@ -1550,6 +1554,33 @@ TEST(Cli, ExplainSaysWhatToldAnEchoFromARetry) {
                                   "the two apart (0 of 4 bits): ambiguous-echo"));
 }
 
+// --explain says why the matcher gave a frame its role and which request it paired it with:
+// an echo is the awaited answer; an answer after a second master's exchange answers the
+// request that exchange cut in on; an answer after the master's time-out, the one that timed
+// out.
+TEST(Cli, ExplainSaysWhyAFrameHasItsRoleAndItsRequest) {
+  const std::string log =
+      hexlog("modtap-explain-role.log",
+             {"00.000000", "11 06 00 01 00 03 9A 9B", "00.010000", "11 06 00 01 00 03 9A 9B",
+              "00.100000", "01 03 00 00 00 01 84 0A", "00.108000", "C9 03 01 00 00 01 95 BE",
+              "00.116000", "C9 03 02 00 2A D8 4B", "00.124000", "01 03 02 00 07 F9 86"});
+  const Outcome echo = run("-r " + log + " --explain 2");
+  ASSERT_EQ(echo.status, 0);
+  EXPECT_THAT(echo.lines,
+              ::testing::Contains("  the matcher read it as a response: of the pending request's "
+                                  "slave and function, where its answer is due: that answer"));
+  EXPECT_THAT(echo.lines, ::testing::Contains("  paired with #1, the pending request"));
+  const Outcome after = run("-r " + log + " --explain 6");
+  EXPECT_THAT(after.lines, ::testing::Contains("  the matcher read it as a response: its "
+                                               "structure fits an answer and no request"));
+  EXPECT_THAT(after.lines,
+              ::testing::Contains("  paired with #3, the request another master's request cut in "
+                                  "on, set aside while that exchange ran"));
+  const Outcome late = run("-r " + log + " --timeout 0.015 --explain 6");
+  EXPECT_THAT(late.lines, ::testing::Contains(::testing::StartsWith(
+                              "  paired with #3, the request that timed out last")));
+}
+
 // --explain answers "why did modtap cut here?". A master's retry of FC07 (`01 07 41 E2`), a
 // silence, then a broadcast: the retry and the broadcast's 0x00 pass a CRC as the five-byte
 // answer the bus waits for, but a silence lies inside that span and the four bytes before it
@@ -1561,7 +1592,7 @@ TEST(Cli, ExplainNamesTheReadingsWeighedAndTheEvidenceThatDecided) {
                                     "00.400000", "00 06 00 10 00 05 49 DD"});
   const Outcome r = run("-r " + log + " --explain 2");
   ASSERT_EQ(r.status, 0);
-  ASSERT_EQ(r.lines.size(), 14u) << ::testing::PrintToString(r.lines);
+  ASSERT_EQ(r.lines.size(), 15u) << ::testing::PrintToString(r.lines);
   EXPECT_THAT(r.lines[0], ::testing::MatchesRegex(" +2 +0\\.300000 req slave 1 .*"));
   EXPECT_THAT(r.lines[1], ::testing::HasSubstr("at byte 4 of"));
   EXPECT_EQ(r.lines[2], "    response, 5 bytes: refuted, -8 bits");
@@ -1572,10 +1603,12 @@ TEST(Cli, ExplainNamesTheReadingsWeighedAndTheEvidenceThatDecided) {
   EXPECT_EQ(r.lines[7], "    request, 4 bytes: kept, +16 bits");
   EXPECT_THAT(r.lines[8], ::testing::StartsWith("       +16  crc-holds: "));
   EXPECT_EQ(r.lines[9], "  kept by 16 bits over the runner-up: no frame here (0 bits)");
-  EXPECT_EQ(r.lines[10], "  the segmentation around it:");
-  EXPECT_EQ(r.lines[11], "    #1 bytes 0-3: request, 4 bytes, check ok");
-  EXPECT_EQ(r.lines[12], "    #2 bytes 4-7: this record");
-  EXPECT_EQ(r.lines[13], "    #3 bytes 8-15: request, 8 bytes, check ok");
+  EXPECT_EQ(r.lines[10],
+            "  the matcher read it as a request: its structure fits a request and no answer");
+  EXPECT_EQ(r.lines[11], "  the segmentation around it:");
+  EXPECT_EQ(r.lines[12], "    #1 bytes 0-3: request, 4 bytes, check ok");
+  EXPECT_EQ(r.lines[13], "    #2 bytes 4-7: this record");
+  EXPECT_EQ(r.lines[14], "    #3 bytes 8-15: request, 8 bytes, check ok");
   const Outcome missing = run("-r " + log + " --explain 9");
   EXPECT_NE(missing.status, 0);
   EXPECT_THAT(missing.lines, ::testing::Contains(
