@@ -465,32 +465,44 @@ TEST(Cli, AFindingsFirstRecordsNameEachRecordOnce) {
       << json;
 }
 
-// A slave that identifies itself as a model with a time-out of its own is waited for as long
-// as that model says from then on, as a slave given the model with --model is.
-TEST(Cli, AnIdentifiedSlaveIsWaitedForAsItsModelSays) {
-  const auto dir = std::filesystem::temp_directory_path() / "modtap-meter-models";
+// --models-dir with a meter that identifies itself by 0010H = 1234H, and `more` of its YAML.
+std::string meter_models(const std::string& name, const std::string& more) {
+  const auto dir = std::filesystem::temp_directory_path() / name;
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "meter.yaml") << "model: meter\ntitle: A meter\nsource: a test\n"
                                        "identify: {address: 0x0010, value: 0x1234}\n"
-                                       "timeout: {response_ms: 50}\n"
-                                       "registers:\n  - {address: 0x0010, name: meter_id}\n";
-  const auto path = (std::filesystem::temp_directory_path() / "modtap-meter.pcap").string();
-  {
-    modtap::captures::PcapChunkWriter writer(path, 147);
-    const auto put = [&](int64_t t_ms, std::vector<uint8_t> body) {
-      const uint16_t crc = modtap::crc16(body);
-      body.push_back(static_cast<uint8_t>(crc & 0xFF));
-      body.push_back(static_cast<uint8_t>(crc >> 8));
-      writer.write({0, 1'700'000'000'000'000'000 + t_ms * 1'000'000, body});
-    };
-    const std::vector<uint8_t> ask{0x05, 0x03, 0x00, 0x10, 0x00, 0x01};
-    put(0, ask);
-    put(10, {0x05, 0x03, 0x02, 0x12, 0x34});  // identifies as meter
-    put(300, ask);                            // unanswered
-    put(700, {0x06, 0x03, 0x00, 0x00, 0x00, 0x01});
-    put(710, {0x06, 0x03, 0x02, 0x00, 0x07});
+                                    << more;
+  return " --models-dir " + dir.string();
+}
+
+// A pcap of RTU frames (slave + PDU, CRC added), each in a packet of its own at its time in ms.
+std::string timed_pcap(const std::string& name,
+                       const std::vector<std::pair<int64_t, std::vector<uint8_t>>>& frames) {
+  const auto path = (std::filesystem::temp_directory_path() / name).string();
+  modtap::captures::PcapChunkWriter writer(path, 147);
+  for (auto [t_ms, body] : frames) {
+    const uint16_t crc = modtap::crc16(body);
+    body.push_back(static_cast<uint8_t>(crc & 0xFF));
+    body.push_back(static_cast<uint8_t>(crc >> 8));
+    writer.write({0, 1'700'000'000'000'000'000 + t_ms * 1'000'000, body});
   }
-  const Outcome r = run("-r " + path + " --models-dir " + dir.string() + " -Y 'slave == 5'");
+  return path;
+}
+
+// A slave that identifies itself as a model with a time-out of its own is waited for as long
+// as that model says from then on, as a slave given the model with --model is.
+TEST(Cli, AnIdentifiedSlaveIsWaitedForAsItsModelSays) {
+  const std::string models = meter_models(
+      "modtap-meter-models",
+      "timeout: {response_ms: 50}\nregisters:\n  - {address: 0x0010, name: meter_id}\n");
+  const std::vector<uint8_t> ask{0x05, 0x03, 0x00, 0x10, 0x00, 0x01};
+  const std::string path =
+      timed_pcap("modtap-meter.pcap", {{0, ask},
+                                       {10, {0x05, 0x03, 0x02, 0x12, 0x34}},  // identifies as meter
+                                       {300, ask},                            // unanswered
+                                       {700, {0x06, 0x03, 0x00, 0x00, 0x00, 0x01}},
+                                       {710, {0x06, 0x03, 0x02, 0x00, 0x07}}});
+  const Outcome r = run("-r " + path + models + " -Y 'slave == 5'");
   ASSERT_EQ(r.status, 0) << ::testing::PrintToString(r.lines);
   EXPECT_THAT(r.lines, ::testing::Contains(::testing::HasSubstr("identifies as meter")));
   EXPECT_THAT(r.lines, ::testing::Contains(::testing::MatchesRegex(
@@ -501,33 +513,20 @@ TEST(Cli, AnIdentifiedSlaveIsWaitedForAsItsModelSays) {
 // Read from a file, a slave's rows before it identifies itself are named by the model it
 // identifies as, as its rows after are; another slave's rows keep their place in time.
 TEST(Cli, CsvNamesASlavesRowsFromBeforeItIdentifiesItself) {
-  const auto dir = std::filesystem::temp_directory_path() / "modtap-naming-models";
-  std::filesystem::create_directories(dir);
-  std::ofstream(dir / "meter.yaml") << "model: meter\ntitle: A meter\nsource: a test\n"
-                                       "identify: {address: 0x0010, value: 0x1234}\n"
-                                       "registers:\n  - {address: 0x0010, name: meter_id}\n"
-                                       "  - {address: 0x0011, name: power, unit: W}\n";
-  const auto path = (std::filesystem::temp_directory_path() / "modtap-naming.pcap").string();
-  {
-    modtap::captures::PcapChunkWriter writer(path, 147);
-    int64_t t_ms = 0;
-    const auto put = [&](std::vector<uint8_t> body) {
-      const uint16_t crc = modtap::crc16(body);
-      body.push_back(static_cast<uint8_t>(crc & 0xFF));
-      body.push_back(static_cast<uint8_t>(crc >> 8));
-      writer.write({0, 1'700'000'000'000'000'000 + t_ms * 1'000'000, body});
-      t_ms += 50;
-    };
-    put({0x05, 0x03, 0x00, 0x11, 0x00, 0x01});
-    put({0x05, 0x03, 0x02, 0x00, 0x64});  // power, before slave 5 says what it is
-    put({0x06, 0x03, 0x00, 0x00, 0x00, 0x01});
-    put({0x06, 0x03, 0x02, 0x00, 0x07});
-    put({0x05, 0x03, 0x00, 0x10, 0x00, 0x02});
-    put({0x05, 0x03, 0x04, 0x12, 0x34, 0x00, 0x65});  // identifies as meter
-    put({0x06, 0x03, 0x00, 0x00, 0x00, 0x01});
-    put({0x06, 0x03, 0x02, 0x00, 0x08});
-  }
-  const std::string read = "-r " + path + " --models-dir " + dir.string();
+  const std::string models = meter_models("modtap-naming-models",
+                                          "registers:\n  - {address: 0x0010, name: meter_id}\n"
+                                          "  - {address: 0x0011, name: power, unit: W}\n");
+  const std::string path =
+      timed_pcap("modtap-naming.pcap",
+                 {{0, {0x05, 0x03, 0x00, 0x11, 0x00, 0x01}},
+                  {50, {0x05, 0x03, 0x02, 0x00, 0x64}},  // power, before slave 5 says what it is
+                  {100, {0x06, 0x03, 0x00, 0x00, 0x00, 0x01}},
+                  {150, {0x06, 0x03, 0x02, 0x00, 0x07}},
+                  {200, {0x05, 0x03, 0x00, 0x10, 0x00, 0x02}},
+                  {250, {0x05, 0x03, 0x04, 0x12, 0x34, 0x00, 0x65}},  // identifies as meter
+                  {300, {0x06, 0x03, 0x00, 0x00, 0x00, 0x01}},
+                  {350, {0x06, 0x03, 0x02, 0x00, 0x08}}});
+  const std::string read = "-r " + path + models;
   const Outcome all = run(read + " -T csv");
   ASSERT_EQ(all.status, 0) << ::testing::PrintToString(all.lines);
   std::vector<std::string> rows;  // without the time column
