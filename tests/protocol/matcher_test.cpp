@@ -30,10 +30,9 @@ struct Read {
   std::vector<uint8_t> bytes;
   int64_t at_ms = -1;
 };
-Collector analyze_reads(const std::vector<Read>& reads, ModeChoice mode = ModeChoice::rtu) {
+// The same with `options` (a clock per read, RTU unless they say otherwise).
+Collector analyze_reads(const std::vector<Read>& reads, AnalyzerOptions options) {
   Collector out;
-  AnalyzerOptions options;
-  options.mode = mode;
   options.clock = ClockQuality::per_chunk;
   Analyzer analyzer(options, {{"test", ChannelRole::bus}}, out);
   constexpr int64_t start = 1'000'000'000;
@@ -44,6 +43,11 @@ Collector analyze_reads(const std::vector<Read>& reads, ModeChoice mode = ModeCh
   }
   analyzer.finish();
   return out;
+}
+Collector analyze_reads(const std::vector<Read>& reads, ModeChoice mode = ModeChoice::rtu) {
+  AnalyzerOptions options;
+  options.mode = mode;
+  return analyze_reads(reads, options);
 }
 
 // A request and its answer in one read (a sniffer's packet, a hex log's block) are placed back
@@ -153,25 +157,18 @@ TEST(Matcher, ARequestCuttingInSoonerThanAMasterWaitsLeavesTheFirstAnswerDue) {
 // may be the master's retry however slowly its slave answers: a slave seen to answer in 190 ms
 // of a 200 ms time-out does not make a FC07 retry 205 ms on the answer cut short.
 TEST(Matcher, ToldTheTimeOutACopyPastItMayBeTheRetryWhateverTheSlavesTurnaround) {
-  Collector out;
   AnalyzerOptions options;
-  options.clock = ClockQuality::per_chunk;
   options.timeout_ns = 200'000'000;
   options.timeout_told = true;
-  Analyzer analyzer(options, {{"test", ChannelRole::bus}}, out);
   const auto read = hex("05 03 00 00 00 01 85 8e"), value = hex("05 03 02 00 09 89 82");
   const auto status = hex("05 07 43 22"), its_answer = hex("05 07 18 63 fb");
-  const auto push = [&](const std::vector<uint8_t>& bytes, int64_t at_ms) {
-    analyzer.push({0, 1'000'000'000 + at_ms * 1'000'000, {bytes.data(), bytes.size()}});
-  };
+  std::vector<Read> reads;
   for (const int64_t cycle : {0, 1000, 2000}) {
-    push(read, cycle);
-    push(value, cycle + 190);
+    reads.push_back({read, cycle});
+    reads.push_back({value, cycle + 190});
   }
-  push(status, 3000);
-  push(status, 3205);
-  push(its_answer, 3400);
-  analyzer.finish();
+  reads.insert(reads.end(), {{status, 3000}, {status, 3205}, {its_answer, 3400}});
+  const Collector out = analyze_reads(reads, options);
   const auto frames = out.frames();
   ASSERT_EQ(frames.size(), 9u);
   EXPECT_EQ(frames[7].role, Role::request);
@@ -548,23 +545,16 @@ TEST(Matcher, ACopyNearTheMastersToldTimeOutIsTheAnswerWhereTheMasterMovesOnAtOn
   const auto write = hex("01 06 00 01 00 03 98 0b");
   const auto moves_on = hex("02 03 00 00 00 01 84 39");
   for (const bool timer_lag : {false, true}) {
-    Collector out;
     AnalyzerOptions options;
-    options.mode = ModeChoice::rtu;
-    options.clock = ClockQuality::per_chunk;
     options.chunk_jitter_ns = timer_lag ? 16'000'000 : 0;
     options.timeout_ns = 200'000'000;
     options.timeout_told = true;
-    Analyzer analyzer(options, {{"test", ChannelRole::bus}}, out);
-    const auto read = [&](const std::vector<uint8_t>& bytes, int64_t at_ms) {
-      analyzer.push({0, at_ms * 1'000'000, {bytes.data(), bytes.size()}});
-    };
-    read(hex("01 03 00 00 00 01 84 0a"), 1000);
-    read(hex("01 03 02 00 05 78 47"), 1010);
-    read(write, 1100);
-    read(write, 1302);
-    read(moves_on, 1312);
-    analyzer.finish();
+    const Collector out = analyze_reads({{hex("01 03 00 00 00 01 84 0a"), 1000},
+                                         {hex("01 03 02 00 05 78 47"), 1010},
+                                         {write, 1100},
+                                         {write, 1302},
+                                         {moves_on, 1312}},
+                                        options);
     const auto frames = out.frames();
     ASSERT_EQ(frames.size(), 5u);
     EXPECT_EQ(frames[3].role, Role::response) << timer_lag;
