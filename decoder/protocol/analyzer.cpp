@@ -75,6 +75,7 @@ class Analyzer::ModeProbe {
     auto& trial = trials_[channel];
     if (!trial) {
       RtuFramerOptions rtu{options_.format, options_.clock, role, options_.chunk_jitter_ns};
+      rtu.weights = options_.framing_weights;
       AsciiFramerOptions ascii{options_.format, options_.clock, role,
                                options_.ascii_char_timeout_ns};
       trial.reset(new Trial{{channel, rtu, rtu_count_}, {channel, ascii, ascii_count_}});
@@ -132,8 +133,9 @@ Analyzer::Channel& Analyzer::channel(uint16_t id) {
 void Analyzer::start_framer(uint16_t id, Mode mode) {
   Channel& c = channels_[id];
   if (mode == Mode::rtu) {
-    RtuFramerOptions o{options_.format, options_.clock, c.info.role, options_.chunk_jitter_ns,
-                       options_.framing_observer};
+    RtuFramerOptions o{
+        options_.format,           options_.clock,          c.info.role, options_.chunk_jitter_ns,
+        options_.framing_observer, options_.framing_weights};
     c.framer = std::make_unique<RtuFramer>(id, o, static_cast<FrameSink&>(*this));
   } else {
     AsciiFramerOptions o{options_.format, options_.clock, c.info.role,

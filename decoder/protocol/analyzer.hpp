@@ -39,6 +39,7 @@ struct AnalyzerOptions {
   int64_t chunk_jitter_ns = default_read_jitter_ns;
   // Told the readings the RTU framer weighs at each start (--explain); not the mode trials'.
   FramingObserver* framing_observer = nullptr;
+  FeatureWeights framing_weights = table_weights;  // the RTU framer's evidence table's weights
 };
 
 class Analyzer final : private FrameSink {

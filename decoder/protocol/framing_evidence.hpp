@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cstdint>
+#include <initializer_list>
 #include <optional>
 #include <span>
 #include <string_view>
@@ -156,6 +157,35 @@ constexpr int feature_bits(std::span<const Feature> features) {
   return sum;
 }
 
+// Features as bits of a mask: the ones a row needs, and the ones found to hold for a span.
+class FeatureSet {
+ public:
+  constexpr FeatureSet() = default;
+  constexpr FeatureSet(std::initializer_list<Feature> features) {
+    for (const Feature f : features) add(f);
+  }
+  // Adds `feature` where it holds; whether it does, so that a row stops at the first that fails.
+  constexpr bool add(Feature feature, bool holds = true) {
+    if (holds) mask_ |= bit(feature);
+    return holds;
+  }
+  constexpr bool has(Feature feature) const { return (mask_ & bit(feature)) != 0; }
+  constexpr bool contains(FeatureSet other) const { return (mask_ & other.mask_) == other.mask_; }
+  constexpr bool operator==(const FeatureSet&) const = default;
+  constexpr uint32_t mask() const { return mask_; }
+  static constexpr FeatureSet of_mask(uint32_t mask) {
+    FeatureSet set;
+    set.mask_ = mask;
+    return set;
+  }
+
+ private:
+  static constexpr uint32_t bit(Feature f) { return uint32_t{1} << static_cast<unsigned>(f); }
+  uint32_t mask_ = 0;
+};
+static_assert(size_t(Feature::public_header) < 31,
+              "a feature set holds every feature, and a row's one bit more");
+
 enum class Evidence : uint8_t {
   length_and_crc,
   no_good_end,
@@ -186,12 +216,47 @@ struct EvidenceInfo {
   // span, and the row weighs that much less.
   std::optional<Feature> for_span = std::nullopt;
 
-  constexpr int bits() const {
-    int sum = for_span ? -feature_table[size_t(*for_span)].bits : 0;
-    for (size_t i = 0; i < feature_count; ++i) sum += feature_table[size_t(features[i])].bits;
-    return sum;
+  constexpr int bits() const;
+  // What must hold for the row's reading of the bytes: all its features.
+  constexpr FeatureSet needs() const {
+    FeatureSet set;
+    for (size_t i = 0; i < feature_count; ++i) set.add(features[i]);
+    return set;
   }
 };
+
+// The bits each feature weighs: the feature table's, unless a framer is given others (what a
+// weight decides, tested by changing it). Every verdict the framer draws from a row is drawn
+// from these.
+struct FeatureWeights {
+  std::array<int8_t, size_t(Feature::public_header) + 1> bits{};
+
+  constexpr int of(Feature f) const { return bits[static_cast<size_t>(f)]; }
+  // A row's weight: its features', less the one its reading needs and the span's does not.
+  constexpr int of(const EvidenceInfo& row) const {
+    int sum = row.for_span ? -of(*row.for_span) : 0;
+    for (size_t i = 0; i < row.feature_count; ++i) sum += of(row.features[i]);
+    return sum;
+  }
+  // What a span whose length rules and CRC agree scores for itself: its CRC.
+  constexpr int span() const { return of(Feature::crc_holds); }
+  constexpr FeatureWeights with(Feature f, int weight) const {
+    FeatureWeights changed = *this;
+    changed.bits[static_cast<size_t>(f)] = static_cast<int8_t>(weight);
+    return changed;
+  }
+};
+
+inline constexpr FeatureWeights table_weights = [] {
+  FeatureWeights weights;
+  for (size_t i = 0; i < feature_table.size(); ++i)
+    weights.bits[i] = static_cast<int8_t>(feature_table[i].bits);
+  return weights;
+}();
+
+constexpr int EvidenceInfo::bits() const {
+  return table_weights.of(*this);
+}
 
 inline constexpr auto evidence_table = std::to_array<EvidenceInfo>({
     {"length-and-crc",
@@ -292,7 +357,7 @@ inline constexpr auto evidence_table = std::to_array<EvidenceInfo>({
 static_assert(evidence_table.size() == size_t(Evidence::swallows_request) + 1,
               "a row for each piece of evidence");
 
-inline const EvidenceInfo& evidence_info(Evidence e) {
+constexpr const EvidenceInfo& evidence_info(Evidence e) {
   return evidence_table[static_cast<size_t>(e)];
 }
 
@@ -533,16 +598,17 @@ static_assert(every_confirmation_makes_up_for_the_search());
 // search found its end, and `copy-after` where its exact copy follows it, which no frame inside
 // explains. A silence or a frame after the span counts for neither: the frame inside and what
 // follows it explain them as well. The span keeps its bytes where it scores at least as much.
-constexpr int frame_inside_bits(bool unexpected) {
-  return row_bits<Evidence::swallows_known_frame> -
-         (unexpected ? 0 : feature_table[size_t(Feature::unexpected_sender)].bits);
+constexpr int frame_inside_bits(bool unexpected, const FeatureWeights& w = table_weights) {
+  return w.of(evidence_info(Evidence::swallows_known_frame)) -
+         (unexpected ? 0 : w.of(Feature::unexpected_sender));
 }
-constexpr int span_bits_against_frame_inside(bool searched, bool copy) {
-  return span_bits - (searched ? search_bits : 0) +
-         (copy ? feature_table[size_t(Feature::copy_after)].bits : 0);
+constexpr int span_bits_against_frame_inside(bool searched, bool copy,
+                                             const FeatureWeights& w = table_weights) {
+  return w.span() - (searched ? search_bits : 0) + (copy ? w.of(Feature::copy_after) : 0);
 }
-constexpr bool keeps_frame_inside(bool searched, bool unexpected, bool copy) {
-  return span_bits_against_frame_inside(searched, copy) >= frame_inside_bits(unexpected);
+constexpr bool keeps_frame_inside(bool searched, bool unexpected, bool copy,
+                                  const FeatureWeights& w = table_weights) {
+  return span_bits_against_frame_inside(searched, copy, w) >= frame_inside_bits(unexpected, w);
 }
 // A frame of known length from an expected sender keeps what is inside it; one at a reserved
 // address, one nobody awaits and one found by search do not; an exact copy after any of them

@@ -36,23 +36,33 @@ RtuFramer::Verdict RtuFramer::weigh_span(const Reading& r, Evidence& why) {
 // most a CRC could say, so no end is sought.
 std::optional<Evidence> RtuFramer::weigh_start(uint64_t at) {
   static_assert(row_bits<Evidence::vendor_frame_inside_awaited_answer> > span_bits);
-  if (vendor_frame_inside_awaited_answer(at)) return Evidence::vendor_frame_inside_awaited_answer;
+  constexpr Evidence row = Evidence::vendor_frame_inside_awaited_answer;
+  if (refutes_alone<row>(vendor_frame_inside_awaited_answer(at))) return row;
   return std::nullopt;
 }
 
 // Inside the span the awaited answer's structure claims, a collision's junk passes a CRC 1
 // start in 65,536, most often as a vendor code or an unnamed exception, whose end only a CRC
 // search 256 bytes on could tell. An exception's code not yet come may still be a standard one.
-bool RtuFramer::vendor_frame_inside_awaited_answer(uint64_t at) {
-  return at + 3 <= end_ && inside_awaited_span(at) && !standard_frame(at);
+RtuFramer::RowFeatures RtuFramer::vendor_frame_inside_awaited_answer(uint64_t at) {
+  FeatureSet held;
+  if (at + 3 <= end_ && held.add(Feature::awaited_header, inside_awaited_span(at)))
+    held.add(Feature::vendor_code, !standard_frame(at));
+  return {held};
 }
 
-// The rows unrolled at compile time: weighing runs once a frame. Below nothing the span is
-// refuted, and the rows after need not be weighed: they only take off.
+RtuFramer::RowWeights::RowWeights(const FeatureWeights& weights) : span(weights.span()) {
+  for (size_t i = 0; i < rows.size(); ++i)
+    rows[i] = static_cast<int16_t>(weights.of(evidence_table[i]));
+}
+
+// The rows unrolled at compile time: weighing runs once a frame. Each row finds the features of
+// its reading; where all it needs hold, its weight comes off the span's score. Below nothing
+// the span is refuted, and the rows after need not be weighed: they only take off.
 template <RtuFramer::Row... rows>
 RtuFramer::Verdict RtuFramer::weigh_rows(const Reading& r, Evidence& why) {
-  Weight weight;
-  if ((weight.refuted<rows.evidence>((this->*rows.says)(r)) || ...)) {
+  Weight weight(row_weights_);
+  if ((weight.refuted<rows.evidence>((this->*rows.finds)(r)) || ...)) {
     why = *weight.refuting;
     return Verdict::refuted;
   }
@@ -62,27 +72,31 @@ RtuFramer::Verdict RtuFramer::weigh_rows(const Reading& r, Evidence& why) {
 
 // A frame ends before a silence inside the reading, and what came after it kept the CRC good (a
 // trailing 0x00 keeps a zero residue zero): the other reading, if any, is the frame.
-RtuFramer::Say RtuFramer::good_frame_before_silence(const Reading& r) {
+RtuFramer::RowFeatures RtuFramer::good_frame_before_silence(const Reading& r) {
   const uint64_t gap = timeline_.first_gap_after(r.at);
-  if (gap < r.at + r.length && gap - r.at >= min_adu && rtu_crc_holds(bytes(r.at, gap)))
-    return Say::refutes;
-  return Say::nothing;
+  FeatureSet held;
+  if (held.add(Feature::silence_inside, gap < r.at + r.length))
+    held.add(Feature::another_crc, gap - r.at >= min_adu && rtu_crc_holds(bytes(r.at, gap)));
+  return {held};
 }
 
 // A silence inside a frame, with a good frame starting right after it (or after the glitch of
 // the driver that sends it), means this was a frame that broke off, whatever its CRC says.
-RtuFramer::Say RtuFramer::broke_off_at_silence(const Reading& r) {
+RtuFramer::RowFeatures RtuFramer::broke_off_at_silence(const Reading& r) {
   const uint64_t gap = timeline_.first_gap_after(r.at);
-  if (gap >= r.at + r.length) return Say::nothing;
+  if (gap >= r.at + r.length) return {};
   return frame_after_silence(gap, r.final);
 }
 
 // What the bytes after the silence at `gap` say of a span across it: that it broke off there,
 // where a good frame starts right after the silence or after its driver's glitch.
-RtuFramer::Say RtuFramer::frame_after_silence(uint64_t gap, bool final) {
+RtuFramer::RowFeatures RtuFramer::frame_after_silence(uint64_t gap, bool final) {
+  FeatureSet held{Feature::silence_inside};
   const Match after = match_at(gap, final, 0);
-  if (after.kind == Match::Kind::found || glitch_then_frame(gap, final, 0)) return Say::refutes;
-  return after.kind == Match::Kind::need_more && !final ? Say::unknown : Say::nothing;
+  if (held.add(Feature::another_crc,
+               after.kind == Match::Kind::found || glitch_then_frame(gap, final, 0)))
+    return {held};
+  return {held, after.kind == Match::Kind::need_more && !final};
 }
 
 // The first bytes after the request, too soon for the master's next one, read as a request:
@@ -90,42 +104,47 @@ RtuFramer::Say RtuFramer::frame_after_silence(uint64_t gap, bool final) {
 // standard does not allow, a talked-over answer whose junk passed a CRC; a glitch and the
 // awaited answer's slave and function code, that answer after its driver's glitch, whatever
 // request they read as. A request the standard allows may be the master's (a short time-out).
-RtuFramer::Say RtuFramer::answer_read_as_request(const Reading& r) {
-  if (r.role != Role::request || !first_after_request(r.at) || !too_soon_for_retry(r.at) ||
+RtuFramer::RowFeatures RtuFramer::answer_read_as_request(const Reading& r) {
+  FeatureSet held;
+  if (r.role != Role::request || !first_after_request(r.at) ||
+      !held.add(Feature::too_soon_for_retry, too_soon_for_retry(r.at)) ||
       awaited_.copies_request(from(r.at), r.length))
-    return Say::nothing;
+    return {held};
   const uint8_t* p = at_ptr(r.at);
   const bool junk_as_request =
       r.other && awaited_.begins(from(r.at)) &&
       request_spec_findings({p + 1, static_cast<size_t>(r.length - 1 - crc_size)}) != 0;
-  if (junk_as_request || glitch_then_awaited(r.at)) return Say::refutes;
-  return Say::nothing;
+  held.add(Feature::awaited_header, junk_as_request || glitch_then_awaited(r.at));
+  return {held};
 }
 
 // A request inside the span the awaited answer's structure claims is a collision's junk that
 // passed a CRC unless its own answer follows it (after a cut answer, the master's next request
 // and its answer). A silence after it may be its slave's; with no clock, where the master's
 // time-out after a silent slave cannot show, no rule.
-RtuFramer::Say RtuFramer::request_inside_awaited_answer(const Reading& r) {
+RtuFramer::RowFeatures RtuFramer::request_inside_awaited_answer(const Reading& r) {
+  FeatureSet held;
   if (r.role != Role::request || *at_ptr(r.at) == 0 || options_.clock == ClockQuality::none ||
-      !inside_awaited_span(r.at))
-    return Say::nothing;
+      !held.add(Feature::awaited_header, inside_awaited_span(r.at)))
+    return {held};
   const auto answered = answer_follows(r.at, r.at + r.length, r.final);
-  if (!answered) return Say::unknown;
-  if (!*answered) return Say::refutes;
-  return Say::nothing;
+  if (!answered) return to_come(held);
+  held.add(Feature::no_answer_after, !*answered);
+  return {held};
 }
 
 // An answer nobody awaits inside the span the awaited answer's structure claims is a
 // collision's junk that passed a CRC, unless its own request comes right before it (after a cut
 // answer, the master's next request and its answer). So is a reading, in either role, that
 // starts at the answering driver's glitch and runs over that answer (a 0xFF read as station 255).
-RtuFramer::Say RtuFramer::unawaited_answer_inside_awaited_answer(const Reading& r) {
+RtuFramer::RowFeatures RtuFramer::unawaited_answer_inside_awaited_answer(const Reading& r) {
   const bool answer = r.role == Role::response;
-  const bool inside = (answer && inside_awaited_span(r.at)) || glitch_then_awaited(r.at);
-  return inside && unexpected_sender(r.at, answer) && !request_right_before(r.at, r.final)
-             ? Say::refutes
-             : Say::nothing;
+  FeatureSet held;
+  if (held.add(Feature::awaited_header,
+               (answer && inside_awaited_span(r.at)) || glitch_then_awaited(r.at)))
+    held.add(Feature::unexpected_sender,
+             unexpected_sender(r.at, answer) && !request_right_before(r.at, r.final));
+  return {held};
 }
 
 // Whether a request of the slave and function of the answer at `at`, inside the awaited span,
@@ -146,23 +165,27 @@ bool RtuFramer::request_right_before(uint64_t at, bool final) {
 // Inside the span the awaited answer claims, a span whose every byte, its CRC's too, is the one
 // the request tells the answer has there (an echo's) holds its CRC because the request does.
 // One that runs on past that span is not explained so.
-RtuFramer::Say RtuFramer::predicted_inside_awaited_answer(const Reading& r) {
+RtuFramer::RowFeatures RtuFramer::predicted_inside_awaited_answer(const Reading& r) {
   const std::optional<uint64_t> answer = r.at > head_ ? awaited_start(head_) : std::nullopt;
   const uint64_t end = r.at + r.length;
-  if (answer && r.at > *answer && end <= *answer + *awaited_.length(from(*answer)) &&
-      awaited_.tells_every_byte(bytes(*answer, end), r.at - *answer))
-    return Say::refutes;
-  return Say::nothing;
+  FeatureSet held;
+  if (held.add(Feature::awaited_header,
+               answer && r.at > *answer && end <= *answer + *awaited_.length(from(*answer))))
+    held.add(Feature::predicted_bytes,
+             awaited_.tells_every_byte(bytes(*answer, end), r.at - *answer));
+  return {held};
 }
 
 // A copy of the pending request and a glitch read as a response of one more byte (FC07's): on a
 // bus of glitches the copy is the likelier (a master's retry), unless too soon for a retry.
-RtuFramer::Say RtuFramer::retry_and_glitch(const Reading& r) {
-  if (r.other && *r.other == Role::request && glitch_odds_.zero_glitch_likelier() &&
-      at_ptr(r.at)[r.length - 1] == 0x00 && timeline_.after_quiet_line(r.at + r.length - 1) &&
-      awaited_.copies_request(from(r.at), r.length - 1) && !too_soon_for_retry(r.at))
-    return Say::refutes;
-  return Say::nothing;
+RtuFramer::RowFeatures RtuFramer::retry_and_glitch(const Reading& r) {
+  FeatureSet held;
+  if (r.other && *r.other == Role::request && at_ptr(r.at)[r.length - 1] == 0x00 &&
+      held.add(Feature::glitch_odds, glitch_odds_.zero_glitch_likelier()) &&
+      timeline_.after_quiet_line(r.at + r.length - 1))
+    held.add(Feature::another_crc,
+             awaited_.copies_request(from(r.at), r.length - 1) && !too_soon_for_retry(r.at));
+  return {held};
 }
 
 // The pending request again (a retry) starts a response that ends elsewhere: shorter where the
@@ -170,28 +193,36 @@ RtuFramer::Say RtuFramer::retry_and_glitch(const Reading& r) {
 // CRC holds by chance, not where the answer begins so by a chance its structure often meets
 // (FC07's, whose status is the copy's CRC low byte). The copy is the reading, once its bytes
 // are there to say so.
-RtuFramer::Say RtuFramer::retry_read_as_answer(const Reading& r) {
+RtuFramer::RowFeatures RtuFramer::retry_read_as_answer(const Reading& r) {
   const size_t copy = awaited_.request_size();
   if (!r.other || *r.other != Role::request || copy == r.length ||
       !awaited_.repeats_request(bytes(r.at, r.at + std::min<size_t>(copy, r.length))) ||
       (copy < r.length && awaited_.may_begin_with_copy(bytes(r.at, r.at + copy), r.length)))
-    return Say::nothing;
-  if (r.at + copy > end_) return r.final ? Say::nothing : Say::unknown;
-  if (!awaited_.copies_request(from(r.at), copy) || too_soon_for_retry(r.at)) return Say::nothing;
-  if (copy > r.length) return Say::refutes;
+    return {};
+  if (r.at + copy > end_) return {{}, !r.final};
+  FeatureSet held;
+  if (!held.add(Feature::another_crc, awaited_.copies_request(from(r.at), copy)) ||
+      too_soon_for_retry(r.at))
+    return {held};
   // A longer answer that begins as its request: the copy read apart leaves the rest to junk
-  // where no frame starts after it, nor the answer to it (talked over or cut), after its
-  // driver's glitch or not (`leaves-junk`, as much against the copy as `request-again` is for
-  // it), and the answer, whose CRC holds, stands.
-  const uint64_t next = r.at + copy;
+  // (`leaves-junk`, as much against the copy as `request-again` is for it), and the answer,
+  // whose CRC holds, stands.
+  const std::optional<bool> junk = copy > r.length ? false : leaves_junk(r.at + copy, r.final);
+  if (!junk) return to_come(held);
+  held.add(Feature::request_again, !*junk);
+  return {held};
+}
+
+// Whether the bytes from `next` on are junk: no frame starts there, nor the awaited answer
+// (talked over or cut), after its driver's glitch or not, and no silence comes before them.
+// Nothing while the bytes that tell are still to come.
+std::optional<bool> RtuFramer::leaves_junk(uint64_t next, bool final) {
   const uint64_t answer = next + (is_glitch_byte(*at_ptr(next)) ? 1 : 0);
-  if (answer + 2 > end_) return r.final ? Say::refutes : Say::unknown;
-  const Match after = match_at(next, r.final, 0);
-  if (after.kind == Match::Kind::need_more && !r.final) return Say::unknown;
-  if (after.kind != Match::Kind::found && !timeline_.gap_at(next) &&
-      !glitch_then_frame(next, r.final, 0) && !awaited_.has_header(from(answer)))
-    return Say::nothing;
-  return Say::refutes;
+  if (answer + 2 > end_) return final ? std::optional(false) : std::nullopt;
+  const Match after = match_at(next, final, 0);
+  if (after.kind == Match::Kind::need_more && !final) return std::nullopt;
+  return after.kind != Match::Kind::found && !timeline_.gap_at(next) &&
+         !glitch_then_frame(next, final, 0) && !awaited_.has_header(from(answer));
 }
 
 // A copy of the pending request too soon for a retry, where the awaited answer is longer, is
@@ -199,47 +230,60 @@ RtuFramer::Say RtuFramer::retry_read_as_answer(const Reading& r) {
 // the request's CRC low byte). After a damaged answer a master may repeat its request as soon:
 // there only bytes no frame explains after the copy make it the answer, unless they begin as the
 // answer to it would, after its driver's glitch or not (its own answer talked over).
-RtuFramer::Say RtuFramer::answer_copying_request(const Reading& r) {
+RtuFramer::RowFeatures RtuFramer::answer_copying_request(const Reading& r) {
+  FeatureSet held;
   if (!r.other || *r.other != Role::response || !awaited_.copies_request(from(r.at), r.length) ||
-      !too_soon_for_retry(r.at))
-    return Say::nothing;
-  const uint64_t end = r.at + r.length;
+      !held.add(Feature::too_soon_for_retry, too_soon_for_retry(r.at)))
+    return {held};
   const auto awaited = awaited_.length(from(r.at));
-  if (!awaited || *awaited <= r.length) return Say::nothing;
-  if (first_after_request(r.at) && awaited_.may_begin_with_copy(bytes(r.at, end), *awaited))
-    return Say::refutes;
-  if (end == end_) return r.final ? Say::nothing : Say::unknown;  // what follows
-  if (timeline_.gap_at(end)) return Say::nothing;
+  if (!awaited || *awaited <= r.length) return {held};
+  const std::optional<bool> begun = copy_begins_answer(r, *awaited);
+  if (!begun) return to_come(held);
+  held.add(Feature::awaited_header, *begun);
+  return {held};
+}
+
+// Whether the copy of the pending request read as `r` begins the awaited answer, `awaited`
+// bytes long: right where that answer begins, if it may begin so, or with bytes no frame
+// explains after it, which do not begin as the answer to the copy would. Nothing while what
+// follows is still to come.
+std::optional<bool> RtuFramer::copy_begins_answer(const Reading& r, size_t awaited) {
+  const uint64_t end = r.at + r.length;
+  if (first_after_request(r.at) && awaited_.may_begin_with_copy(bytes(r.at, end), awaited))
+    return true;
+  if (end == end_) return r.final ? std::optional(false) : std::nullopt;
+  if (timeline_.gap_at(end)) return false;
   const Match next = match_at(end, r.final, 0);
   const uint64_t answer = end + (is_glitch_byte(*at_ptr(end)) ? 1 : 0);
-  if ((next.kind == Match::Kind::need_more || answer + 3 > end_) && !r.final) return Say::unknown;
-  if (next.kind == Match::Kind::none && !glitch_then_frame(end, r.final, 0) &&
-      !awaited_.starts(from(answer)))
-    return Say::refutes;
-  return Say::nothing;
+  if ((next.kind == Match::Kind::need_more || answer + 3 > end_) && !r.final) return std::nullopt;
+  return next.kind == Match::Kind::none && !glitch_then_frame(end, r.final, 0) &&
+         !awaited_.starts(from(answer));
 }
 
 // The awaited response cut one or two bytes short, whose missing CRC the next request's first
 // bytes repeat, reads whole and good, the rest of the request as junk. Only on a bus channel (on
 // a split tap the request is on the other), and for a reading that may search on (not nested
 // in another's judgement, nor a CRC search at its depth), so that it never nests.
-RtuFramer::Say RtuFramer::answer_cut_before_request(const Reading& r) {
+RtuFramer::RowFeatures RtuFramer::answer_cut_before_request(const Reading& r) {
   const uint8_t* p = at_ptr(r.at);
   if (r.role != Role::response || options_.role != ChannelRole::bus || r.search <= 0 ||
       !expected_.pending || expected_.slave != p[0] || expected_.function != (p[1] & 0x7F))
-    return Say::nothing;
+    return {};
   const auto cut = cut_before_frame(r.at, r.length, r.final, r.search);
-  if (!cut) return Say::unknown;
-  if (*cut) return Say::refutes;
-  return Say::nothing;
+  if (!cut) return to_come();
+  if (!*cut) return {};
+  return {{Feature::another_crc, Feature::leaves_junk}};
 }
 
 // A reserved address is as often a turnaround's 0xFF, and an answer nobody awaits (another
 // slave's or function's while a request waits) a collision's junk that passed a CRC: such a
 // frame gives way to one a bus carries inside it. A frame from an expected sender keeps it.
-RtuFramer::Say RtuFramer::swallows_known_frame_reading(const Reading& r) {
-  const bool unexpected = unexpected_sender(r.at, r.role == Role::response);
-  return swallows_known_frame(r.at, r.at + r.length, false, unexpected, r.final);
+RtuFramer::RowFeatures RtuFramer::swallows_known_frame_reading(const Reading& r) {
+  FeatureSet held;
+  if (!held.add(Feature::unexpected_sender, unexpected_sender(r.at, r.role == Role::response)))
+    return {held};
+  return swallows_known_frame(r.at, r.at + r.length, false, true, r.final)
+      .with(Feature::unexpected_sender);
 }
 
 // A reserved address, or an answer while a request of another slave or function waits.
@@ -259,8 +303,8 @@ bool RtuFramer::glitch_then_awaited(uint64_t at) const {
 
 // Nor does any frame whose CRC holds by chance across a whole exchange: junk after it, and
 // inside it a request with its own answer's first bytes after it.
-RtuFramer::Say RtuFramer::swallows_exchange_reading(const Reading& r) {
-  return r.search > 0 ? swallows_exchange(r.at, r.at + r.length, r.final) : Say::nothing;
+RtuFramer::RowFeatures RtuFramer::swallows_exchange_reading(const Reading& r) {
+  return r.search > 0 ? swallows_exchange(r.at, r.at + r.length, r.final) : RowFeatures{};
 }
 
 // A span whose CRC holds across a frame cut short and a whole request after it: the cut
@@ -270,17 +314,18 @@ RtuFramer::Say RtuFramer::swallows_exchange_reading(const Reading& r) {
 // answer, or the master's retry after a silence), after a glitch or not, says the request was
 // sent. Only the awaited answer is weighed so, as a cut answer is what the master's next
 // request follows; nothing while the bytes after it are still to come, unless no more can.
-RtuFramer::Say RtuFramer::swallows_request_reading(const Reading& r) {
+RtuFramer::RowFeatures RtuFramer::swallows_request_reading(const Reading& r) {
   const uint8_t* p = at_ptr(r.at);
   if (r.role != Role::response || options_.role != ChannelRole::bus || r.search <= 0 ||
       !expected_.pending || expected_.slave != p[0] || expected_.function != (p[1] & 0x7F))
-    return Say::nothing;
+    return {};
   // No frame of a request's kin starts with a glitch's byte: no slave answers to 0 or 255, and
   // a master does not repeat a broadcast.
   const uint64_t end = r.at + r.length;
   const uint64_t next = end + (end < end_ && is_glitch_byte(*at_ptr(end)) ? 1 : 0);
-  if (next + 2 <= end_) return request_before_kin(r.at, end, next) ? Say::refutes : Say::nothing;
-  return !r.final && request_ending(r.at, end) ? Say::unknown : Say::nothing;
+  if (next + 2 > end_) return {{}, !r.final && request_ending(r.at, end)};
+  if (!request_before_kin(r.at, end, next)) return {};
+  return {{Feature::another_crc, Feature::answer_after}};
 }
 
 // A request that broke off and was sent again at once, read as one span (a master sends again;
@@ -290,14 +335,14 @@ RtuFramer::Say RtuFramer::swallows_request_reading(const Reading& r) {
 // 1 cut in 256 where the missing last CRC byte is the slave address the request sent again
 // begins with). A clock that sees the pause before the request sent again refutes the span by
 // that silence alone.
-RtuFramer::Say RtuFramer::resent_inside(const Reading& r) {
-  if (r.role != Role::request) return Say::nothing;
+RtuFramer::RowFeatures RtuFramer::resent_inside(const Reading& r) {
+  if (r.role != Role::request) return {};
   const uint64_t end = r.at + r.length;
   const bool open = end == end_;  // what follows is still to come
-  if ((open && r.final) || (!open && timeline_.gap_at(end))) return Say::nothing;
+  if ((open && r.final) || (!open && timeline_.gap_at(end))) return {};
   const uint8_t* first = at_ptr(r.at);
   // A header may start at the span's last byte, once the byte after it has come.
-  if (open && *at_ptr(end - 1) == first[0]) return Say::unknown;
+  if (open && *at_ptr(end - 1) == first[0]) return to_come();
   const uint8_t* stop = at_ptr(open ? end - 1 : end);
   for (const uint8_t* p = first + 1; p < stop; ++p) {
     p = static_cast<const uint8_t*>(std::memchr(p, first[0], static_cast<size_t>(stop - p)));
@@ -305,13 +350,13 @@ RtuFramer::Say RtuFramer::resent_inside(const Reading& r) {
     if (p[1] != first[1]) continue;
     const uint64_t start = r.at + static_cast<uint64_t>(p - first);
     const Match again = match_at(start, r.final, 0);
-    if (again.kind == Match::Kind::need_more && !r.final) return Say::unknown;
+    if (again.kind == Match::Kind::need_more && !r.final) return to_come();
     const uint64_t broken_off = start - r.at;
     if (again.kind == Match::Kind::found && again.fit.request && start + again.length > end &&
         again.length > broken_off && std::equal(first, p, p))
-      return Say::refutes;
+      return {{Feature::another_crc, Feature::broken_off_copy}};
   }
-  return Say::nothing;
+  return {};
 }
 
 // A request's length where its function code alone tells it, else 0: the function codes' own
@@ -377,14 +422,15 @@ std::optional<bool> RtuFramer::answer_follows(uint64_t at, uint64_t end, bool fi
 // function code right after (or after a glitch) is taken to begin a frame without looking
 // further: a frame follows almost every frame, and the search inside is rare. Unknown while such
 // a request's answer has yet to come, so that where a read ends does not decide.
-RtuFramer::Say RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) {
-  if (end + 3 > end_) return Say::nothing;
+RtuFramer::RowFeatures RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool final) {
+  if (end + 3 > end_) return {};
   const uint8_t* after = at_ptr(end);
   if (is_public_function(after[1] & 0x7F) ||
       (is_glitch_byte(after[0]) && is_public_function(after[2] & 0x7F)) || timeline_.gap_at(end) ||
       match_at(end, final, 0).kind != Match::Kind::none || glitch_then_frame(end, final, 0))
-    return Say::nothing;
-  Say say = Say::nothing;
+    return {};
+  const FeatureSet held{Feature::leaves_junk};
+  bool to_come = false;
   for (uint64_t inner = begin + 1; inner < end && inner + 3 <= end_; ++inner) {
     if (!standard_frame(inner)) continue;
     const Match request = match_at(inner, final, 0);
@@ -393,15 +439,15 @@ RtuFramer::Say RtuFramer::swallows_exchange(uint64_t begin, uint64_t end, bool f
     const bool glitch = after < end_ && is_glitch_byte(*at_ptr(after));
     for (uint64_t answer = after; answer <= after + (glitch ? 1 : 0); ++answer) {
       if (answer + 2 > end_) {
-        if (!final) say = Say::unknown;  // the answer's first bytes are still to come
+        to_come |= !final;  // the answer's first bytes are still to come
         continue;
       }
       if (std::equal(at_ptr(inner), at_ptr(inner + 2), at_ptr(answer)) &&
           match_at(answer, final, 0).kind != Match::Kind::none)
-        return Say::refutes;
+        return {{Feature::leaves_junk, Feature::another_crc, Feature::answer_after}};
     }
   }
-  return say;
+  return {held, to_come};
 }
 
 // Whether the response [at, at + length) is one cut short with the next request right behind

@@ -34,7 +34,8 @@ RtuFramer::RtuFramer(uint16_t channel, const RtuFramerOptions& options, FrameSin
       sink_(sink),
       expected_(sink.expectation()),
       awaited_(expected_, options.role != ChannelRole::master),
-      timeline_(options.format, options.clock, options.chunk_jitter_ns) {
+      timeline_(options.format, options.clock, options.chunk_jitter_ns),
+      row_weights_(options.weights) {
   buf_.reserve(compact_after + 4096);
 }
 
@@ -239,7 +240,8 @@ RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, b
           public_header && (!alone.length || (alone.length == n - 1u && shorter.decided()));
       if (!confirmed && !at_end && !may_stand_alone) continue;
       // A hit does not wait for a frame inside still to come (final): the search's end waits.
-      if (swallows_known_frame(at, at + n, true, unexpected, true) == Say::refutes) continue;
+      if (swallows_known_frame(at, at + n, true, unexpected, true).held().has(Feature::another_crc))
+        continue;
       // Confirmed only by taking the next 0x00 for a glitch, where one byte more holds too; or
       // ending in a 0x00 that could be a glitch after a good frame one byte shorter.
       Margin doubt = allow_glitch ? longer_end(at, at + n) : Margin{};
@@ -299,8 +301,10 @@ RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_
     const Margin shorter = zero_appended ? shorter_end(at, at + n, final, search - 1) : Margin{};
     if (glitch_appended(at, at + n, shorter)) continue;
     const std::optional<SpanEnd> confirmed = confirmed_end(at, at + n, final, search - 1, false);
-    if (confirmed && swallows_known_frame(at, at + n, true, unexpected_sender(at, fit.response),
-                                          true) != Say::refutes)
+    if (confirmed &&
+        !swallows_known_frame(at, at + n, true, unexpected_sender(at, fit.response), true)
+             .held()
+             .has(Feature::another_crc))
       return {Match::Kind::found, static_cast<uint16_t>(n), fit, shorter, *confirmed};
   }
   return {};
@@ -412,20 +416,22 @@ bool RtuFramer::copy_follows(uint64_t begin, uint64_t end, uint64_t copy) const 
 // span (keeps_frame_inside, framing_evidence.hpp): inside a long frame, bytes pass a CRC as a
 // vendor code or an unnamed exception now and then. An exact copy after the span outweighs it.
 // Unknown while such a frame's bytes are still to come, unless `final`.
-RtuFramer::Say RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end, bool searched,
-                                               bool unexpected, bool final) {
-  if (keeps_frame_inside(searched, unexpected, false)) return Say::nothing;
-  if (keeps_frame_inside(searched, unexpected, true) && copy_follows(begin, end))
-    return Say::nothing;
-  Say say = Say::nothing;
+RtuFramer::RowFeatures RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end, bool searched,
+                                                       bool unexpected, bool final) {
+  const FeatureWeights& weights = options_.weights;
+  if (keeps_frame_inside(searched, unexpected, false, weights)) return {};
+  if (keeps_frame_inside(searched, unexpected, true, weights) && copy_follows(begin, end))
+    return {};
+  bool to_come = false;
   for (uint64_t inner = begin + 1; inner < end; ++inner) {
-    if (inner + 3 > end_) return final ? say : Say::unknown;
+    if (inner + 3 > end_) return {{}, !final};
     if (!standard_frame(inner)) continue;
     const Match::Kind kind = match_at(inner, false, 0).kind;
-    if (kind == Match::Kind::found || copied_frame_at(inner)) return Say::refutes;
-    if (kind == Match::Kind::need_more && !final) say = Say::unknown;
+    if (kind == Match::Kind::found || copied_frame_at(inner))
+      return {{Feature::another_crc, Feature::bus_code}};
+    to_come |= kind == Match::Kind::need_more && !final;
   }
-  return say;
+  return {{}, to_come};
 }
 
 // A frame with no length of its own (FC08 Return Query Data) whose CRC holds where its exact
@@ -450,7 +456,8 @@ bool RtuFramer::copied_frame_at(uint64_t at) {
 // reading of the bytes at `at` ends before it: none waits for bytes beyond it.
 bool RtuFramer::blocked_by_gap(uint64_t at, bool final) {
   const uint64_t gap = timeline_.first_gap_after(at);
-  return gap < end_ && frame_after_silence(gap, final) == Say::refutes;
+  return gap < end_ &&
+         refutes_alone<Evidence::broke_off_at_silence>(frame_after_silence(gap, final));
 }
 
 uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {

@@ -31,7 +31,8 @@ struct RtuFramerOptions {
   // With per-chunk clocks a USB adapter holds bytes back (FTDI: 16 ms latency timer), so a
   // gap is only evidence when it is longer than t3.5 plus this.
   int64_t chunk_jitter_ns = default_read_jitter_ns;
-  FramingObserver* observer = nullptr;  // told the readings weighed at each start (--explain)
+  FramingObserver* observer = nullptr;     // told the readings weighed at each start (--explain)
+  FeatureWeights weights = table_weights;  // what each feature of the evidence table weighs
 };
 
 class RtuFramer {
@@ -90,9 +91,29 @@ class RtuFramer {
   // nested in another's judgement is not `observed`.
   Match match_at(uint64_t at, bool final, int search, bool observed = false);
   enum class Verdict : uint8_t { keep, refuted, wait };
-  // What a row of the evidence table says of a span: nothing, that it is not one frame, or
-  // that the bytes that would tell have not come yet.
-  enum class Say : uint8_t { nothing, refutes, unknown };
+  // What a row of the evidence table found of a span: the features of its reading of the bytes
+  // that hold (the row holds where all it needs do), and whether bytes that would tell the rest
+  // have yet to come. A row stops at the first feature that fails. One word, so that a row that
+  // found nothing, as nearly every row on nearly every frame, costs one test.
+  class RowFeatures {
+   public:
+    RowFeatures() = default;
+    RowFeatures(FeatureSet held, bool to_come = false)  // NOLINT: a row returns its set
+        : word_(held.mask() | (to_come ? to_come_bit : 0)) {}
+    FeatureSet held() const { return FeatureSet::of_mask(word_ & ~to_come_bit); }
+    bool to_come() const { return (word_ & to_come_bit) != 0; }
+    bool nothing() const { return word_ == 0; }
+    RowFeatures with(Feature f) const {
+      FeatureSet set = held();
+      set.add(f);
+      return {set, to_come()};
+    }
+
+   private:
+    static constexpr uint32_t to_come_bit = uint32_t{1} << 31;
+    uint32_t word_ = 0;
+  };
+  static RowFeatures to_come(FeatureSet held = {}) { return {held, true}; }
   // A reading of [at, at + length) as `role` whose length rules and CRC agree; `other` is the
   // other role, where it is allowed.
   struct Reading {
@@ -104,24 +125,45 @@ class RtuFramer {
     int search;
   };
   std::optional<Evidence> weigh_start(uint64_t at);
-  bool vendor_frame_inside_awaited_answer(uint64_t at);
+  RowFeatures vendor_frame_inside_awaited_answer(uint64_t at);
   Verdict weigh_span(const Reading& reading, Evidence& why);
-  struct Row {  // a row of weigh_span's table: its evidence, and what it says of a span
+  struct Row {  // a row of weigh_span's table: its evidence, and the features it finds
     Evidence evidence;
-    Say (RtuFramer::*says)(const Reading&);
+    RowFeatures (RtuFramer::*finds)(const Reading&);
   };
   template <Row... rows>
   Verdict weigh_rows(const Reading& reading, Evidence& why);
+  // Whether the row `row` holds on `found` and outweighs a span's CRC alone.
+  template <Evidence row>
+  bool refutes_alone(const RowFeatures& found) const {
+    constexpr FeatureSet needs = evidence_info(row).needs();
+    return found.held().contains(needs) && row_weights_.of(row) > row_weights_.span;
+  }
+  // Each row's weight from the framer's feature weights, worked out once.
+  struct RowWeights {
+    explicit RowWeights(const FeatureWeights& weights);
+    int of(Evidence row) const { return rows[static_cast<size_t>(row)]; }
+    std::array<int16_t, evidence_table.size()> rows{};
+    int span;
+  };
   // A span's score as the rows are weighed: its CRC's bits, less each row that holds.
   struct Weight {
-    int score = span_bits;
+    explicit Weight(const RowWeights& w) : weights(w), score(w.span) {}
+    const RowWeights& weights;
+    int score;
     std::optional<Evidence> unknown;   // a row whose bytes have not come, heavy enough to refute
     std::optional<Evidence> refuting;  // the row that took the score below nothing
     template <Evidence row>
-    bool refuted(Say say) {
-      constexpr int bits = row_bits<row>;
-      if (say == Say::unknown && !unknown && score < bits) unknown = row;
-      if (say != Say::refutes) return false;
+    bool refuted(const RowFeatures& found) {
+      constexpr FeatureSet needs = evidence_info(row).needs();
+      if (found.nothing()) return false;
+      const bool holds = found.held().contains(needs);
+      if (!holds && !found.to_come()) return false;
+      const int bits = weights.of(row);
+      if (!holds) {
+        if (!unknown && score < bits) unknown = row;
+        return false;
+      }
       score -= bits;
       if (score >= 0) return false;
       refuting = row;
@@ -129,22 +171,24 @@ class RtuFramer {
     }
   };
   // The rows of weigh_span's table.
-  Say good_frame_before_silence(const Reading& r);
-  Say broke_off_at_silence(const Reading& r);
-  Say frame_after_silence(uint64_t gap, bool final);
-  Say answer_read_as_request(const Reading& r);
-  Say request_inside_awaited_answer(const Reading& r);
-  Say unawaited_answer_inside_awaited_answer(const Reading& r);
+  RowFeatures good_frame_before_silence(const Reading& r);
+  RowFeatures broke_off_at_silence(const Reading& r);
+  RowFeatures frame_after_silence(uint64_t gap, bool final);
+  RowFeatures answer_read_as_request(const Reading& r);
+  RowFeatures request_inside_awaited_answer(const Reading& r);
+  RowFeatures unawaited_answer_inside_awaited_answer(const Reading& r);
   bool request_right_before(uint64_t at, bool final);
-  Say predicted_inside_awaited_answer(const Reading& r);
-  Say retry_and_glitch(const Reading& r);
-  Say retry_read_as_answer(const Reading& r);
-  Say answer_copying_request(const Reading& r);
-  Say answer_cut_before_request(const Reading& r);
-  Say swallows_known_frame_reading(const Reading& r);
-  Say swallows_exchange_reading(const Reading& r);
-  Say swallows_request_reading(const Reading& r);
-  Say resent_inside(const Reading& r);
+  RowFeatures predicted_inside_awaited_answer(const Reading& r);
+  RowFeatures retry_and_glitch(const Reading& r);
+  RowFeatures retry_read_as_answer(const Reading& r);
+  std::optional<bool> leaves_junk(uint64_t next, bool final);
+  RowFeatures answer_copying_request(const Reading& r);
+  std::optional<bool> copy_begins_answer(const Reading& r, size_t awaited);
+  RowFeatures answer_cut_before_request(const Reading& r);
+  RowFeatures swallows_known_frame_reading(const Reading& r);
+  RowFeatures swallows_exchange_reading(const Reading& r);
+  RowFeatures swallows_request_reading(const Reading& r);
+  RowFeatures resent_inside(const Reading& r);
   std::optional<uint64_t> request_ending(uint64_t begin, uint64_t end) const;
   bool request_spans(uint64_t start, uint64_t end) const;
   bool request_before_kin(uint64_t begin, uint64_t end, uint64_t next) const;
@@ -188,12 +232,12 @@ class RtuFramer {
   // and good CRC, starts inside [begin, end), wherever it ends, and outweighs the span: one
   // whose end a CRC search found (`searched`), from an `unexpected` sender; unknown while such a
   // frame may still come, unless `final`.
-  Say swallows_known_frame(uint64_t begin, uint64_t end, bool searched, bool unexpected,
-                           bool final);
+  RowFeatures swallows_known_frame(uint64_t begin, uint64_t end, bool searched, bool unexpected,
+                                   bool final);
   bool copied_frame_at(uint64_t at);
   bool unexpected_sender(uint64_t at, bool answer) const;
   bool glitch_then_awaited(uint64_t at) const;
-  Say swallows_exchange(uint64_t begin, uint64_t end, bool final);
+  RowFeatures swallows_exchange(uint64_t begin, uint64_t end, bool final);
   std::optional<bool> answer_follows(uint64_t at, uint64_t end, bool final) const;
   // First position >= from that starts a good frame; `decided` false if one is still open.
   uint64_t next_start(uint64_t from, bool final, bool& decided);
@@ -247,6 +291,7 @@ class RtuFramer {
   CrcIndex crc_index_;  // over the searched part of buf_
   CrcHits last_hits_;
   GlitchOdds glitch_odds_;  // the bus's glitches so far, against a frame's bytes by chance
+  RowWeights row_weights_;
 };
 
 }  // namespace modtap

@@ -300,6 +300,30 @@ TEST(RtuFramer, ARequestBrokenOffAndSentAgainIsNoFrameOfItsFirstBytes) {
   }
 }
 
+// The verdict is the weights': the same bytes, with a feature of the refuting row weighing
+// nothing, or a CRC weighing more than any row, keep the span the table refutes.
+TEST(RtuFramer, AFeaturesWeightDecidesWhetherItsRowRefutesASpan) {
+  std::vector<uint8_t> request;
+  for (uint16_t address = 0;; ++address) {  // as above: a read whose CRC ends in its slave
+    request = with_crc({0x11, 0x03, static_cast<uint8_t>(address >> 8),
+                        static_cast<uint8_t>(address & 0xFF), 0x00, 0x01});
+    if (request.back() == 0x11) break;
+  }
+  const std::vector<uint8_t> broken_off(request.begin(), request.end() - 1);
+  const auto bytes = concat({broken_off, request, read_request});
+  const std::vector<uint8_t> span(bytes.begin(), bytes.begin() + 8);
+  ASSERT_TRUE(rtu_crc_holds(span));
+  EXPECT_EQ(analyze_untimed(bytes).stream()[1].raw, request);  // resent-inside refutes the span
+  for (const FeatureWeights& weights : {table_weights.with(Feature::broken_off_copy, 0),
+                                        table_weights.with(Feature::crc_holds, 40)}) {
+    const auto out = analyze_untimed(bytes, {}, ModeChoice::rtu, weights);
+    ASSERT_FALSE(out.stream().empty());
+    EXPECT_EQ(out.stream()[0].raw, span);
+    EXPECT_TRUE(out.stream()[0].check_ok);
+    EXPECT_EQ(out.stream()[0].role, Role::request);
+  }
+}
+
 // An answer that begins as its request, byte for byte, after its driver's glitch: FC12's byte
 // count and first status byte the request's CRC (1 answer in 65,536). Read apart, the copy
 // would be the master's retry and leave the rest of the answer to junk, no frame starting

@@ -128,11 +128,13 @@ inline std::vector<uint8_t> hex(const std::string& text) {
 
 // Runs bytes with no timing through an analyzer, split into chunks at `cuts`.
 inline Collector analyze_untimed(const std::vector<uint8_t>& bytes, std::vector<size_t> cuts = {},
-                                 ModeChoice mode = ModeChoice::rtu) {
+                                 ModeChoice mode = ModeChoice::rtu,
+                                 const FeatureWeights& weights = table_weights) {
   Collector out;
   AnalyzerOptions options;
   options.mode = mode;
   options.clock = ClockQuality::none;
+  options.framing_weights = weights;
   Analyzer analyzer(options, {{"test", ChannelRole::bus}}, out);
   cuts.push_back(bytes.size());
   size_t at = 0;
