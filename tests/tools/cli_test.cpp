@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <bit>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -1811,3 +1812,62 @@ TEST(Cli, TopRefusesAnOutputThatWouldDrawOnItsTerminal) {
 }
 
 }  // namespace
+
+namespace discover {
+
+std::array<uint8_t, 4> words_bytes(uint32_t value, bool low_first) {
+  const uint32_t v = low_first ? (value << 16 | value >> 16) : value;
+  return {static_cast<uint8_t>(v >> 24), static_cast<uint8_t>(v >> 16),
+          static_cast<uint8_t>(v >> 8), static_cast<uint8_t>(v)};
+}
+
+// A meter that no model names: its voltage in f32 low word first, its energy in u32 high word
+// first, a temperature in s16 tenths around freezing, read every second.
+std::string meter_capture(const std::string& name) {
+  std::vector<std::pair<int64_t, std::vector<uint8_t>>> frames;
+  for (int n = 0; n < 30; ++n) {
+    frames.push_back({n * 1000, {0x07, 0x04, 0x00, 0x00, 0x00, 0x05}});
+    std::vector<uint8_t> answer{0x07, 0x04, 0x0A};
+    const float volts = 229.0f + 0.1f * static_cast<float>(n % 7);
+    for (const uint8_t b : words_bytes(std::bit_cast<uint32_t>(volts), true)) answer.push_back(b);
+    for (const uint8_t b : words_bytes(0x0000FFF0u + 7u * static_cast<uint32_t>(n), false))
+      answer.push_back(b);
+    const auto tenths = static_cast<uint16_t>(static_cast<int16_t>(-40 + 3 * n));
+    answer.push_back(static_cast<uint8_t>(tenths >> 8));
+    answer.push_back(static_cast<uint8_t>(tenths));
+    frames.push_back({n * 1000 + 20, answer});
+  }
+  return timed_pcap(name, frames);
+}
+
+}  // namespace discover
+
+// From a capture of a meter no model names to named values: discover drafts its model, which
+// modtap's own check takes, and the capture read through it shows the voltage as a float in
+// the right word order and the energy as one 32-bit number.
+TEST(Cli, DiscoverDraftsAModelThatReadsTheBusByName) {
+  const std::string capture = discover::meter_capture("modtap-discover-meter.pcap");
+  const Outcome summary = run("discover " + capture);
+  ASSERT_EQ(summary.status, 0) << ::testing::PrintToString(summary.lines);
+  EXPECT_THAT(summary.lines,
+              ::testing::Contains(::testing::MatchesRegex(
+                  " *input +0000H-0001H +f32, low word first .*V .*high confidence.*voltage.*")))
+      << ::testing::PrintToString(summary.lines);
+  EXPECT_THAT(summary.lines,
+              ::testing::Contains(::testing::HasSubstr("polling program: 1 request a cycle")));
+  const auto dir = std::filesystem::temp_directory_path() / "modtap-discover-drafts";
+  std::filesystem::remove_all(dir);
+  const Outcome wrote = run("discover " + capture + " --out " + dir.string());
+  ASSERT_EQ(wrote.status, 0) << ::testing::PrintToString(wrote.lines);
+  ASSERT_TRUE(std::filesystem::exists(dir / "slave-7.yaml"));
+  EXPECT_EQ(run("models check " + (dir / "slave-7.yaml").string()).status, 0);
+  const Outcome read = run("-r " + capture + " --models-dir " + dir.string() +
+                           " --model 7=slave-7 -T json -Y 'role == response'");
+  ASSERT_EQ(read.status, 0) << ::testing::PrintToString(read.lines);
+  ASSERT_FALSE(read.lines.empty());
+  const std::string& first = read.lines.front();
+  EXPECT_NE(first.find("\"voltage_ir_0000\""), std::string::npos) << first;
+  EXPECT_NE(first.find("229"), std::string::npos) << first;
+  EXPECT_NE(first.find(std::to_string(0x0000FFF0)), std::string::npos) << first;
+  EXPECT_NE(first.find("-40"), std::string::npos) << first;
+}

@@ -139,6 +139,7 @@ struct Command {
   CLI::App* models = nullptr;
   CLI::App* check = nullptr;
   CLI::App* top = nullptr;
+  CLI::App* discover = nullptr;
   CLI::Option* speed = nullptr;
   std::vector<std::string> check_files;
 };
@@ -348,6 +349,19 @@ void add_subcommands(CLI::App& app, RunOptions& o, Command& command) {
       "--report, -w, --metrics, --mqtt (modtap --help)");
   command.top->add_option("capture", command.named_capture, "The capture file, as with -r")
       ->type_name("FILE");
+  command.discover = app.add_subcommand(
+      "discover",
+      "Draft each slave's register map from the values its master reads: the blocks, each "
+      "register's likeliest reading with its runner-up and confidence, the polling program "
+      "(docs/discover.md); with -r FILE, or -i PORT until Ctrl-C or -a");
+  command.discover->fallthrough();
+  command.discover
+      ->add_option("--out", o.discover_out,
+                   "Write a draft model per slave, DIR/slave-N.yaml, to use with --models-dir DIR "
+                   "--model N=slave-N")
+      ->type_name("DIR");
+  command.discover->add_option("capture", command.named_capture, "The capture file, as with -r")
+      ->type_name("FILE");
 }
 
 // What options left at their defaults mean beside the others given: -w alone writes nothing
@@ -368,6 +382,8 @@ void settle_implied(RunOptions& o, const Command& command) {
   o.top = command.top->parsed();
   if (o.top && command.output->count() == 0) o.output = OutputKind::none;
   if (o.top) o.announce = false;  // the screen says what is listened to
+  o.discover = command.discover->parsed();
+  if (o.discover && command.output->count() == 0) o.output = OutputKind::none;
 }
 
 std::optional<std::string> refuse_source(const RunOptions& o) {

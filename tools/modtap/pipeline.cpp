@@ -135,6 +135,10 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
   if (o.explain) explain_ = static_cast<output::ExplainSink*>(terminal_.get());
   if (o.output == OutputKind::csv) csv_ = static_cast<output::CsvSink*>(terminal_.get());
   fan_out_.add(*terminal_);
+  if (o.discover) {
+    discovery_ = std::make_unique<RegisterDiscovery>();
+    fan_out_.add(*discovery_);
+  }
   const Needs needs = needs_of(o);
   if (needs.statistics) {
     statistics_ = std::make_unique<BusStatistics>(format, clock,

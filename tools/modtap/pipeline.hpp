@@ -17,6 +17,7 @@
 #include "decoder/analysis/bus_problems.hpp"
 #include "decoder/analysis/bus_statistics.hpp"
 #include "decoder/analysis/bus_timeline.hpp"
+#include "decoder/analysis/register_discovery.hpp"
 #include "decoder/filter/display_filter.hpp"
 #include "decoder/models/model_interpreter.hpp"
 #include "decoder/protocol/analyzer.hpp"
@@ -92,6 +93,10 @@ struct RunOptions {
   // modtap top: the live view instead of lines; a file replayed at `top_speed` times its pace.
   bool top = false;
   double top_speed = 1;
+  // modtap discover: each slave's registers drafted from their values; to files in this folder
+  // (DIR/slave-N.yaml), or summarised on standard output where empty.
+  bool discover = false;
+  std::string discover_out;
   // Say on standard error which port is listened to, and keep a status line there (not to
   // Wireshark: it reads anything there as an error).
   bool announce = true;
@@ -160,6 +165,7 @@ class Pipeline {
   const output::CitedRecords* cited_records() const { return cited_.get(); }
   output::SharedStatistics* shared_statistics() { return shared_statistics_.get(); }
   const BusTimeline* timeline() const { return timeline_.get(); }
+  const RegisterDiscovery* discovery() const { return discovery_.get(); }
   // The --follow items no frame read or wrote, so far.
   std::vector<std::string> unseen_follow() const {
     return follow_watch_ ? follow_watch_->unseen() : std::vector<std::string>{};
@@ -220,6 +226,7 @@ class Pipeline {
   std::unique_ptr<RecordLimit> limit_;
   std::unique_ptr<output::MqttPublisher> mqtt_;
   std::unique_ptr<top::TopFeed> top_feed_;
+  std::unique_ptr<RegisterDiscovery> discovery_;
 };
 
 }  // namespace modtap::tools

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "captures/piped_input.hpp"
+#include "output/model_draft.hpp"
 #include "output/mosquitto_broker.hpp"
 #include "output/mqtt_publisher.hpp"
 #include "output/report.hpp"
@@ -25,7 +26,33 @@ void write_whole(const std::string& path, const fmt::memory_buffer& content) {
 
 // The end of a run: -T stats prints the statistics, --stats and --report write them
 // (`complete` false when the input broke off: they cover what was read).
+// modtap discover: the drafts, to files or summarised; a capture with no register reads says so.
+void write_discovery(const RunOptions& o, output::Output& out, const RegisterDiscovery& found) {
+  if (!found.saw_register_reads()) {
+    fmt::print(stderr,
+               "modtap discover: no register values read (no answer to FC03 or FC04, no write "
+               "of FC06 or FC16): nothing to draft\n");
+    return;
+  }
+  if (found.registers_not_followed())
+    fmt::print(stderr, "modtap discover: {} values of registers past the first {} not followed\n",
+               found.registers_not_followed(), RegisterDiscovery::max_registers);
+  const std::vector<SlaveDraft> drafts = found.drafts();
+  if (o.discover_out.empty())
+    return output::write_discovery_summary(out, drafts, found.polling_program());
+  for (const std::string& path : output::write_model_drafts(o.discover_out, drafts))
+    fmt::print(stderr, "modtap discover: wrote {}\n", path);
+  fmt::print(stderr, "modtap discover: read with them: modtap -r CAPTURE --models-dir {}{}\n",
+             o.discover_out, [&] {
+               std::string models;
+               for (const SlaveDraft& d : drafts)
+                 models += fmt::format(" --model {}=slave-{}", d.slave, d.slave);
+               return models;
+             }());
+}
+
 void summarise(const RunOptions& o, output::Output& out, const Pipeline& pipeline, bool complete) {
+  if (pipeline.discovery()) write_discovery(o, out, *pipeline.discovery());
   const BusStatistics* statistics = pipeline.statistics();
   if (!statistics) return;
   const auto base = o.register_base;

@@ -1,0 +1,453 @@
+#include "decoder/analysis/register_discovery.hpp"
+
+#include <fmt/format.h>
+#include <algorithm>
+#include <bit>
+#include <cmath>
+
+#include "decoder/protocol/bytes.hpp"
+
+namespace modtap {
+namespace {
+
+// A float a device reports: a number of everyday size, or exactly zero. An integer's bits read
+// as a float are almost always tiny (a zero high word), NaN, or absurdly large.
+bool plausible_float(uint32_t bits) {
+  if ((bits & 0x7FFFFFFF) == 0) return true;
+  const unsigned exponent = (bits >> 23) & 0xFF;
+  if (exponent == 0 || exponent == 0xFF) return false;
+  const double size = std::fabs(std::bit_cast<float>(bits));
+  return size >= 1e-6 && size <= 1e9;
+}
+
+// The quantities a value's size names on its own, and the scales a device stores them in.
+struct Quantity {
+  std::string_view name;
+  std::string_view unit;
+  double low, high;
+};
+constexpr std::array<Quantity, 4> quantities{{
+    {"voltage", "V", 207, 253},   // 230 V, +-10 %
+    {"voltage", "V", 360, 440},   // 400 V between phases
+    {"frequency", "Hz", 49, 51},  // 50 Hz mains, as a meter or a drive on mains sees it
+    {"frequency", "Hz", 59, 61},
+}};
+constexpr std::array<double, 3> scales{1.0, 0.1, 0.01};
+
+// A quantity the values [low, high] fit at one of the scales, where they move: a value that
+// never moves fits too many things to be named.
+void name_quantity(RegisterReading& r, bool moves, bool integer) {
+  if (!moves) return;
+  for (const double scale : integer ? std::span(scales) : std::span(scales).first(1))
+    for (const Quantity& q : quantities)
+      if (r.low * scale >= q.low && r.high * scale <= q.high) {
+        r.quantity = q.name;
+        r.unit = q.unit;
+        r.scale = scale;
+        r.low *= scale;
+        r.high *= scale;
+        return;
+      }
+}
+
+std::string times(uint64_t n) {
+  return n == 1 ? "once" : fmt::format("{} times", n);
+}
+
+std::string values_list(const WordHistory& h) {
+  std::vector<uint16_t> values(h.distinct.begin(), h.distinct.begin() + h.distinct_count);
+  std::sort(values.begin(), values.end());
+  std::string text;
+  for (const uint16_t v : values) text += fmt::format("{}{}", text.empty() ? "" : ", ", v);
+  return text;
+}
+
+bool contiguous(const WordHistory& h) {
+  return !h.many_values && h.max - h.min + 1u == h.distinct_count;
+}
+
+RegisterReading reading(ValueType type, ReadingKind kind, Confidence confidence, std::string why,
+                        std::string runner_up = {}) {
+  RegisterReading r;
+  r.type = type;
+  r.kind = kind;
+  r.confidence = confidence;
+  r.why = std::move(why);
+  r.runner_up = std::move(runner_up);
+  return r;
+}
+
+// A register that never moved: unused where it reads 0, else a constant.
+RegisterReading read_constant(const WordHistory& h) {
+  RegisterReading r = h.first == 0
+                          ? reading(ValueType::u16, ReadingKind::unused, Confidence::medium,
+                                    fmt::format("0 in every one of {} reads", h.samples),
+                                    "a value that did not move while captured")
+                          : reading(ValueType::u16, ReadingKind::constant, Confidence::medium,
+                                    fmt::format("{} in every one of {} reads", h.first, h.samples),
+                                    "a setting or an identifier");
+  r.low = r.high = h.first;
+  return r;
+}
+
+// Small numbers of both signs: FFxxH beside 00xxH.
+bool signed_small(const WordHistory& h) {
+  return h.max >= 0xF000 && (h.min < 0x1000 || h.min >= 0x8000);
+}
+
+RegisterReading read_moving(const WordHistory& h) {
+  if (signed_small(h)) {
+    RegisterReading r = reading(
+        ValueType::s16, ReadingKind::number, h.min < 0x1000 ? Confidence::high : Confidence::medium,
+        h.min < 0x1000 ? "values near 0 on both sides (FFxxH and 00xxH): a signed number"
+                       : "values just below 0 as a signed number (FxxxH)",
+        "u16");
+    r.low = h.signed_min;
+    r.high = h.signed_max;
+    return r;
+  }
+  const uint16_t changing = h.changing_bits();
+  const bool low_bits = (changing & (changing + 1)) == 0;  // bits 0..n, as a number's change
+  RegisterReading r;
+  if (!low_bits && !contiguous(h)) {
+    r = reading(ValueType::code, ReadingKind::bit_field, Confidence::medium,
+                fmt::format("bits that change on their own (mask {:04X}H), not as a number's "
+                            "lowest bits",
+                            changing),
+                "an enum");
+  } else if (h.falls == 0 && h.rises >= 3) {
+    r = reading(ValueType::u16, ReadingKind::counter,
+                h.rises >= 8 ? Confidence::high : Confidence::medium,
+                fmt::format("it only grew, {} in {} reads", times(h.rises), h.samples), "u16");
+  } else if (!h.many_values && h.distinct_count <= 6 && !contiguous(h)) {
+    r = reading(ValueType::u16, ReadingKind::enumerated, Confidence::medium,
+                fmt::format("{} values, apart: {}", h.distinct_count, values_list(h)), "u16");
+  } else {
+    const bool few = !h.many_values && h.distinct_count <= 4;
+    r = reading(ValueType::u16, ReadingKind::number, few ? Confidence::low : Confidence::medium,
+                few ? fmt::format("{} values in a row: {}", h.distinct_count, values_list(h))
+                    : fmt::format("values that move from {} to {}", h.min, h.max),
+                few ? "an enum" : (h.max >= 0x8000 ? "s16" : ""));
+  }
+  r.low = h.min;
+  r.high = h.max;
+  return r;
+}
+
+// Which of two orders reads the pair as the likelier float, if either does.
+std::optional<RegisterReading> read_float(const std::array<PairHistory, 2>& pair) {
+  auto fits = [](const PairHistory& p) {
+    return p.samples && p.floats == p.samples && p.samples - p.zeros >= 3;
+  };
+  // A pair that never moves is a constant, whatever it reads as: a float's evidence is its
+  // values over time.
+  const bool high = fits(pair[0]) && pair[0].rises + pair[0].falls > 0;
+  const bool low = fits(pair[1]) && pair[1].rises + pair[1].falls > 0;
+  if (!high && !low) return std::nullopt;
+  auto smoothness = [](const PairHistory& p) { return p.float_jumps / double(p.samples); };
+  const size_t o =
+      high && low ? (smoothness(pair[1]) < smoothness(pair[0]) ? 1 : 0) : (low ? 1 : 0);
+  const PairHistory& p = pair[o];
+  // A measured quantity moves by small steps against its size; an integer's bits read as a
+  // float jump.
+  const bool smooth = smoothness(p) < 0.2;
+  RegisterReading r =
+      reading(ValueType::f32, ReadingKind::number,
+              high && low ? Confidence::low : (smooth ? Confidence::high : Confidence::medium),
+              fmt::format("every read is a float of everyday size ({:g} to {:g}){}", p.float_min,
+                          p.float_max, smooth ? ", moving smoothly" : ""),
+              high && low ? fmt::format("f32 {} word first", o ? "high" : "low") : "two u16");
+  r.order = o ? WordOrder::low_first : WordOrder::high_first;
+  r.words = 2;
+  r.low = p.float_min;
+  r.high = p.float_max;
+  name_quantity(r, true, false);
+  return r;
+}
+
+// A 32-bit integer in one word order: its high word is not always 0, and moves only as the low
+// word's carry or borrow moves it (the boundary and the order show in how often each word
+// changes). A high word that never moves leaves two 16-bit values as likely.
+std::optional<RegisterReading> read_integer(const std::array<PairHistory, 2>& pair) {
+  for (size_t o = 0; o < pair.size(); ++o) {
+    const PairHistory& p = pair[o];
+    if ((p.max >> 16) == 0 || p.rises + p.falls == 0 || p.high_changes != p.carries) continue;
+    const bool negative = p.signed_min < 0 && (p.max >> 16) == 0xFFFF &&
+                          ((p.min >> 16) == 0xFFFF || (p.min >> 16) == 0);
+    const bool counter = !negative && p.falls == 0 && p.rises >= 3;
+    const bool carried = p.high_changes > 0;
+    const std::string grew = counter ? "it only grew; " : "";
+    // One carry may be chance; two that each came with the low word's wrap are the number's.
+    const Confidence confidence = p.high_changes >= 2 ? Confidence::high
+                                  : carried           ? Confidence::medium
+                                                      : Confidence::low;
+    RegisterReading r = reading(
+        negative ? ValueType::s32 : ValueType::u32,
+        counter ? ReadingKind::counter : ReadingKind::number, confidence,
+        carried ? fmt::format("{}its high word moved {}, each time with its low word's carry", grew,
+                              times(p.high_changes))
+                : grew + "a high word that never moved beside a moving low word",
+        carried ? "" : "two u16, a constant beside a value");
+    r.order = o ? WordOrder::low_first : WordOrder::high_first;
+    r.words = 2;
+    r.low = negative ? p.signed_min : p.min;
+    r.high = negative ? p.signed_max : p.max;
+    return r;
+  }
+  return std::nullopt;
+}
+
+// Printable ASCII in both bytes, or a NUL that pads a string.
+bool text_word(uint16_t word) {
+  auto text = [](uint8_t c) { return c == 0 || (c >= 0x20 && c < 0x7F); };
+  return word != 0 && text(static_cast<uint8_t>(word >> 8)) && text(static_cast<uint8_t>(word));
+}
+
+}  // namespace
+
+void WordHistory::add(uint16_t value) {
+  if (samples == 0) first = value;
+  if (samples > 0 && value != last) {
+    ++changes;
+    ++(value > last ? rises : falls);
+    for (unsigned flipped = value ^ last; flipped; flipped &= flipped - 1)
+      ++bit_changes[static_cast<size_t>(std::countr_zero(flipped))];
+  }
+  ++samples;
+  last = value;
+  min = std::min(min, value);
+  max = std::max(max, value);
+  signed_min = std::min(signed_min, static_cast<int16_t>(value));
+  signed_max = std::max(signed_max, static_cast<int16_t>(value));
+  if (many_values) return;
+  if (std::find(distinct.begin(), distinct.begin() + distinct_count, value) !=
+      distinct.begin() + distinct_count)
+    return;
+  if (distinct_count == max_distinct)
+    many_values = true;
+  else
+    distinct[distinct_count++] = value;
+}
+
+uint16_t WordHistory::changing_bits() const {
+  uint16_t mask = 0;
+  for (unsigned bit = 0; bit < 16; ++bit)
+    if (bit_changes[bit]) mask = static_cast<uint16_t>(mask | 1u << bit);
+  return mask;
+}
+
+void PairHistory::add(uint32_t value) {
+  if (plausible_float(value)) {
+    const double v = std::bit_cast<float>(value);
+    if (floats == 0) float_min = float_max = v;
+    float_min = std::min(float_min, v);
+    float_max = std::max(float_max, v);
+    if (samples) {
+      const double before = std::bit_cast<float>(last);
+      const double larger = std::max(std::fabs(v), std::fabs(before));
+      if (larger > 0 && plausible_float(last)) float_jumps += std::fabs(v - before) / larger;
+    }
+    ++floats;
+  }
+  if ((value & 0x7FFFFFFF) == 0) ++zeros;
+  if (samples && value != last) ++(value > last ? rises : falls);
+  const auto high = static_cast<uint16_t>(value >> 16), low = static_cast<uint16_t>(value);
+  const auto high_before = static_cast<uint16_t>(last >> 16),
+             low_before = static_cast<uint16_t>(last);
+  if (samples && high != high_before) {
+    ++high_changes;
+    const bool carry = static_cast<uint16_t>(high - high_before) == 1 && low < low_before;
+    const bool borrow = static_cast<uint16_t>(high_before - high) == 1 && low > low_before;
+    carries += carry || borrow;
+  }
+  min = std::min(min, value);
+  max = std::max(max, value);
+  signed_min = std::min(signed_min, static_cast<int32_t>(value));
+  signed_max = std::max(signed_max, static_cast<int32_t>(value));
+  ++samples;
+  last = value;
+}
+
+std::optional<int64_t> BlockTimes::period_ns() const {
+  if (requests < 2) return std::nullopt;
+  return (last_ns - first_ns) / static_cast<int64_t>(requests - 1);
+}
+
+RegisterReading read_word(const WordHistory& h) {
+  RegisterReading r = h.changes == 0 ? read_constant(h) : read_moving(h);
+  r.samples = h.samples;
+  if (r.kind == ReadingKind::number) name_quantity(r, true, true);
+  return r;
+}
+
+std::optional<RegisterReading> read_pair(const std::array<PairHistory, 2>& pair) {
+  std::optional<RegisterReading> r = read_float(pair);
+  if (!r) r = read_integer(pair);
+  if (r) r->samples = pair[0].samples;
+  return r;
+}
+
+void RegisterDiscovery::on_frame(const Frame& frame) {
+  if (!frame.check_ok || frame.is_exception()) return;
+  if (frame.role == Role::request) return on_request(frame);
+  if (frame.role != Role::response || frame.request_pdu.size() < 5) return;
+  const std::span<const uint8_t> asked = frame.request_pdu;
+  const std::span<const uint8_t> pdu = frame.pdu();
+  const uint8_t function = asked[0];
+  const uint16_t first = be16(asked, 1);
+  const BlockKey key{frame.device(), function, first,
+                     function == 0x06 ? uint16_t{1} : be16(asked, 3)};
+  if (const auto block = blocks_.find(key); block != blocks_.end()) ++block->second.answered;
+  if ((function == 0x03 || function == 0x04) && pdu.size() >= 2 && pdu[1] == pdu.size() - 2)
+    on_values(frame.device(), function == 0x03 ? Table::holding : Table::input, first,
+              pdu.subspan(2));
+  else if (function == 0x06 && pdu.size() == 5)
+    on_values(frame.device(), Table::holding, first, pdu.subspan(3));
+  else if (function == 0x10 && asked.size() >= 6 && asked[5] == asked.size() - 6)
+    on_values(frame.device(), Table::holding, first, asked.subspan(6));
+}
+
+// The block a request reads or writes, with its time: the blocks' periods, the polling program.
+void RegisterDiscovery::on_request(const Frame& frame) {
+  const std::span<const uint8_t> pdu = frame.pdu();
+  const uint8_t function = frame.function();
+  const bool addressed = pdu.size() >= 5 && function >= 0x01 && function <= 0x10;
+  const uint16_t count = !addressed ? 0 : (function == 0x05 || function == 0x06) ? 1 : be16(pdu, 3);
+  const BlockKey key{frame.slave(), function, addressed ? be16(pdu, 1) : uint16_t{0}, count};
+  BlockTimes& times = blocks_[key];
+  if (times.requests == 0) {
+    times.first_ns = frame.t_ns;
+  } else {
+    const int64_t gap = frame.t_ns - times.last_ns;
+    times.min_gap_ns = std::min(times.min_gap_ns, gap);
+    times.max_gap_ns = std::max(times.max_gap_ns, gap);
+  }
+  times.last_ns = frame.t_ns;
+  ++times.requests;
+  if (requests_.size() < program_window) requests_.emplace_back(key, frame.t_ns);
+}
+
+void RegisterDiscovery::on_values(uint8_t slave, Table table, uint16_t first,
+                                  std::span<const uint8_t> data) {
+  const size_t count = data.size() / 2;
+  auto at = words_.lower_bound({slave, table, first});
+  for (size_t i = 0; i < count; ++i) {
+    const WordKey key{slave, table, static_cast<uint16_t>(first + i)};
+    // A block's registers are neighbours in the map: each found from the one before.
+    if (at == words_.end() || !(at->first == key)) {
+      if (words_.size() >= max_registers) {
+        ++registers_not_followed_;
+        continue;
+      }
+      at = words_.try_emplace(at, key);
+    }
+    Words& words = at->second;
+    ++at;
+    const uint16_t value = be16(data, 2 * i);
+    words.history.add(value);
+    if (i + 1 == count) continue;
+    const uint16_t next = be16(data, 2 * i + 2);
+    words.pairs[0].add(uint32_t{value} << 16 | next);
+    words.pairs[1].add(uint32_t{next} << 16 | value);
+    ++words.pair_samples;
+  }
+}
+
+std::vector<SlaveDraft> RegisterDiscovery::drafts() const {
+  std::vector<SlaveDraft> drafts;
+  for (auto it = words_.begin(); it != words_.end();) {
+    const uint8_t slave = it->first.slave;
+    drafts.push_back(draft_of(slave));
+    if (slave == UINT8_MAX) break;
+    it = words_.lower_bound({static_cast<uint8_t>(slave + 1), Table::coil, 0});
+  }
+  return drafts;
+}
+
+SlaveDraft RegisterDiscovery::draft_of(uint8_t slave) const {
+  SlaveDraft draft;
+  draft.slave = slave;
+  for (auto it = blocks_.lower_bound({slave, 0, 0, 0});
+       it != blocks_.end() && it->first.slave == slave; ++it)
+    draft.blocks.push_back({it->first, it->second});
+  for (const Table table : {Table::holding, Table::input}) {
+    std::vector<RegisterReading> readings = readings_of(slave, table);
+    draft.registers.insert(draft.registers.end(), readings.begin(), readings.end());
+  }
+  for (auto it = words_.lower_bound({slave, Table::coil, 0});
+       it != words_.end() && it->first.slave == slave; ++it)
+    if (it->second.history.samples < min_samples)
+      draft.too_few_samples.push_back(it->first.address);
+  return draft;
+}
+
+std::vector<RegisterReading> RegisterDiscovery::readings_of(uint8_t slave, Table table) const {
+  std::vector<RegisterReading> readings;
+  auto it = words_.lower_bound({slave, table, 0});
+  auto in_table = [&](auto at) {
+    return at != words_.end() && at->first.slave == slave && at->first.table == table;
+  };
+  for (; in_table(it); ++it) {
+    const auto& [key, words] = *it;
+    if (words.history.samples < min_samples) continue;
+    auto next = std::next(it);
+    const bool neighbour = in_table(next) && next->first.address == key.address + 1;
+    // A run of constant registers of text: a name, a serial number.
+    uint16_t run = 0;
+    for (auto at = it; in_table(at) && at->first.address == key.address + run &&
+                       at->second.history.changes == 0 && text_word(at->second.history.first);
+         ++at)
+      ++run;
+    std::optional<RegisterReading> r;
+    if (run >= 2) {
+      r = reading(ValueType::string, ReadingKind::text, Confidence::high,
+                  fmt::format("{} registers of printable text that never changed", run));
+      r->words = run;
+      r->samples = words.history.samples;
+    } else if (neighbour && words.pair_samples == words.history.samples &&
+               next->second.history.samples == words.history.samples) {
+      r = read_pair(words.pairs);
+    }
+    if (!r) r = read_word(words.history);
+    r->address = key.address;
+    r->table = table;
+    readings.push_back(*r);
+    for (uint16_t claimed = 1; claimed < r->words && in_table(std::next(it)); ++claimed) ++it;
+  }
+  return readings;
+}
+
+// The requests of one cycle: what the master sends from its first request to the next time it
+// sends it, most often (a retry, a broadcast between, a slave skipped change a few cycles).
+PollingProgram RegisterDiscovery::polling_program() const {
+  const std::vector<std::pair<BlockKey, int64_t>>& sent = requests_;
+  PollingProgram program;
+  std::vector<size_t> starts;
+  for (size_t i = 0; i < sent.size(); ++i)
+    if (sent[i].first == sent.front().first) starts.push_back(i);
+  std::map<std::vector<BlockKey>, size_t> cycles;
+  for (size_t c = 1; c < starts.size(); ++c) {
+    std::vector<BlockKey> cycle;
+    for (size_t i = starts[c - 1]; i < starts[c]; ++i) cycle.push_back(sent[i].first);
+    ++cycles[cycle];
+  }
+  const auto most =
+      std::max_element(cycles.begin(), cycles.end(),
+                       [](const auto& a, const auto& b) { return a.second < b.second; });
+  if (most == cycles.end() || most->second < 2) return program;
+  program.cycle = most->first;
+  program.cycles_seen = most->second;
+  program.cycles_all = starts.size() - 1;
+  program.period_ns = (sent[starts.back()].second - sent[starts.front()].second) /
+                      static_cast<int64_t>(starts.size() - 1);
+  int64_t narrowest = INT64_MAX, widest = 0;
+  for (size_t c = 1; c < starts.size(); ++c) {
+    const int64_t gap = sent[starts[c]].second - sent[starts[c - 1]].second;
+    narrowest = std::min(narrowest, gap);
+    widest = std::max(widest, gap);
+  }
+  program.jitter_ns = widest - narrowest;
+  return program;
+}
+
+}  // namespace modtap
