@@ -49,7 +49,8 @@ std::string reading_text(const RegisterReading& r) {
   std::string text(type_name(r.type));
   if (r.words == 2)
     text += r.order == WordOrder::high_first ? ", high word first" : ", low word first";
-  if (r.kind != ReadingKind::number) text += fmt::format(" ({})", to_string(r.kind));
+  if (r.kind != ReadingKind::number && r.kind != ReadingKind::text)
+    text += fmt::format(" ({})", to_string(r.kind));
   return text;
 }
 

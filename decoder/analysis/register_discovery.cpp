@@ -20,34 +20,68 @@ bool plausible_float(uint32_t bits) {
   return size >= 1e-6 && size <= 1e9;
 }
 
-// The quantities a value's size names on its own, and the scales a device stores them in.
+// The quantities a value's size and sign name on their own, the types a device stores each in,
+// and the scales it stores integers at. The first that fits names the register; a value that
+// fits none keeps a plain name.
+enum TypeSet : uint8_t { u16_type = 1, s16_type = 2, int32_types = 4, f32_type = 8 };
 struct Quantity {
   std::string_view name;
   std::string_view unit;
-  double low, high;
+  double low, high;   // the values, scaled, lie inside
+  double extent = 0;  // the largest size among them is at least this
+  bool crosses_zero = false;
+  uint8_t types = u16_type | int32_types | f32_type;
+  std::array<double, 3> scales{1.0, 0.1, 0.01};  // for integers; a float's is 1
 };
-constexpr std::array<Quantity, 4> quantities{{
+const std::array<Quantity, 7> quantities{{
     {"voltage", "V", 207, 253},   // 230 V, +-10 %
     {"voltage", "V", 360, 440},   // 400 V between phases
     {"frequency", "Hz", 49, 51},  // 50 Hz mains, as a meter or a drive on mains sees it
     {"frequency", "Hz", 59, 61},
+    // A float within -1..1 that is mostly near 1: a power factor (a cosine phi).
+    {"power_factor", "", -1, 1, 0.5, false, f32_type, {1, 1, 1}},
+    // A 32-bit value across zero, in the hundreds and more: power imported and exported.
+    {"power", "W", -1e7, 1e7, 100, true, int32_types | f32_type, {1, 1, 1}},
+    // A signed 16-bit value across zero, in tenths between -40 and 60: a temperature.
+    {"temperature", "\u00B0C", -40, 60, 0, true, s16_type, {0.1, 0.1, 0.1}},
 }};
-constexpr std::array<double, 3> scales{1.0, 0.1, 0.01};
 
-// A quantity the values [low, high] fit at one of the scales, where they move: a value that
-// never moves fits too many things to be named.
-void name_quantity(RegisterReading& r, bool moves, bool integer) {
-  if (!moves) return;
-  for (const double scale : integer ? std::span(scales) : std::span(scales).first(1))
-    for (const Quantity& q : quantities)
-      if (r.low * scale >= q.low && r.high * scale <= q.high) {
-        r.quantity = q.name;
-        r.unit = q.unit;
-        r.scale = scale;
-        r.low *= scale;
-        r.high *= scale;
-        return;
-      }
+uint8_t type_set(ValueType type) {
+  switch (type) {
+    case ValueType::u16:
+      return u16_type;
+    case ValueType::s16:
+      return s16_type;
+    case ValueType::u32:
+    case ValueType::s32:
+      return int32_types;
+    case ValueType::f32:
+      return f32_type;
+    default:
+      return 0;
+  }
+}
+
+bool fits(const Quantity& q, const RegisterReading& r, double scale) {
+  const double low = r.low * scale, high = r.high * scale;
+  return (q.types & type_set(r.type)) && low >= q.low && high <= q.high &&
+         std::max(std::fabs(low), std::fabs(high)) >= q.extent &&
+         (!q.crosses_zero || (low < 0 && high > 0));
+}
+
+// Names the quantity the values [low, high] of a moving number fit, if one does.
+void name_quantity(RegisterReading& r) {
+  const bool integer = r.type != ValueType::f32;
+  for (const Quantity& q : quantities)
+    for (const double scale : integer ? std::span(q.scales) : std::span(q.scales).first(1)) {
+      if (!fits(q, r, scale)) continue;
+      r.quantity = q.name;
+      r.unit = q.unit;
+      r.scale = scale;
+      r.low *= scale;
+      r.high *= scale;
+      return;
+    }
 }
 
 std::string times(uint64_t n) {
@@ -149,19 +183,26 @@ std::optional<RegisterReading> read_float(const std::array<PairHistory, 2>& pair
       high && low ? (smoothness(pair[1]) < smoothness(pair[0]) ? 1 : 0) : (low ? 1 : 0);
   const PairHistory& p = pair[o];
   // A measured quantity moves by small steps against its size; an integer's bits read as a
-  // float jump.
+  // float jump. As it moves, its mantissa's low word moves too: where that word never did, the
+  // pair is likelier a value beside a constant (or a float of whole numbers).
   const bool smooth = smoothness(p) < 0.2;
+  const bool mantissa_moves = p.low_changes > 0;
+  const Confidence confidence = (high && low) || !mantissa_moves ? Confidence::low
+                                : smooth                         ? Confidence::high
+                                                                 : Confidence::medium;
+  const std::string runner_up = high && low ? fmt::format("f32 {} word first", o ? "high" : "low")
+                                : mantissa_moves ? "two u16"
+                                                 : "a 16-bit value beside a constant";
   RegisterReading r =
-      reading(ValueType::f32, ReadingKind::number,
-              high && low ? Confidence::low : (smooth ? Confidence::high : Confidence::medium),
+      reading(ValueType::f32, ReadingKind::number, confidence,
               fmt::format("every read is a float of everyday size ({:g} to {:g}){}", p.float_min,
                           p.float_max, smooth ? ", moving smoothly" : ""),
-              high && low ? fmt::format("f32 {} word first", o ? "high" : "low") : "two u16");
+              runner_up);
   r.order = o ? WordOrder::low_first : WordOrder::high_first;
   r.words = 2;
   r.low = p.float_min;
   r.high = p.float_max;
-  name_quantity(r, true, false);
+  name_quantity(r);
   return r;
 }
 
@@ -172,6 +213,9 @@ std::optional<RegisterReading> read_integer(const std::array<PairHistory, 2>& pa
   for (size_t o = 0; o < pair.size(); ++o) {
     const PairHistory& p = pair[o];
     if ((p.max >> 16) == 0 || p.rises + p.falls == 0 || p.high_changes != p.carries) continue;
+    // A high word that never moved beside a measurement moving up and down is two values; beside
+    // one that only grows, a counter that has not carried yet.
+    if (p.high_changes == 0 && p.falls > 0) continue;
     const bool negative = p.signed_min < 0 && (p.max >> 16) == 0xFFFF &&
                           ((p.min >> 16) == 0xFFFF || (p.min >> 16) == 0);
     const bool counter = !negative && p.falls == 0 && p.rises >= 3;
@@ -181,17 +225,17 @@ std::optional<RegisterReading> read_integer(const std::array<PairHistory, 2>& pa
     const Confidence confidence = p.high_changes >= 2 ? Confidence::high
                                   : carried           ? Confidence::medium
                                                       : Confidence::low;
-    RegisterReading r = reading(
-        negative ? ValueType::s32 : ValueType::u32,
-        counter ? ReadingKind::counter : ReadingKind::number, confidence,
-        carried ? fmt::format("{}its high word moved {}, each time with its low word's carry", grew,
-                              times(p.high_changes))
-                : grew + "a high word that never moved beside a moving low word",
-        carried ? "" : "two u16, a constant beside a value");
+    RegisterReading r =
+        reading(negative ? ValueType::s32 : ValueType::u32,
+                counter ? ReadingKind::counter : ReadingKind::number, confidence,
+                carried ? fmt::format("{}its high word moved {}, each time as its low word wrapped",
+                                      grew, times(p.high_changes))
+                        : grew + "a counter whose high word has not moved yet",
+                carried ? "" : "two u16, a constant beside a value");
     r.order = o ? WordOrder::low_first : WordOrder::high_first;
     r.words = 2;
-    r.low = negative ? p.signed_min : p.min;
-    r.high = negative ? p.signed_max : p.max;
+    r.low = negative ? static_cast<double>(p.signed_min) : static_cast<double>(p.min);
+    r.high = negative ? static_cast<double>(p.signed_max) : static_cast<double>(p.max);
     return r;
   }
   return std::nullopt;
@@ -254,10 +298,13 @@ void PairHistory::add(uint32_t value) {
   const auto high = static_cast<uint16_t>(value >> 16), low = static_cast<uint16_t>(value);
   const auto high_before = static_cast<uint16_t>(last >> 16),
              low_before = static_cast<uint16_t>(last);
+  if (samples && low != low_before) ++low_changes;
   if (samples && high != high_before) {
     ++high_changes;
-    const bool carry = static_cast<uint16_t>(high - high_before) == 1 && low < low_before;
-    const bool borrow = static_cast<uint16_t>(high_before - high) == 1 && low > low_before;
+    // The low word wrapped: it went the other way by more than half its range.
+    const bool carry = static_cast<uint16_t>(high - high_before) == 1 && low_before - low >= 0x8000;
+    const bool borrow =
+        static_cast<uint16_t>(high_before - high) == 1 && low - low_before >= 0x8000;
     carries += carry || borrow;
   }
   min = std::min(min, value);
@@ -276,13 +323,17 @@ std::optional<int64_t> BlockTimes::period_ns() const {
 RegisterReading read_word(const WordHistory& h) {
   RegisterReading r = h.changes == 0 ? read_constant(h) : read_moving(h);
   r.samples = h.samples;
-  if (r.kind == ReadingKind::number) name_quantity(r, true, true);
+  if (r.kind == ReadingKind::number) name_quantity(r);
   return r;
 }
 
 std::optional<RegisterReading> read_pair(const std::array<PairHistory, 2>& pair) {
   std::optional<RegisterReading> r = read_float(pair);
   if (!r) r = read_integer(pair);
+  // A 32-bit counter that only grows is most often an energy: named so, its unit and scale
+  // (Wh, 0.1 kWh...) left to the manual, as no value tells them.
+  if (r && r->kind == ReadingKind::counter) r->quantity = "energy";
+  if (r && r->kind == ReadingKind::number && r->type != ValueType::f32) name_quantity(*r);
   if (r) r->samples = pair[0].samples;
   return r;
 }
@@ -387,11 +438,22 @@ std::vector<RegisterReading> RegisterDiscovery::readings_of(uint8_t slave, Table
   auto in_table = [&](auto at) {
     return at != words_.end() && at->first.slave == slave && at->first.table == table;
   };
+  // The register at `at` and the next read as one number, where both were read together every
+  // time and often enough.
+  auto pair_at = [&](auto at) -> std::optional<RegisterReading> {
+    if (!in_table(at)) return std::nullopt;
+    const auto after = std::next(at);
+    const Words& words = at->second;
+    if (!in_table(after) || after->first.address != at->first.address + 1 ||
+        words.history.samples < min_samples || words.pair_samples != words.history.samples ||
+        after->second.history.samples != words.history.samples)
+      return std::nullopt;
+    return read_pair(words.pairs);
+  };
   for (; in_table(it); ++it) {
     const auto& [key, words] = *it;
     if (words.history.samples < min_samples) continue;
-    auto next = std::next(it);
-    const bool neighbour = in_table(next) && next->first.address == key.address + 1;
+    const auto next = std::next(it);
     // A run of constant registers of text: a name, a serial number.
     uint16_t run = 0;
     for (auto at = it; in_table(at) && at->first.address == key.address + run &&
@@ -404,9 +466,10 @@ std::vector<RegisterReading> RegisterDiscovery::readings_of(uint8_t slave, Table
                   fmt::format("{} registers of printable text that never changed", run));
       r->words = run;
       r->samples = words.history.samples;
-    } else if (neighbour && words.pair_samples == words.history.samples &&
-               next->second.history.samples == words.history.samples) {
-      r = read_pair(words.pairs);
+    } else if (std::optional<RegisterReading> pair = pair_at(it)) {
+      // The register after may begin a likelier pair: this one is then read alone.
+      const std::optional<RegisterReading> after = pair_at(next);
+      if (!after || after->confidence <= pair->confidence) r = pair;
     }
     if (!r) r = read_word(words.history);
     r->address = key.address;

@@ -47,6 +47,7 @@ struct PairHistory {
   // Samples whose high word differs from the one before, and those of them where the low word
   // wrapped the other way (a carry or a borrow): a 32-bit number's high word moves only so.
   uint64_t high_changes = 0, carries = 0;
+  uint64_t low_changes = 0;
   uint32_t last = 0;
   uint32_t min = UINT32_MAX, max = 0;
   int32_t signed_min = INT32_MAX, signed_max = INT32_MIN;

@@ -131,7 +131,8 @@ TEST(RegisterDiscovery, TwoValuesThatMoveApartStaySixteenBits) {
   }
 }
 
-// A temperature around freezing: FFxxH beside 00xxH is a signed number.
+// A temperature around freezing: FFxxH beside 00xxH is a signed number, in tenths a
+// temperature.
 TEST(RegisterDiscovery, ValuesOnBothSidesOfZeroAreSigned) {
   Reads bus(0x0010, 1);
   bus.run(30, [](int n) {
@@ -141,8 +142,10 @@ TEST(RegisterDiscovery, ValuesOnBothSidesOfZeroAreSigned) {
   ASSERT_EQ(registers.size(), 1u);
   EXPECT_EQ(registers[0].type, ValueType::s16);
   EXPECT_EQ(registers[0].confidence, Confidence::high);
-  EXPECT_EQ(registers[0].low, -50);
-  EXPECT_EQ(registers[0].high, 66);
+  EXPECT_EQ(registers[0].quantity, "temperature");  // tenths between -40 and 60, across zero
+  EXPECT_EQ(registers[0].scale, 0.1);
+  EXPECT_DOUBLE_EQ(registers[0].low, -5.0);
+  EXPECT_DOUBLE_EQ(registers[0].high, 6.6);
 }
 
 // A status word whose bits 0, 3 and 9 change on their own, a register never used, a constant,

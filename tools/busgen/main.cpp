@@ -1,6 +1,8 @@
 // modtap-bus-simulator: writes simulated bus traffic as a capture file, for benchmarks and demos.
 #include <cstdio>
+#include <fstream>
 #include <map>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -9,7 +11,9 @@
 
 #include "captures/hexlog_writer.hpp"
 #include "captures/pcap_chunk_writer.hpp"
+#include "decoder/models/model_yaml.hpp"
 #include "tools/busgen/bus_simulator.hpp"
+#include "tools/busgen/device_bus.hpp"
 #include "tools/help_format.hpp"
 
 namespace {
@@ -38,6 +42,21 @@ int write(const busgen::BusCapture& capture, const std::string& format, busgen::
     file.close();
   }
   return 0;
+}
+
+// "SLAVE=FILE": the device at SLAVE, its model (and truth) read from FILE.
+busgen::SimulatedDevice device_of(const std::string& spec) {
+  const size_t eq = spec.find('=');
+  if (eq == std::string::npos) throw std::invalid_argument("give SLAVE=MODEL.yaml, not " + spec);
+  const int slave = std::stoi(spec.substr(0, eq));
+  if (slave < 1 || slave > 247)
+    throw std::invalid_argument("slave " + spec.substr(0, eq) + " is not 1-247");
+  const std::string file = spec.substr(eq + 1);
+  std::ifstream in(file);
+  if (!in) throw std::invalid_argument("cannot read " + file);
+  std::ostringstream yaml;
+  yaml << in.rdbuf();
+  return {static_cast<uint8_t>(slave), parse_model(yaml.str(), file)};
 }
 
 }  // namespace
@@ -85,6 +104,17 @@ int main(int argc, char** argv) {
                  "e.g. 2:slow=131ms 6:missing-block=0400H+4")
       ->type_name("ADDR:FAULT");
   app.add_flag("--ascii", ascii, "Modbus ASCII instead of RTU (7E1)");
+  std::vector<std::string> device_specs;
+  busgen::DeviceBusOptions devices;
+  double period_s = 1.0;
+  app.add_option("--device", device_specs,
+                 "Instead of random traffic: a device with a known map, SLAVE=MODEL.yaml "
+                 "(repeatable), whose registers the master reads every period, their values moving "
+                 "as the model's types, ranges, enums and bits say (tools/busgen/device_bus.hpp)")
+      ->type_name("SLAVE=FILE");
+  app.add_option("--cycles", devices.cycles, "With --device: the master's polling cycles");
+  app.add_option("--period", period_s, "With --device: seconds between cycles")
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
   try {
     for (const auto& spec : slave_faults) busgen::add_slave_faults(o, spec);
@@ -112,7 +142,21 @@ int main(int argc, char** argv) {
       {"bursts", busgen::Delivery::bursts},
       {"usb", busgen::Delivery::usb_packets},
       {"sniffer", busgen::Delivery::per_frame}};
-  const auto capture = busgen::simulate(o);
+  busgen::BusCapture capture;
+  if (device_specs.empty()) {
+    capture = busgen::simulate(o);
+  } else {
+    try {
+      for (const auto& spec : device_specs) devices.devices.push_back(device_of(spec));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "modtap-bus-simulator: --device: %s\n", e.what());
+      return 2;
+    }
+    devices.seed = o.seed;
+    devices.format = o.format;
+    devices.period_ns = static_cast<int64_t>(period_s * 1e9);
+    capture = busgen::simulate_devices(devices);
+  }
   std::fprintf(stderr, "%zu frames, %zu bytes\n", capture.frames.size(), capture.bytes.size());
   try {
     return write(capture, format, deliveries.at(delivery_name), o.seed, out);
