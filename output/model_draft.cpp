@@ -98,6 +98,8 @@ void write_registers(Output& out, const SlaveDraft& draft) {
               values_text(r), to_string(r.confidence), r.why);
     if (!r.quantity.empty()) out.print("; likely a {}", r.quantity);
     if (!r.runner_up.empty()) out.print("; runner-up: {}", r.runner_up);
+    if (r.writes && !r.write_only)
+      out.print("; the master wrote it {}", counted(r.writes, "time", "times"));
     out.print("\n");
   }
 }
@@ -155,6 +157,7 @@ std::string model_draft(const SlaveDraft& draft) {
     if (r.type == ValueType::string) out.print(", words: {}", r.words);
     if (r.scale != 1.0) out.print(", scale: {:g}", r.scale);
     if (!r.unit.empty()) out.print(", unit: {}", r.unit);
+    if (r.write_only) out.print(", access: W");
     out.print("}}\n");
   }
   return fmt::to_string(out.buffer());

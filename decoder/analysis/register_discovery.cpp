@@ -143,7 +143,12 @@ RegisterReading read_moving(const WordHistory& h) {
   const uint16_t changing = h.changing_bits();
   const bool low_bits = (changing & (changing + 1)) == 0;  // bits 0..n, as a number's change
   RegisterReading r;
-  if (!low_bits && !contiguous(h)) {
+  // Bits of a status word change each on its own, so the values seen cover most combinations of
+  // the bits that change; an enum's few values cover few of them.
+  const int changing_count = std::popcount(changing);
+  const size_t seen = h.many_values ? WordHistory::max_distinct + 1 : h.distinct_count;
+  const bool independent = 2 * seen > (size_t{1} << std::min(changing_count, 5));
+  if (!low_bits && !contiguous(h) && independent) {
     r = reading(ValueType::code, ReadingKind::bit_field, Confidence::medium,
                 fmt::format("bits that change on their own (mask {:04X}H), not as a number's "
                             "lowest bits",
@@ -327,6 +332,18 @@ RegisterReading read_word(const WordHistory& h) {
   return r;
 }
 
+// A register the master writes and does not read (often): read from the values it writes, which
+// say less than a device's answers over time.
+RegisterReading read_written(uint16_t address, Table table, const WordHistory& written) {
+  RegisterReading r = read_word(written);
+  r.address = address;
+  r.table = table;
+  r.writes = written.samples;
+  if (written.samples < RegisterDiscovery::min_samples) r.confidence = Confidence::low;
+  r.why = fmt::format("written {}: {}", times(written.samples), r.why);
+  return r;
+}
+
 std::optional<RegisterReading> read_pair(const std::array<PairHistory, 2>& pair) {
   std::optional<RegisterReading> r = read_float(pair);
   if (!r) r = read_integer(pair);
@@ -353,9 +370,9 @@ void RegisterDiscovery::on_frame(const Frame& frame) {
     on_values(frame.device(), function == 0x03 ? Table::holding : Table::input, first,
               pdu.subspan(2));
   else if (function == 0x06 && pdu.size() == 5)
-    on_values(frame.device(), Table::holding, first, pdu.subspan(3));
+    on_values(frame.device(), Table::holding, first, pdu.subspan(3), true);
   else if (function == 0x10 && asked.size() >= 6 && asked[5] == asked.size() - 6)
-    on_values(frame.device(), Table::holding, first, asked.subspan(6));
+    on_values(frame.device(), Table::holding, first, asked.subspan(6), true);
 }
 
 // The block a request reads or writes, with its time: the blocks' periods, the polling program.
@@ -379,7 +396,7 @@ void RegisterDiscovery::on_request(const Frame& frame) {
 }
 
 void RegisterDiscovery::on_values(uint8_t slave, Table table, uint16_t first,
-                                  std::span<const uint8_t> data) {
+                                  std::span<const uint8_t> data, bool written) {
   const size_t count = data.size() / 2;
   auto at = words_.lower_bound({slave, table, first});
   for (size_t i = 0; i < count; ++i) {
@@ -395,6 +412,10 @@ void RegisterDiscovery::on_values(uint8_t slave, Table table, uint16_t first,
     Words& words = at->second;
     ++at;
     const uint16_t value = be16(data, 2 * i);
+    if (written) {
+      words.written.add(value);
+      continue;
+    }
     words.history.add(value);
     if (i + 1 == count) continue;
     const uint16_t next = be16(data, 2 * i + 2);
@@ -427,7 +448,7 @@ SlaveDraft RegisterDiscovery::draft_of(uint8_t slave) const {
   }
   for (auto it = words_.lower_bound({slave, Table::coil, 0});
        it != words_.end() && it->first.slave == slave; ++it)
-    if (it->second.history.samples < min_samples)
+    if (it->second.history.samples < min_samples && it->second.written.samples == 0)
       draft.too_few_samples.push_back(it->first.address);
   return draft;
 }
@@ -452,7 +473,13 @@ std::vector<RegisterReading> RegisterDiscovery::readings_of(uint8_t slave, Table
   };
   for (; in_table(it); ++it) {
     const auto& [key, words] = *it;
-    if (words.history.samples < min_samples) continue;
+    if (words.history.samples < min_samples) {
+      if (words.written.samples) {
+        readings.push_back(read_written(key.address, table, words.written));
+        readings.back().write_only = words.history.samples == 0;
+      }
+      continue;
+    }
     const auto next = std::next(it);
     // A run of constant registers of text: a name, a serial number.
     uint16_t run = 0;
@@ -474,6 +501,7 @@ std::vector<RegisterReading> RegisterDiscovery::readings_of(uint8_t slave, Table
     if (!r) r = read_word(words.history);
     r->address = key.address;
     r->table = table;
+    r->writes = words.written.samples;
     readings.push_back(*r);
     for (uint16_t claimed = 1; claimed < r->words && in_table(std::next(it)); ++claimed) ++it;
   }

@@ -113,6 +113,8 @@ struct RegisterReading {
   std::string unit;
   uint64_t samples = 0;
   double low = 0, high = 0;  // the values seen, read so and scaled
+  uint64_t writes = 0;       // values the master wrote to it (FC06, FC16)
+  bool write_only = false;   // the master writes it and never reads it
 };
 
 // A request of the master's polling program: a block, in the order one cycle asks for them.
@@ -165,14 +167,16 @@ class RegisterDiscovery final : public RecordSink {
     auto operator<=>(const WordKey&) const = default;
   };
   struct Words {
-    WordHistory history;
+    WordHistory history;  // the values its answers read
+    WordHistory written;  // the values the master wrote
     // This register and the next read as one number, high word first and low word first.
     std::array<PairHistory, 2> pairs;
     bool pair_read = false;  // the next register was read in the same answers, every time
     uint64_t pair_samples = 0;
   };
   void on_request(const Frame& frame);
-  void on_values(uint8_t slave, Table table, uint16_t first, std::span<const uint8_t> data);
+  void on_values(uint8_t slave, Table table, uint16_t first, std::span<const uint8_t> data,
+                 bool written = false);
   SlaveDraft draft_of(uint8_t slave) const;
   std::vector<RegisterReading> readings_of(uint8_t slave, Table table) const;
 
@@ -185,6 +189,7 @@ class RegisterDiscovery final : public RecordSink {
 // The reading of one register alone, or of it and the next as one number (in both word orders,
 // high word first and low word first), by their values: exposed for the tests of the method.
 RegisterReading read_word(const WordHistory& history);
+RegisterReading read_written(uint16_t address, Table table, const WordHistory& written);
 std::optional<RegisterReading> read_pair(const std::array<PairHistory, 2>& pair);
 
 }  // namespace modtap

@@ -148,22 +148,25 @@ TEST(RegisterDiscovery, ValuesOnBothSidesOfZeroAreSigned) {
   EXPECT_DOUBLE_EQ(registers[0].high, 6.6);
 }
 
-// A status word whose bits 0, 3 and 9 change on their own, a register never used, a constant,
-// and a device name in text, inside one block.
-TEST(RegisterDiscovery, StatusBitsUnusedWordsConstantsAndTextAreToldApart) {
-  Reads bus(0x0000, 5);
-  bus.run(24, [](int n) {
+// A status word whose bits 0, 3 and 9 change on their own, one at a time (running, at speed,
+// remote), beside an enum of three commands whose changes flip two bits as often as one, a
+// register never used, a constant, and a device name in text, inside one block.
+TEST(RegisterDiscovery, StatusBitsEnumsUnusedWordsConstantsAndTextAreToldApart) {
+  Reads bus(0x0000, 6);
+  bus.run(40, [](int n) {
     const uint16_t status =
-        static_cast<uint16_t>((n % 2) | ((n / 3) % 2) << 3 | ((n / 5) % 2) << 9);
-    return std::vector<uint16_t>{status, 0, 0x0106, 0x4D54 /* MT */, 0x3230 /* 20 */};
+        static_cast<uint16_t>((n / 2) % 2 | ((n + 1) / 3) % 2 << 3 | ((n + 2) / 7) % 2 << 9);
+    const uint16_t command = std::array<uint16_t, 3>{1, 6, 5}[(n / 4) % 3];
+    return std::vector<uint16_t>{status, command, 0, 0x0106, 0x4D54 /* MT */, 0x3230 /* 20 */};
   });
   const auto registers = bus.registers();
-  ASSERT_EQ(registers.size(), 4u);
+  ASSERT_EQ(registers.size(), 5u);
   EXPECT_EQ(registers[0].kind, ReadingKind::bit_field);
-  EXPECT_EQ(registers[1].kind, ReadingKind::unused);
-  EXPECT_EQ(registers[2].kind, ReadingKind::constant);
-  EXPECT_EQ(registers[3].kind, ReadingKind::text);
-  EXPECT_EQ(registers[3].words, 2);
+  EXPECT_EQ(registers[1].kind, ReadingKind::enumerated);
+  EXPECT_EQ(registers[2].kind, ReadingKind::unused);
+  EXPECT_EQ(registers[3].kind, ReadingKind::constant);
+  EXPECT_EQ(registers[4].kind, ReadingKind::text);
+  EXPECT_EQ(registers[4].words, 2);
 }
 
 // A register read fewer times than a reading needs is named, not guessed at.

@@ -12,6 +12,7 @@ constexpr uint16_t max_gap = 4;      // unused registers a block reads across
 constexpr uint16_t max_block = 100;  // registers a block reads at most, or the model's limit
 constexpr int64_t turnaround_ns = 6'000'000;
 constexpr int64_t between_ns = 15'000'000;
+constexpr size_t write_every = 5;  // cycles between the master's writes of a register
 
 // A register's own phase, so that no two move together.
 double phase_of(const RegisterDef& def, uint64_t seed) {
@@ -87,8 +88,13 @@ class DeviceBus {
   BusCapture run() {
     for (size_t cycle = 0; cycle < o_.cycles; ++cycle) {
       t_ = std::max(t_, static_cast<int64_t>(cycle) * o_.period_ns);
-      for (const SimulatedDevice& device : o_.devices)
+      for (const SimulatedDevice& device : o_.devices) {
         for (const Block& block : blocks_of(device.model)) read(device, block, cycle);
+        if (cycle % write_every == 0)
+          for (const auto& [key, def] : device.model.registers)
+            if (key.first == Table::holding && def.access == Access::write)
+              write(device, def, cycle);
+      }
     }
     return std::move(capture_);
   }
@@ -109,6 +115,26 @@ class DeviceBus {
     }
     std::vector<uint8_t> answer{device.slave, function, static_cast<uint8_t>(2 * block.count)};
     for (const uint16_t w : words) put16(answer, w);
+    t_ += turnaround_ns;
+    send(answer, Role::response, device.slave, asked);
+    t_ += between_ns;
+  }
+
+  // The master sets a register it only writes (a setpoint, a command): FC06 for one word, FC16
+  // for more; the device answers as the standard says.
+  void write(const SimulatedDevice& device, const RegisterDef& def, size_t cycle) {
+    const std::vector<uint16_t> words = register_words(def, cycle, o_.seed);
+    std::vector<uint8_t> request{device.slave,
+                                 static_cast<uint8_t>(words.size() == 1 ? 0x06 : 0x10)};
+    put16(request, def.address);
+    if (words.size() > 1) {
+      put16(request, static_cast<uint16_t>(words.size()));
+      request.push_back(static_cast<uint8_t>(2 * words.size()));
+    }
+    for (const uint16_t w : words) put16(request, w);
+    const size_t asked = send(request, Role::request, device.slave, std::nullopt);
+    // FC06 echoes its request; FC16 answers with its address and count: six bytes either way.
+    const std::vector<uint8_t> answer(request.begin(), request.begin() + 6);
     t_ += turnaround_ns;
     send(answer, Role::response, device.slave, asked);
     t_ += between_ns;

@@ -8,6 +8,8 @@
 // - min and max given: the same, a constant; else a smooth swing across 80 % of the range;
 // - a 32- or 64-bit integer with no range: a counter that grows (its low word wraps);
 // - anything else: a constant.
+// Registers the model marks write-only (access: W) the master writes every 5 cycles instead, as
+// the same rules move their values (a setpoint, a command).
 // Values are scaled back by the register's scale and offset, and stored in its type and order.
 #pragma once
 
