@@ -179,8 +179,11 @@ class BusStatistics final : public RecordSink {
   void see_time(int64_t start_ns, int64_t end_ns);
   void count_finding(size_t slot, uint64_t index);
   void count_exchange(const Frame& frame, SlaveStatistics& slave);
+  // A late answer's latency is the master's time-out and more; an answer after another master's
+  // exchange holds that exchange: neither is the slave's.
   static bool counts_latency(const Frame& frame) {
-    return frame.latency_ns && *frame.latency_ns >= 0 && !(frame.findings & finding_late_response);
+    return frame.latency_ns && *frame.latency_ns >= 0 &&
+           !(frame.findings & (finding_late_response | finding_after_other_master));
   }
   void keep_values(const Frame& frame);
   void heard(SlaveStatistics& slave, int64_t t_ns);

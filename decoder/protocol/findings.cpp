@@ -44,6 +44,9 @@ constexpr FindingInfo registry[] = {
      "a damaged response whose last byte could as well be the next frame's turnaround glitch: "
      "the clock cannot see the quiet line a glitch comes after, so the frame may be one byte "
      "longer or shorter than shown"},
+    {"after-other-master", Severity::note,
+     "the answer to a request another master's request cut in on, paired with it after that "
+     "exchange: its latency holds the other exchange, and the statistics leave it out"},
     // The device model's, in RuleKind order.
     {"reserved-write", Severity::warning, "a write to a register the manual says not to write"},
     {"read-only-write", Severity::warning, "a write to a register the device only reports"},

@@ -37,8 +37,11 @@ enum Finding : uint32_t {
   finding_gap_in_frame = 1u << 17,           // a silence over t1.5 between two bytes of one frame
   finding_garbage_after_request = 1u << 18,  // no answer, where a request awaits its answer
   finding_ambiguous_end = 1u << 19,  // a damaged frame whose last byte may be a glitch, or not
+  // An answer to a request another master's request cut in on, after that exchange: its
+  // latency is its request's, and holds the other exchange.
+  finding_after_other_master = 1u << 20,
 };
-inline constexpr size_t frame_finding_count = 20;
+inline constexpr size_t frame_finding_count = 21;
 // Time-outs in a row after which a slave has gone silent: its next answer, garbled or not, is
 // answers-again, and the statistics list the silence as an outage.
 inline constexpr uint64_t silent_after_timeouts = 3;

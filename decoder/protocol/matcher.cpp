@@ -380,6 +380,7 @@ void Matcher::interrupted_answer(Frame& frame) {
   frame.request = interrupted_.index;
   frame.request_slave = interrupted_.slave;
   frame.request_pdu = {interrupted_.pdu.data(), interrupted_.size};
+  frame.findings |= finding_after_other_master;
   if (!frame.untimed_start && count_turnaround(frame, interrupted_.end_ns, interrupted_.end_read))
     frame.latency_ns = frame.t_ns - interrupted_.end_ns;
   if (frame.check_ok)

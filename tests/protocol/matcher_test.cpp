@@ -138,6 +138,9 @@ TEST(Matcher, ARequestCuttingInSoonerThanAMasterWaitsLeavesTheFirstAnswerDue) {
   EXPECT_EQ(frames[3].role, Role::response);
   EXPECT_EQ(frames[3].request, frames[0].index);
   EXPECT_FALSE(frames[3].findings & finding_late_response);
+  // Its latency holds the other exchange: marked so (the statistics leave it out).
+  EXPECT_TRUE(frames[3].findings & finding_after_other_master);
+  EXPECT_FALSE(frames[2].findings & finding_after_other_master);
   ASSERT_EQ(out.timeouts().size(), 1u);  // the last request's, at the end of the capture
   EXPECT_EQ(out.timeouts()[0].request, frames[4].index);
 

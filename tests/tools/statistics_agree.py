@@ -32,6 +32,13 @@ def check(what, got, want):
         failures.append(f"{what}: statistics say {got!r:.300}, records say {want!r:.300}")
 
 
+def counted_latency(frame):
+    """A latency that is the slave's: not a late answer's, nor one after another master's
+    exchange (BusStatistics::counts_latency)."""
+    return (frame["latency_us"] is not None and frame["latency_us"] >= 0
+            and not {"late-response", "after-other-master"} & set(frame["findings"]))
+
+
 def nearest_rank(values, p):
     ordered = sorted(values)
     rank = max(1, math.ceil(p / 100 * len(ordered)))
@@ -137,7 +144,7 @@ def expected_slaves(records):
             "exceptions_by_code": dict(collections.Counter(
                 str(f["exception"]) for f in ok if f["role"] == "response" and f["exception"] is not None)),
             "by_fc": by_fc,
-            "latency": [f["latency_us"] for f in ok if f["latency_us"] is not None and f["latency_us"] >= 0],
+            "latency": [f["latency_us"] for f in ok if counted_latency(f)],
             "poll": [(b - a) / 1e6 for a, b in zip(requests, requests[1:]) if b >= a],
         }
     stray = {device(f, slave_of) for f in frames} - good
@@ -175,7 +182,7 @@ def compare(name, stats, records):
           {k: {"count": v["count"], "first": v["first"]} for k, v in stats["diagnostics"].items()},
           e["diagnostics"])
     latencies = [f["latency_us"] for f in records if f["type"] == "frame" and f["check"] == "ok"
-                 and f["latency_us"] is not None]
+                 and counted_latency(f)]
     check_percentiles(f"{name} latency_us", stats["latency_us"], latencies, 1000)
     check_registers(name, stats, records)
     slaves, stray, stray_bad = expected_slaves(records)

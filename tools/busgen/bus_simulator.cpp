@@ -124,10 +124,11 @@ class Simulator {
 
   // The second master's read of its slave, where its time has come: request and answer, each
   // after a quiet line.
-  void second_master_polls() {
-    if (!o_.second_master_period_ns) return;
+  // Whether it polled.
+  bool second_master_polls() {
+    if (!o_.second_master_period_ns) return false;
     if (!next_second_poll_ns_) next_second_poll_ns_ = o_.second_master_period_ns;
-    if (now_ns() < next_second_poll_ns_) return;
+    if (now_ns() < next_second_poll_ns_) return false;
     next_second_poll_ns_ = now_ns() + o_.second_master_period_ns;
     constexpr uint8_t its_slave = 201;
     Bytes request{its_slave, 0x03}, response{its_slave, 0x03, 2};
@@ -136,6 +137,7 @@ class Simulator {
     u16(response, pick(0, 1000));
     const size_t req = send_frame(request, Role::request, t35_ + pick(0, 2'000'000), std::nullopt);
     send_frame(response, Role::response, t35_ + pick(0, 3'000'000), req);
+    return true;
   }
 
   // The noise bursts due before a frame that starts `gap_ns` from now, each junk in the gap
@@ -306,7 +308,8 @@ class Simulator {
     }
     size_t req = send_request(request, request_findings, idle_gap());
     if (broadcast) return;
-    second_master_polls();
+    // The answer comes after the other master's exchange, paired with its request then.
+    bool after_other_master = second_master_polls();
     // A corrupted request no slave takes; a retry is one only after a copy the analyzer saw.
     bool unanswered_copy = false;
     for (unsigned retries = 0;; ++retries) {
@@ -324,6 +327,7 @@ class Simulator {
       req =
           send_request(request, request_findings | (unanswered_copy ? uint32_t{finding_retry} : 0u),
                        o_.retry_after_ns + pick(0, 50'000'000));
+      after_other_master = false;
     }
     int64_t turnaround =
         chance(o_.fast_turnaround_rate) ? char_ns_ * pick(15, 30) / 10 : t35_ + pick(0, 3'000'000);
@@ -347,7 +351,12 @@ class Simulator {
     if (!late) ++answered_;
     const size_t first = capture_.frames.size();
     answer(response, turnaround, req, faults, late);
-    for (size_t i = first; i < capture_.frames.size(); ++i) capture_.frames[i].late = late;
+    for (size_t i = first; i < capture_.frames.size(); ++i) {
+      TruthFrame& frame = capture_.frames[i];
+      frame.late = late;
+      if (after_other_master && frame.role == Role::response && frame.request == req)
+        frame.findings |= finding_after_other_master;
+    }
   }
 
   void answer(const Bytes& response, int64_t turnaround, size_t req, const SlaveFaults* faults,
