@@ -68,9 +68,7 @@ uint32_t BusDiagnostics::answered(const Frame& frame, SlaveHistory& slave) {
 
 // The slave was heard: after a silence, its answer is the finding that says it is back.
 uint32_t BusDiagnostics::back_from_silence(SlaveHistory& slave) {
-  const bool was_silent = slave.timeouts_in_a_row >= silent_after_timeouts;
-  slave.timeouts_in_a_row = 0;
-  return was_silent ? uint32_t{finding_answers_again} : 0u;
+  return slave.silence.heard().silent() ? uint32_t{finding_answers_again} : 0u;
 }
 
 // A master polls each slave in a cycle; a request far off the slave's usual interval shows the
@@ -132,7 +130,7 @@ void BusDiagnostics::on_timeout(const Timeout& timeout) {
   if (timeout.timed_out()) {
     SlaveHistory& slave = slaves_[timeout.slave];
     slave.timed_out_function = timeout.function & 0x7F;
-    ++slave.timeouts_in_a_row;
+    slave.silence.unanswered(timeout);
   }
   next_.on_timeout(timeout);
 }

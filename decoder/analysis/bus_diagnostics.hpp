@@ -9,6 +9,7 @@
 #include <optional>
 #include <vector>
 
+#include "decoder/analysis/silence_run.hpp"
 #include "decoder/protocol/record_sink.hpp"
 #include "decoder/protocol/serial_format.hpp"
 
@@ -31,7 +32,7 @@ class BusDiagnostics final : public RecordSink {
 
  private:
   struct SlaveHistory {
-    uint64_t timeouts_in_a_row = 0;
+    SilenceRun silence;
     std::optional<uint8_t> timed_out_function;  // its last request timed out, none since
     uint8_t exception = 0;  // the exception of its answers in a row, and how many
     uint8_t exception_function = 0;

@@ -268,18 +268,17 @@ void ProblemEvidence::on_damaged_answer(uint64_t index, int64_t t_ns, size_t siz
 
 // The slave spoke: a silence of a few time-outs in a row, seconds long, is over (a restart).
 void ProblemEvidence::heard(Slave& slave, int64_t t_ns) {
-  if (slave.silent_timeouts == 0) return;
-  const bool restart =
-      slave.silent_timeouts >= restart_timeouts && t_ns - slave.silent_since_ns >= restart_ns;
-  if (!restart || !slave.silences.add(slave.silent_since_ns, slave.silent_since_request))
-    withdrawn_ = slave.silent_since_request;
+  const SilenceRun run = slave.silence.heard();
+  if (run.timeouts == 0) return;
+  const bool restart = run.timeouts >= restart_timeouts && t_ns - run.since_ns >= restart_ns;
+  if (!restart || !slave.silences.add(run.since_ns, run.first_request))
+    withdrawn_ = run.first_request;
   if (restart) {
-    const int64_t lasted = t_ns - slave.silent_since_ns;
-    slave.silence_timeouts += slave.silent_timeouts;
+    const int64_t lasted = t_ns - run.since_ns;
+    slave.silence_timeouts += run.timeouts;
     slave.shortest_silence_ns = std::min(slave.shortest_silence_ns, lasted);
     slave.longest_silence_ns = std::max(slave.longest_silence_ns, lasted);
   }
-  slave.silent_timeouts = 0;
 }
 
 void ProblemEvidence::on_noise(const Noise& noise) {
@@ -308,11 +307,8 @@ void ProblemEvidence::on_timeout(const Timeout& timeout) {
   if (!timeout.timed_out() || timeout.slave == 0) return;
   Slave& slave = slaves_[timeout.slave];
   note(slave.timeouts, timeout.t_ns, timeout.request);
-  if (slave.silent_timeouts++ == 0) {
-    slave.silent_since_ns = timeout.t_ns - timeout.waited_ns;
-    slave.silent_since_request = timeout.request;
-    may_cite_ = timeout.request;
-  }
+  slave.silence.unanswered(timeout);
+  if (slave.silence.timeouts == 1) may_cite_ = timeout.request;
 }
 
 namespace {
@@ -481,24 +477,24 @@ class Diagnosis {
   void stopped_or_intermittent(uint8_t address, const Slave& s, bool restarts) {
     // A restarting device silent at the end, no longer than twice its longest silence, is
     // restarting again, not gone.
-    const int64_t silent_at_end = statistics_.last_t_ns.value_or(0) - s.silent_since_ns;
-    const bool stopped = s.answers >= few && s.silent_timeouts >= some &&
+    const int64_t silent_at_end = statistics_.last_t_ns.value_or(0) - s.silence.since_ns;
+    const bool stopped = s.answers >= few && s.silence.timeouts >= some &&
                          (!restarts || silent_at_end > 2 * s.longest_silence_ns);
     if (stopped) {
-      Problem& p = add(ProblemKind::stopped_responding, address, Severity::error, s.silent_since_ns,
-                       {s.silent_since_request});
-      p.evidence = {{"answered_before", s.answers}, {"timeouts_since", s.silent_timeouts}};
+      Problem& p = add(ProblemKind::stopped_responding, address, Severity::error,
+                       s.silence.since_ns, {s.silence.first_request});
+      p.evidence = {{"answered_before", s.answers}, {"timeouts_since", s.silence.timeouts}};
       p.text =
           fmt::format("{} stopped answering at {}: its last {} requests timed out", who(address, s),
-                      moment_text(statistics_, s.silent_since_ns), s.silent_timeouts);
+                      moment_text(statistics_, s.silence.since_ns), s.silence.timeouts);
     }
     // Time-outs its late answers explain are late-responses; those after it stopped, stopped.
     // Restarts, their silences'.
     const uint64_t explained =
-        std::min(s.timeouts.count, s.late.count + (stopped || restarts ? s.silent_timeouts : 0) +
+        std::min(s.timeouts.count, s.late.count + (stopped || restarts ? s.silence.timeouts : 0) +
                                        (restarts ? s.silence_timeouts : 0));
     const uint64_t missed = s.timeouts.count - explained;
-    const uint64_t asked = s.requests - (stopped ? s.silent_timeouts : 0);
+    const uint64_t asked = s.requests - (stopped ? s.silence.timeouts : 0);
     const double missed_rate = share(missed, asked);
     if (missed < some || missed_rate < missed_share ||
         missed_rate < concentrated * others_missed_rate(address))
@@ -518,7 +514,7 @@ class Diagnosis {
     if (s.silences.count < 2) return false;
     const uint64_t between =
         s.timeouts.count -
-        std::min(s.timeouts.count, s.silence_timeouts + s.late.count + s.silent_timeouts);
+        std::min(s.timeouts.count, s.silence_timeouts + s.late.count + s.silence.timeouts);
     if (share(between, s.requests) >= missed_share) return false;
     Problem& p = add(ProblemKind::device_restarts, address, Severity::error, *s.silences.first_ns,
                      s.silences.first);
@@ -533,10 +529,10 @@ class Diagnosis {
         who(address, s), s.silences.count, shortest_s, longest_s,
         moment_text(statistics_, *s.silences.first_ns));
     // A silence the capture ended in is one more, whose length nobody knows.
-    if (s.silent_timeouts >= silent_after_timeouts) {
+    if (s.silence.silent()) {
       p.evidence.push_back({"silent_at_end", 1});
       p.text += fmt::format("; silent again from {} to the end",
-                            moment_text(statistics_, s.silent_since_ns));
+                            moment_text(statistics_, s.silence.since_ns));
     }
     return true;
   }

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "decoder/analysis/bus_statistics.hpp"
+#include "decoder/analysis/silence_run.hpp"
 #include "decoder/models/device_model.hpp"
 #include "decoder/protocol/findings.hpp"
 #include "decoder/protocol/format_probe.hpp"
@@ -108,9 +109,7 @@ class ProblemEvidence final : public RecordSink {
     // How long after their requests its late answers came, where the clock timed them.
     std::optional<int64_t> late_min_ns, late_max_ns;
     // The time-outs since its last answer: a slave that stopped answering.
-    uint64_t silent_timeouts = 0;
-    int64_t silent_since_ns = 0;
-    uint64_t silent_since_request = 0;
+    SilenceRun silence;
     // Its silences that ended, each a few time-outs and seconds long (a restart), and the
     // time-outs they hold.
     Events silences;

@@ -147,21 +147,18 @@ void BusStatistics::on_noise(const Noise& noise) {
 void BusStatistics::heard(SlaveStatistics& s, int64_t t_ns) {
   if (s.open_outage) outages_[*s.open_outage].back_ns = t_ns;
   s.open_outage.reset();
-  s.timeouts_in_a_row = 0;
+  s.silence.heard();
 }
 
 void BusStatistics::unanswered_again(SlaveStatistics& s, const Timeout& timeout) {
-  if (s.timeouts_in_a_row++ == 0)
-    s.silence = {timeout.slave, timeout.request, timeout.t_ns - timeout.waited_ns, {}, 0};
-  s.silence.timeouts = s.timeouts_in_a_row;
-  if (s.timeouts_in_a_row == silent_after_timeouts) {
+  if (s.silence.unanswered(timeout)) {
     ++outage_count_;
     if (outages_.size() < kept_outages) {
       s.open_outage = outages_.size();
-      outages_.push_back(s.silence);
+      outages_.push_back({timeout.slave, s.silence.first_request, s.silence.since_ns, {}, 0});
     }
   }
-  if (s.open_outage) outages_[*s.open_outage].timeouts = s.timeouts_in_a_row;
+  if (s.open_outage) outages_[*s.open_outage].timeouts = s.silence.timeouts;
 }
 
 void BusStatistics::on_timeout(const Timeout& timeout) {

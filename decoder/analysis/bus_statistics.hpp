@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "decoder/analysis/histogram.hpp"
+#include "decoder/analysis/silence_run.hpp"
 #include "decoder/models/register_meaning.hpp"
 #include "decoder/protocol/findings.hpp"
 #include "decoder/protocol/function_codes.hpp"
@@ -61,11 +62,9 @@ struct SlaveStatistics {
   Histogram poll_interval_ns;                     // start of one request to the next's
   int64_t last_frame_ns = 0;
   std::optional<int64_t> last_answer_ns;  // the end of its last good answer: when it last spoke
-  // Its time-outs since it was last heard, and the silence they began.
-  uint64_t timeouts_in_a_row = 0;
-  Outage silence;
-  std::optional<size_t> open_outage;  // in outages(), while it stays silent
-  bool good = false;                  // a frame with a good check came from or went to this address
+  SilenceRun silence;                     // its time-outs since it was last heard
+  std::optional<size_t> open_outage;      // in outages(), while it stays silent
+  bool good = false;  // a frame with a good check came from or went to this address
 };
 
 // The last value the bus carried for one register: the bus's state, as a data logger shows it.
