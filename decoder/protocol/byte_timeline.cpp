@@ -41,10 +41,18 @@ const ByteTimeline::Mark* ByteTimeline::find(uint64_t offset) const {
 
 int64_t ByteTimeline::end_time(uint64_t offset) const {
   if (clock_ == ClockQuality::none) return static_cast<int64_t>(offset + 1) * char_ns_;
+  return end_time_in(locate(offset), offset);
+}
+
+ByteTimeline::SpanTimes ByteTimeline::span_times(uint64_t begin, uint64_t end) const {
+  const Mark* first = locate(begin);
+  const Mark* last = first && end - 1 < first->end ? first : locate(end - 1);
   const Mark& newest = marks_.back();
-  const Mark* mark = offset >= newest.first && offset < newest.end ? &newest : find(offset);
-  if (!mark) return last_end_ns_;
-  return mark->end_ns - static_cast<int64_t>(mark->end - 1 - offset) * char_ns_;
+  const Mark& first_mark = first ? *first : newest;
+  return {
+      end_time_in(first, begin) - char_ns_, end_time_in(last, end - 1),
+      clock_ == ClockQuality::per_chunk && (first_mark.first < begin || first_mark.continues_read),
+      first_mark.read, (last ? *last : newest).read};
 }
 
 const ByteTimeline::Mark& ByteTimeline::mark_of(uint64_t offset) const {

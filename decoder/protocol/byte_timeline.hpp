@@ -43,6 +43,17 @@ class ByteTimeline {
   bool empty() const { return marks_.empty(); }
   const Mark& last() const { return marks_.back(); }
 
+  // What a record of the bytes [begin, end) carries of their times, each chunk looked up once:
+  // every record asks all of it.
+  struct SpanTimes {
+    int64_t start_ns;     // start_time(begin)
+    int64_t end_ns;       // end_time(end - 1)
+    bool untimed_start;   // starts_untimed(begin)
+    uint64_t start_read;  // mark_of(begin).read
+    uint64_t end_read;    // mark_of(end - 1).read
+  };
+  SpanTimes span_times(uint64_t begin, uint64_t end) const;
+
   int64_t end_time(uint64_t offset) const;
   int64_t start_time(uint64_t offset) const { return end_time(offset) - char_ns_; }
   // The chunk that held the byte at `offset`, one not yet dropped: most often the newest.
@@ -67,6 +78,16 @@ class ByteTimeline {
 
  private:
   const Mark* find(uint64_t offset) const;
+  // The chunk that held `offset`, the newest looked at first; none past the newest.
+  const Mark* locate(uint64_t offset) const {
+    const Mark& newest = marks_.back();
+    return offset >= newest.first && offset < newest.end ? &newest : find(offset);
+  }
+  int64_t end_time_in(const Mark* mark, uint64_t offset) const {
+    if (clock_ == ClockQuality::none) return static_cast<int64_t>(offset + 1) * char_ns_;
+    if (!mark) return last_end_ns_;
+    return mark->end_ns - static_cast<int64_t>(mark->end - 1 - offset) * char_ns_;
+  }
 
   ClockQuality clock_;
   int64_t char_ns_;

@@ -507,11 +507,12 @@ Frame RtuFramer::frame_of(uint64_t begin, uint64_t end, RoleFit fit) const {
   frame.fit = fit;
   frame.offset = begin;
   frame.raw = frame.adu = {at_ptr(begin), static_cast<size_t>(end - begin)};
-  frame.t_ns = timeline_.start_time(begin);
-  frame.end_ns = timeline_.end_time(end - 1);
-  frame.untimed_start = timeline_.starts_untimed(begin);
-  frame.start_read = timeline_.mark_of(begin).read;
-  frame.end_read = timeline_.mark_of(end - 1).read;
+  const ByteTimeline::SpanTimes times = timeline_.span_times(begin, end);
+  frame.t_ns = times.start_ns;
+  frame.end_ns = times.end_ns;
+  frame.untimed_start = times.untimed_start;
+  frame.start_read = times.start_read;
+  frame.end_read = times.end_read;
   if (timeline_.paused_inside(begin, end)) frame.findings = finding_gap_in_frame;
   return frame;
 }
