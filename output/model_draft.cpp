@@ -148,7 +148,8 @@ std::string model_draft(const SlaveDraft& draft) {
   if (draft.registers.empty()) return fmt::to_string(out.buffer());
   out.print("registers:\n");
   for (const RegisterReading& r : draft.registers) {
-    out.print("  # {}: {}, confidence {}", reading_text(r), r.why, to_string(r.confidence));
+    out.print("  # {}: {}, confidence {} ({})", reading_text(r), r.why, to_string(r.confidence),
+              counted(r.samples, "value", "values"));
     if (!r.runner_up.empty()) out.print("; runner-up: {}", r.runner_up);
     out.print("\n  - {{address: 0x{:04X}, table: {}, name: {}, type: {}", r.address,
               r.table == Table::input ? "input" : "holding", register_name(r), type_name(r.type));

@@ -111,7 +111,7 @@ struct RegisterReading {
   std::string quantity;
   double scale = 1.0;
   std::string unit;
-  uint64_t samples = 0;
+  uint64_t samples = 0;      // the reads it was drawn from
   double low = 0, high = 0;  // the values seen, read so and scaled
   uint64_t writes = 0;       // values the master wrote to it (FC06, FC16)
   bool write_only = false;   // the master writes it and never reads it
@@ -171,7 +171,6 @@ class RegisterDiscovery final : public RecordSink {
     WordHistory written;  // the values the master wrote
     // This register and the next read as one number, high word first and low word first.
     std::array<PairHistory, 2> pairs;
-    bool pair_read = false;  // the next register was read in the same answers, every time
     uint64_t pair_samples = 0;
   };
   void on_request(const Frame& frame);
