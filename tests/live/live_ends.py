@@ -1,8 +1,9 @@
 #!/usr/bin/python3
 """How a live run ends, on a pseudo-terminal: the port going away (the process holding its
 other end killed, as an unplugged adapter or a killed socat) marks the statistics and the
-report incomplete; -c N stops after N records, noise counted, however much more comes; and a
-baud slower than the traffic gets the hint a capture file's run gives.
+report incomplete; -c N stops after N records, noise counted, however much more comes; a
+baud slower than the traffic gets the hint a capture file's run gives; and modtap discover on
+a port summarises what it read when Ctrl-C ends it.
 
 Usage: live_ends.py MODTAP WORK_DIR
 """
@@ -94,7 +95,10 @@ def count_stops_on_noise():
 
 
 def read_request(slave):
-    body = bytes([slave, 0x03, 0x00, 0x00, 0x00, 0x01])
+    return with_crc(bytes([slave, 0x03, 0x00, 0x00, 0x00, 0x01]))
+
+
+def with_crc(body):
     crc = 0xFFFF
     for byte in body:
         crc ^= byte
@@ -131,12 +135,40 @@ def too_slow_a_baud_gets_a_hint():
     print(f"a live run at too slow a baud gets a hint: {'ok' if ok else 'FAILED'}")
 
 
+def discover_on_a_port():
+    """modtap discover -i PORT until Ctrl-C: a meter's temperature across zero, read as a master
+    does, summarised when the run ends."""
+    master, slave = os.openpty()
+    tty.setraw(master)
+    tty.setraw(slave)
+    port = os.ttyname(slave)
+    modtap = subprocess.Popen([MODTAP, "discover", "-i", port, "--baud", "19200", "--mode", "rtu"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    check("discover", wait_until_open(modtap, port), "the port never opened")
+    for n in range(16):
+        tenths = (-40 + 7 * n) & 0xFFFF
+        os.write(master, with_crc(bytes([3, 0x04, 0x00, 0x10, 0x00, 0x01])))
+        time.sleep(0.015)
+        os.write(master, with_crc(bytes([3, 0x04, 0x02, tenths >> 8, tenths & 0xFF])))
+        time.sleep(0.030)
+    time.sleep(0.2)
+    modtap.send_signal(signal.SIGINT)
+    out, err = modtap.communicate(timeout=15)
+    for fd in (master, slave):
+        os.close(fd)
+    ok = check("discover", modtap.returncode == 0 and "slave 3" in out
+               and "s16" in out and "temperature" in out and "polling program: 1 request" in out,
+               f"exit {modtap.returncode}: {out!r} {err!r}")
+    print(f"discover on a port, ended by Ctrl-C: {'ok' if ok else 'FAILED'}")
+
+
 os.makedirs(WORK, exist_ok=True)
 port_goes_away()
 count_stops_on_noise()
 too_slow_a_baud_gets_a_hint()
+discover_on_a_port()
 for f in failures:
     print("FAIL", f)
-print(f"{3 - len({f.split(':')[0] for f in failures})} passed, "
+print(f"{4 - len({f.split(':')[0] for f in failures})} passed, "
       f"{len({f.split(':')[0] for f in failures})} failed")
 sys.exit(1 if failures else 0)
