@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "decoder/protocol/bytes.hpp"
+#include "decoder/protocol/function_codes.hpp"
 
 namespace modtap {
 namespace {
@@ -115,10 +116,10 @@ RegisterReading reading(ValueType type, ReadingKind kind, Confidence confidence,
 RegisterReading read_constant(const WordHistory& h) {
   RegisterReading r = h.first == 0
                           ? reading(ValueType::u16, ReadingKind::unused, Confidence::medium,
-                                    fmt::format("0 in every one of {} reads", h.samples),
+                                    fmt::format("0 in all {} values", h.samples),
                                     "a value that did not move while captured")
                           : reading(ValueType::u16, ReadingKind::constant, Confidence::medium,
-                                    fmt::format("{} in every one of {} reads", h.first, h.samples),
+                                    fmt::format("{} in all {} values", h.first, h.samples),
                                     "a setting or an identifier");
   r.low = r.high = h.first;
   return r;
@@ -157,7 +158,7 @@ RegisterReading read_moving(const WordHistory& h) {
   } else if (h.falls == 0 && h.rises >= 3) {
     r = reading(ValueType::u16, ReadingKind::counter,
                 h.rises >= 8 ? Confidence::high : Confidence::medium,
-                fmt::format("it only grew, {} in {} reads", times(h.rises), h.samples), "u16");
+                fmt::format("it only grew, {} in {} values", times(h.rises), h.samples), "u16");
   } else if (!h.many_values && h.distinct_count <= 6 && !contiguous(h)) {
     r = reading(ValueType::u16, ReadingKind::enumerated, Confidence::medium,
                 fmt::format("{} values, apart: {}", h.distinct_count, values_list(h)), "u16");
@@ -335,11 +336,19 @@ RegisterReading read_word(const WordHistory& h) {
 // A register the master writes and does not read (often): read from the values it writes, which
 // say less than a device's answers over time.
 RegisterReading read_written(uint16_t address, Table table, const WordHistory& written) {
-  RegisterReading r = read_word(written);
+  // Too few to draw a reading from: what was written, as a plain number.
+  RegisterReading r =
+      written.samples >= RegisterDiscovery::min_samples
+          ? read_word(written)
+          : reading(ValueType::u16, ReadingKind::number, Confidence::low, values_list(written));
+  if (written.samples < RegisterDiscovery::min_samples) {
+    r.low = written.min;
+    r.high = written.max;
+    r.samples = written.samples;
+  }
   r.address = address;
   r.table = table;
   r.writes = written.samples;
-  if (written.samples < RegisterDiscovery::min_samples) r.confidence = Confidence::low;
   r.why = fmt::format("written {}: {}", times(written.samples), r.why);
   return r;
 }
@@ -355,33 +364,44 @@ std::optional<RegisterReading> read_pair(const std::array<PairHistory, 2>& pair)
   return r;
 }
 
+// The block a request reads or writes: its function code and its first access's registers (or
+// bits), as the function code's table places them.
+BlockKey RegisterDiscovery::block_of(uint8_t slave, std::span<const uint8_t> pdu) {
+  if (pdu.empty()) return {slave, 0, 0, 0};
+  const RegisterAccesses accesses = function_code(pdu[0]).request_accesses(pdu);
+  if (accesses.size == 0) return {slave, pdu[0], 0, 0};
+  return {slave, pdu[0], accesses.list[0].start, accesses.list[0].count};
+}
+
+// The values a good answer confirms, as the model stage reads them (register_meaning.cpp): a
+// write's from its echo, or from its request where the answer only acknowledges; a read's from
+// the answer.
 void RegisterDiscovery::on_frame(const Frame& frame) {
   if (!frame.check_ok || frame.is_exception()) return;
   if (frame.role == Role::request) return on_request(frame);
-  if (frame.role != Role::response || frame.request_pdu.size() < 5) return;
-  const std::span<const uint8_t> asked = frame.request_pdu;
+  if (frame.role != Role::response || frame.request_pdu.empty()) return;
+  const uint8_t slave = frame.device();
+  if (const auto block = blocks_.find(block_of(slave, frame.request_pdu)); block != blocks_.end())
+    ++block->second.answered;
   const std::span<const uint8_t> pdu = frame.pdu();
-  const uint8_t function = asked[0];
-  const uint16_t first = be16(asked, 1);
-  const BlockKey key{frame.device(), function, first,
-                     function == 0x06 ? uint16_t{1} : be16(asked, 3)};
-  if (const auto block = blocks_.find(key); block != blocks_.end()) ++block->second.answered;
-  if ((function == 0x03 || function == 0x04) && pdu.size() >= 2 && pdu[1] == pdu.size() - 2)
-    on_values(frame.device(), function == 0x03 ? Table::holding : Table::input, first,
-              pdu.subspan(2));
-  else if (function == 0x06 && pdu.size() == 5)
-    on_values(frame.device(), Table::holding, first, pdu.subspan(3), true);
-  else if (function == 0x10 && asked.size() >= 6 && asked[5] == asked.size() - 6)
-    on_values(frame.device(), Table::holding, first, asked.subspan(6), true);
+  if (pdu.empty() || (frame.findings & response_misfit)) return;
+  const std::optional<RegisterAccess> values =
+      function_code(pdu[0]).response_values(pdu, frame.request_pdu);
+  if (!values || !values->write)
+    for (const RegisterAccess& access :
+         function_code(frame.request_pdu[0]).request_accesses(frame.request_pdu))
+      if (access.write) on_access(slave, access);
+  if (values) on_access(slave, *values);
+}
+
+void RegisterDiscovery::on_access(uint8_t slave, const RegisterAccess& access) {
+  if (access.data == RegisterAccess::Data::words)
+    on_values(slave, access.table, access.start, access.values, access.write);
 }
 
 // The block a request reads or writes, with its time: the blocks' periods, the polling program.
 void RegisterDiscovery::on_request(const Frame& frame) {
-  const std::span<const uint8_t> pdu = frame.pdu();
-  const uint8_t function = frame.function();
-  const bool addressed = pdu.size() >= 5 && function >= 0x01 && function <= 0x10;
-  const uint16_t count = !addressed ? 0 : (function == 0x05 || function == 0x06) ? 1 : be16(pdu, 3);
-  const BlockKey key{frame.slave(), function, addressed ? be16(pdu, 1) : uint16_t{0}, count};
+  const BlockKey key = block_of(frame.slave(), frame.pdu());
   BlockTimes& times = blocks_[key];
   if (times.requests == 0) {
     times.first_ns = frame.t_ns;

@@ -173,7 +173,9 @@ class RegisterDiscovery final : public RecordSink {
     std::array<PairHistory, 2> pairs;
     uint64_t pair_samples = 0;
   };
+  static BlockKey block_of(uint8_t slave, std::span<const uint8_t> pdu);
   void on_request(const Frame& frame);
+  void on_access(uint8_t slave, const RegisterAccess& access);
   void on_values(uint8_t slave, Table table, uint16_t first, std::span<const uint8_t> data,
                  bool written = false);
   SlaveDraft draft_of(uint8_t slave) const;
