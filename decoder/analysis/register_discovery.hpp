@@ -113,7 +113,7 @@ struct RegisterReading {
   std::string unit;
   uint64_t samples = 0;      // the reads it was drawn from
   double low = 0, high = 0;  // the values seen, read so and scaled
-  uint64_t writes = 0;       // values the master wrote to it (FC06, FC16)
+  uint64_t writes = 0;       // values the master wrote to it (FC06, FC16, FC17, FC23)
   bool write_only = false;   // the master writes it and never reads it
 };
 

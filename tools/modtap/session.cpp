@@ -30,8 +30,8 @@ void write_whole(const std::string& path, const fmt::memory_buffer& content) {
 void write_discovery(const RunOptions& o, output::Output& out, const RegisterDiscovery& found) {
   if (!found.saw_register_reads()) {
     fmt::print(stderr,
-               "modtap discover: no register values read (no answer to FC03 or FC04, no write "
-               "of FC06 or FC16): nothing to draft\n");
+               "modtap discover: no register values (no good answer that reads or writes holding "
+               "or input registers): nothing to draft\n");
     return;
   }
   if (found.registers_not_followed())
