@@ -16,29 +16,6 @@ std::string milliseconds_text(int64_t ns) {
   return fmt::format("{:.1f}", static_cast<double>(ns) / 1e6);
 }
 
-constexpr std::string_view type_name(ValueType type) {
-  switch (type) {
-    case ValueType::s16:
-      return "s16";
-    case ValueType::u32:
-      return "u32";
-    case ValueType::s32:
-      return "s32";
-    case ValueType::f32:
-      return "f32";
-    case ValueType::u64:
-      return "u64";
-    case ValueType::s64:
-      return "s64";
-    case ValueType::string:
-      return "string";
-    case ValueType::code:
-      return "code";
-    default:
-      return "u16";
-  }
-}
-
 std::string span_of(const RegisterReading& r) {
   if (r.words == 1) return fmt::format("{:04X}H", r.address);
   return fmt::format("{:04X}H-{:04X}H", r.address, r.address + r.words - 1);
@@ -46,7 +23,7 @@ std::string span_of(const RegisterReading& r) {
 
 // The reading in a few words: "f32, low word first", "u16 counter", "enum".
 std::string reading_text(const RegisterReading& r) {
-  std::string text(type_name(r.type));
+  std::string text(to_string(r.type));
   if (r.words == 2)
     text += r.order == WordOrder::high_first ? ", high word first" : ", low word first";
   if (r.kind != ReadingKind::number && r.kind != ReadingKind::text)
@@ -62,7 +39,7 @@ std::string values_text(const RegisterReading& r) {
 }
 
 std::string register_name(const RegisterReading& r) {
-  const std::string_view table = r.table == Table::input ? "ir" : "hr";
+  const std::string_view table = r.table == Table::input ? "ir" : "hr";  // as Modbus tools say
   if (!r.quantity.empty()) return fmt::format("{}_{}_{:04x}", r.quantity, table, r.address);
   return fmt::format("{}_{:04x}", table, r.address);
 }
@@ -94,8 +71,8 @@ void write_registers(Output& out, const SlaveDraft& draft) {
   out.print("  registers:\n");
   for (const RegisterReading& r : draft.registers) {
     out.print("    {} {:<11} {:<32} {:<26} {} confidence: {}",
-              r.table == Table::input ? "input  " : "holding", span_of(r), reading_text(r),
-              values_text(r), to_string(r.confidence), r.why);
+              fmt::format("{:<7}", to_string(r.table)), span_of(r), reading_text(r), values_text(r),
+              to_string(r.confidence), r.why);
     if (!r.quantity.empty()) out.print("; likely a {}", r.quantity);
     if (!r.runner_up.empty()) out.print("; runner-up: {}", r.runner_up);
     if (r.writes && !r.write_only)
@@ -152,9 +129,8 @@ std::string model_draft(const SlaveDraft& draft) {
               counted(r.samples, "value", "values"));
     if (!r.runner_up.empty()) out.print("; runner-up: {}", r.runner_up);
     out.print("\n  - {{address: 0x{:04X}, table: {}, name: {}, type: {}", r.address,
-              r.table == Table::input ? "input" : "holding", register_name(r), type_name(r.type));
-    if (r.words == 2)
-      out.print(", order: {}", r.order == WordOrder::high_first ? "high_first" : "low_first");
+              to_string(r.table), register_name(r), to_string(r.type));
+    if (r.words == 2) out.print(", order: {}", to_string(r.order));
     if (r.type == ValueType::string) out.print(", words: {}", r.words);
     if (r.scale != 1.0) out.print(", scale: {:g}", r.scale);
     if (!r.unit.empty()) out.print(", unit: {}", r.unit);

@@ -18,6 +18,11 @@ namespace modtap {
 
 // `code`: a 16-bit value the manual writes in hex (an identifying code, 0106H), shown so.
 enum class ValueType : uint8_t { u16, s16, u32, s32, f32, u64, s64, bcd, string, code, raw };
+template <>
+struct EnumNames<ValueType> {  // as a model file writes them
+  static constexpr std::array<std::string_view, 11> names{
+      "u16", "s16", "u32", "s32", "f32", "u64", "s64", "bcd", "string", "code", "raw"};
+};
 
 // The registers a number of the type spans, where the type fixes them (0: the model's `words`).
 constexpr uint16_t words_of_type(ValueType type) {
@@ -35,6 +40,10 @@ constexpr uint16_t words_of_type(ValueType type) {
 }
 enum class Access : uint8_t { read, write, read_write };
 enum class WordOrder : uint8_t { high_first, low_first };
+template <>
+struct EnumNames<WordOrder> {
+  static constexpr std::array<std::string_view, 2> names{"high_first", "low_first"};
+};
 
 using EnumTable = std::map<int64_t, std::string>;
 

@@ -7,6 +7,7 @@
 #include <set>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "decoder/models/yaml_tree.hpp"
 
@@ -177,6 +178,19 @@ bool read_choice(const YamlNode& node, Problems& problems,
     names += name;
   }
   problems.add(node, fmt::format("'{}' is not one of: {}", text, names));
+  return false;
+}
+
+// A value of an enum whose names (EnumNames) are what a model file writes.
+template <NamedEnum Enum>
+bool read_named(const YamlNode& node, Problems& problems, Enum& out) {
+  const std::string text = node.is_scalar() ? node.text() : "";
+  if (const std::optional<Enum> value = enum_named<Enum>(text)) {
+    out = *value;
+    return true;
+  }
+  problems.add(
+      node, fmt::format("'{}' is not one of: {}", text, fmt::join(EnumNames<Enum>::names, ", ")));
   return false;
 }
 
@@ -376,12 +390,9 @@ class ModelReader {
                   def.table);
     if (map["name"]) def.name = read_text(map["name"], problems_);
     if (map["label"]) def.label = read_text(map["label"], problems_);
-    if (map["type"]) read_type(map["type"], def);
+    if (map["type"]) read_named(map["type"], problems_, def.type);
     if (map["words"]) read_integer(map["words"], problems_, def.words, 1, 64);
-    if (map["order"])
-      read_choice(map["order"], problems_,
-                  {{"high_first", WordOrder::high_first}, {"low_first", WordOrder::low_first}},
-                  def.order);
+    if (map["order"]) read_named(map["order"], problems_, def.order);
     if (map["scale"]) read_number(map["scale"], problems_, def.scale);
     if (map["offset"]) read_number(map["offset"], problems_, def.offset);
     if (map["unit"]) def.unit = read_text(map["unit"], problems_);
@@ -412,22 +423,6 @@ class ModelReader {
       if (one.name.empty()) one.name = fmt::format("reserved_{:04X}", address);
       define(node, std::move(one));
     }
-  }
-
-  void read_type(const YamlNode& node, RegisterDef& def) {
-    read_choice(node, problems_,
-                {{"u16", ValueType::u16},
-                 {"s16", ValueType::s16},
-                 {"u32", ValueType::u32},
-                 {"s32", ValueType::s32},
-                 {"f32", ValueType::f32},
-                 {"u64", ValueType::u64},
-                 {"s64", ValueType::s64},
-                 {"bcd", ValueType::bcd},
-                 {"string", ValueType::string},
-                 {"code", ValueType::code},
-                 {"raw", ValueType::raw}},
-                def.type);
   }
 
   void read_named_enum(const YamlNode& node, RegisterDef& def) {

@@ -66,11 +66,16 @@ def port_goes_away():
     print(f"port gone without --reconnect: {'ok' if ok else 'FAILED'}")
 
 
-def count_stops_on_noise():
+def raw_pty():
+    """A raw pseudo-terminal pair, and the port name of its slave end for modtap to open."""
     master, slave = os.openpty()
     tty.setraw(master)
     tty.setraw(slave)
-    port = os.ttyname(slave)
+    return master, slave, os.ttyname(slave)
+
+
+def count_stops_on_noise():
+    master, slave, port = raw_pty()
     os.set_blocking(master, False)
     modtap = subprocess.Popen([MODTAP, "-i", port, "--baud", "115200", "--mode", "rtu", "-c", "2"],
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -109,10 +114,7 @@ def with_crc(body):
 
 def hint_after_run(baud):
     """Polls every 10 ms, as a line of 19200 baud can carry them; the run's stderr once ended."""
-    master, slave = os.openpty()
-    tty.setraw(master)
-    tty.setraw(slave)
-    port = os.ttyname(slave)
+    master, slave, port = raw_pty()
     modtap = subprocess.Popen([MODTAP, "-i", port, "--baud", str(baud), "--mode", "rtu", "-q"],
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     check("hint", wait_until_open(modtap, port), "the port never opened")
@@ -138,10 +140,7 @@ def too_slow_a_baud_gets_a_hint():
 def discover_on_a_port():
     """modtap discover -i PORT until Ctrl-C: a meter's temperature across zero, read as a master
     does, summarised when the run ends."""
-    master, slave = os.openpty()
-    tty.setraw(master)
-    tty.setraw(slave)
-    port = os.ttyname(slave)
+    master, slave, port = raw_pty()
     modtap = subprocess.Popen([MODTAP, "discover", "-i", port, "--baud", "19200", "--mode", "rtu"],
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     check("discover", wait_until_open(modtap, port), "the port never opened")
