@@ -185,7 +185,8 @@ void Analyzer::flush(int64_t now_ns) {
 // the pending request, so that request's time-out waits for it.
 void Analyzer::settle(int64_t settled_ns) {
   release_held_by(settled_ns);
-  matcher_.advance(held_ ? std::min(settled_ns, held_->t_ns) : settled_ns);
+  const std::optional<Frame>& first = chained_.frame ? chained_.frame : held_.frame;
+  matcher_.advance(first ? std::min(settled_ns, first->t_ns) : settled_ns);
 }
 
 // A read is stamped when it came, and its bytes may have begun as early as the line could carry
@@ -223,10 +224,11 @@ void Analyzer::finish() {
   // The capture ended before the master's next move: the copy may be either. A copy of the
   // pending request stays as its time told (a retry); one of a request that timed out already,
   // read as its late answer, invents no request.
-  if (held_) {
-    held_->findings |= finding_ambiguous_echo;
-    release_held(!matcher_.copies_pending(*held_));
+  if (held_.frame && !held_.echo && !chained_.frame) {
+    held_.frame->findings |= finding_ambiguous_echo;
+    release_held(!matcher_.copies_pending(*held_.frame));
   }
+  if (held_.frame) release_undecided();
   matcher_.finish(last_ns_);
 }
 
@@ -234,7 +236,7 @@ void Analyzer::on_frame(Frame& frame) {
   frame.index = next_index_++;
   if (options_.clock == ClockQuality::none) last_ns_ = std::max(last_ns_, frame.end_ns);
   const ChannelRole role = channels_[frame.channel].info.role;
-  if (held_ || (role == ChannelRole::bus && matcher_.may_be_copy_in_doubt(frame)))
+  if (held_.frame || (role == ChannelRole::bus && matcher_.may_be_copy_in_doubt(frame)))
     return on_frame_in_doubt(frame, role);
   matcher_.on_frame(frame, role);
   out_.on_frame(frame);
@@ -242,29 +244,50 @@ void Analyzer::on_frame(Frame& frame) {
 
 // The few frames that follow a held copy, or may be one.
 void Analyzer::on_frame_in_doubt(Frame& frame, ChannelRole role) {
-  if (held_) release_held(Matcher::moved_on_after(*held_, frame, held_decide_by_ns_));
+  if (held_.frame) {
+    const Frame& held = *held_.frame;
+    const bool same_again = held.adu.size() == frame.adu.size() &&
+                            std::equal(held.adu.begin(), held.adu.end(), frame.adu.begin());
+    if (held_.echo && !chained_.frame && role == ChannelRole::bus && frame.check_ok && same_again)
+      return chain(frame);
+    const bool moved_on = Matcher::moved_on_after(held, frame, held_.decide_by_ns);
+    if (chained_.frame) {
+      release_chain(moved_on);
+    } else {
+      release_held(moved_on && !held_.echo);
+    }
+  }
   if (role == ChannelRole::bus) {
-    if (const auto decide_by = matcher_.copy_in_doubt(frame)) return hold(frame, *decide_by);
+    if (const auto decide_by = matcher_.copy_in_doubt(frame)) return hold(frame, *decide_by, false);
+    if (const auto decide_by = matcher_.echo_in_doubt(frame)) return hold(frame, *decide_by, true);
   }
   matcher_.on_frame(frame, role);
   out_.on_frame(frame);
 }
 
-void Analyzer::hold(const Frame& frame, int64_t decide_by_ns) {
-  held_bytes_.assign(frame.raw.begin(), frame.raw.end());
-  held_bytes_.insert(held_bytes_.end(), frame.adu.begin(), frame.adu.end());
-  held_ = frame;
-  held_->raw = {held_bytes_.data(), frame.raw.size()};
-  held_->adu = {held_bytes_.data() + frame.raw.size(), frame.adu.size()};
-  held_decide_by_ns_ = decide_by_ns;
-  matcher_.doubt(*held_);
+void Analyzer::hold(const Frame& frame, int64_t decide_by_ns, bool echo) {
+  held_.bytes.assign(frame.raw.begin(), frame.raw.end());
+  held_.bytes.insert(held_.bytes.end(), frame.adu.begin(), frame.adu.end());
+  held_.frame = frame;
+  held_.frame->raw = {held_.bytes.data(), frame.raw.size()};
+  held_.frame->adu = {held_.bytes.data() + frame.raw.size(), frame.adu.size()};
+  held_.decide_by_ns = decide_by_ns;
+  held_.echo = echo;
+  matcher_.doubt(*held_.frame);
+}
+
+// The echo held before waits on, and the same bytes again are held after it (a vector's swap
+// keeps the frames' views of their bytes).
+void Analyzer::chain(const Frame& frame) {
+  std::swap(chained_, held_);
+  hold(frame, Matcher::second_copy_decide_by(*chained_.frame, frame), false);
 }
 
 // The master's next move decides the held copy: a request of its own sent without waiting for
 // the copy's answer makes the copy the slave's late answer; anything else (noise, the request
 // again, silence) leaves the matcher to judge it as any copy: the master's retry.
 void Analyzer::release_held(bool late) {
-  Frame& copy = *held_;
+  Frame& copy = *held_.frame;
   matcher_.end_doubt();
   if (late) {
     matcher_.on_late_copy(copy);
@@ -272,12 +295,38 @@ void Analyzer::release_held(bool late) {
     matcher_.on_frame(copy, ChannelRole::bus);
   }
   out_.on_frame(copy);
-  held_.reset();
+  held_.frame.reset();
+}
+
+void Analyzer::release_chain(bool second_answered) {
+  Frame& first = *chained_.frame;
+  Frame& second = *held_.frame;
+  matcher_.end_doubt();
+  if (second_answered) {
+    matcher_.on_retry_copy(first);
+  } else {
+    matcher_.on_frame(first, ChannelRole::bus);
+  }
+  out_.on_frame(first);
+  if (second_answered) {
+    matcher_.on_late_copy(second);
+  } else {
+    matcher_.on_frame(second, ChannelRole::bus);
+  }
+  out_.on_frame(second);
+  chained_.frame.reset();
+  held_.frame.reset();
+}
+
+// Nothing came to tell the held copies apart: each goes as the matcher judges it.
+void Analyzer::release_undecided() {
+  if (chained_.frame) return release_chain(false);
+  release_held(false);
 }
 
 void Analyzer::on_noise(Noise& noise) {
   noise.index = next_index_++;
-  if (held_) release_held(false);
+  if (held_.frame) release_undecided();
   matcher_.on_noise(noise, channels_[noise.channel].info.role);
   out_.on_noise(noise);
 }

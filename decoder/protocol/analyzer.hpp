@@ -82,14 +82,28 @@ class Analyzer final : private FrameSink {
   void on_noise(Noise& noise) override;
   const Expectation& expectation() const override { return matcher_.expectation(); }
   void on_timeout(const Timeout& timeout);
-  // A copy the matcher cannot yet tell from a retry (Matcher::copy_in_doubt) waits, its bytes
-  // copied, for the master's next move: the next frame, or the clock past `decide_by_ns`.
+  // A copy the matcher cannot yet tell from a retry (Matcher::copy_in_doubt), or an echo only
+  // its slave's learned turnaround tells from one (Matcher::echo_in_doubt), waits, its bytes
+  // copied, for the master's next move: the next frame, or the clock past its decide-by time.
+  // The same bytes again after such an echo wait with it, chained: the master moving on right
+  // after them shows that they were the answer, and the first copy the master's retry.
+  struct HeldCopy {
+    std::optional<Frame> frame;
+    std::vector<uint8_t> bytes;  // its raw and ADU bytes, kept from one copy to the next
+    int64_t decide_by_ns = 0;
+    bool echo = false;  // held by echo_in_doubt: the same bytes again are chained to it
+  };
   void on_frame_in_doubt(Frame& frame, ChannelRole role);
-  void hold(const Frame& frame, int64_t decide_by_ns);
+  void hold(const Frame& frame, int64_t decide_by_ns, bool echo);
+  void chain(const Frame& frame);
   void release_held(bool late);
+  // The chained copies as the master's next move told them: the second the answer to the
+  // first, or each as the matcher judges it.
+  void release_chain(bool second_answered);
+  void release_undecided();
   void settle(int64_t settled_ns);
   void release_held_by(int64_t now_ns) {
-    if (held_ && now_ns >= held_decide_by_ns_) release_held(false);
+    if (held_.frame && now_ns >= held_.decide_by_ns) release_undecided();
   }
 
   AnalyzerOptions options_;
@@ -101,9 +115,8 @@ class Analyzer final : private FrameSink {
   uint64_t next_index_ = 1;
   int64_t last_ns_ = 0;
   uint64_t clock_steps_back_ = 0;
-  std::optional<Frame> held_;
-  std::vector<uint8_t> held_bytes_;  // its raw and ADU bytes, kept from one copy to the next
-  int64_t held_decide_by_ns_ = 0;
+  HeldCopy held_;
+  HeldCopy chained_;  // an echo in doubt that the held copy repeats
 };
 
 }  // namespace modtap

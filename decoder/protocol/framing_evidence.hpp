@@ -666,10 +666,11 @@ enum class RoleReason : uint8_t {
   fits_neither,
   garbled_answer,
   held_copy_answer,
+  chained_copy_retry,
 };
 template <>
 struct EnumNames<RoleReason> {
-  static constexpr std::array<std::string_view, 14> names{
+  static constexpr std::array<std::string_view, 15> names{
       "it came on the master's channel of a split tap",
       "it came on the slaves' channel of a split tap",
       "its function code has the exception bit, which only an answer has",
@@ -688,7 +689,10 @@ struct EnumNames<RoleReason> {
       "its check fails where the pending request's answer is due: that answer, damaged, whatever "
       "its address or function code says",
       "a copy of a request held until the master's next move, which showed the master did not "
-      "wait for its answer: the answer"};
+      "wait for its answer: the answer",
+      "a copy of the pending request that its slave's learned turnaround read as the echo, but "
+      "the same bytes came again and the master moved on at once: those were the answer, this "
+      "the master's retry"};
 };
 
 // Which request the matcher paired an answer with.

@@ -505,6 +505,22 @@ void Matcher::on_late_copy(Frame& frame) {
   late_answer(frame);
 }
 
+std::optional<int64_t> Matcher::echo_in_doubt(const Frame& frame) const {
+  if (!options_.timed || !pending_ || pending_->timeout_told || !frame.check_ok ||
+      !copies_pending(frame) || frame.t_ns - pending_->end_ns < shortest_master_timeout_ns ||
+      judge_copy(frame).copy != Copy::response)
+    return std::nullopt;
+  return frame.end_ns + answer_over_ns(pending_->slave);
+}
+
+void Matcher::on_retry_copy(Frame& frame) {
+  advance(frame.t_ns);
+  ambiguous_echo_.reset();
+  frame.role = Role::request;
+  tell_role(frame, RoleReason::chained_copy_retry);
+  on_request(frame);
+}
+
 // Whether the clock saw the silence between the request and this answer. A clock that steps
 // back, or stamps reads later than the bytes ended, can put a response before its request's
 // end: that latency is not measured rather than negative. An answer that came in the read of

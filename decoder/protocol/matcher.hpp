@@ -65,13 +65,30 @@ class Matcher {
     const uint8_t slave = frame.slave();
     if (pending_ && pending_->slave == slave) {
       const int64_t waited = frame.t_ns - pending_->end_ns;
-      return !too_soon_for_retry(*pending_, waited) || waited > pending_->timeout_ns;
+      return !too_soon_for_retry(*pending_, waited) || waited > pending_->timeout_ns ||
+             (!pending_->timeout_told && waited >= shortest_master_timeout_ns);
     }
     return overdue_open_ && overdue_.slave == slave;
   }
   // Whether `next`, the first frame after such a copy, is the master's request to another slave
   // or function, sent before the master waits for an answer: then the copy was no request.
   static bool moved_on_after(const Frame& copy, const Frame& next, int64_t decide_by_ns);
+  // A copy of the pending request that only its slave's learned turnaround reads as the echo:
+  // the master's time-out untold, and the copy as late as a master may time out. A slave that
+  // answers after the master's time-out teaches a turnaround that late, and every retry of the
+  // master's then reads as its echo, the slave's answer after it as a request. The same bytes
+  // again, and the master moving on at once, show the retry (Analyzer holds both): the time by
+  // which those bytes would come, the slave's answer time after this copy. None where the frame
+  // is no such copy.
+  std::optional<int64_t> echo_in_doubt(const Frame& frame) const;
+  // The time by which the master's request to another slave or function shows that it did not
+  // wait for an answer to `second`, the same bytes again after the copy `first`: as long as a
+  // master waits at least, half the wait between them.
+  static int64_t second_copy_decide_by(const Frame& first, const Frame& second) {
+    return second.end_ns + (second.t_ns - first.end_ns) / 2;
+  }
+  // The copy echo_in_doubt held was the master's retry: the same bytes after it answered it.
+  void on_retry_copy(Frame& frame);
   // The copy in doubt taken for the late answer of the request it copies.
   void on_late_copy(Frame& frame);
   bool copies_pending(const Frame& frame) const { return pending_ && copies(frame, *pending_); }

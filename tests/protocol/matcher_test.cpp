@@ -567,6 +567,42 @@ TEST(Matcher, ACopyNearTheMastersToldTimeOutIsTheAnswerWhereTheMasterMovesOnAtOn
   }
 }
 
+// Slave 1 answers 204 ms after each request, past the master's time-out (not told): its
+// turnaround, learned so, makes a copy of its write 234 ms on read as the echo. The same bytes
+// again 204 ms after that, and the master's request to slave 2 at once, show otherwise: the
+// second copy was the answer, the first the master's retry. Where the master waits on after the
+// second copy, nothing tells, and the copies stay as the slave's turnaround reads them.
+TEST(Matcher, TheSameCopyAgainAndTheMasterMovingOnShowTheFirstWasTheRetry) {
+  const auto write = hex("01 06 00 01 00 03 98 0b");
+  const auto read = hex("01 03 00 00 00 01 84 0a");
+  const auto other = hex("02 03 00 00 00 01 84 39");
+  for (const bool moves_on : {true, false}) {
+    const Collector out = analyze_reads({{read, 1000},
+                                         {hex("01 03 02 00 05 78 47"), 1204},
+                                         {write, 1300},
+                                         {write, 1534},
+                                         {write, 1738},
+                                         {other, moves_on ? 1742 : 2400}},
+                                        AnalyzerOptions{});
+    const auto frames = out.frames();
+    ASSERT_EQ(frames.size(), 6u);
+    if (moves_on) {
+      EXPECT_EQ(frames[3].role, Role::request);
+      EXPECT_TRUE(frames[3].findings & finding_retry);
+      EXPECT_EQ(frames[4].role, Role::response);
+      EXPECT_EQ(frames[4].request, frames[3].index);
+      const auto timeouts = out.timeouts();
+      ASSERT_FALSE(timeouts.empty());
+      EXPECT_EQ(timeouts.front().request, frames[2].index);
+    } else {
+      EXPECT_EQ(frames[3].role, Role::response);
+      EXPECT_EQ(frames[3].request, frames[2].index);
+      EXPECT_EQ(frames[4].role, Role::request);
+    }
+    EXPECT_EQ(frames[5].role, Role::request);
+  }
+}
+
 // A late answer that reads as a request too may be the master's next one: it teaches no
 // turnaround. Slave 1 answers in 5 ms, slave 2's FC08 counter comes 211 ms on; slave 3's
 // write, copied 120 ms on, is then past every answer's time: the master's retry.
