@@ -416,6 +416,9 @@ class Diagnosis {
     } else if (mostly_junk(bytes, evidence_.good_frame_bytes())) {
       why = fmt::format("only {:.0f}% of {} bytes form frames with a good check at {}", 100 * good,
                         bytes, settings);
+    } else if (const auto& better = options_.better) {
+      why = fmt::format("{:.0f}% of the capture's first bytes form frames with a good check at {}",
+                        100 * better->given_share, settings);
     } else {
       return false;
     }
@@ -427,9 +430,22 @@ class Diagnosis {
       p.evidence.emplace_back("fast_reads", pace->fast_reads);
       p.evidence.emplace_back("reads", pace->reads);
     }
-    p.text = fmt::format("The line's settings look wrong: {}. Are they the line's? Try --baud auto",
-                         why);
+    p.text = fmt::format("The line's settings look wrong: {}. {}", why, remedy(p));
     return true;
+  }
+
+  // What to read the capture with: the settings found to read it, or the search for them.
+  std::string remedy(Problem& p) const {
+    const auto& better = options_.better;
+    if (!better) return "Are they the line's? Try --baud auto";
+    const SerialFormat& f = better->format;
+    p.evidence.emplace_back("better_baud", f.baud);
+    p.evidence.emplace_back("better_good_share", better->good_share);
+    return fmt::format("At {}, {:.0f}% do: read it with --baud {} --parity {}{}", describe(f),
+                       100 * better->good_share, f.baud, to_string(f.parity),
+                       f.stop_bits == statistics_.format().stop_bits
+                           ? ""
+                           : fmt::format(" --stop-bits {}", f.stop_bits));
   }
 
   // "Slave 3 (gd20)": the model named where one was set or found, not the generic one.

@@ -204,12 +204,21 @@ class ProblemEvidence final : public RecordSink {
   std::optional<uint64_t> cited_, may_cite_, withdrawn_;
 };
 
+// Settings that read a capture convincingly where the given ones did not (--baud auto's
+// scoring on its start): the shares of its bytes in frames with a good check, under each.
+struct BetterSettings {
+  SerialFormat format;
+  double good_share = 0;
+  double given_share = 0;
+};
+
 struct ProblemOptions {
   int64_t timeout_ns = 1'000'000'000;  // the time-out the analyzer waits for an answer
   bool timeout_told = false;           // timeout_ns is the master's (--timeout), not a default
   // Whether the reads came faster than the line's baud could carry their bytes (none: not
   // watched, as for sources with no clock per read).
   const ChunkPace* pace = nullptr;
+  std::optional<BetterSettings> better{};  // none: not sought (a port, a pipe) or none found
 };
 
 // The problems the statistics and the evidence show, errors first, then by slave.

@@ -797,6 +797,26 @@ TEST(Cli, AWrongBaudGivesNoiseAndAHintNotACrash) {
       << r.lines.back();
 }
 
+// A logic-analyzer capture of a 19200 8E1 bus decoded at 9600: most of its bytes are junk, and
+// the settings that read it are found and named in the problem, in every output, so that a
+// report says what to change rather than "check the termination".
+TEST(Cli, TheSettingsThatReadACaptureAreNamedInItsSettingsProblem) {
+  const Outcome wrong = run(brainchild_lines + " --baud 9600 --parity even -T stats");
+  ASSERT_EQ(wrong.status, 0);
+  ASSERT_GE(wrong.lines.size(), 3u);
+  EXPECT_EQ(wrong.lines[0], "problems");
+  const std::string problem = wrong.lines[1] + " " + wrong.lines[2];
+  EXPECT_THAT(problem, ::testing::HasSubstr("only 9% of 119 bytes form frames with a good check"));
+  EXPECT_THAT(problem, ::testing::HasSubstr("At 19200 8E1, 100% do: read it with --baud 19200 "
+                                            "--parity even"));
+  const std::string json =
+      stats_json(brainchild_lines + " --baud 9600 --parity even", "modtap-better-settings.json");
+  EXPECT_NE(json.find("\"better_baud\":19200"), std::string::npos) << json.substr(0, 600);
+  // Read at its own settings, nothing is doubted.
+  const Outcome right = run(brainchild_lines + " --baud 19200 --parity even -T stats");
+  EXPECT_THAT(right.lines, ::testing::Not(::testing::Contains(::testing::HasSubstr("settings"))));
+}
+
 // A hint names the setting the evidence points at: the mode where the other one reads the
 // capture, and no baud where the capture has no timing to tell bauds apart.
 TEST(Cli, AHintNamesTheSettingTheEvidencePointsAt) {

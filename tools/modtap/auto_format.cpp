@@ -41,6 +41,39 @@ std::optional<ModeChoice> better_mode(const std::string& path, captures::OpenOpt
   return analyzer.mode;
 }
 
+namespace {
+
+// Each candidate setting read on the capture's start, the common ones first, until one reads
+// convincingly, and the other parities at the leading baud (a line with long stop gaps can read
+// cleanly under more than one).
+std::vector<FormatTrial> try_candidates(const std::string& path, captures::OpenOptions open,
+                                        const AnalyzerOptions& analyzer,
+                                        std::optional<uint32_t> baud, std::optional<Parity> parity,
+                                        Parity fallback_parity, ClockQuality clock) {
+  // A logic-analyzer capture is decoded into bytes per format: every candidate matters, and the
+  // decoder's parity errors tell the parities apart. Bytes timed per read only move the t3.5
+  // gaps, so parity cannot be told from them.
+  const auto candidates =
+      candidate_formats(baud, clock == ClockQuality::per_byte ? parity : fallback_parity,
+                        open.serial.data_bits, open.serial.stop_bits);
+  std::vector<FormatTrial> trials;
+  for (const auto& format : candidates) {
+    trials.push_back(trial(path, open, analyzer, format));
+    if (trials.back().convincing()) break;
+  }
+  const SerialFormat leader = best_trial(trials).format;
+  for (const auto& format : candidates) {
+    if (format.baud != leader.baud) continue;
+    bool tried = false;
+    for (const auto& t : trials)
+      tried |= t.format.parity == format.parity && t.format.baud == format.baud;
+    if (!tried) trials.push_back(trial(path, open, analyzer, format));
+  }
+  return trials;
+}
+
+}  // namespace
+
 SerialFormat choose_file_format(const std::string& path, captures::OpenOptions open,
                                 AnalyzerOptions analyzer, std::optional<uint32_t> baud,
                                 std::optional<Parity> parity) {
@@ -53,27 +86,8 @@ SerialFormat choose_file_format(const std::string& path, captures::OpenOptions o
                describe(fallback));
     return fallback;
   }
-  // A logic-analyzer capture is decoded into bytes per format: every candidate matters, and the
-  // decoder's parity errors tell the parities apart. Bytes timed per read only move the t3.5
-  // gaps, so parity cannot be told from them.
-  const auto candidates =
-      candidate_formats(baud, clock == ClockQuality::per_byte ? parity : fallback.parity,
-                        open.serial.data_bits, open.serial.stop_bits);
-  std::vector<FormatTrial> trials;
-  for (const auto& format : candidates) {
-    trials.push_back(trial(path, open, analyzer, format));
-    if (trials.back().convincing()) break;
-  }
-  // An early stop leaves the other parities at the winning baud untried: try them, since a
-  // line with long stop gaps can read cleanly under more than one.
-  const SerialFormat leader = best_trial(trials).format;
-  for (const auto& format : candidates) {
-    if (format.baud != leader.baud) continue;
-    bool tried = false;
-    for (const auto& t : trials)
-      tried |= t.format.parity == format.parity && t.format.baud == format.baud;
-    if (!tried) trials.push_back(trial(path, open, analyzer, format));
-  }
+  const std::vector<FormatTrial> trials =
+      try_candidates(path, open, analyzer, baud, parity, fallback.parity, clock);
   const FormatTrial& best = best_trial(trials);
   report(trials, best);
   for (const auto& t : trials)
@@ -87,6 +101,28 @@ SerialFormat choose_file_format(const std::string& path, captures::OpenOptions o
     return fallback;
   }
   return best.format;
+}
+
+std::optional<BetterSettings> better_format(const std::string& path, captures::OpenOptions open,
+                                            AnalyzerOptions analyzer) {
+  const SerialFormat told = open.serial;
+  const ClockQuality clock = captures::open_capture(path, open)->clock();
+  if (clock == ClockQuality::none) return std::nullopt;
+  const FormatTrial given = trial(path, open, analyzer, told);
+  if (given.convincing()) return std::nullopt;
+  const std::vector<FormatTrial> trials =
+      try_candidates(path, open, analyzer, std::nullopt, std::nullopt, told.parity, clock);
+  const FormatTrial& best = best_trial(trials);
+  // Convincing where the given settings are not, and twice the bytes making sense: a noisy
+  // bus read at its own settings finds no such rival.
+  if (!best.convincing() || best.good_frame_bytes < 2 * given.good_frame_bytes ||
+      (best.format.baud == told.baud && best.format.parity == told.parity &&
+       best.format.stop_bits == told.stop_bits))
+    return std::nullopt;
+  const auto share = [](const FormatTrial& t) {
+    return t.bytes ? static_cast<double>(t.good_frame_bytes) / static_cast<double>(t.bytes) : 0.0;
+  };
+  return BetterSettings{best.format, share(best), share(given)};
 }
 
 }  // namespace modtap::tools

@@ -158,6 +158,9 @@ class Pipeline {
   // faster than the settings modtap was given. Only for sources with a clock (per read, per byte).
   void on_read(const Chunk& chunk);
   const ChunkPace& pace() const { return pace_; }
+  // Settings found to read the capture where the given ones did not: the settings' problem
+  // names them.
+  void found_better_settings(const BetterSettings& better) { problem_options_.better = better; }
   // The problems the statistics and the evidence beside them show (none without statistics).
   // With --metrics, call it under shared_statistics()'s lock.
   std::vector<Problem> problems() const;

@@ -190,6 +190,16 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
     view->end_of_capture(!broken);
     view->close();  // the terminal given back before anything is said on it
   }
+  // Given settings that read a third of a timed file's bytes as junk or more, or that the line
+  // outpaces: the settings that read it, before the outputs say their problems. A bus that
+  // noisy is rarer than a wrong setting; one less noisy is not read again under every setting.
+  const bool doubtful = 3 * health.good_frame_bytes < 2 * health.bytes ||
+                        session.pipeline().pace().too_fast() ||
+                        mostly_early(bus.matcher().timed_answers(), bus.matcher().early_answers());
+  if (o.baud && o.parity && !piped && source->clock() != ClockQuality::none && health.bytes >= 64 &&
+      doubtful)
+    if (const auto better = better_format(o.read_file, open, analyzer_options(o, source->clock())))
+      session.pipeline().found_better_settings(*better);
   session.finish(!broken, frames_met(o, autostop, session).value_or(stopped_by.value_or("")));
   if (bus.clock_steps_back())
     fmt::print(stderr,
