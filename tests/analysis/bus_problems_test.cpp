@@ -2,6 +2,7 @@
 // that slave, and nothing else of severity warning or error; a healthy bus shows no problem.
 #include "decoder/analysis/bus_problems.hpp"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <map>
@@ -146,9 +147,16 @@ TEST(BusProblems, ASlowSlaveIsSlowResponse) {
       << run.problems[0].text;
 }
 
+// The problem says how late against the master's time-out: the figure to set it by.
 TEST(BusProblems, AnswersAfterTheMastersTimeoutAreLate) {
   const Diagnosed run = diagnose(scan(15, "5:late"));
   EXPECT_EQ(run.kinds(), (Found{{"late-responses", 5}})) << describe(run);
+  ASSERT_EQ(run.problems.size(), 1u);
+  EXPECT_THAT(run.problems[0].text,
+              ::testing::MatchesRegex("Slave 5 answers after the master has given up: [0-9]+ of "
+                                      "its [0-9]+ requests \\([0-9]+%\\) were answered too late, "
+                                      "20[0-9] to 20[0-9] ms after their requests where the "
+                                      "master waits 200 ms"));
 }
 
 TEST(BusProblems, BitErrorsInOneSlavesAnswersAreCorruptedResponses) {

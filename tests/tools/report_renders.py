@@ -1,6 +1,7 @@
 """The report (--report) as a customer's browser shows it: rendered by headless Chromium, every
 number it shows (each marked with its --stats key) equals --stats, every chart has marks in its
-colours on the screenshot, nothing is fetched from outside the file; a filtered run reports only
+colours on the screenshot, nothing is fetched from outside the file; the notes are folded under a
+line that counts them, and a slave's registers that held one value under another; a filtered run reports only
 what the filter kept, and a capture that breaks off says so. The problems lead, as --stats lists
 them, each linking to the records behind it and to its slave's shaded row; a drive's status is
 a band of its named states, a register read once shows its value, and a dated capture's time
@@ -143,6 +144,51 @@ def check_problems(name, dom, stats):
     return shown
 
 
+def check_folded_notes(name, dom, stats):
+    """The notes (poll jitter, broadcasts...) folded under one line that names each with its
+    count, after the errors and warnings, which stay in view."""
+    notes = {k: v["count"] for k, v in stats["diagnostics"].items() if v["severity"] == "note"}
+    fold = re.search(r"<details><summary>(\d+) notes?: ([^<]*)</summary>", dom)
+    if not notes:
+        if fold:
+            failures.append(f"{name}: notes folded where there are none")
+        return
+    if not fold:
+        failures.append(f"{name}: the notes {notes} are not folded")
+        return
+    named = {k: int(v) for k, v in (part.split(" ") for part in fold.group(2).split(", "))}
+    if named != notes or int(fold.group(1)) != sum(notes.values()):
+        failures.append(f"{name}: the fold says {fold.group(0)!r}, the statistics {notes}")
+    for finding, data in stats["diagnostics"].items():
+        at = dom.find(f'data-stat="diagnostics.{finding}.count"')
+        if at < 0:
+            failures.append(f"{name}: no row for {finding}")
+        elif (at > fold.start()) != (data["severity"] == "note"):
+            failures.append(f"{name}: {finding} ({data['severity']}) is on the wrong side of the fold")
+
+
+def check_register_summary(name, dom, slave, moved, held):
+    """A slave's registers: those that moved in view, each once; those that held one value
+    folded under a line that counts them."""
+    section = re.search(rf"<h3>Slave {slave}</h3>\n(.*?)(?=<h[23]>)", dom, re.S)
+    if not section:
+        failures.append(f"{name}: no register summary of slave {slave}")
+        return
+    body = section.group(1)
+    fold = re.search(r"<details(?: open(?:=\"\")?)?><summary>(\d+) registers? that did not change</summary>",
+                     body)
+    shown = body[:fold.start()] if fold else body
+    folded = body[fold.start():] if fold else ""
+    for register in moved:
+        if shown.count(f'<td class="text">{register}</td>') != 1:
+            failures.append(f"{name}: {register} is not in view once")
+    for register in held:
+        if f'<td class="text">{register}</td>' not in folded:
+            failures.append(f"{name}: {register} is not folded among those that held")
+    if held and (not fold or int(fold.group(1)) != len(held)):
+        failures.append(f"{name}: the fold counts {fold.group(1) if fold else None}, not {len(held)}")
+
+
 def html_text(text):
     return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
 
@@ -231,6 +277,7 @@ def check_drive():
         ticks = re.findall(r'<text class="tick"[^>]*>(\d\d:\d\d:\d\d)</text>', status.group(1))
         if "08:00:30" not in ticks or "time (UTC)" not in status.group(1):
             failures.append(f"drive: the time axis is not clock time: {ticks}")
+    check_register_summary("drive", dom, 1, ["status"], ["output_frequency"])
     once = re.search(r"<figcaption>slave 1 2524H output_frequency \(Hz\): read once, 60</figcaption>"
                      r"\n(.*?)</figure>", dom, re.S)
     if not once or '<circle class="value-dot"' not in once.group(1):
@@ -266,6 +313,7 @@ def main():
         failures.append(f"polled: {len(followed)} followed register charts, not 8: {followed}")
 
     check_problems("polled", dom, stats)
+    check_folded_notes("polled", dom, stats)
     check_drive()
 
     # A restarting drive: its silences begin where its problem's records say, each linked, as
