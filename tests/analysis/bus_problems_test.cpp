@@ -2,12 +2,15 @@
 // that slave, and nothing else of severity warning or error; a healthy bus shows no problem.
 #include "decoder/analysis/bus_problems.hpp"
 
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <map>
 #include <optional>
 #include <set>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -385,6 +388,20 @@ TEST(BusProblems, ASlaveThatAnsweredOnceInHundredsAlmostNeverAnswers) {
   EXPECT_EQ(problems[0].kind, ProblemKind::no_response);
   EXPECT_EQ(problems[0].text,
             "Slave 3 almost never answers: 199 of 200 requests timed out, 1 answered");
+}
+
+// docs/output.md is where a technician reads what a problem advises: every kind's advice, as
+// the outputs give it, in its table.
+TEST(BusProblems, TheOutputDocsGiveEveryKindsAdvice) {
+  std::ifstream file(std::string(MODTAP_SOURCE) + "/docs/output.md");
+  ASSERT_TRUE(file) << "docs/output.md";
+  std::stringstream docs;
+  docs << file.rdbuf();
+  for (size_t kind = 0; kind < problem_kind_count; ++kind) {
+    const ProblemInfo& info = problem_info(static_cast<ProblemKind>(kind));
+    const std::string row = fmt::format("| `{}` | {} |", info.name, std::string_view(info.advice));
+    EXPECT_NE(docs.str().find(row), std::string::npos) << row;
+  }
 }
 
 }  // namespace
