@@ -105,13 +105,10 @@ double share(uint64_t part, uint64_t whole) {
 
 // The answer's length on the wire, where the request tells it (a read's byte count, an echo).
 uint16_t expected_answer_size(const Frame& request) {
-  const ResponsePrefix prefix = response_prefix(request.pdu());
-  std::array<uint8_t, 9> head{request.slave()};
-  std::copy_n(prefix.pdu.begin(), prefix.size, head.begin() + 1);
-  const BodyLength body = body_length(Role::response, {head.data(), prefix.size + 1u});
-  if (body.kind != BodyLength::Kind::known) return 0;
-  if (request.mode == Mode::rtu) return static_cast<uint16_t>(body.bytes + 2);
-  return static_cast<uint16_t>(1 + 2 * (body.bytes + 1) + 2);  // ':' hex LRC CR LF
+  const uint16_t body = told_answer_size(request.slave(), request.pdu());
+  if (!body) return 0;
+  if (request.mode == Mode::rtu) return static_cast<uint16_t>(body + 2);
+  return static_cast<uint16_t>(1 + 2 * (body + 1) + 2);  // ':' hex LRC CR LF
 }
 
 // Slave, function, start and quantity of a request that reads or writes registers or coils.

@@ -911,4 +911,12 @@ std::string_view function_label(uint8_t fc) {
   return labels[fc];
 }
 
+uint16_t told_answer_size(uint8_t slave, std::span<const uint8_t> request_pdu) {
+  const ResponsePrefix prefix = response_prefix(request_pdu);
+  std::array<uint8_t, 1 + sizeof(prefix.pdu)> head{slave};
+  std::copy_n(prefix.pdu.begin(), prefix.size, head.begin() + 1);
+  const BodyLength body = body_length(Role::response, {head.data(), prefix.size + 1u});
+  return body.kind == BodyLength::Kind::known ? body.bytes : 0;
+}
+
 }  // namespace modtap

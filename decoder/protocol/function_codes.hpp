@@ -124,6 +124,9 @@ BodyLength body_length(Role role, std::span<const uint8_t> prefix);
 uint32_t request_spec_findings(std::span<const uint8_t> pdu);
 // What every good response to this request PDU starts with (ResponsePrefix).
 ResponsePrefix response_prefix(std::span<const uint8_t> request_pdu);
+// The slave address and PDU of the answer to `request_pdu` from `slave`, where the request
+// tells its length (a read's byte count, an echo): that many bytes, 0 where it does not.
+uint16_t told_answer_size(uint8_t slave, std::span<const uint8_t> request_pdu);
 // Whether a response's content fits its request: byte counts against quantities, echoes
 // against what was sent. Returns the finding to raise, or finding_none.
 Finding check_response_fit(std::span<const uint8_t> request_pdu,

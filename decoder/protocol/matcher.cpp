@@ -104,13 +104,24 @@ void Matcher::on_noise(Noise& noise, ChannelRole channel_role) {
 // A frame with a bad check in the answer's time is the answer, whatever its damaged address or
 // function code says. The wait goes on: junk may come before the answer itself (a vendor code
 // of no length rule, a device starting at the wrong moment). If nothing readable follows, the
-// slave did answer, garbled: no time-out.
+// slave did answer, garbled: no time-out. One that is the answer whole with bits flipped ends
+// the wait, and a bad frame after it is the master's next request, sent on its CRC error, not a
+// second answer: on RTU's binary, one as long as the request tells its answer is, or one of the
+// awaited function whose own structure says where it ends (Damage::corrupted).
 void Matcher::garbled_answer(Frame& frame) {
   frame.role = Role::response;
   tell_role(frame, RoleReason::garbled_answer);
   frame.request = pending_->index;
   frame.request_slave = pending_->slave;
   pending_->garbled_answer = true;
+  if (frame.mode != Mode::rtu) return;
+  const uint16_t told = told_answer_size(pending_->slave, {pending_->pdu.data(), pending_->size});
+  const bool whole = (told && frame.adu.size() == told + 2u) ||
+                     (frame.damage == Damage::corrupted && frame.adu.size() >= 2 &&
+                      (frame.function() & 0x7F) == pending_->pdu[0]);
+  if (!whole) return;
+  resumed_ns_ = frame.end_ns;
+  set_pending(nullptr);
 }
 
 // Whether something starting at `t_ns` on this channel comes where the pending request's answer

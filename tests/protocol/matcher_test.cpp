@@ -567,6 +567,26 @@ TEST(Matcher, ACopyNearTheMastersToldTimeOutIsTheAnswerWhereTheMasterMovesOnAtOn
   }
 }
 
+// Slave 1's answer comes whole with bits flipped, its address among them (a trunk that reflects
+// long frames): the answer, damaged, which ends the wait. The master's next request, damaged
+// too, 20 ms on, is a request, not a second answer to the first.
+TEST(Matcher, ADamagedAnswerWholeByItsLengthEndsTheWait) {
+  AnalyzerOptions options;
+  options.chunk_jitter_ns = 0;
+  const Collector out = analyze_reads({{hex("01 03 00 00 00 02 c4 0b"), 1000},
+                                       {hex("03 03 04 00 01 00 02 00 00"), 1010},
+                                       {hex("02 03 00 00 00 01 00 00"), 1030}},
+                                      options);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[1].role, Role::response);
+  EXPECT_EQ(frames[1].request, frames[0].index);
+  EXPECT_FALSE(frames[1].check_ok);
+  EXPECT_EQ(frames[2].role, Role::request);
+  EXPECT_FALSE(frames[2].check_ok);
+  EXPECT_TRUE(out.timeouts().empty());
+}
+
 // Slave 1 answers 204 ms after each request, past the master's time-out (not told): its
 // turnaround, learned so, makes a copy of its write 234 ms on read as the echo. The same bytes
 // again 204 ms after that, and the master's request to slave 2 at once, show otherwise: the
