@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <set>
 #include <span>
@@ -345,6 +346,111 @@ TEST(SlaveFaults, LineNoiseDamagesRequestsAndAnswersOfEverySlave) {
   EXPECT_EQ(slaves_hit, (std::set<uint8_t>{1, 2, 3, 4, 5}));
   EXPECT_TRUE(c.timed_out.empty());
   EXPECT_EQ(answered.size() + requests_hit, o.transactions);
+}
+
+// A restarting slave is silent the first 5 s of every period after the first, each request then
+// timed out, and answers every request between; no other slave misses one.
+TEST(SlaveFaults, ARestartingSlaveIsSilentFiveSecondsOfEveryPeriod) {
+  BusOptions o = scan(4000);
+  o.slave_faults[2].restarts_every_ns = 7'000'000'000;
+  const BusCapture c = simulate(o);
+  const auto answered = responses(c);
+  const auto unanswered = timed_out(c);
+  size_t silent = 0;
+  for (size_t req : requests_to(c, 2)) {
+    const int64_t asked = end_ns(c, c.frames[req]);  // when the simulator asks the slave
+    const bool down = asked >= 7'000'000'000 && asked % 7'000'000'000 < 5'000'000'000;
+    EXPECT_EQ(unanswered.count(req), down ? 1u : 0u) << asked;
+    EXPECT_EQ(answered.count(req), down ? 0u : 1u) << asked;
+    silent += down;
+  }
+  EXPECT_GT(silent, 20u);
+  EXPECT_EQ(unanswered.size(), silent);
+}
+
+// A slow block is answered 60 to 63 ms after its read, every cycle; the slave's other reads and
+// every other slave's come at the bus's turnaround.
+TEST(SlaveFaults, ASlowBlockIsAnsweredLateAndTheRestOnTime) {
+  BusOptions o = scan();
+  o.slave_faults[3].slow_block = RegisterBlock{0x0100, 8};
+  const BusCapture c = simulate(o);
+  size_t slow = 0;
+  for (const auto& [req, rsp] : responses(c)) {
+    const Bytes request = wire(c, c.frames[req]);
+    const int64_t turnaround = start_ns(c, c.frames[rsp].offset, o) - end_ns(c, c.frames[req]);
+    const bool block = request[0] == 3 && request[2] == 0x01 && request[3] == 0x00;
+    if (block) {
+      EXPECT_GE(turnaround, 60'000'000);
+      EXPECT_LE(turnaround, 63'000'000);
+      ++slow;
+    } else {
+      EXPECT_LT(turnaround, 10'000'000);
+    }
+  }
+  EXPECT_GT(slow, 100u);
+}
+
+// Reflections damage long frames and never one of 8 bytes or fewer; a damaged frame holds no span
+// whose CRC holds (a good frame inside it no receiver could tell from one sent).
+TEST(SlaveFaults, ReflectionsDamageLongFramesAndLeaveNoGoodSpanInside) {
+  BusOptions o = scan(3000);
+  o.polled_slaves = 0;  // reads and writes of every length
+  o.reflection_rate = 0.5;
+  const BusCapture c = simulate(o);
+  size_t short_damaged = 0, long_frames = 0, long_damaged = 0;
+  for (const TruthFrame& f : c.frames) {
+    const bool damaged = f.damage == Damage::corrupted;
+    if (f.size <= 8) short_damaged += damaged;
+    if (f.size >= 32) {
+      ++long_frames;
+      long_damaged += damaged;
+    }
+    if (!damaged) continue;
+    const Bytes bytes = wire(c, f);
+    for (size_t first = 0; first + 4 <= bytes.size(); ++first)
+      for (size_t end = first + 4; end <= bytes.size(); ++end)
+        EXPECT_FALSE(crc_ok(Bytes(bytes.begin() + static_cast<ptrdiff_t>(first),
+                                  bytes.begin() + static_cast<ptrdiff_t>(end))))
+            << "frame at " << f.offset << ": a good span at " << first << "-" << end;
+  }
+  EXPECT_EQ(short_damaged, 0u);
+  EXPECT_GT(long_frames, 100u);
+  const double share = static_cast<double>(long_damaged) / static_cast<double>(long_frames);
+  EXPECT_GT(share, 0.4);
+  EXPECT_LT(share, 0.6);
+}
+
+// Noise bursts come at their period, 2 to 6 bytes of junk each between frames, or over a frame,
+// whose check then fails.
+TEST(SlaveFaults, NoiseBurstsComeAtTheirPeriod) {
+  BusOptions o = scan(3000);
+  o.noise_burst_period_ns = 700'000'000;
+  const BusCapture c = simulate(o);
+  std::vector<bool> framed(c.bytes.size(), false);
+  for (const TruthFrame& f : c.frames) std::fill_n(framed.begin() + f.offset, f.size, true);
+  std::vector<int64_t> bursts;
+  for (size_t i = 0; i < c.bytes.size(); ++i) {
+    if (framed[i] || (i > 0 && !framed[i - 1])) continue;
+    size_t end = i;
+    while (end < c.bytes.size() && !framed[end]) ++end;
+    EXPECT_GE(end - i, 2u);
+    EXPECT_LE(end - i, 6u);
+    bursts.push_back(c.end_ns[i] - o.format.char_time_ns());
+  }
+  size_t on_frames = 0;
+  for (const TruthFrame& f : c.frames) on_frames += f.damage == Damage::corrupted;
+  // A beat brings junk between frames or a frame it fell on, unless it fell on bytes sent
+  // already, which went with them: nearly every beat, never more.
+  const auto beats = static_cast<size_t>(c.end_ns.back() / 700'000'000);
+  EXPECT_GT(bursts.size(), 0u);
+  EXPECT_GT(on_frames, 0u);
+  EXPECT_LE(bursts.size() + on_frames, beats + 1);
+  EXPECT_GE(bursts.size() + on_frames, beats * 9 / 10);
+  // Junk between frames starts on its beat, give or take the jitter of up to 1 ms a beat.
+  for (const int64_t t : bursts) {
+    const double beat = static_cast<double>(t) / 700'000'000.0;
+    EXPECT_LT(std::abs(beat - std::round(beat)) * 700, std::round(beat) + 1) << t;
+  }
 }
 
 // The scan list reads the missing block from its slave every cycle, right after its usual

@@ -225,16 +225,23 @@ class Simulator {
       const auto now = length_of();
       return now.kind == length.kind && now.bytes == length.bytes;
     };
-    for (unsigned hits = pick(1, 3); hits > 0; --hits) {
-      for (;;) {
-        const size_t at = pick(0, static_cast<unsigned>(adu.size() - 1));
-        const auto bit = static_cast<uint8_t>(1u << pick(0, 7));
-        adu[at] ^= bit;
-        if (keeps_structure(at)) break;
-        adu[at] ^= bit;
+    // Flipped so that a good span appears inside (1 in 65,536 a start), the frame is flipped
+    // afresh: no receiver could read those bytes as anything but that frame (good_span_end).
+    const Bytes sent = adu;
+    for (int attempt = 0; attempt < 64; ++attempt) {
+      adu = sent;
+      for (unsigned hits = pick(1, 3); hits > 0; --hits) {
+        for (;;) {
+          const size_t at = pick(0, static_cast<unsigned>(adu.size() - 1));
+          const auto bit = static_cast<uint8_t>(1u << pick(0, 7));
+          adu[at] ^= bit;
+          if (keeps_structure(at)) break;
+          adu[at] ^= bit;
+        }
       }
+      if (check_ok(adu)) adu.back() ^= 1;  // the hits cancelled out, or kept the check
+      if (!good_span_end(adu)) break;
     }
-    if (check_ok(adu)) adu.back() ^= 1;  // the hits cancelled out, or kept the check
     return true;
   }
 
@@ -914,6 +921,10 @@ void add_fault(SlaveFaults& faults, std::string_view name, std::optional<std::st
 }
 
 }  // namespace
+
+std::optional<int64_t> bus_time_ns(std::string_view text) {
+  return time_ns(text);
+}
 
 void add_slave_faults(BusOptions& options, std::string_view spec) {
   try {
