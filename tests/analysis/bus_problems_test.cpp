@@ -227,6 +227,7 @@ TEST(BusProblems, OneCauseIsOneProblemWhateverTheSeedAndClock) {
       {{"2:late"}, 0, {{"late-responses", 2}}},
       {{}, 0.5, {{"turnaround-glitches", -1}}},
       {{}, 0, {{"reflections", -1}}, 0.15, 0, true},
+      {{"3:absent"}, 0, {{"reflections", -1}, {"no-response", 3}}, 0.15, 0, true},
       {{}, 0, {{"bus-noise", -1}}, 0, 0.05, true},
       {{}, 0, {{"noise-bursts", -1}}, 0, 0, false, 700'000'000},
       {{}, 0, {{"second-master", -1}}, 0, 0, false, 0, 1'000'000'000},

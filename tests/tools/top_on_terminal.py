@@ -12,6 +12,7 @@ Usage: top_on_terminal.py MODTAP BUSGEN WORK_DIR
 """
 import glob
 import json
+import math
 import os
 import re
 import subprocess
@@ -92,9 +93,10 @@ def simulate(name, *options):
     return path
 
 
-def stats_of(capture):
+def stats_of(capture, *options):
     out = os.path.join(WORK, "truth.json")
-    subprocess.run([MODTAP, "-r", capture, "-q", "--stats", out], check=True, timeout=120)
+    subprocess.run([MODTAP, "-r", capture, "-q", "--stats", out, *options], check=True,
+                   timeout=120)
     with open(out) as f:
         return json.load(f)
 
@@ -208,21 +210,30 @@ def live_screen():
 
 
 def replay_ends_on_the_statistics():
-    capture = simulate("replay.pcap", "-n", "300", "--format", "pcap", "--faults")
-    truth = stats_of(capture)
+    capture = simulate("replay.pcap", "-n", "300", "--format", "pcap", "--faults",
+                       "--slave-fault", "4:late")
+    # Told the master's 200 ms time-out, slave 4's answers are late: time-outs, not answers.
+    truth = stats_of(capture, "--timeout", "0.2")
     tmux("kill-server")
     tmux("new-session", "-d", "-s", SESSION, "-x", "100", "-y", "30", "-c", WORK,
-         f"{MODTAP} top -r {capture} --speed 1000; sleep 60")
+         f"{MODTAP} top -r {capture} --speed 1000 --timeout 0.2; sleep 60")
     lines = wait_for(lambda lines: "end of capture" in lines[0] if lines else False)
     numbers = re.search(r"(\d+) frames +(\d+) bad checks +(\d+) noise", lines[1])
     check("replay", numbers and [int(n) for n in numbers.groups()] ==
           [truth["frames"], truth["bad_checks"], truth["noise_records"]],
           f"{lines[1]!r}: {truth['frames']} frames, {truth['bad_checks']} bad checks, "
           f"{truth['noise_records']} noise")
+    # ans%: the answers in time (late ones are time-outs), as --stats counts them.
     for slave in truth["slaves"]:
         row = slave_row(lines, slave["slave"])
+        in_time = slave["responses"] - slave["late_responses"]
+        answered = math.floor(100 * in_time / slave["requests"]) if slave["requests"] else None
         check("replay", row and int(row[2]) == slave["requests"] and
-              int(row[4]) == slave["timeouts"], f"slave {slave['slave']}: {row}, {slave}")
+              int(row[4]) == slave["timeouts"] and
+              row[3] == (str(answered) if answered is not None else "-"),
+              f"slave {slave['slave']}: {row}, {slave}")
+    late = next(s for s in truth["slaves"] if s["slave"] == 4)
+    check("replay", late["late_responses"] > 0, f"slave 4 answered none late: {late}")
     keys("q")
 
     # TERM=dumb on a terminal 100 columns wide, a session of its own beside the first: the

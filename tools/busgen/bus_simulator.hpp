@@ -116,6 +116,8 @@ struct BusOptions {
 // 0x400 or 1024), slow-block=START+COUNT, duplicate, glitch, half-baud, restarts=TIME; TIME as
 // 131ms, 60s, 500us or 2.5s. Throws std::invalid_argument saying what is wrong.
 void add_slave_faults(BusOptions& options, std::string_view spec);
+// A time written as on busgen's command line (131ms, 60s, 500us, 2.5s); none where it is not.
+std::optional<int64_t> bus_time_ns(std::string_view text);
 
 // A frame the master or a slave really sent.
 struct TruthFrame {

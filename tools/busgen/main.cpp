@@ -91,6 +91,27 @@ int main(int argc, char** argv) {
                  "Line noise: this share of all frames, requests and answers, arrives with bits "
                  "flipped (a bad CRC)")
       ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--reflections", o.reflection_rate,
+                 "A trunk not terminated: bits flip in frames with odds that grow with their "
+                 "length, none at 8 bytes, this at 32 and on, from every sender alike")
+      ->check(CLI::Range(0.0, 1.0));
+  const auto bus_time = [](int64_t& target) {
+    return [&target](const std::string& text) {
+      const auto ns = busgen::bus_time_ns(text);
+      if (!ns || *ns <= 0) throw CLI::ValidationError("a time, as 700ms or 2.5s: " + text);
+      target = *ns;
+    };
+  };
+  app.add_option_function<std::string>(
+         "--noise-bursts", bus_time(o.noise_burst_period_ns),
+         "A contactor or drive switching nearby: a burst of 2 to 6 junk bytes every TIME (as "
+         "700ms), destroying the frame it falls on")
+      ->type_name("TIME");
+  app.add_option_function<std::string>(
+         "--second-master", bus_time(o.second_master_period_ns),
+         "A second master on the line: every TIME it reads slave 201 on its own program, as "
+         "soon as the line is quiet, which may be right after the first master's request")
+      ->type_name("TIME");
   std::vector<std::string> slave_faults;
   app.add_option("--slave-fault", slave_faults,
                  "A slave's faults, as ADDR:FAULT[,FAULT...], repeatable: absent, stops=TIME "
