@@ -369,7 +369,7 @@ inline constexpr int span_bits = evidence_table[size_t(Evidence::length_and_crc)
 
 // Each row alone outweighs the CRC: the first that holds refutes the span, and a refuted span's
 // score is its CRC less that one row (FramingStep::score). The framer sums the rows that hold
-// (RtuFramer::Weight), so a lighter row would need another beside it; this says there is none.
+// (RtuReadings::Weight), so a lighter row would need another beside it; this says there is none.
 constexpr bool every_row_outweighs_the_crc() {
   for (size_t i = size_t(Evidence::good_frame_before_silence); i < evidence_table.size(); ++i)
     if (evidence_table[i].bits() <= span_bits) return false;

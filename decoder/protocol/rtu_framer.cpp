@@ -11,49 +11,35 @@ namespace {
 
 // Compact the buffer once this much has been consumed, so memmove stays rare.
 constexpr size_t compact_after = 1 << 16;
-// A frame found by CRC search may be confirmed by following ones found the same way (FC08
-// Return Query Data requests and their echoes, back to back); CRC hits are rare, so each
-// level costs one more bounded scan.
-constexpr int max_search = 8;
 
 }  // namespace
-
-// Function code 0 is no function's: no frame starts there.
-bool RtuFramer::may_start(uint8_t fc) {
-  return (fc & 0x7F) != 0;
-}
-
-// Reads are never broadcast, and only answers carry the exception bit.
-bool RtuFramer::may_start_request(uint8_t slave, uint8_t fc) {
-  return may_start(fc) && !(fc & 0x80) && (slave != 0 || may_broadcast(fc));
-}
 
 RtuFramer::RtuFramer(uint16_t channel, const RtuFramerOptions& options, FrameSink& sink)
     : channel_(channel),
       options_(options),
       sink_(sink),
-      expected_(sink.expectation()),
-      awaited_(expected_, options.role != ChannelRole::master),
-      timeline_(options.format, options.clock, options.chunk_jitter_ns),
-      row_weights_(options.weights) {
-  buf_.reserve(compact_after + 4096);
+      awaited_(sink.expectation(), options.role != ChannelRole::master),
+      s_(options_),
+      readings_(channel, options_, sink.expectation(), s_) {
+  s_.buf.reserve(compact_after + 4096);
 }
 
 void RtuFramer::push(const Chunk& chunk) {
   if (chunk.bytes.empty()) return;
-  timeline_.add(chunk.bytes.size(), chunk.t_ns, chunk.continues_read);
-  buf_.insert(buf_.end(), chunk.bytes.begin(), chunk.bytes.end());
-  end_ += chunk.bytes.size();
+  s_.timeline.add(chunk.bytes.size(), chunk.t_ns, chunk.continues_read);
+  s_.buf.insert(s_.buf.end(), chunk.bytes.begin(), chunk.bytes.end());
+  s_.end += chunk.bytes.size();
   if (!chunk.read_goes_on) resolve(false);
 }
 
 void RtuFramer::flush(int64_t now_ns) {
-  if (head_ < end_ && options_.clock != ClockQuality::none && timeline_.boundary_silence_at(now_ns))
+  if (s_.head < s_.end && options_.clock != ClockQuality::none &&
+      s_.timeline.boundary_silence_at(now_ns))
     resolve(true);
 }
 
 int64_t RtuFramer::held_since_ns() const {
-  return head_ < end_ ? timeline_.start_time(head_) : INT64_MAX;
+  return s_.head < s_.end ? s_.timeline.start_time(s_.head) : INT64_MAX;
 }
 
 void RtuFramer::finish() {
@@ -61,411 +47,28 @@ void RtuFramer::finish() {
 }
 
 void RtuFramer::resolve(bool final) {
-  while (head_ < end_) {
-    head_awaited_end_ = end_unknown;  // a frame emitted, or a request's time-out, changes it
-    const Match m = match_start(head_, final);
+  while (s_.head < s_.end) {
+    readings_.new_step();
+    const Match m = readings_.match_start(s_.head, final);
     if (m.kind == Match::Kind::found) {
-      emit_frame(head_, m);
+      emit_frame(s_.head, m);
       continue;
     }
-    if (m.kind == Match::Kind::need_more && !final && !blocked_by_gap(head_, final)) return;
+    if (m.kind == Match::Kind::need_more && !final && !readings_.blocked_by_gap(s_.head, final))
+      return;
     bool decided = false;
-    const uint64_t next = next_start(head_ + 1, final, decided);
-    if (!decided && next - head_ <= max_rtu_adu) return;  // may still be one (bad) frame
-    emit_unframed(head_, next);
+    const uint64_t next = next_start(s_.head + 1, final, decided);
+    if (!decided && next - s_.head <= max_rtu_adu) return;  // may still be one (bad) frame
+    emit_unframed(s_.head, next);
   }
-}
-
-RtuFramer::Match RtuFramer::match_start(uint64_t at, bool final) {
-  return match_at(at, final, max_search, true);
-}
-
-RtuFramer::Match RtuFramer::match_at(uint64_t at, bool final, int search, bool observed) {
-  if (options_.observer && observed) options_.observer->on_start(channel_, at);
-  if (end_ - at < 2) return need_more();
-  const Readings readings = readings_at(at);
-  if (const std::optional<Evidence> row = readings.count ? weigh_start(at) : std::nullopt) {
-    for (size_t i = 0; observed && i < readings.count; ++i)
-      observe(at, readings.order[i], {}, ReadingOutcome::refuted_at_start, *row);
-    return {};
-  }
-  bool waiting = false;
-  std::optional<std::pair<uint16_t, Evidence>> refuted;  // a span refuted, in either role
-  for (size_t i = 0; i < readings.count; ++i) {
-    const Role role = readings.order[i];
-    Match m = match_role(role, at, final, search);
-    const Role other = role == Role::request ? Role::response : Role::request;
-    const bool other_allowed = readings.allows(other);
-    if (m.kind == Match::Kind::found) {
-      const bool refuted_span = refuted && refuted->first == m.length;
-      Evidence why = refuted_span ? refuted->second : Evidence::length_and_crc;
-      const Verdict verdict =
-          refuted_span
-              ? Verdict::refuted
-              : weigh_span({at, role, m.length, other_allowed ? &other : nullptr, final, search},
-                           why);
-      if (observed) observe(at, role, m, outcome_of(verdict), why);
-      if (verdict == Verdict::wait) return need_more();
-      if (verdict == Verdict::refuted) {
-        refuted = {m.length, why};
-        continue;
-      }
-      // The same bytes may read as the other role too (echo codes 05, 06, 08, ...).
-      if (other_allowed && fits_role(other, at, m.length)) m.fit = {true, true};
-      return m;
-    }
-    const bool open = m.kind == Match::Kind::need_more;
-    if (observed)
-      observe(at, role, {}, open ? ReadingOutcome::waiting : ReadingOutcome::no_frame,
-              open ? Evidence::more_bytes_needed : Evidence::no_good_end);
-    // The likelier reading is still open: wait for it rather than take the other one early,
-    // unless a silence with a good frame after it says it never completes (a master's retry
-    // read as the response its slave did not send).
-    if (!open || blocked_by_gap(at, final)) continue;
-    if (!final) return m;
-    waiting = true;
-  }
-  return waiting ? need_more() : Match{};
-}
-
-// The roles the bytes at `at` may be read in, the likelier first: the response where the bus
-// waits for an answer of this slave and function. None where no frame can start.
-RtuFramer::Readings RtuFramer::readings_at(uint64_t at) const {
-  const uint8_t* p = at_ptr(at);
-  const uint8_t fc = p[1];
-  Readings readings;
-  if (!may_start(fc)) return readings;
-  readings.request = options_.role != ChannelRole::slave && may_start_request(p[0], fc);
-  readings.response = options_.role != ChannelRole::master && p[0] != 0;
-  const bool response_first =
-      expected_.pending && expected_.slave == p[0] && expected_.function == (fc & 0x7F);
-  for (const Role role : response_first ? std::array{Role::response, Role::request}
-                                        : std::array{Role::request, Role::response})
-    if (readings.allows(role)) readings.order[readings.count++] = role;
-  return readings;
-}
-
-ReadingOutcome RtuFramer::outcome_of(Verdict verdict) {
-  static constexpr ReadingOutcome outcomes[] = {ReadingOutcome::kept, ReadingOutcome::refuted,
-                                                ReadingOutcome::waiting};
-  return outcomes[static_cast<size_t>(verdict)];
-}
-
-void RtuFramer::observe(uint64_t at, Role role, const Match& match, ReadingOutcome outcome,
-                        Evidence why) const {
-  if (options_.observer)
-    options_.observer->on_reading(
-        {channel_, at, role, match.length, match.end, outcome, why, match.end_margin});
-}
-
-RtuFramer::Match RtuFramer::match_role(Role role, uint64_t at, bool final, int search) {
-  const uint64_t avail = end_ - at;
-  const uint8_t* p = at_ptr(at);
-  const BodyLength body = body_length(role, {p, static_cast<size_t>(avail)});
-  const RoleFit fit{role == Role::request, role == Role::response};
-  switch (body.kind) {
-    case BodyLength::Kind::need_more:
-      return need_more();
-    case BodyLength::Kind::invalid:
-      return {};
-    case BodyLength::Kind::known: {
-      const uint16_t total = body.bytes + crc_size;
-      if (total > max_rtu_adu) return {};
-      if (avail < total) return need_more();
-      if (rtu_crc_holds({p, total})) return {Match::Kind::found, total, fit};
-      return {};
-    }
-    case BodyLength::Kind::variable: {
-      const Expectation& expected = expected_;
-      if (role == Role::response && expected.echo_size && expected.slave == p[0] &&
-          expected.function == p[1]) {
-        if (avail < expected.echo_size) return need_more();
-        if (rtu_crc_holds({p, expected.echo_size})) {
-          // The echo of a request whose end was in doubt is in doubt alike, where the runner-up
-          // of its end stands.
-          const uint16_t n = expected.echo_size;
-          if (!expected.echo_end_in_doubt)
-            return {Match::Kind::found, n, fit, {}, SpanEnd::echo_length};
-          if (avail == n && !final) return need_more();
-          Margin doubt = longer_end(at, at + n);
-          if (!doubt.stands()) consider(doubt, shorter_end(at, at + n, final, search - 1));
-          return {Match::Kind::found, n, fit, doubt, SpanEnd::echo_length};
-        }
-      }
-      if (search <= 0) return {};
-      return search_end(at, std::max<size_t>(body.bytes + crc_size, min_adu), fit, final, search,
-                        body.public_header);
-    }
-  }
-  return {};
-}
-
-// A bounded CRC search for the end of a frame of no fixed length, from `first` bytes on. Its
-// hit stands once something confirms it (span_end_table), a turnaround glitch only where
-// nothing else does, and never where it swallows a frame a bus carries; the header of a public
-// function whose length only its CRC tells (`public_header`, the feature public-header) confirms
-// its first end once nothing more can.
-RtuFramer::Match RtuFramer::search_end(uint64_t at, size_t first, RoleFit fit, bool final,
-                                       int search, bool public_header) {
-  const uint64_t avail = end_ - at;
-  const uint64_t limit = std::min<uint64_t>(avail, max_rtu_adu);
-  const bool in_junk = at >= crc_index_.begin() && at < crc_index_.end();
-  if (!in_junk) {
-    const Match m = first_confirmed_end(at, first, limit, fit, final, search);
-    if (m.kind == Match::Kind::found) return m;
-  }
-  std::array<uint16_t, max_rtu_adu> hits;  // lengths with a good CRC, ascending
-  const size_t hit_count = good_lengths(at, first, limit, hits);
-  // Junk's usual case, at nearly every start: no end to weigh.
-  if (hit_count == 0) return !final && avail < max_rtu_adu ? need_more() : Match{};
-  const bool unexpected = unexpected_sender(at, fit.response);
-  bool open = false;
-  Match alone;  // a public function's first plausible end nothing confirmed
-  for (bool allow_glitch : {false, true}) {
-    for (size_t i = 0; i < hit_count; ++i) {
-      const uint16_t n = hits[i];
-      const bool zero_appended = i > 0 && hits[i - 1] == n - 1;
-      const Margin shorter = zero_appended ? shorter_end(at, at + n, final, search - 1) : Margin{};
-      if (glitch_appended(at, at + n, shorter)) {
-        open |= at + n == end_;
-        continue;
-      }
-      // Whether it swallows a frame is the costly question: asked only where it decides.
-      const std::optional<SpanEnd> confirmed =
-          confirmed_end(at, at + n, final, search - 1, allow_glitch);
-      const bool at_end = at + n == end_;
-      // Of two ends a byte apart, the longer stands where the shorter's 0x00 is ruled out as a
-      // glitch.
-      const bool may_stand_alone =
-          public_header && (!alone.length || (alone.length == n - 1u && shorter.decided()));
-      if (!confirmed && !at_end && !may_stand_alone) continue;
-      // A hit does not wait for a frame inside still to come (final): the search's end waits.
-      if (swallows_known_frame(at, at + n, true, unexpected, true).held().has(Feature::another_crc))
-        continue;
-      // Confirmed only by taking the next 0x00 for a glitch, where one byte more holds too; or
-      // ending in a 0x00 that could be a glitch after a good frame one byte shorter.
-      Margin doubt = allow_glitch ? longer_end(at, at + n) : Margin{};
-      if (!doubt.stands()) consider(doubt, shorter);
-      if (confirmed) return {Match::Kind::found, n, fit, doubt, *confirmed};
-      open |= at_end;
-      if (may_stand_alone) alone = {Match::Kind::found, n, fit, shorter, SpanEnd::header_alone};
-    }
-  }
-  // A public function followed by junk: once nothing more can confirm an end (the input's
-  // end, or a silence with a good frame after it), its header confirms the first, and one
-  // byte more stands beside it where a 0x00 after it makes that good too.
-  if (alone.length && (final || (avail >= max_rtu_adu && !open) || blocked_by_gap(at, final))) {
-    Margin doubt = longer_end(at, at + alone.length);
-    if (!doubt.stands()) consider(doubt, alone.end_margin);
-    alone.end_margin = doubt;
-    return alone;
-  }
-  if (!final && (avail < max_rtu_adu || open)) return need_more();
-  return {};
-}
-
-// Both readings of a start often search the same span (an unknown function code reads as a
-// request and as a response alike), so the last answer is kept.
-size_t RtuFramer::good_lengths(uint64_t at, size_t first, size_t limit,
-                               std::array<uint16_t, max_rtu_adu>& lengths) {
-  CrcHits& last = last_hits_;
-  if (last.at != at || last.first != first || last.limit != limit) {
-    last.at = at;
-    last.first = first;
-    last.limit = limit;
-    last.count = 0;
-    index_span(at, at + limit);
-    crc_index_.good_ends(at, at + first, at + limit, [&](uint64_t end) {
-      last.lengths[last.count++] = static_cast<uint16_t>(end - at);
-    });
-  }
-  // Copied out: confirming one of them searches further on, which replaces the kept answer.
-  std::copy_n(last.lengths.begin(), last.count, lengths.begin());
-  return last.count;
-}
-
-// A frame with no fixed length is found by running the CRC from its start, stopping at its end
-// as soon as something confirms it: few steps for a real frame. Where this finds nothing, the
-// bytes are junk, and the CRC index takes over for this start and the ones after it.
-RtuFramer::Match RtuFramer::first_confirmed_end(uint64_t at, size_t first, size_t limit,
-                                                RoleFit fit, bool final, int search) {
-  const uint8_t* p = at_ptr(at);
-  uint16_t crc = crc16({p, first - crc_size});
-  bool previous_hit = false;
-  for (size_t n = first; n <= limit; ++n) {
-    const bool hit = crc == wire_crc({p, n});
-    const bool zero_appended = hit && previous_hit;
-    previous_hit = hit;
-    crc = crc16_step(crc, p[n - crc_size]);
-    if (!hit) continue;
-    const Margin shorter = zero_appended ? shorter_end(at, at + n, final, search - 1) : Margin{};
-    if (glitch_appended(at, at + n, shorter)) continue;
-    const std::optional<SpanEnd> confirmed = confirmed_end(at, at + n, final, search - 1, false);
-    if (confirmed &&
-        !swallows_known_frame(at, at + n, true, unexpected_sender(at, fit.response), true)
-             .held()
-             .has(Feature::another_crc))
-      return {Match::Kind::found, static_cast<uint16_t>(n), fit, shorter, *confirmed};
-  }
-  return {};
-}
-
-// A CRC end right after a CRC end is the shorter frame with a 0x00 appended, the next driver's
-// glitch, unless what tells against that reading decides (`shorter`: a silence right after
-// the 0x00, a clock per byte that saw it sent straight on, a second glitch it would need), or
-// the longer frame's exact copy follows it (FC08's echo) on a bus whose glitches do not make
-// the glitch the likelier.
-bool RtuFramer::glitch_appended(uint64_t begin, uint64_t end, const Margin& shorter) const {
-  if (shorter.runner_up != RunnerUp::shorter || shorter.decided()) return false;
-  return glitch_odds_.zero_glitch_likelier() || !copy_follows(begin, end);
-}
-
-// The runner-up of a good frame's end (framing_evidence.hpp, Margin): the same frame one byte
-// longer, the 0x00 after it its own (a CRC that holds keeps holding with a 0x00 appended), or
-// one byte shorter, its last 0x00 the next driver's glitch. The longer is told apart by a
-// silence before the byte, the shorter by a silence after it, a clock per byte that saw it sent
-// straight on, or a second glitch that reading would need at one turnaround.
-Margin RtuFramer::longer_end(uint64_t at, uint64_t end) const {
-  if (end >= end_ || end - at >= max_rtu_adu || *at_ptr(end) != 0x00) return {};
-  Margin margin{RunnerUp::longer};
-  margin.tell(Feature::silence_inside, timeline_.gap_at(end));
-  return margin;
-}
-
-Margin RtuFramer::shorter_end(uint64_t at, uint64_t end, bool final, int search) {
-  if (*at_ptr(end - 1) != 0x00) return {};
-  Margin margin{RunnerUp::shorter};
-  margin.tell(Feature::silence_after, timeline_.gap_at(end)) ||
-      margin.tell(Feature::sent_straight_on, !timeline_.after_quiet_line(end - 1)) ||
-      margin.tell(Feature::second_glitch,
-                  glitch_then_frame(end, final, search) || glitch_then_kin(at, end));
-  return margin;
-}
-
-// A turnaround's glitch at `end`, then a frame of the slave and function code of the frame at
-// `at` (its answer, cut or talked over though it may be, or the master's next request to it):
-// two bytes that begin a frame, as likely by chance as a CRC.
-bool RtuFramer::glitch_then_kin(uint64_t at, uint64_t end) const {
-  if (end + 3 > end_ || !is_glitch_byte(*at_ptr(end))) return false;
-  const uint8_t* frame = at_ptr(at);
-  const uint8_t* next = at_ptr(end + 1);
-  return next[0] == frame[0] && (next[1] & 0x7F) == (frame[1] & 0x7F);
-}
-
-// Of two runner-ups, the one that stands, else the first there is (--explain names it).
-void RtuFramer::consider(Margin& margin, const Margin& other) {
-  if (other.stands() || margin.runner_up == RunnerUp::none) margin = other;
-}
-
-// A turnaround's glitch at `at` with a good frame right behind it.
-bool RtuFramer::glitch_then_frame(uint64_t at, bool final, int search) {
-  return at + 1 < end_ && is_glitch_byte(*at_ptr(at)) &&
-         match_at(at + 1, final, search).kind == Match::Kind::found;
-}
-
-// The CRC index is kept only over what is searched: traffic whose lengths the function codes
-// tell never pays for it, and junk is indexed once, however many starts search it.
-void RtuFramer::index_span(uint64_t begin, uint64_t end) {
-  if (begin < crc_index_.begin() || begin > crc_index_.end()) crc_index_.restart(begin);
-  const uint64_t from = crc_index_.end();
-  if (end > from) crc_index_.append({at_ptr(from), static_cast<size_t>(end - from)});
-}
-
-bool RtuFramer::fits_role(Role role, uint64_t at, uint16_t length) const {
-  const BodyLength body = body_length(role, {at_ptr(at), length});
-  if (body.kind == BodyLength::Kind::known) return body.bytes + crc_size == length;
-  return body.kind == BodyLength::Kind::variable && body.bytes + crc_size <= length;
-}
-
-// Whether a request may start at `start` and its length rules end it at `end`. Asked 1 time in
-// 65,536, so kept out of line: the hot paths inline the questions it asks.
-[[gnu::cold, gnu::noinline]] bool RtuFramer::request_spans(uint64_t start, uint64_t end) const {
-  const uint8_t* p = at_ptr(start);
-  return may_start_request(p[0], p[1]) &&
-         fits_role(Role::request, start, static_cast<uint16_t>(end - start));
-}
-
-// The first confirmation of a searched end that holds (span_end_table: each is a feature that
-// makes up for the search's tries alone, so the first is enough), the end of the input where
-// it is final, or none.
-std::optional<SpanEnd> RtuFramer::confirmed_end(uint64_t begin, uint64_t end, bool final,
-                                                int search, bool allow_glitch) {
-  if (end == end_) return final ? std::optional(SpanEnd::input_end) : std::nullopt;
-  if (timeline_.gap_at(end)) return SpanEnd::silence_after;
-  if (end > head_ && timeline_.paused_before(end)) return SpanEnd::pause_after;
-  if (match_at(end, final, search).kind == Match::Kind::found) return SpanEnd::frame_after;
-  if (copy_follows(begin, end)) return SpanEnd::copy_after;
-  // A turnaround glitch between this frame and the next still confirms this end; without
-  // this, the glitch's 0x00 would be taken into the frame (it keeps the CRC residue zero).
-  const uint8_t next = *at_ptr(end);
-  if (allow_glitch && is_glitch_byte(next) && end + 1 < end_ &&
-      (timeline_.gap_at(end + 1) || match_at(end + 1, final, search).kind == Match::Kind::found))
-    return SpanEnd::glitch_then_frame;
-  return std::nullopt;
-}
-
-// An exact copy right behind is the echo of FC08 Return Query Data; a silence inside it says
-// its bytes were not one frame (a glitch after an echo can complete a false copy).
-bool RtuFramer::copy_follows(uint64_t begin, uint64_t end, uint64_t copy) const {
-  const uint64_t size = end - begin;
-  return copy + size <= end_ && std::equal(at_ptr(begin), at_ptr(end), at_ptr(copy)) &&
-         timeline_.first_gap_after(copy) >= copy + size;
-}
-
-// Whether a frame a bus carries starts inside [begin, end), wherever it ends, and outweighs the
-// span (keeps_frame_inside, framing_evidence.hpp): inside a long frame, bytes pass a CRC as a
-// vendor code or an unnamed exception now and then. An exact copy after the span outweighs it.
-// Unknown while such a frame's bytes are still to come, unless `final`.
-RtuFramer::RowFeatures RtuFramer::swallows_known_frame(uint64_t begin, uint64_t end, bool searched,
-                                                       bool unexpected, bool final) {
-  const FeatureWeights& weights = options_.weights;
-  if (keeps_frame_inside(searched, unexpected, false, weights)) return {};
-  if (keeps_frame_inside(searched, unexpected, true, weights) && copy_follows(begin, end))
-    return {};
-  bool to_come = false;
-  for (uint64_t inner = begin + 1; inner < end; ++inner) {
-    if (inner + 3 > end_) return {{}, !final};
-    if (!standard_frame(inner)) continue;
-    const Match::Kind kind = match_at(inner, false, 0).kind;
-    if (kind == Match::Kind::found || copied_frame_at(inner))
-      return {{Feature::another_crc, Feature::bus_code}};
-    to_come |= kind == Match::Kind::need_more && !final;
-  }
-  return {{}, to_come};
-}
-
-// A frame with no length of its own (FC08 Return Query Data) whose CRC holds where its exact
-// copy follows, right after it or after the answering driver's glitch: a query and its echo.
-// The copy makes up for the search's tries (copy-after).
-bool RtuFramer::copied_frame_at(uint64_t at) {
-  const BodyLength body = body_length(Role::request, from(at));
-  if (body.kind != BodyLength::Kind::variable) return false;
-  const size_t first = std::max<size_t>(body.bytes + crc_size, min_adu);
-  std::array<uint16_t, max_rtu_adu> hits;
-  const size_t count = good_lengths(at, first, std::min<uint64_t>(end_ - at, max_rtu_adu), hits);
-  for (size_t i = 0; i < count; ++i) {
-    const uint64_t end = at + hits[i];
-    if (copy_follows(at, end) ||
-        (end < end_ && is_glitch_byte(*at_ptr(end)) && copy_follows(at, end, end + 1)))
-      return true;
-  }
-  return false;
-}
-
-// Where `broke-off-at-silence` refutes every span across the first silence after `at`, every
-// reading of the bytes at `at` ends before it: none waits for bytes beyond it.
-bool RtuFramer::blocked_by_gap(uint64_t at, bool final) {
-  const uint64_t gap = timeline_.first_gap_after(at);
-  return gap < end_ &&
-         refutes_alone<Evidence::broke_off_at_silence>(frame_after_silence(gap, final));
 }
 
 uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
   uint64_t at = std::max(from, scanned_to_);
-  for (; at < end_; ++at) {
-    const Match m = match_start(at, final);
+  for (; at < s_.end; ++at) {
+    const Match m = readings_.match_start(at, final);
     if (m.kind == Match::Kind::found) break;
-    if (m.kind == Match::Kind::need_more && !final && !blocked_by_gap(at, final)) {
+    if (m.kind == Match::Kind::need_more && !final && !readings_.blocked_by_gap(at, final)) {
       scanned_to_ = at;
       decided = false;
       return at;
@@ -476,29 +79,6 @@ uint64_t RtuFramer::next_start(uint64_t from, bool final, bool& decided) {
   return at;
 }
 
-// Where the awaited response starting at `at` begins, after its driver's glitch if one is there.
-std::optional<uint64_t> RtuFramer::awaited_start(uint64_t at) const {
-  if (at >= end_) return std::nullopt;
-  if (awaited_.length(from(at))) return at;
-  if (at + 1 < end_ && is_glitch_byte(*at_ptr(at)) && awaited_.length(from(at + 1))) return at + 1;
-  return std::nullopt;
-}
-
-// Where that response ends by its structure (its bytes may be still to come); 0 where none.
-uint64_t RtuFramer::awaited_end(uint64_t at) const {
-  const std::optional<uint64_t> start = awaited_start(at);
-  return start ? *start + *awaited_.length(from(*start)) : 0;
-}
-
-// Whether the frame at `at` has a code a bus carries (`bus-code`): a public function code, and
-// for an exception a code the standard names.
-bool RtuFramer::standard_frame(uint64_t at) const {
-  const uint8_t* p = at_ptr(at);
-  const uint8_t fc = p[1];
-  if (!(fc & 0x80)) return is_public_function(fc);
-  return is_public_function(fc & 0x7F) && !exception_name(p[2]).empty();
-}
-
 // The bytes [begin, end) as a frame with its place and time; the check is the caller's to judge.
 Frame RtuFramer::frame_of(uint64_t begin, uint64_t end, RoleFit fit) const {
   Frame frame;
@@ -507,24 +87,24 @@ Frame RtuFramer::frame_of(uint64_t begin, uint64_t end, RoleFit fit) const {
   frame.fit = fit;
   frame.offset = begin;
   frame.raw = frame.adu = {at_ptr(begin), static_cast<size_t>(end - begin)};
-  const ByteTimeline::SpanTimes times = timeline_.span_times(begin, end);
+  const ByteTimeline::SpanTimes times = s_.timeline.span_times(begin, end);
   frame.t_ns = times.start_ns;
   frame.end_ns = times.end_ns;
   frame.untimed_start = times.untimed_start;
   frame.start_read = times.start_read;
   frame.end_read = times.end_read;
-  if (timeline_.paused_inside(begin, end)) frame.findings = finding_gap_in_frame;
+  if (s_.timeline.paused_inside(begin, end)) frame.findings = finding_gap_in_frame;
   return frame;
 }
 
 void RtuFramer::emit_frame(uint64_t at, const Match& match) {
-  glitch_odds_.frame();
+  s_.glitch_odds.frame();
   Frame frame = frame_of(at, at + match.length, match.fit);
   frame.check_ok = true;
   frame.expected_check = wire_crc(frame.adu);
   if (match.end_margin.stands()) frame.findings |= finding_ambiguous_end;
   sink_.on_frame(frame);
-  answer_start_ = at + match.length;
+  s_.answer_start = at + match.length;
   consume(at + match.length);
 }
 
@@ -532,17 +112,10 @@ void RtuFramer::emit_frame(uint64_t at, const Match& match) {
 // is a frame with a bad CRC when its header says exactly its length, else noise.
 void RtuFramer::emit_unframed(uint64_t begin, uint64_t end) {
   while (begin < end) {
-    const uint64_t gap = std::min(timeline_.first_gap_after(begin), end);
+    const uint64_t gap = std::min(s_.timeline.first_gap_after(begin), end);
     emit_piece(begin, gap);
     begin = gap;
   }
-}
-
-// Whether `at` is where the bytes after the last frame begin, or a lone glitch after it ends:
-// while a request is pending, where its answer begins. Bytes after junk are not.
-bool RtuFramer::first_after_request(uint64_t at) const {
-  return at == answer_start_ || (at == answer_start_ + 1 && answer_start_ >= head_ &&
-                                 answer_start_ < end_ && is_glitch_byte(*at_ptr(answer_start_)));
 }
 
 // A damaged response: a frame with a bad check, so it stays in the slave's picture. Cut short,
@@ -559,7 +132,7 @@ void RtuFramer::emit_damaged(uint64_t begin, uint64_t end, Damage damage, uint32
     frame.findings |= finding_bad_check;
   }
   sink_.on_frame(frame);
-  answer_start_ = end;
+  s_.answer_start = end;
   consume(end);
 }
 
@@ -583,9 +156,10 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
     emit_damaged(begin, begin + *length, Damage::collision, findings);
     return emit_run_on(begin + *length, end);
   }
-  if (size >= min_adu && size <= max_rtu_adu && may_start(p[1])) {
-    RoleFit fit{options_.role != ChannelRole::slave && fits_role(Role::request, begin, size),
-                options_.role != ChannelRole::master && fits_role(Role::response, begin, size)};
+  if (size >= min_adu && size <= max_rtu_adu && RtuReadings::may_start(p[1])) {
+    RoleFit fit{
+        options_.role != ChannelRole::slave && readings_.fits_role(Role::request, begin, size),
+        options_.role != ChannelRole::master && readings_.fits_role(Role::response, begin, size)};
     if ((fit.request || fit.response) && !piece_header(begin).noise()) {
       Frame frame = frame_of(begin, end, fit);
       frame.expected_check = crc16({p, static_cast<size_t>(size - crc_size)});
@@ -595,7 +169,7 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
         frame.damage = Damage::corrupted;
       }
       sink_.on_frame(frame);
-      answer_start_ = end;
+      s_.answer_start = end;
       consume(end);
       return;
     }
@@ -603,7 +177,7 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
   NoiseReason reason = NoiseReason::junk;
   if (size == 1 && is_glitch_byte(p[0])) {
     reason = NoiseReason::glitch;
-    glitch_odds_.glitch(p[0]);
+    s_.glitch_odds.glitch(p[0]);
   } else if (size >= 2 && is_public_function(p[1])) {
     reason = NoiseReason::truncated;
   }
@@ -626,7 +200,7 @@ void RtuFramer::emit_run_on(uint64_t begin, uint64_t end) {
 // frame: only its header does.
 PieceHeader RtuFramer::piece_header(uint64_t at) const {
   const uint8_t* p = at_ptr(at);
-  const PieceHeader header{at, standard_frame(at), p[0] > max_unicast_slave};
+  const PieceHeader header{at, readings_.standard_frame(at), p[0] > max_unicast_slave};
   if (options_.observer && header.noise_features)
     options_.observer->on_piece_header(channel_, header);
   return header;
@@ -638,7 +212,7 @@ PieceHeader RtuFramer::piece_header(uint64_t at) const {
 std::optional<EdgeByte> RtuFramer::first_edge(uint64_t begin, uint64_t end) const {
   if (end - begin < 2 || !is_glitch_byte(*at_ptr(begin)) || !awaited_.starts(bytes(begin + 1, end)))
     return std::nullopt;
-  EdgeByte edge{EdgeSide::first, begin, *at_ptr(begin), glitch_odds_.habit()};
+  EdgeByte edge{EdgeSide::first, begin, *at_ptr(begin), s_.glitch_odds.habit()};
   edge.weigh(Feature::awaited_header, true, true);
   edge.weigh(Feature::awaited_header, awaited_.starts(bytes(begin, end)), false);
   observe_edge(edge);
@@ -656,14 +230,14 @@ std::optional<EdgeByte> RtuFramer::last_edge(uint64_t begin, uint64_t end,
   const auto length = awaited_.length(bytes(begin, end));
   const bool cut_short =
       (length && size <= *length) || (!length && awaited_.length(bytes(begin, end - 1)));
-  if (!cut_short || size <= 3 || !is_glitch_byte(*at_ptr(end - 1)) || end >= end_)
+  if (!cut_short || size <= 3 || !is_glitch_byte(*at_ptr(end - 1)) || end >= s_.end)
     return std::nullopt;
-  EdgeByte edge{EdgeSide::last, end - 1, *at_ptr(end - 1), glitch_odds_.habit()};
+  EdgeByte edge{EdgeSide::last, end - 1, *at_ptr(end - 1), s_.glitch_odds.habit()};
   const std::optional<bool> told = awaited_.byte(bytes(begin, end), size - 1);
   edge.weigh(Feature::byte_ruled_out, told == false, true);
   edge.weigh(Feature::predicted_byte, told == true, false);
-  edge.weigh(Feature::silence_after, timeline_.gap_at(end), false);
-  edge.weigh(Feature::sent_straight_on, !timeline_.after_quiet_line(end - 1), false);
+  edge.weigh(Feature::silence_after, s_.timeline.gap_at(end), false);
+  edge.weigh(Feature::sent_straight_on, !s_.timeline.after_quiet_line(end - 1), false);
   edge.weigh(Feature::second_glitch, glitch_after, false);
   observe_edge(edge);
   return edge;
@@ -679,26 +253,26 @@ void RtuFramer::emit_noise(uint64_t begin, uint64_t end, NoiseReason reason) {
   noise.mode = Mode::rtu;
   noise.offset = begin;
   noise.raw = {at_ptr(begin), static_cast<size_t>(end - begin)};
-  noise.t_ns = timeline_.start_time(begin);
-  noise.end_ns = timeline_.end_time(end - 1);
-  noise.untimed_start = timeline_.starts_untimed(begin);
+  noise.t_ns = s_.timeline.start_time(begin);
+  noise.end_ns = s_.timeline.end_time(end - 1);
+  noise.untimed_start = s_.timeline.starts_untimed(begin);
   noise.reason = reason;
   sink_.on_noise(noise);
-  if (reason == NoiseReason::glitch && begin == answer_start_) answer_start_ = end;
+  if (reason == NoiseReason::glitch && begin == s_.answer_start) s_.answer_start = end;
   consume(end);
 }
 
 void RtuFramer::consume(uint64_t to) {
-  head_ = to;
-  timeline_.drop_before(head_);
-  if (head_ == end_) {
-    buf_.clear();
-    crc_index_.drop_before(head_);
-    base_ = head_;
-  } else if (head_ - base_ >= compact_after) {
-    buf_.erase(buf_.begin(), buf_.begin() + static_cast<ptrdiff_t>(head_ - base_));
-    crc_index_.drop_before(head_);
-    base_ = head_;
+  s_.head = to;
+  s_.timeline.drop_before(s_.head);
+  if (s_.head == s_.end) {
+    s_.buf.clear();
+    readings_.drop_before(s_.head);
+    s_.base = s_.head;
+  } else if (s_.head - s_.base >= compact_after) {
+    s_.buf.erase(s_.buf.begin(), s_.buf.begin() + static_cast<ptrdiff_t>(s_.head - s_.base));
+    readings_.drop_before(s_.head);
+    s_.base = s_.head;
   }
 }
 
