@@ -146,7 +146,8 @@ void ProblemEvidence::on_frame(const Frame& frame) {
   if (frame.check_ok) good_frame_bytes_ += frame.raw.size();
   if (frame.adu.empty()) return;
   count_length(frame);
-  if (!frame.check_ok) note_junk(frame.t_ns, frame.role == Role::response ? frame.device() : 0);
+  if (!frame.check_ok)
+    note_junk(frame.t_ns, frame.role == Role::response ? frame.device() : 0, frame.index);
   time_answer(frame);
   if (frame.role == Role::request && frame.check_ok) return on_request(frame);
   const bool awaited =
@@ -229,7 +230,7 @@ void ProblemEvidence::on_answer(const Frame& frame, Slave& slave) {
     if (frame.is_exception()) {
       note(asked.by_exception[frame.adu[2]], frame.t_ns, frame.index);
     } else if (frame.latency_ns) {
-      ++asked.timed_answers;
+      asked.timed.add(frame.t_ns, frame.index);  // not cited: there is one for every request
       asked.latency_sum_ns += *frame.latency_ns;
     }
   }
@@ -282,7 +283,7 @@ void ProblemEvidence::on_noise(const Noise& noise) {
   forget_citations();
   bytes_ += noise.raw.size();
   if (noise.reason != NoiseReason::glitch)
-    note_junk(noise.t_ns, noise.damaged_answer ? noise.request_slave : 0);
+    note_junk(noise.t_ns, noise.damaged_answer ? noise.request_slave : 0, noise.index);
   const bool after_request = std::exchange(after_request_, false);
   if (noise.reason == NoiseReason::glitch) {
     // Right after a request, the slave's driver turning on to answer; else the master's.
@@ -580,19 +581,19 @@ class Diagnosis {
     uint64_t timed = 0;
     int64_t sum_ns = 0;
     for (auto it = first; it != end; ++it) {
-      timed += it->second.timed_answers;
+      timed += it->second.timed.count;
       sum_ns += it->second.latency_sum_ns;
     }
     for (auto it = first; it != end; ++it) {
       const ProblemEvidence::Asked& asked = it->second;
-      const uint64_t others = timed - asked.timed_answers;
-      if (asked.timed_answers < some || others < some) continue;
+      const uint64_t others = timed - asked.timed.count;
+      if (asked.timed.count < some || others < some) continue;
       const double mean = asked.mean_latency_ns();
       const double others_mean = static_cast<double>(sum_ns - asked.latency_sum_ns) / others;
       if (mean < slow_factor * others_mean || mean - others_mean < slow_margin_ns) continue;
       const auto [slave, fc, start, quantity] = it->first;
       Problem& p = add(ProblemKind::slow_block, address, Severity::warning,
-                       s.first_request_ns.value_or(0), {});
+                       asked.timed.first_ns.value_or(0), asked.timed.first);
       p.evidence = {{"function", fc},
                     {"address", start},
                     {"quantity", quantity},
@@ -852,11 +853,13 @@ class Diagnosis {
   // is left out: a device answering junk at every poll is periodic too.
   bool noise_bursts() {
     std::vector<int64_t> gaps;
+    std::vector<uint64_t> first;  // the first bursts' first records
     std::optional<int64_t> last;
-    for (const auto& [t_ns, slave] : evidence_.junk()) {
+    for (const auto& [t_ns, slave, index] : evidence_.junk()) {
       if (damage_explained_[slave] && slave) continue;
       if (last && t_ns - *last < burst_merge_ns) continue;  // one burst's pieces
       if (last) gaps.push_back(t_ns - *last);
+      if (first.size() < ProblemEvidence::kept_records) first.push_back(index);
       last = t_ns;
     }
     if (gaps.size() < bursts_needed) return false;
@@ -870,7 +873,7 @@ class Diagnosis {
     if (static_cast<double>(regular) < regular_share * static_cast<double>(gaps.size()))
       return false;
     Problem& p = add(ProblemKind::noise_bursts, std::nullopt, Severity::warning,
-                     evidence_.junk().front().first, {});
+                     evidence_.junk().front().t_ns, std::move(first));
     p.evidence = {{"period_ms", period / 1e6}, {"bursts", gaps.size() + 1}};
     p.text = fmt::format(
         "Junk on the line every {:.0f} ms, as regular as a contactor or a drive switching "

@@ -124,10 +124,10 @@ class ProblemEvidence final : public RecordSink {
   struct Asked {
     uint64_t requests = 0;
     std::map<uint8_t, Events> by_exception;
-    uint64_t timed_answers = 0;
+    Events timed;  // its answers the clock timed, the first of them cited
     int64_t latency_sum_ns = 0;
     double mean_latency_ns() const {
-      return timed_answers ? static_cast<double>(latency_sum_ns) / timed_answers : 0;
+      return timed.count ? static_cast<double>(latency_sum_ns) / timed.count : 0;
     }
   };
 
@@ -145,7 +145,12 @@ class ProblemEvidence final : public RecordSink {
   // When junk came (noise but a turnaround's glitch, a frame whose check fails) and the slave
   // it is counted against (0: none), the first kept_junk of them: a period shows in them.
   static constexpr size_t kept_junk = 4096;
-  const std::vector<std::pair<int64_t, uint8_t>>& junk() const { return junk_; }
+  struct Junk {
+    int64_t t_ns;
+    uint8_t slave;
+    uint64_t index;  // its record's
+  };
+  const std::vector<Junk>& junk() const { return junk_; }
   // Every frame by length, whoever sent it.
   const Lengths& short_frames() const { return short_frames_; }
   const Lengths& long_frames() const { return long_frames_; }
@@ -188,11 +193,15 @@ class ProblemEvidence final : public RecordSink {
   Lengths short_frames_, long_frames_;
   std::array<std::array<Lengths, 2>, 256>
       slave_lengths_{};  // by address: a frame's costs no lookup
-  std::vector<std::pair<int64_t, uint8_t>> junk_;
+  std::vector<Junk> junk_;
   Events interruptions_;
   uint64_t last_request_ = 0;  // the index of the last good request
-  void note_junk(int64_t t_ns, uint8_t slave) {
-    if (junk_.size() < kept_junk) junk_.emplace_back(t_ns, slave);
+  // The first junk's records are cited, a few: a period's first bursts are among them.
+  static constexpr size_t cited_junk = 32;
+  void note_junk(int64_t t_ns, uint8_t slave, uint64_t index) {
+    if (junk_.size() >= kept_junk) return;
+    if (junk_.size() < cited_junk) cited_ = index;
+    junk_.push_back({t_ns, slave, index});
   }
   void count_length(const Frame& frame);
   void time_answer(const Frame& frame);

@@ -30,14 +30,31 @@ constexpr int64_t master_timeout_ns = 200'000'000;
 
 struct Diagnosed {
   std::vector<Problem> problems;
-  std::map<uint8_t, ExchangeCounts> counts;              // the statistics' of each slave
-  std::map<uint8_t, uint64_t> outages;                   // the statistics' silences of each
+  std::map<uint8_t, ExchangeCounts> counts;  // the statistics' of each slave
+  std::map<uint8_t, uint64_t> outages;       // the statistics' silences of each
+  struct Seen {
+    bool frame = false, check_ok = false;
+    uint8_t slave = 0;
+    std::optional<int64_t> latency_ns;
+    int64_t t_ns = 0;
+  };
+  std::map<uint64_t, Seen> records;  // what each record index was, for the problems' citations
   std::set<std::pair<std::string, int>> kinds() const {  // (kind, slave or -1)
     std::set<std::pair<std::string, int>> out;
     for (const Problem& p : problems)
       out.emplace(std::string(problem_info(p.kind).name), p.slave ? *p.slave : -1);
     return out;
   }
+};
+
+// What each record was, by its index.
+struct RecordsSeen final : RecordSink {
+  void on_frame(const Frame& f) override {
+    records[f.index] = {true, f.check_ok, f.device(), f.latency_ns, f.t_ns};
+  }
+  void on_noise(const Noise& n) override { records[n.index] = {false, false, 0, {}, n.t_ns}; }
+  void on_timeout(const Timeout&) override {}
+  std::map<uint64_t, Diagnosed::Seen> records;
 };
 
 // The bus read as a technician who gives modtap the master's time-out (--timeout) reads it,
@@ -52,15 +69,20 @@ Diagnosed diagnose(const BusOptions& bus, Delivery delivery = Delivery::whole_fr
   options.timeout_told = told;
   BusStatistics statistics(bus.format, options.clock);
   ProblemEvidence evidence;
+  RecordsSeen seen;
   FanOut sinks;
   sinks.add(statistics);
   sinks.add(evidence);
+  sinks.add(seen);
   BusDiagnostics history(bus.format, options.clock, sinks);
   Analyzer analyzer(options, {{"bus", ChannelRole::bus}}, history);
   for (const auto& c : busgen::deliver(capture, delivery, bus.seed))
     analyzer.push({0, c.t_ns, {capture.bytes.data() + c.offset, c.size}});
   analyzer.finish();
-  Diagnosed run{find_problems(statistics, evidence, {options.timeout_ns, told}), {}, {}};
+  Diagnosed run{find_problems(statistics, evidence, {options.timeout_ns, told}),
+                {},
+                {},
+                std::move(seen.records)};
   statistics.for_each_slave(
       [&](uint8_t address, const SlaveStatistics& slave) { run.counts[address] = slave.counts; });
   for (const Outage& outage : statistics.outages()) ++run.outages[outage.slave];
@@ -344,6 +366,32 @@ TEST(BusProblems, ARestartingDevicesSilencesAreItsOutages) {
       EXPECT_EQ(run.outages.count(4), 0u) << period << describe(run);
     }
   EXPECT_GT(ended_silent, 0u);  // the capture ended in a silence in some of these
+}
+
+// A slow block cites its first slow answers, and a contactor's bursts the first of its bursts:
+// records a report links, each what the problem says.
+TEST(BusProblems, ASlowBlockAndNoiseBurstsCiteTheirFirstRecords) {
+  const Diagnosed slow = diagnose(scan(40, "2:slow-block=0400H+10"), Delivery::per_byte);
+  ASSERT_EQ(slow.problems.size(), 1u) << describe(slow);
+  EXPECT_EQ(slow.problems[0].first_records.size(), ProblemEvidence::kept_records);
+  for (const uint64_t index : slow.problems[0].first_records) {
+    const Diagnosed::Seen& r = slow.records.at(index);
+    EXPECT_TRUE(r.frame && r.check_ok && r.slave == 2) << index;
+    EXPECT_GE(r.latency_ns.value_or(0), 60'000'000) << index;
+  }
+  BusOptions bus = scan(41);
+  bus.noise_burst_period_ns = 700'000'000;
+  const Diagnosed bursts = diagnose(bus, Delivery::per_byte);
+  ASSERT_EQ(bursts.problems.size(), 1u) << describe(bursts);
+  const auto& first = bursts.problems[0].first_records;
+  ASSERT_EQ(first.size(), ProblemEvidence::kept_records);
+  for (size_t i = 0; i < first.size(); ++i) {
+    const Diagnosed::Seen& r = bursts.records.at(first[i]);
+    EXPECT_FALSE(r.check_ok) << first[i];  // junk, or a frame a burst fell on
+    if (i > 0) {
+      EXPECT_GT(r.t_ns - bursts.records.at(first[i - 1]).t_ns, 600'000'000) << i;
+    }
+  }
 }
 
 // A slave asked 200 times that answered once (a record read as its answer that was none, or
