@@ -428,22 +428,18 @@ class Diagnosis {
       p.evidence.emplace_back("fast_reads", pace->fast_reads);
       p.evidence.emplace_back("reads", pace->reads);
     }
-    p.text = fmt::format("The line's settings look wrong: {}. {}", why, remedy(p));
+    p.text = fmt::format("The line's settings look wrong: {}{}", why, remedy(p));
     return true;
   }
 
   // What to read the capture with: the settings found to read it, or the search for them.
   std::string remedy(Problem& p) const {
     const auto& better = options_.better;
-    if (!better) return "Are they the line's? Try --baud auto";
+    if (!better) return ". Are they the line's? Try --baud auto";
     const SerialFormat& f = better->format;
     p.evidence.emplace_back("better_baud", f.baud);
     p.evidence.emplace_back("better_good_share", better->good_share);
-    return fmt::format("At {}, {:.0f}% do: read it with --baud {} --parity {}{}", describe(f),
-                       100 * better->good_share, f.baud, to_string(f.parity),
-                       f.stop_bits == statistics_.format().stop_bits
-                           ? ""
-                           : fmt::format(" --stop-bits {}", f.stop_bits));
+    return "; " + read_it_with(*better, statistics_.format());
   }
 
   // "Slave 3 (gd20)": the model named where one was set or found, not the generic one.
@@ -1010,6 +1006,14 @@ class Diagnosis {
 std::vector<Problem> find_problems(const BusStatistics& statistics, const ProblemEvidence& evidence,
                                    const ProblemOptions& options) {
   return Diagnosis(statistics, evidence, options).run();
+}
+
+std::string read_it_with(const BetterSettings& better, const SerialFormat& given) {
+  const SerialFormat& f = better.format;
+  return fmt::format(
+      "at {}, {:.0f}% do: read it with --baud {} --parity {}{}", describe(f),
+      100 * better.good_share, f.baud, to_string(f.parity),
+      f.stop_bits == given.stop_bits ? "" : fmt::format(" --stop-bits {}", f.stop_bits));
 }
 
 }  // namespace modtap

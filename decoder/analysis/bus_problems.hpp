@@ -221,6 +221,10 @@ struct BetterSettings {
   double given_share = 0;
 };
 
+// "at 19200 8E1, 100% do: read it with --baud 19200 --parity even", for settings read with
+// `given` (the stop bits named only where they differ).
+std::string read_it_with(const BetterSettings& better, const SerialFormat& given);
+
 struct ProblemOptions {
   int64_t timeout_ns = 1'000'000'000;  // the time-out the analyzer waits for an answer
   bool timeout_told = false;           // timeout_ns is the master's (--timeout), not a default

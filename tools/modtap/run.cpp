@@ -46,7 +46,16 @@ struct HintContext {
   bool untimed = false;                    // a capture without timing: no baud reads differently
   std::optional<ModeChoice> better_mode;   // the other mode reads the capture where this did not
   uint64_t timed_answers = 0, early_answers = 0;  // the matcher's: answers before their questions
+  std::optional<BetterSettings> better{};         // settings found to read the capture
 };
+
+// What to do about settings that read the traffic poorly: the ones found to read it, or the
+// search for them.
+std::string settings_remedy(const SerialFormat& format, const HintContext& context) {
+  if (!context.better)
+    return fmt::format("are {} the line's settings? try --baud auto", describe(format));
+  return read_it_with(*context.better, format);
+}
 
 // After a run whose traffic made little sense, or came faster than the baud allows, say so,
 // naming the setting the evidence points at.
@@ -98,9 +107,8 @@ void hint_settings(const SerialFormat& format, const LineHealth& health, const C
                describe(format), pace.fast_reads, pace.reads);
   else if (health.looks_wrong())
     fmt::print(stderr,
-               "modtap: hint: only {:.0f}% of {} bytes formed frames with a good check; are {} "
-               "the line's settings? try --baud auto\n",
-               100 * health.good_share(), health.bytes, describe(format));
+               "modtap: hint: only {:.0f}% of {} bytes formed frames with a good check; {}\n",
+               100 * health.good_share(), health.bytes, settings_remedy(format, context));
 }
 
 // modtap top's screen over the session's statistics; none without `top`.
@@ -196,10 +204,11 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
   const bool doubtful = 3 * health.good_frame_bytes < 2 * health.bytes ||
                         session.pipeline().pace().too_fast() ||
                         mostly_early(bus.matcher().timed_answers(), bus.matcher().early_answers());
+  std::optional<BetterSettings> better;
   if (o.baud && o.parity && !piped && source->clock() != ClockQuality::none && health.bytes >= 64 &&
       doubtful)
-    if (const auto better = better_format(o.read_file, open, analyzer_options(o, source->clock())))
-      session.pipeline().found_better_settings(*better);
+    better = better_format(o.read_file, open, analyzer_options(o, source->clock()));
+  if (better) session.pipeline().found_better_settings(*better);
   session.finish(!broken, frames_met(o, autostop, session).value_or(stopped_by.value_or("")));
   if (bus.clock_steps_back())
     fmt::print(stderr,
@@ -216,6 +225,7 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
                                           : captures::detect_format(o.read_file);
   HintContext context{
       format == captures::Format::sigrok, {}, source->clock() == ClockQuality::none, std::nullopt};
+  context.better = better;
   context.timed_answers = bus.matcher().timed_answers();
   context.early_answers = bus.matcher().early_answers();
   if (context.logic_analyzer && o.sigrok_channels.empty() && health.bytes == 0)
