@@ -30,6 +30,7 @@ void append_field(fmt::memory_buffer& out, std::string_view text) {
 
 std::vector<FollowedRegister> parse_follow(const std::string& list, RegisterBase base) {
   std::vector<FollowedRegister> follow;
+  if (list.empty()) return follow;
   size_t at = 0;
   while (at <= list.size()) {
     const size_t comma = std::min(list.find(',', at), list.size());

@@ -25,14 +25,10 @@ struct FollowedRegister {
   std::string name;
   std::optional<NamedRegister> number;
 };
-// "frequency_command,2503H"; throws std::invalid_argument for an empty item.
+// "frequency_command,2503H" (none for an empty list, which follows every register); throws
+// std::invalid_argument for an empty item.
 std::vector<FollowedRegister> parse_follow(const std::string& list,
                                            RegisterBase base = RegisterBase::hex);
-// The same, where an empty list follows every register.
-inline std::vector<FollowedRegister> parse_follow_or_all(const std::string& list,
-                                                         RegisterBase base) {
-  return list.empty() ? std::vector<FollowedRegister>{} : parse_follow(list, base);
-}
 
 // Whether `reg` is one of `follow` (by name or address); an empty list follows every register.
 bool follows(const std::vector<FollowedRegister>& follow, const RegisterValue& reg);

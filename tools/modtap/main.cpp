@@ -108,7 +108,7 @@ std::optional<std::string> refuse_follow(const RunOptions& o) {
   if (o.follow.empty()) return std::nullopt;
   const tools::ModelCatalog catalog = tools::load_models(o);
   const auto models = catalog.all();
-  for (const auto& item : output::parse_follow(o.follow, o.register_base)) {
+  for (const auto& item : o.follow) {
     if (item.number || std::any_of(models.begin(), models.end(),
                                    [&](const auto* m) { return names_register(*m, item.name); }))
       continue;
@@ -173,7 +173,7 @@ void add_output_options(CLI::App& app, RunOptions& o, Command& command) {
       tools::add_enum_option(app, "-T,--output", o.output,
                              "Output: text, json (JSON Lines), stats, csv (register "
                              "values over time), none (default: text, or none with -w)");
-  app.add_option("--follow", o.follow,
+  app.add_option("--follow", o.follow_list,
                  "With -T csv (implied): the registers to follow, by name or address: "
                  "frequency_command,2503H")
       ->type_name("REGISTERS");
@@ -376,6 +376,7 @@ void settle_implied(RunOptions& o, const Command& command) {
   });
   if (network && command.chunk_jitter->count() == 0) o.jitter_ms = captures::network_read_jitter_ms;
   if (!o.write_file.empty() && command.output->count() == 0) o.output = OutputKind::none;
+  o.follow = output::parse_follow(o.follow_list, o.register_base);
   if (!o.follow.empty() && command.output->count() == 0)
     o.output = o.report_file.empty() ? OutputKind::csv : OutputKind::text;
   if (o.quiet && o.output != OutputKind::stats) o.output = OutputKind::none;
@@ -441,6 +442,7 @@ void warn_idle_options(const RunOptions& o, const Command& command) {
 
 int run_command(RunOptions& o, const Command& command) {
   try {
+    settle_implied(o, command);
     if (command.check->parsed()) return tools::check_model_files(command.check_files, o.models_dir);
     if (command.models->parsed()) return list_models(o);
     if (command.fields->parsed()) return list_fields();
@@ -495,6 +497,5 @@ int main(int argc, char** argv) {
     return 2;
   }
   signal(SIGPIPE, SIG_IGN);  // a closed pipe is a failed write (EPIPE), handled in run_command
-  settle_implied(o, command);
   return run_command(o, command);
 }

@@ -17,9 +17,8 @@ std::unique_ptr<RecordSink> make_sink(const RunOptions& o, output::Output& out,
   if (o.output == OutputKind::json) return std::make_unique<output::JsonSink>(out, channels);
   const RecordClock* clock_before_filter = o.display_filter.empty() ? nullptr : &clock;
   if (o.output == OutputKind::csv)
-    return std::make_unique<output::CsvSink>(out,
-                                             output::parse_follow_or_all(o.follow, o.register_base),
-                                             time_format, o.register_base, clock_before_filter);
+    return std::make_unique<output::CsvSink>(out, o.follow, time_format, o.register_base,
+                                             clock_before_filter);
   if (o.explain)
     return std::make_unique<output::ExplainSink>(
         out, channels, output::TextOptions{o.verbose, time_format, o.register_base, nullptr},
@@ -75,10 +74,7 @@ Needs needs_of(const RunOptions& o) {
 // The report's registers over time: those --follow names, none without it.
 std::function<bool(const RegisterValue&)> report_follow(const RunOptions& o) {
   if (o.follow.empty()) return {};
-  const auto base = o.register_base;
-  return [follow = output::parse_follow(o.follow, base)](const RegisterValue& reg) {
-    return output::follows(follow, reg);
-  };
+  return [follow = o.follow](const RegisterValue& reg) { return output::follows(follow, reg); };
 }
 
 }  // namespace
@@ -269,8 +265,7 @@ RecordSink& Pipeline::before_filter() {
 // Behind the model stage, whose registers it looks at; before the filter, which may hide them.
 RecordSink& Pipeline::watch_follow(const RunOptions& o, RecordSink& next) {
   if (o.follow.empty()) return next;
-  const auto base = o.register_base;
-  follow_watch_ = std::make_unique<FollowWatch>(output::parse_follow(o.follow, base), next);
+  follow_watch_ = std::make_unique<FollowWatch>(o.follow, next);
   return *follow_watch_;
 }
 

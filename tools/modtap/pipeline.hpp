@@ -78,7 +78,9 @@ struct RunOptions {
   uint64_t max_records = 0;  // -c: frames and noise; 0: no limit
   bool quiet = false;
   std::string display_filter;
-  std::string follow;
+  std::string follow_list;  // --follow as given
+  // --follow parsed, once the register base is known: none follows every register.
+  std::vector<output::FollowedRegister> follow;
   RegisterBase register_base = RegisterBase::hex;
   std::string metrics_address;
   std::string metrics_web_config;  // HTTPS and users, in the Prometheus exporter toolkit's format

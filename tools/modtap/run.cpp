@@ -127,7 +127,7 @@ std::unique_ptr<top::TopView> top_view(const RunOptions& o, Session& session,
                                   o.baud && o.parity ? "as given" : "found by --baud auto");
   settings.clock = std::string(to_string(clock));
   if (!o.read_file.empty()) settings.replay_speed = o.top_speed;
-  settings.follow = output::parse_follow_or_all(o.follow, o.register_base);
+  settings.follow = o.follow;
   settings.register_base = o.register_base;
   settings.on_quit = std::move(on_quit);
   return std::make_unique<top::TopView>(std::move(sources), std::move(settings));

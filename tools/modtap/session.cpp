@@ -157,7 +157,7 @@ class MqttOutput {
     options.bus = o.mqtt_bus.empty() ? bus : o.mqtt_bus;
     options.interval_ns = static_cast<int64_t>(o.mqtt_interval_s * 1e9);
     const auto base = o.register_base;
-    options.follow = output::parse_follow_or_all(o.follow, base);
+    options.follow = o.follow;
     options.base = base;
     if (!o.mqtt_discovery.empty()) options.discovery_prefix = o.mqtt_discovery;
     broker_ =
