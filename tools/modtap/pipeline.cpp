@@ -173,18 +173,44 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
     if (std::any_of(models.begin(), models.end(), [](auto* m) { return m->identification; }))
       may_identify_ = [named = choice.by_slave](uint8_t slave) { return !named.count(slave); };
     if (!o.timeout_given) slave_timeouts_ = modtap::model_timeouts(choice);
-    if (!o.display_filter.empty()) filter(o.display_filter, o.register_base, channels);
   }
-  // Every record's time is kept before the filter picks some: the time column counts over the
-  // whole capture, as without the filter.
-  if (filter_) clock_stage_ = std::make_unique<ClockStage>(clock_, *filter_);
-  if (needs.meanings)
-    interpreter_ = std::make_unique<ModelInterpreter>(
-        catalog_.all(), choice, clock, watch_follow(o, before_filter()), needs.unnamed_registers,
-        o.timeout_given ? nullptr : &slave_timeouts_);
-  diagnostics_ =
-      std::make_unique<BusDiagnostics>(format, clock, after_diagnostics(), read_jitter_ns(o));
   if (!o.write_file.empty()) write_pcapng(o, ring, channels, format, clock);
+  // The stages every record passes, in the order it passes them, each present where the run
+  // needs it; then every output (fan_out_). The record limit goes in front of them later.
+  const bool filtered = !o.display_filter.empty();
+  entry_ = &in_order(
+      {
+          [&](RecordSink& next) -> RecordSink& {  // the bus's history: its findings
+            diagnostics_ = std::make_unique<BusDiagnostics>(format, clock, next, read_jitter_ns(o));
+            return *diagnostics_;
+          },
+          [&](RecordSink& next) -> RecordSink& {  // frames read through the device models
+            if (!needs.meanings) return next;
+            interpreter_ = std::make_unique<ModelInterpreter>(
+                catalog_.all(), choice, clock, next, needs.unnamed_registers,
+                o.timeout_given ? nullptr : &slave_timeouts_);
+            return *interpreter_;
+          },
+          [&](RecordSink& next) -> RecordSink& {  // which --follow registers some frame read
+            if (!needs.meanings || o.follow.empty()) return next;
+            follow_watch_ = std::make_unique<FollowWatch>(o.follow, next);
+            return *follow_watch_;
+          },
+          // Every record's time, kept before the filter picks some: the time column counts
+          // over the whole capture, as without the filter.
+          [&](RecordSink& next) -> RecordSink& {
+            if (!filtered) return next;
+            clock_stage_ = std::make_unique<ClockStage>(clock_, next);
+            return *clock_stage_;
+          },
+          [&](RecordSink& next) -> RecordSink& {  // -Y
+            if (!filtered) return next;
+            filter_ = std::make_unique<FilterStage>(
+                compile_filter(o.display_filter, o.register_base, channels), next);
+            return *filter_;
+          },
+      },
+      fan_out_);
 }
 
 namespace {
@@ -252,21 +278,12 @@ output::MqttPublisher& Pipeline::publish(output::MessageBroker& broker,
   return *mqtt_;
 }
 
-RecordSink& Pipeline::after_diagnostics() {
-  if (interpreter_) return *interpreter_;
-  return before_filter();
-}
-
-RecordSink& Pipeline::before_filter() {
-  if (clock_stage_) return *clock_stage_;
-  return fan_out_;
-}
-
-// Behind the model stage, whose registers it looks at; before the filter, which may hide them.
-RecordSink& Pipeline::watch_follow(const RunOptions& o, RecordSink& next) {
-  if (o.follow.empty()) return next;
-  follow_watch_ = std::make_unique<FollowWatch>(o.follow, next);
-  return *follow_watch_;
+// Each stage built in front of the ones after it, from the last: `stages` in flow order.
+RecordSink& Pipeline::in_order(std::initializer_list<StageBuilder> stages, RecordSink& last) {
+  RecordSink* next = &last;
+  for (auto stage = std::rbegin(stages); stage != std::rend(stages); ++stage)
+    next = &(*stage)(*next);
+  return *next;
 }
 
 FollowWatch::FollowWatch(const std::vector<output::FollowedRegister>& follow, RecordSink& next)
@@ -288,11 +305,6 @@ std::vector<std::string> FollowWatch::unseen() const {
 }
 
 // -Y: every output (text, JSON, statistics, pcapng) sees only the records it matches.
-void Pipeline::filter(const std::string& text, RegisterBase base,
-                      const std::vector<ChannelInfo>& channels) {
-  filter_ = std::make_unique<FilterStage>(compile_filter(text, base, channels), fan_out_);
-}
-
 DisplayFilter Pipeline::compile_filter(const std::string& text, RegisterBase base,
                                        const std::vector<ChannelInfo>& channels) const {
   const auto models = catalog_.all();

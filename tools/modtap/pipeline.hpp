@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <initializer_list>
 #include <map>
 #include <memory>
 #include <optional>
@@ -139,7 +140,7 @@ class Pipeline {
   // Where records enter.
   RecordSink& all() {
     if (limit_) return *limit_;
-    return *diagnostics_;
+    return *entry_;
   }
   // -c N: stop after N frames and noise records; `on_reached` stops a live run.
   void limit_records(uint64_t max_records, std::function<void()> on_reached = {});
@@ -192,10 +193,9 @@ class Pipeline {
   }
 
  private:
-  RecordSink& after_diagnostics();
-  RecordSink& before_filter();  // the clock stage in front of the filter, or the sinks
-  RecordSink& watch_follow(const RunOptions& o, RecordSink& next);
-  void filter(const std::string& text, RegisterBase base, const std::vector<ChannelInfo>& channels);
+  // A stage of the chain: built in front of `next`, the stages after it, or absent (`next`).
+  using StageBuilder = std::function<RecordSink&(RecordSink& next)>;
+  static RecordSink& in_order(std::initializer_list<StageBuilder> stages, RecordSink& last);
   DisplayFilter compile_filter(const std::string& text, RegisterBase base,
                                const std::vector<ChannelInfo>& channels) const;
   void feed_top(const RunOptions& o, const std::vector<ChannelInfo>& channels,
@@ -228,6 +228,7 @@ class Pipeline {
   std::unique_ptr<ModelInterpreter> interpreter_;
   SlaveTimeouts slave_timeouts_{};
   std::unique_ptr<output::PcapngFiles> pcapng_;
+  RecordSink* entry_ = nullptr;  // the first stage of the chain
   std::unique_ptr<RecordLimit> limit_;
   std::unique_ptr<output::MqttPublisher> mqtt_;
   std::unique_ptr<top::TopFeed> top_feed_;
