@@ -92,7 +92,9 @@ void write_discovery_summary(Output& out, const std::vector<SlaveDraft>& drafts,
     if (!draft.too_few_samples.empty()) {
       out.print("  read fewer than {} times, too few to tell (a longer capture will):",
                 RegisterDiscovery::min_samples);
-      for (const uint16_t address : draft.too_few_samples) out.print(" {:04X}H", address);
+      const char* separator = " ";
+      for (const auto& [table, address] : draft.too_few_samples)
+        out.print("{}{} {:04X}H", std::exchange(separator, ", "), to_string(table), address);
       out.print("\n");
     }
   }

@@ -469,7 +469,7 @@ SlaveDraft RegisterDiscovery::draft_of(uint8_t slave) const {
   for (auto it = words_.lower_bound({slave, Table::coil, 0});
        it != words_.end() && it->first.slave == slave; ++it)
     if (it->second.history.samples < min_samples && it->second.written.samples == 0)
-      draft.too_few_samples.push_back(it->first.address);
+      draft.too_few_samples.emplace_back(it->first.table, it->first.address);
   return draft;
 }
 

@@ -11,6 +11,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "decoder/models/device_model.hpp"
@@ -128,7 +129,7 @@ struct SlaveDraft {
   std::vector<PolledBlock> blocks;  // read and written, by first register
   std::vector<RegisterReading> registers;
   // Registers read fewer times than a reading needs: named so, to be read longer.
-  std::vector<uint16_t> too_few_samples;
+  std::vector<std::pair<Table, uint16_t>> too_few_samples;  // read too few times to tell
 };
 
 struct PollingProgram {

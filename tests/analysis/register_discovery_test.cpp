@@ -178,7 +178,9 @@ TEST(RegisterDiscovery, ARegisterReadTooFewTimesIsNamedNotRead) {
   const auto drafts = bus.found().drafts();
   ASSERT_EQ(drafts.size(), 1u);
   EXPECT_TRUE(drafts[0].registers.empty());
-  EXPECT_EQ(drafts[0].too_few_samples, (std::vector<uint16_t>{0x20, 0x21}));
+  using Sampled = std::pair<Table, uint16_t>;
+  EXPECT_EQ(drafts[0].too_few_samples,
+            (std::vector<Sampled>{{Table::holding, 0x20}, {Table::holding, 0x21}}));
 }
 
 // The master's program: the blocks of one cycle in order, and its period.
