@@ -1,6 +1,7 @@
 #include "output/model_draft.hpp"
 
 #include <filesystem>
+#include <utility>
 
 #include "captures/output_file.hpp"
 #include "decoder/protocol/function_codes.hpp"
