@@ -8,7 +8,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "output/mosquitto_broker.hpp"
+#include "output/network/mosquitto_broker.hpp"
 
 namespace modtap::output {
 namespace {

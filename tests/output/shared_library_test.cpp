@@ -1,4 +1,4 @@
-#include "output/shared_library.hpp"
+#include "output/network/shared_library.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-#include "output/web_config.hpp"
+#include "output/network/web_config.hpp"
 
 #include <algorithm>
 #include <chrono>

@@ -27,7 +27,7 @@
 #include "output/csv_sink.hpp"
 #include "output/explain_sink.hpp"
 #include "output/metrics.hpp"
-#include "output/mosquitto_broker.hpp"
+#include "output/network/mosquitto_broker.hpp"
 #include "output/mqtt_publisher.hpp"
 #include "output/output.hpp"
 #include "output/pcapng_sink.hpp"

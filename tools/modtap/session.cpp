@@ -10,7 +10,7 @@
 
 #include "captures/piped_input.hpp"
 #include "output/model_draft.hpp"
-#include "output/mosquitto_broker.hpp"
+#include "output/network/mosquitto_broker.hpp"
 #include "output/mqtt_publisher.hpp"
 #include "output/report.hpp"
 #include "output/statistics_output.hpp"

@@ -16,6 +16,7 @@
 #include "decoder/protocol/records.hpp"
 #include "decoder/protocol/serial_format.hpp"
 #include "output/metrics.hpp"
+#include "output/network/metrics_server.hpp"
 #include "output/output.hpp"
 #include "tools/modtap/pipeline.hpp"
 

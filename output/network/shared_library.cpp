@@ -1,4 +1,4 @@
-#include "output/shared_library.hpp"
+#include "output/network/shared_library.hpp"
 
 #include <dlfcn.h>
 

@@ -1,4 +1,4 @@
-#include "output/mosquitto_broker.hpp"
+#include "output/network/mosquitto_broker.hpp"
 
 #include <unistd.h>
 
@@ -10,7 +10,7 @@
 #include <fmt/format.h>
 #include <mosquitto.h>
 
-#include "output/shared_library.hpp"
+#include "output/network/shared_library.hpp"
 
 namespace modtap::output {
 
