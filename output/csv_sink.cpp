@@ -1,7 +1,6 @@
 #include "output/csv_sink.hpp"
 
 #include <ctime>
-#include <stdexcept>
 
 #include <fmt/chrono.h>
 
@@ -28,33 +27,10 @@ void append_field(fmt::memory_buffer& out, std::string_view text) {
 
 }  // namespace
 
-std::vector<FollowedRegister> parse_follow(const std::string& list, RegisterBase base) {
-  std::vector<FollowedRegister> follow;
-  if (list.empty()) return follow;
-  size_t at = 0;
-  while (at <= list.size()) {
-    const size_t comma = std::min(list.find(',', at), list.size());
-    const std::string item = list.substr(at, comma - at);
-    if (item.empty()) throw std::invalid_argument("--follow: an empty name in \"" + list + "\"");
-    follow.push_back({item, parse_register_number(item, base)});
-    at = comma + 1;
-  }
-  return follow;
-}
-
 CsvSink::CsvSink(Output& out, std::vector<FollowedRegister> follow, TimeFormat time_format,
                  RegisterBase base, const RecordClock* clock)
     : out_(out), follow_(std::move(follow)), time_format_(time_format), base_(base), clock_(clock) {
   out_.print("t,slave,address,name,value,unit,raw,text\n");
-}
-
-bool follows(const std::vector<FollowedRegister>& follow, const RegisterValue& reg) {
-  if (follow.empty()) return true;
-  for (const FollowedRegister& f : follow)
-    if (f.name == reg.name || (f.number && f.number->address == reg.address &&
-                               f.number->table.value_or(reg.table) == reg.table))
-      return true;
-  return false;
 }
 
 // Seconds since the capture's first record (the text's time column), with -t a since the Unix

@@ -14,24 +14,11 @@
 #include "decoder/models/register_meaning.hpp"
 #include "decoder/protocol/record_sink.hpp"
 #include "decoder/protocol/register_numbering.hpp"
+#include "output/followed_registers.hpp"
 #include "output/output.hpp"
 #include "output/text_sink.hpp"
 
 namespace modtap::output {
-
-// One --follow item: a register's name (frequency_command, P00.04) or number (2502H, 0x2502,
-// or a decimal number in the --register-base convention: 9474, 9475, 49475).
-struct FollowedRegister {
-  std::string name;
-  std::optional<NamedRegister> number;
-};
-// "frequency_command,2503H" (none for an empty list, which follows every register); throws
-// std::invalid_argument for an empty item.
-std::vector<FollowedRegister> parse_follow(const std::string& list,
-                                           RegisterBase base = RegisterBase::hex);
-
-// Whether `reg` is one of `follow` (by name or address); an empty list follows every register.
-bool follows(const std::vector<FollowedRegister>& follow, const RegisterValue& reg);
 
 class CsvSink final : public RecordSink {
  public:

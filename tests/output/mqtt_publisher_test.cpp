@@ -245,7 +245,7 @@ TEST(MqttPublisher, ARegisterNoModelNamesIsNamedByTableAndAddress) {
 TEST(MqttPublisher, FollowLimitsWhatIsPublished) {
   RecordingBroker broker;
   MqttOptions o = options(0);
-  o.follow = parse_follow("output_current");
+  o.follow = {{"output_current", std::nullopt}};
   Bus bus(broker, o);
   bus.read(frequency(6000), 1.0);
   EXPECT_TRUE(broker.on(topic).empty());

@@ -1,6 +1,7 @@
 // modtap: a passive Modbus RTU/ASCII analyzer. This file is its command line: it checks the
 // options and hands them to a run (run.hpp); the stages do the work (docs/architecture.md).
 #include <algorithm>
+#include <stdexcept>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -364,6 +365,21 @@ void add_subcommands(CLI::App& app, RunOptions& o, Command& command) {
       ->type_name("FILE");
 }
 
+// --follow "frequency_command,2503H": none for an empty list, which follows every register.
+std::vector<output::FollowedRegister> parse_follow(const std::string& list, RegisterBase base) {
+  std::vector<output::FollowedRegister> follow;
+  if (list.empty()) return follow;
+  size_t at = 0;
+  while (at <= list.size()) {
+    const size_t comma = std::min(list.find(',', at), list.size());
+    const std::string item = list.substr(at, comma - at);
+    if (item.empty()) throw std::invalid_argument("--follow: an empty name in \"" + list + "\"");
+    follow.push_back({item, parse_register_number(item, base)});
+    at = comma + 1;
+  }
+  return follow;
+}
+
 // What options left at their defaults mean beside the others given: -w alone writes nothing
 // to the terminal (as tshark -w), --follow alone the values over time, -q only statistics.
 void settle_implied(RunOptions& o, const Command& command) {
@@ -376,7 +392,7 @@ void settle_implied(RunOptions& o, const Command& command) {
   });
   if (network && command.chunk_jitter->count() == 0) o.jitter_ms = captures::network_read_jitter_ms;
   if (!o.write_file.empty() && command.output->count() == 0) o.output = OutputKind::none;
-  o.follow = output::parse_follow(o.follow_list, o.register_base);
+  o.follow = parse_follow(o.follow_list, o.register_base);
   if (!o.follow.empty() && command.output->count() == 0)
     o.output = o.report_file.empty() ? OutputKind::csv : OutputKind::text;
   if (o.quiet && o.output != OutputKind::stats) o.output = OutputKind::none;
