@@ -223,8 +223,12 @@ void TextSink::tree(const RecordFields& f, AddressNumbering numbering) {
     }
     out_.print(FMT_COMPILE("\n"));
   }
-  if (f.request) out_.print(FMT_COMPILE("    Request in frame: {}\n"), *f.request);
-  if (f.latency_ns) out_.print(FMT_COMPILE("    Latency: {} ms\n"), Fixed{*f.latency_ns, 6, 3});
+  // Titled and scaled as the field registry says, as JSON and Wireshark show them.
+  if (f.request)
+    out_.print(FMT_COMPILE("    {}: {}\n"), field_info(FieldId::request).title, *f.request);
+  if (f.latency_ns)
+    out_.print(FMT_COMPILE("    {}: {}\n"), field_info(FieldId::latency_us).title,
+               Fixed{*f.latency_ns, 3, 3});
   registers_tree(f);
 }
 
