@@ -287,35 +287,32 @@ void Analyzer::chain(const Frame& frame) {
 // the copy's answer makes the copy the slave's late answer; anything else (noise, the request
 // again, silence) leaves the matcher to judge it as any copy: the master's retry.
 void Analyzer::release_held(bool late) {
-  Frame& copy = *held_.frame;
   matcher_.end_doubt();
-  if (late) {
-    matcher_.on_late_copy(copy);
-  } else {
-    matcher_.on_frame(copy, ChannelRole::bus);
-  }
-  out_.on_frame(copy);
+  pass_on(*held_.frame, late ? HeldAs::answer : HeldAs::judged);
   held_.frame.reset();
 }
 
 void Analyzer::release_chain(bool second_answered) {
-  Frame& first = *chained_.frame;
-  Frame& second = *held_.frame;
   matcher_.end_doubt();
-  if (second_answered) {
-    matcher_.on_retry_copy(first);
-  } else {
-    matcher_.on_frame(first, ChannelRole::bus);
-  }
-  out_.on_frame(first);
-  if (second_answered) {
-    matcher_.on_late_copy(second);
-  } else {
-    matcher_.on_frame(second, ChannelRole::bus);
-  }
-  out_.on_frame(second);
+  pass_on(*chained_.frame, second_answered ? HeldAs::retry : HeldAs::judged);
+  pass_on(*held_.frame, second_answered ? HeldAs::answer : HeldAs::judged);
   chained_.frame.reset();
   held_.frame.reset();
+}
+
+void Analyzer::pass_on(Frame& copy, HeldAs as) {
+  switch (as) {
+    case HeldAs::answer:
+      matcher_.on_late_copy(copy);
+      break;
+    case HeldAs::retry:
+      matcher_.on_retry_copy(copy);
+      break;
+    case HeldAs::judged:
+      matcher_.on_frame(copy, ChannelRole::bus);
+      break;
+  }
+  out_.on_frame(copy);
 }
 
 // Nothing came to tell the held copies apart: each goes as the matcher judges it.

@@ -101,6 +101,10 @@ class Analyzer final : private FrameSink {
   // first, or each as the matcher judges it.
   void release_chain(bool second_answered);
   void release_undecided();
+  // How the master's next move told a held copy: the answer, the master's retry, or untold
+  // (judged by the matcher as any copy).
+  enum class HeldAs : uint8_t { answer, retry, judged };
+  void pass_on(Frame& copy, HeldAs as);
   void settle(int64_t settled_ns);
   void release_held_by(int64_t now_ns) {
     if (held_.frame && now_ns >= held_.decide_by_ns) release_undecided();
