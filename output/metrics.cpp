@@ -65,19 +65,27 @@ void latency_histogram(Exposition& e, const BusStatistics& s) {
   });
 }
 
+// The exchange counts each slave has per function code: the metric, its help, the count.
+struct ExchangeFamily {
+  std::string_view name;
+  std::string_view help;
+  uint64_t ExchangeCounts::*count;
+};
+constexpr ExchangeFamily exchange_families[] = {
+    {"modtap_requests_total", "Requests to a slave with a good check, per function code",
+     &ExchangeCounts::requests},
+    {"modtap_responses_total", "Responses from a slave with a good check, per function code",
+     &ExchangeCounts::responses},
+    {"modtap_timeouts_total",
+     "Requests a slave left unanswered past the time-out, per function code",
+     &ExchangeCounts::timeouts},
+    {"modtap_retries_total", "Requests sent again after no answer, per slave and function code",
+     &ExchangeCounts::retries},
+};
+
 void per_slave(Exposition& e, const BusStatistics& s) {
-  exchange_family(e, s, "modtap_requests_total",
-                  "Requests to a slave with a good check, per function code",
-                  &ExchangeCounts::requests);
-  exchange_family(e, s, "modtap_responses_total",
-                  "Responses from a slave with a good check, per function code",
-                  &ExchangeCounts::responses);
-  exchange_family(e, s, "modtap_timeouts_total",
-                  "Requests a slave left unanswered past the time-out, per function code",
-                  &ExchangeCounts::timeouts);
-  exchange_family(e, s, "modtap_retries_total",
-                  "Requests sent again after no answer, per slave and function code",
-                  &ExchangeCounts::retries);
+  for (const ExchangeFamily& family : exchange_families)
+    exchange_family(e, s, family.name, family.help, family.count);
   // A frame's function code may be as corrupted as its check: bad checks are counted per slave.
   e.family("modtap_bad_checks_total", "counter",
            "Frames to or from a slave with a wrong CRC or LRC");
