@@ -1,11 +1,11 @@
 // modtap: a passive Modbus RTU/ASCII analyzer. This file is its command line: it checks the
 // options and hands them to a run (run.hpp); the stages do the work (docs/architecture.md).
 #include <algorithm>
-#include <stdexcept>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <utility>

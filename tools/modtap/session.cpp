@@ -10,8 +10,8 @@
 
 #include "captures/piped_input.hpp"
 #include "output/model_draft.hpp"
-#include "output/network/mosquitto_broker.hpp"
 #include "output/mqtt_publisher.hpp"
+#include "output/network/mosquitto_broker.hpp"
 #include "output/report.hpp"
 #include "output/statistics_output.hpp"
 
