@@ -8,6 +8,20 @@
 #include "output/text_sink.hpp"
 
 namespace modtap::tools {
+
+// What an output needs of the stages before it.
+struct Needs {
+  bool statistics = false;         // the statistics and the problems' evidence
+  bool meanings = false;           // frames read through the device models
+  bool unnamed_registers = false;  // with the registers no model names
+
+  void add(const Needs& more) {
+    statistics |= more.statistics;
+    meanings |= more.meanings;
+    unnamed_registers |= more.unnamed_registers;
+  }
+};
+
 namespace {
 
 std::unique_ptr<RecordSink> make_sink(const RunOptions& o, output::Output& out,
@@ -29,19 +43,6 @@ std::unique_ptr<RecordSink> make_sink(const RunOptions& o, output::Output& out,
         output::TextOptions{o.verbose, time_format, o.register_base, clock_before_filter});
   return std::make_unique<NullSink>();  // stats: the statistics print at the end
 }
-
-// What an output needs of the stages before it.
-struct Needs {
-  bool statistics = false;         // the statistics and the problems' evidence
-  bool meanings = false;           // frames read through the device models
-  bool unnamed_registers = false;  // with the registers no model names
-
-  void add(const Needs& more) {
-    statistics |= more.statistics;
-    meanings |= more.meanings;
-    unnamed_registers |= more.unnamed_registers;
-  }
-};
 
 // Each output a run may ask for, and what it needs: the stages a run builds are those its
 // outputs need, so a run that asks less does less (no model is read for -T none alone).
@@ -136,30 +137,7 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
     fan_out_.add(*discovery_);
   }
   const Needs needs = needs_of(o);
-  if (needs.statistics) {
-    statistics_ = std::make_unique<BusStatistics>(format, clock,
-                                                  !o.data_bits && o.mode == ModeChoice::automatic);
-    statistics_->set_read_lag(read_jitter_ns(o));
-    evidence_ = std::make_unique<ProblemEvidence>();
-    problem_options_.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
-    problem_options_.timeout_told = o.timeout_given;
-    problem_options_.pace = &pace_;
-    if (!o.report_file.empty()) {  // the report shows the lines of the records problems cite
-      cited_ = std::make_unique<output::CitedRecords>(*evidence_, channels, o.register_base,
-                                                      o.display_filter.empty() ? nullptr : &clock_);
-      health_.add(*cited_);
-    } else {
-      health_.add(*evidence_);
-    }
-    health_.add(*statistics_);
-    if (o.top) feed_top(o, channels, format, clock);
-    if (o.metrics_address.empty() && !o.top) {
-      fan_out_.add(health_);
-    } else {  // read by the metrics server's or the screen's thread while records come in
-      shared_statistics_ = std::make_unique<output::SharedStatistics>(health_);
-      fan_out_.add(*shared_statistics_);
-    }
-  }
+  if (needs.statistics) add_health(o, channels, format, clock);
   if (!o.report_file.empty()) {
     timeline_ = std::make_unique<BusTimeline>(report_follow(o));
     fan_out_.add(*timeline_);
@@ -175,10 +153,44 @@ Pipeline::Pipeline(const RunOptions& o, const captures::RingLimits& ring, output
     if (!o.timeout_given) slave_timeouts_ = modtap::model_timeouts(choice);
   }
   if (!o.write_file.empty()) write_pcapng(o, ring, channels, format, clock);
-  // The stages every record passes, in the order it passes them, each present where the run
-  // needs it; then every output (fan_out_). The record limit goes in front of them later.
+  entry_ = &stages(o, needs, choice, channels, format, clock);
+}
+
+// The statistics and the problems' evidence (the records problems cite before them, for the
+// report), beside the outputs; under a lock where another thread reads them.
+void Pipeline::add_health(const RunOptions& o, const std::vector<ChannelInfo>& channels,
+                          const SerialFormat& format, ClockQuality clock) {
+  statistics_ = std::make_unique<BusStatistics>(format, clock,
+                                                !o.data_bits && o.mode == ModeChoice::automatic);
+  statistics_->set_read_lag(read_jitter_ns(o));
+  evidence_ = std::make_unique<ProblemEvidence>();
+  problem_options_.timeout_ns = static_cast<int64_t>(o.timeout_s * 1e9);
+  problem_options_.timeout_told = o.timeout_given;
+  problem_options_.pace = &pace_;
+  if (!o.report_file.empty()) {  // the report shows the lines of the records problems cite
+    cited_ = std::make_unique<output::CitedRecords>(*evidence_, channels, o.register_base,
+                                                    o.display_filter.empty() ? nullptr : &clock_);
+    health_.add(*cited_);
+  } else {
+    health_.add(*evidence_);
+  }
+  health_.add(*statistics_);
+  if (o.top) feed_top(o, channels, format, clock);
+  if (o.metrics_address.empty() && !o.top) {
+    fan_out_.add(health_);
+  } else {  // read by the metrics server's or the screen's thread while records come in
+    shared_statistics_ = std::make_unique<output::SharedStatistics>(health_);
+    fan_out_.add(*shared_statistics_);
+  }
+}
+
+// The stages every record passes, in the order it passes them, each present where the run
+// needs it; then every output (fan_out_). The record limit goes in front of them later.
+RecordSink& Pipeline::stages(const RunOptions& o, const Needs& needs, const ModelChoice& choice,
+                             const std::vector<ChannelInfo>& channels, const SerialFormat& format,
+                             ClockQuality clock) {
   const bool filtered = !o.display_filter.empty();
-  entry_ = &in_order(
+  return in_order(
       {
           [&](RecordSink& next) -> RecordSink& {  // the bus's history: its findings
             diagnostics_ = std::make_unique<BusDiagnostics>(format, clock, next, read_jitter_ns(o));

@@ -128,6 +128,8 @@ class FollowWatch final : public RecordSink {
   RecordSink& next_;
 };
 
+struct Needs;  // what the outputs a run asks for need of the stages before them
+
 // The stages and sinks a run writes to: in front, the record limit, the bus's history, the
 // stage that reads frames through the device models, the --follow watch, the clock of every
 // record and the filter; then the terminal's output, the statistics, the report's timeline,
@@ -193,6 +195,11 @@ class Pipeline {
   }
 
  private:
+  void add_health(const RunOptions& o, const std::vector<ChannelInfo>& channels,
+                  const SerialFormat& format, ClockQuality clock);
+  RecordSink& stages(const RunOptions& o, const Needs& needs, const ModelChoice& choice,
+                     const std::vector<ChannelInfo>& channels, const SerialFormat& format,
+                     ClockQuality clock);
   // A stage of the chain: built in front of `next`, the stages after it, or absent (`next`).
   using StageBuilder = std::function<RecordSink&(RecordSink& next)>;
   static RecordSink& in_order(std::initializer_list<StageBuilder> stages, RecordSink& last);

@@ -143,14 +143,17 @@ std::optional<std::string> frames_met(const RunOptions& o, const Autostop& stop,
 
 }  // namespace
 
-int read_capture(const RunOptions& o, const Autostop& autostop, const captures::RingLimits& ring) {
+namespace {
+
+// How to open the capture: its format, and the line's settings, found by --baud auto (a read of
+// the capture's start under each) where they are not given.
+captures::OpenOptions open_options(const RunOptions& o, bool piped) {
   captures::OpenOptions open;
   open.format = o.format;
   open.serial = serial_format(o);
   if (!o.sigrok_channels.empty())
     open.sigrok.lines = captures::parse_sigrok_channels(o.sigrok_channels);
   open.sigrok.invert = o.sigrok_invert;
-  const bool piped = captures::is_piped(o.read_file);
   if (!o.baud || !o.parity) {
     if (piped)
       throw std::runtime_error(fmt::format(
@@ -159,79 +162,115 @@ int read_capture(const RunOptions& o, const Autostop& autostop, const captures::
           o.read_file == "-" ? "standard input" : o.read_file));
     open.serial = choose_file_format(o.read_file, open, analyzer_options(o, {}), o.baud, o.parity);
   }
-  auto source = piped ? captures::open_piped_capture(o.read_file, open)
-                      : captures::open_capture(o.read_file, open);
+  return open;
+}
 
-  Session session(o, ring, {source->channels(), open.serial, source->clock(), o.read_file, false});
-  LineHealth health(&session.records());
-  AnalyzerOptions options = analyzer_options(o, source->clock());
-  options.format = open.serial;
-  options.slave_timeout_ns = &session.slave_timeouts();
-  options.framing_observer = session.explain();
-  Analyzer bus(options, source->channels(), health);
-  Chunk chunk;
-  // A capture that breaks off (a truncated file) still gives everything read before the
-  // break, in every output, and then the error.
+// How a read of the capture ended: broken off (a truncated file: everything read before the
+// break is in every output, then the error), or at an -a condition.
+struct ReadEnd {
   std::optional<captures::CaptureError> broken;
-  std::optional<std::string> stopped_by;  // the -a condition met
-  auto progress = progress_bar(o, *source, piped);
-  auto view = top_view(o, session, open.serial, source->clock());
+  std::optional<std::string> stopped_by;
+};
+
+ReadEnd read_chunks(const RunOptions& o, const Autostop& autostop, captures::ChunkSource& source,
+                    Analyzer& bus, Session& session, top::TopView* view, bool piped) {
+  ReadEnd end;
+  auto progress = progress_bar(o, source, piped);
+  Chunk chunk;
   try {
     std::optional<int64_t> first_ns;
-    while (!session.limit_reached() && source->next(chunk)) {
+    while (!session.limit_reached() && source.next(chunk)) {
       if (view && !view->pace(chunk.t_ns)) break;
       if (!first_ns) first_ns = chunk.t_ns;
-      stopped_by = autostop_met(autostop, chunk.t_ns - *first_ns, session.pcapng_bytes());
-      if (stopped_by) break;
-      if (progress) progress->update(*source->file_position());
-      if (source->clock() != ClockQuality::none) session.pipeline().on_read(chunk);
+      end.stopped_by = autostop_met(autostop, chunk.t_ns - *first_ns, session.pcapng_bytes());
+      if (end.stopped_by) break;
+      if (progress) progress->update(*source.file_position());
+      if (source.clock() != ClockQuality::none) session.pipeline().on_read(chunk);
       if (session.keeps_raw()) session.keep_raw(chunk, bus.between_frames());
       bus.push(chunk);
       if (piped) session.flush_output();
     }
   } catch (const captures::CaptureError& e) {
-    broken = e;
+    end.broken = e;
   }
-  progress.reset();  // wiped before anything else reaches the terminal
-  bus.finish();
-  if (view) {
-    view->end_of_capture(!broken);
-    view->close();  // the terminal given back before anything is said on it
-  }
-  // Given settings that read a third of a timed file's bytes as junk or more, or that the line
-  // outpaces: the settings that read it, before the outputs say their problems. A bus that
-  // noisy is rarer than a wrong setting; one less noisy is not read again under every setting.
+  return end;  // the progress bar wiped before anything else reaches the terminal
+}
+
+// Given settings that read a third of a timed file's bytes as junk or more, or that the line
+// outpaces: the settings that read it. A bus that noisy is rarer than a wrong setting; one less
+// noisy is not read again under every setting.
+std::optional<BetterSettings> settings_that_read(const RunOptions& o,
+                                                 const captures::OpenOptions& open,
+                                                 ClockQuality clock, bool piped,
+                                                 const LineHealth& health, Session& session,
+                                                 const Analyzer& bus) {
   const bool doubtful = 3 * health.good_frame_bytes < 2 * health.bytes ||
                         session.pipeline().pace().too_fast() ||
                         mostly_early(bus.matcher().timed_answers(), bus.matcher().early_answers());
-  std::optional<BetterSettings> better;
-  if (o.baud && o.parity && !piped && source->clock() != ClockQuality::none && health.bytes >= 64 &&
-      doubtful)
-    better = better_format(o.read_file, open, analyzer_options(o, source->clock()));
-  if (better) session.pipeline().found_better_settings(*better);
-  session.finish(!broken, frames_met(o, autostop, session).value_or(stopped_by.value_or("")));
-  if (bus.clock_steps_back())
-    fmt::print(stderr,
-               "modtap: warning: {}: the time stamps go backwards {}; latencies across "
-               "those steps are not measured\n",
-               o.read_file, output::counted(bus.clock_steps_back(), "time", "times"));
-  if (broken) throw *broken;
-  if (session.explain() && !session.explain()->found())
-    throw std::runtime_error(
-        fmt::format("--explain {}: {} has no record {}", *o.explain, o.read_file, *o.explain));
-  // A pipe is not read again: it holds no logic-analyzer capture anyway.
+  if (!o.baud || !o.parity || piped || clock == ClockQuality::none || health.bytes < 64 ||
+      !doubtful)
+    return std::nullopt;
+  return better_format(o.read_file, open, analyzer_options(o, clock));
+}
+
+// What the hint after the run knows besides the traffic. A pipe is not read again: it holds no
+// logic-analyzer capture anyway.
+HintContext hint_context(const RunOptions& o, const captures::OpenOptions& open, ClockQuality clock,
+                         bool piped, const LineHealth& health, const Analyzer& bus,
+                         std::optional<BetterSettings> better) {
   const captures::Format format = open.format != captures::Format::automatic ? open.format
                                   : piped                                    ? captures::Format::raw
                                           : captures::detect_format(o.read_file);
   HintContext context{
-      format == captures::Format::sigrok, {}, source->clock() == ClockQuality::none, std::nullopt};
+      format == captures::Format::sigrok, {}, clock == ClockQuality::none, std::nullopt};
   context.better = better;
   context.timed_answers = bus.matcher().timed_answers();
   context.early_answers = bus.matcher().early_answers();
   if (context.logic_analyzer && o.sigrok_channels.empty() && health.bytes == 0)
     context.unnamed_lines = captures::sigrok_channel_names(o.read_file);
   if (health.looks_wrong() && !piped && !context.logic_analyzer)
-    context.better_mode = better_mode(o.read_file, open, analyzer_options(o, source->clock()));
+    context.better_mode = better_mode(o.read_file, open, analyzer_options(o, clock));
+  return context;
+}
+
+}  // namespace
+
+int read_capture(const RunOptions& o, const Autostop& autostop, const captures::RingLimits& ring) {
+  const bool piped = captures::is_piped(o.read_file);
+  const captures::OpenOptions open = open_options(o, piped);
+  auto source = piped ? captures::open_piped_capture(o.read_file, open)
+                      : captures::open_capture(o.read_file, open);
+  const ClockQuality clock = source->clock();
+
+  Session session(o, ring, {source->channels(), open.serial, clock, o.read_file, false});
+  LineHealth health(&session.records());
+  AnalyzerOptions options = analyzer_options(o, clock);
+  options.format = open.serial;
+  options.slave_timeout_ns = &session.slave_timeouts();
+  options.framing_observer = session.explain();
+  Analyzer bus(options, source->channels(), health);
+  auto view = top_view(o, session, open.serial, clock);
+  const ReadEnd end = read_chunks(o, autostop, *source, bus, session, view.get(), piped);
+  bus.finish();
+  if (view) {
+    view->end_of_capture(!end.broken);
+    view->close();  // the terminal given back before anything is said on it
+  }
+  // Before the outputs say their problems.
+  const auto better = settings_that_read(o, open, clock, piped, health, session, bus);
+  if (better) session.pipeline().found_better_settings(*better);
+  session.finish(!end.broken,
+                 frames_met(o, autostop, session).value_or(end.stopped_by.value_or("")));
+  if (bus.clock_steps_back())
+    fmt::print(stderr,
+               "modtap: warning: {}: the time stamps go backwards {}; latencies across "
+               "those steps are not measured\n",
+               o.read_file, output::counted(bus.clock_steps_back(), "time", "times"));
+  if (end.broken) throw *end.broken;
+  if (session.explain() && !session.explain()->found())
+    throw std::runtime_error(
+        fmt::format("--explain {}: {} has no record {}", *o.explain, o.read_file, *o.explain));
+  const HintContext context = hint_context(o, open, clock, piped, health, bus, better);
   hint_settings(open.serial, health, session.pipeline().pace(), context);
   return 0;
 }
