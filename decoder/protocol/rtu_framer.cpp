@@ -18,7 +18,6 @@ RtuFramer::RtuFramer(uint16_t channel, const RtuFramerOptions& options, FrameSin
     : channel_(channel),
       options_(options),
       sink_(sink),
-      awaited_(sink.expectation(), options.role != ChannelRole::master),
       s_(options_),
       readings_(channel, options_, sink.expectation(), s_) {
   s_.buf.reserve(compact_after + 4096);
@@ -150,7 +149,7 @@ void RtuFramer::emit_piece(uint64_t begin, uint64_t end, uint32_t findings, bool
       return emit_piece(end - 1, end);
     }
   }
-  const auto length = awaited_.length(bytes(begin, end));
+  const auto length = readings_.awaited().length(bytes(begin, end));
   if (length && *length != size) {
     if (size < *length) return emit_damaged(begin, end, Damage::cut, findings);
     emit_damaged(begin, begin + *length, Damage::collision, findings);
@@ -210,11 +209,12 @@ PieceHeader RtuFramer::piece_header(uint64_t at) const {
 // answer: the answering driver's glitch, or the piece's own (EdgeByte). Elsewhere the byte and
 // what follows it are noise either way, and nothing is weighed.
 std::optional<EdgeByte> RtuFramer::first_edge(uint64_t begin, uint64_t end) const {
-  if (end - begin < 2 || !is_glitch_byte(*at_ptr(begin)) || !awaited_.starts(bytes(begin + 1, end)))
+  if (end - begin < 2 || !is_glitch_byte(*at_ptr(begin)) ||
+      !readings_.awaited().starts(bytes(begin + 1, end)))
     return std::nullopt;
   EdgeByte edge{EdgeSide::first, begin, *at_ptr(begin), s_.glitch_odds.habit()};
   edge.weigh(Feature::awaited_header, true, true);
-  edge.weigh(Feature::awaited_header, awaited_.starts(bytes(begin, end)), false);
+  edge.weigh(Feature::awaited_header, readings_.awaited().starts(bytes(begin, end)), false);
   observe_edge(edge);
   return edge;
 }
@@ -227,13 +227,13 @@ std::optional<EdgeByte> RtuFramer::first_edge(uint64_t begin, uint64_t end) cons
 std::optional<EdgeByte> RtuFramer::last_edge(uint64_t begin, uint64_t end,
                                              bool glitch_after) const {
   const uint64_t size = end - begin;
-  const auto length = awaited_.length(bytes(begin, end));
+  const auto length = readings_.awaited().length(bytes(begin, end));
   const bool cut_short =
-      (length && size <= *length) || (!length && awaited_.length(bytes(begin, end - 1)));
+      (length && size <= *length) || (!length && readings_.awaited().length(bytes(begin, end - 1)));
   if (!cut_short || size <= 3 || !is_glitch_byte(*at_ptr(end - 1)) || end >= s_.end)
     return std::nullopt;
   EdgeByte edge{EdgeSide::last, end - 1, *at_ptr(end - 1), s_.glitch_odds.habit()};
-  const std::optional<bool> told = awaited_.byte(bytes(begin, end), size - 1);
+  const std::optional<bool> told = readings_.awaited().byte(bytes(begin, end), size - 1);
   edge.weigh(Feature::byte_ruled_out, told == false, true);
   edge.weigh(Feature::predicted_byte, told == true, false);
   edge.weigh(Feature::silence_after, s_.timeline.gap_at(end), false);

@@ -13,7 +13,6 @@
 #include <optional>
 #include <span>
 
-#include "decoder/protocol/awaited_answer.hpp"
 #include "decoder/protocol/frame_sink.hpp"
 #include "decoder/protocol/records.hpp"
 #include "decoder/protocol/rtu_readings.hpp"
@@ -70,7 +69,6 @@ class RtuFramer {
   uint16_t channel_;
   RtuFramerOptions options_;
   FrameSink& sink_;
-  AwaitedAnswer awaited_;
   RtuStream s_;
   RtuReadings readings_;     // reads s_, never changes it
   uint64_t scanned_to_ = 0;  // positions below this are known not to start a frame

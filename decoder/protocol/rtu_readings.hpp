@@ -85,6 +85,8 @@ class RtuReadings {
   // Where `broke-off-at-silence` refutes every span across the first silence after `at`.
   bool blocked_by_gap(uint64_t at, bool final);
   bool fits_role(Role role, uint64_t at, uint16_t length) const;
+  // What the pending request says of the bytes after it: the framer's pieces ask it too.
+  const AwaitedAnswer& awaited() const { return awaited_; }
   // Whether the frame at `at` has a code a bus carries (`bus-code`).
   bool standard_frame(uint64_t at) const;
   // A step of the framer begins: a frame emitted, or a request's time-out, changes where the
