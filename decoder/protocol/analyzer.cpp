@@ -280,7 +280,7 @@ void Analyzer::hold(const Frame& frame, int64_t decide_by_ns, bool echo) {
 // keeps the frames' views of their bytes).
 void Analyzer::chain(const Frame& frame) {
   std::swap(chained_, held_);
-  hold(frame, Matcher::second_copy_decide_by(*chained_.frame, frame), false);
+  hold(frame, Matcher::untold_decide_by(frame, chained_.frame->end_ns), false);
 }
 
 // The master's next move decides the held copy: a request of its own sent without waiting for

@@ -472,9 +472,8 @@ std::optional<int64_t> Matcher::copy_in_doubt(const Frame& frame) {
   advance(frame.t_ns);  // a pending request whose time-out has run out by now is overdue
   const Pending* request = copied_in_doubt(frame);
   if (!request) return std::nullopt;
-  const int64_t waits_ns = request->timeout_told ? request->timeout_ns - options_.clock_lag_ns
-                                                 : (frame.t_ns - request->end_ns) / 2;
-  return frame.end_ns + waits_ns;
+  if (!request->timeout_told) return untold_decide_by(frame, request->end_ns);
+  return frame.end_ns + request->timeout_ns - options_.clock_lag_ns;
 }
 
 const Matcher::Pending* Matcher::copied_in_doubt(const Frame& frame) const {

@@ -82,10 +82,10 @@ class Matcher {
   // is no such copy.
   std::optional<int64_t> echo_in_doubt(const Frame& frame) const;
   // The time by which the master's request to another slave or function shows that it did not
-  // wait for an answer to `second`, the same bytes again after the copy `first`: as long as a
-  // master waits at least, half the wait between them.
-  static int64_t second_copy_decide_by(const Frame& first, const Frame& second) {
-    return second.end_ns + (second.t_ns - first.end_ns) / 2;
+  // wait for an answer to `copy`, sent `since_ns` after what it copies: a master that sends again
+  // waits at least half as long again for the answer (its time-out not told).
+  static int64_t untold_decide_by(const Frame& copy, int64_t since_ns) {
+    return copy.end_ns + (copy.t_ns - since_ns) / 2;
   }
   // The copy echo_in_doubt held was the master's retry: the same bytes after it answered it.
   void on_retry_copy(Frame& frame);
